@@ -1,0 +1,154 @@
+//! Feature negotiation as data: what the chosen device can do, and which checkerboard layouts
+//! (DESIGN.md) it can therefore run.
+
+use ash::vk;
+use serde::Serialize;
+
+/// Capabilities that matter to cbr, read once from the device.
+#[derive(Clone, Debug, Serialize)]
+pub struct Caps {
+    pub sample_rate_shading: bool,
+    /// Sample counts usable for a colour + depth + integer-ID target together.
+    pub sample_counts: Vec<u32>,
+    pub integer_color_sample_counts: Vec<u32>,
+    pub sample_locations: bool,
+    pub maintenance4: bool,
+    pub dynamic_rendering: bool,
+    pub pipeline_statistics: bool,
+    pub timestamps: bool,
+    /// Nanoseconds per timestamp tick.
+    pub timestamp_period_ns: f32,
+    pub timestamp_valid_bits: u32,
+    pub geometry_shader: bool,
+    pub shader_output_layer: bool,
+    pub clip_distance: bool,
+    pub multiview: bool,
+    pub max_image_dimension_2d: u32,
+    pub max_viewport: [u32; 2],
+    pub max_framebuffer: [u32; 2],
+    pub viewport_sub_pixel_bits: u32,
+    pub sub_pixel_precision_bits: u32,
+}
+
+/// The checkerboard raster layouts of DESIGN.md.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Layout {
+    Msaa2x,
+    Rotated,
+    Split,
+    Masked,
+}
+
+impl Layout {
+    pub const ALL: [Layout; 4] = [Layout::Msaa2x, Layout::Rotated, Layout::Split, Layout::Masked];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Layout::Msaa2x => "msaa2x",
+            Layout::Rotated => "rotated",
+            Layout::Split => "split",
+            Layout::Masked => "masked",
+        }
+    }
+}
+
+pub(crate) fn sample_count_list(flags: vk::SampleCountFlags) -> Vec<u32> {
+    (0..7)
+        .map(|b| 1u32 << b)
+        .filter(|&n| flags.contains(vk::SampleCountFlags::from_raw(n)))
+        .collect()
+}
+
+impl Caps {
+    /// Why `layout` cannot run on this device, or `None` when it can.
+    pub fn layout_unsupported(&self, layout: Layout) -> Option<String> {
+        let mut missing = Vec::new();
+        match layout {
+            Layout::Msaa2x => {
+                if !self.sample_counts.contains(&2) {
+                    missing.push("2x MSAA for colour and depth attachments");
+                }
+                if !self.integer_color_sample_counts.contains(&2) {
+                    missing.push("2x MSAA for integer (ID) attachments");
+                }
+                if !self.sample_rate_shading {
+                    missing.push("sampleRateShading");
+                }
+            }
+            Layout::Rotated => {
+                if !self.clip_distance {
+                    missing.push("shaderClipDistance");
+                }
+            }
+            Layout::Split => {
+                if !self.shader_output_layer {
+                    missing.push("shaderOutputLayer (gl_Layer from the vertex shader)");
+                }
+            }
+            Layout::Masked => {}
+        }
+        (!missing.is_empty()).then(|| missing.join(", "))
+    }
+
+    pub fn supported_layouts(&self) -> Vec<Layout> {
+        Layout::ALL
+            .into_iter()
+            .filter(|&l| self.layout_unsupported(l).is_none())
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lavapipe_like() -> Caps {
+        Caps {
+            sample_rate_shading: true,
+            sample_counts: vec![1, 4],
+            integer_color_sample_counts: vec![1],
+            sample_locations: false,
+            maintenance4: true,
+            dynamic_rendering: true,
+            pipeline_statistics: true,
+            timestamps: true,
+            timestamp_period_ns: 1.0,
+            timestamp_valid_bits: 64,
+            geometry_shader: true,
+            shader_output_layer: true,
+            clip_distance: true,
+            multiview: true,
+            max_image_dimension_2d: 16384,
+            max_viewport: [16384, 16384],
+            max_framebuffer: [16384, 16384],
+            viewport_sub_pixel_bits: 0,
+            sub_pixel_precision_bits: 8,
+        }
+    }
+
+    #[test]
+    fn lavapipe_runs_the_portable_layouts_only() {
+        let caps = lavapipe_like();
+        assert_eq!(
+            caps.supported_layouts(),
+            vec![Layout::Rotated, Layout::Split, Layout::Masked]
+        );
+        let why = caps.layout_unsupported(Layout::Msaa2x).unwrap_or_default();
+        assert!(why.contains("2x MSAA"), "{why}");
+    }
+
+    #[test]
+    fn a_gpu_with_2x_runs_all() {
+        let mut caps = lavapipe_like();
+        caps.sample_counts = vec![1, 2, 4, 8];
+        caps.integer_color_sample_counts = vec![1, 2, 4, 8];
+        assert_eq!(caps.supported_layouts(), Layout::ALL.to_vec());
+    }
+
+    #[test]
+    fn sample_count_flags_decode() {
+        let f = vk::SampleCountFlags::TYPE_1 | vk::SampleCountFlags::TYPE_4;
+        assert_eq!(sample_count_list(f), vec![1, 4]);
+    }
+}

@@ -1,0 +1,195 @@
+//! Per-pass GPU timestamps and pipeline statistics.
+//!
+//! lavapipe rule (PLATFORM.md): a compute dispatch between two timestamps reads ~0 ms unless a
+//! barrier sits right after the start timestamp and right before the end one. Compute scopes get
+//! those barriers (`compute_fences`, on by default); graphics intervals are right without them.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use crate::cmd::Cmd;
+use crate::context::{Garbage, Gpu, Inner};
+use crate::error::{Result, VkContext};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PassKind {
+    Graphics,
+    Compute,
+    Transfer,
+}
+
+/// Device-independent cost counters of one pass.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct PipelineStats {
+    pub vertex_invocations: u64,
+    pub clipping_primitives: u64,
+    pub fragment_invocations: u64,
+    pub compute_invocations: u64,
+}
+
+/// One measured pass.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PassTiming {
+    pub name: String,
+    pub gpu_ms: f64,
+    pub stats: Option<PipelineStats>,
+}
+
+const STATS: vk::QueryPipelineStatisticFlags = vk::QueryPipelineStatisticFlags::from_raw(
+    vk::QueryPipelineStatisticFlags::VERTEX_SHADER_INVOCATIONS.as_raw()
+        | vk::QueryPipelineStatisticFlags::CLIPPING_PRIMITIVES.as_raw()
+        | vk::QueryPipelineStatisticFlags::FRAGMENT_SHADER_INVOCATIONS.as_raw()
+        | vk::QueryPipelineStatisticFlags::COMPUTE_SHADER_INVOCATIONS.as_raw(),
+);
+
+pub struct Profiler {
+    gpu: Arc<Inner>,
+    timestamps: vk::QueryPool,
+    stats: Option<vk::QueryPool>,
+    capacity: u32,
+    scopes: Vec<(String, PassKind)>,
+    open: Option<u32>,
+    period_ns: f64,
+    /// Barriers around compute scopes (see module docs). Switchable to demonstrate the rule.
+    pub compute_fences: bool,
+}
+
+/// Handle of an open scope.
+#[must_use]
+pub struct Scope(u32);
+
+impl Profiler {
+    pub fn new(gpu: &Gpu, name: &str, capacity: u32) -> Result<Profiler> {
+        let dev = gpu.device();
+        let info = vk::QueryPoolCreateInfo::default()
+            .query_type(vk::QueryType::TIMESTAMP)
+            .query_count(capacity * 2);
+        // SAFETY: valid create info.
+        let timestamps = unsafe { dev.create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
+        gpu.name_object(timestamps, &format!("{name}.timestamps"));
+        let stats = if gpu.caps().pipeline_statistics {
+            let info = vk::QueryPoolCreateInfo::default()
+                .query_type(vk::QueryType::PIPELINE_STATISTICS)
+                .query_count(capacity)
+                .pipeline_statistics(STATS);
+            // SAFETY: valid create info; the feature is enabled.
+            let pool = unsafe { dev.create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
+            gpu.name_object(pool, &format!("{name}.statistics"));
+            Some(pool)
+        } else {
+            None
+        };
+        let p = Profiler {
+            gpu: gpu.inner.clone(),
+            timestamps,
+            stats,
+            capacity,
+            scopes: Vec::new(),
+            open: None,
+            period_ns: f64::from(gpu.caps().timestamp_period_ns),
+            compute_fences: true,
+        };
+        p.reset();
+        Ok(p)
+    }
+
+    /// Forgets the previous frame's scopes (host query reset).
+    pub fn reset(&self) {
+        // SAFETY: hostQueryReset is enabled; no submission using the pools is in flight (submissions
+        // are waited on before results are read and before the next reset).
+        unsafe {
+            self.gpu.device.reset_query_pool(self.timestamps, 0, self.capacity * 2);
+            if let Some(s) = self.stats {
+                self.gpu.device.reset_query_pool(s, 0, self.capacity);
+            }
+        }
+    }
+
+    pub fn begin_frame(&mut self) {
+        self.reset();
+        self.scopes.clear();
+        self.open = None;
+    }
+
+    /// Opens a named scope. Scopes do not nest.
+    pub fn begin(&mut self, cmd: &mut Cmd, name: &str, kind: PassKind) -> Scope {
+        let i = self.scopes.len() as u32;
+        assert!(i < self.capacity, "profiler capacity {} exceeded", self.capacity);
+        assert!(self.open.is_none(), "profiler scopes do not nest");
+        self.scopes.push((name.to_string(), kind));
+        self.open = Some(i);
+        let dev = &self.gpu.device;
+        // SAFETY: queries were reset; indices are in range.
+        unsafe {
+            dev.cmd_write_timestamp2(cmd.cb, vk::PipelineStageFlags2::ALL_COMMANDS, self.timestamps, 2 * i);
+            if let Some(s) = self.stats {
+                dev.cmd_begin_query(cmd.cb, s, i, vk::QueryControlFlags::empty());
+            }
+        }
+        if kind == PassKind::Compute && self.compute_fences {
+            cmd.full_barrier();
+        }
+        Scope(i)
+    }
+
+    pub fn end(&mut self, cmd: &mut Cmd, scope: Scope) {
+        let i = scope.0;
+        if self.scopes[i as usize].1 == PassKind::Compute && self.compute_fences {
+            cmd.full_barrier();
+        }
+        let dev = &self.gpu.device;
+        // SAFETY: paired with `begin`.
+        unsafe {
+            if let Some(s) = self.stats {
+                dev.cmd_end_query(cmd.cb, s, i);
+            }
+            dev.cmd_write_timestamp2(cmd.cb, vk::PipelineStageFlags2::ALL_COMMANDS, self.timestamps, 2 * i + 1);
+        }
+        self.open = None;
+    }
+
+    /// Results of the scopes recorded since `begin_frame`, once their submission has completed.
+    pub fn results(&self) -> Result<Vec<PassTiming>> {
+        let n = self.scopes.len();
+        if n == 0 {
+            return Ok(Vec::new());
+        }
+        let mut ts = vec![0u64; 2 * n];
+        let dev = &self.gpu.device;
+        // SAFETY: the submission was waited on; WAIT makes the call block until available.
+        unsafe { dev.get_query_pool_results(self.timestamps, 0, &mut ts, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT) }
+            .vk("vkGetQueryPoolResults")?;
+        let mut stats = vec![[0u64; 4]; n];
+        if let Some(s) = self.stats {
+            // SAFETY: as above; 4 counters per query, in flag-bit order.
+            unsafe { dev.get_query_pool_results(s, 0, &mut stats, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT) }
+                .vk("vkGetQueryPoolResults")?;
+        }
+        Ok(self
+            .scopes
+            .iter()
+            .enumerate()
+            .map(|(i, (name, _))| PassTiming {
+                name: name.clone(),
+                gpu_ms: ts[2 * i + 1].saturating_sub(ts[2 * i]) as f64 * self.period_ns * 1e-6,
+                // Flag-bit order: VERTEX_SHADER (bit 2), CLIPPING_PRIMITIVES (6), FRAGMENT (7), COMPUTE (10).
+                stats: self.stats.map(|_| PipelineStats {
+                    vertex_invocations: stats[i][0],
+                    clipping_primitives: stats[i][1],
+                    fragment_invocations: stats[i][2],
+                    compute_invocations: stats[i][3],
+                }),
+            })
+            .collect())
+    }
+}
+
+impl Drop for Profiler {
+    fn drop(&mut self) {
+        self.gpu.defer(Garbage::QueryPool(self.timestamps));
+        if let Some(s) = self.stats {
+            self.gpu.defer(Garbage::QueryPool(s));
+        }
+    }
+}
