@@ -1,0 +1,220 @@
+//! The scene TOML. Unknown keys and wrong types are errors naming the key path and the line.
+//!
+//! ```toml
+//! obj = "../../shared/scenes/sibenik/sibenik.obj"   # or: procedural = "demo"
+//! up = "y"                 # the OBJ's up axis: "y" or "z"
+//! width = 1280             # resolution, frames, fps, seed, exposure (stops), ambient
+//! frames = 8
+//! [camera]
+//! near = 0.05
+//! [[camera.keys]]
+//! time = 0.0
+//! position = [-12.0, -8.0, 0.0]
+//! target = [10.0, -10.0, 0.0]
+//! fov_y_deg = 60.0
+//! [[lights.directional]]
+//! direction = [-0.3, -1.0, -0.2]
+//! intensity = 3.0
+//! [lights.random_points]
+//! count = 1000
+//! [[animate]]
+//! object = "Spinner"
+//! spin_deg_per_s = 360.0
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::camera::{CameraKey, CameraPath};
+use crate::error::{Result, SceneError};
+use crate::obj::MissingTextures;
+use crate::scene::Up;
+
+#[derive(Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct SceneDesc {
+    pub name: Option<String>,
+    pub obj: Option<PathBuf>,
+    pub procedural: Option<String>,
+    #[serde(default)]
+    pub up: Up,
+    pub mtl: Option<PathBuf>,
+    pub default_material: Option<String>,
+    pub missing_textures: Option<MissingTextures>,
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    pub frames: Option<u32>,
+    pub fps: Option<f64>,
+    pub seed: Option<u64>,
+    pub exposure: Option<f32>,
+    pub ambient: Option<[f32; 3]>,
+    pub camera: Option<CameraDesc>,
+    pub lights: Option<LightsDesc>,
+    #[serde(default)]
+    pub animate: Vec<AnimDesc>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDesc {
+    pub near: Option<f64>,
+    pub fov_y_deg: Option<f64>,
+    #[serde(default)]
+    pub keys: Vec<KeyDesc>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KeyDesc {
+    pub time: f64,
+    pub position: [f64; 3],
+    pub target: [f64; 3],
+    pub fov_y_deg: Option<f64>,
+}
+
+#[derive(Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct LightsDesc {
+    #[serde(default)]
+    pub directional: Vec<DirDesc>,
+    #[serde(default)]
+    pub point: Vec<PointDesc>,
+    pub random_points: Option<RandomPointsDesc>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DirDesc {
+    pub direction: [f32; 3],
+    #[serde(default = "white")]
+    pub color: [f32; 3],
+    #[serde(default = "one")]
+    pub intensity: f32,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointDesc {
+    pub position: [f64; 3],
+    #[serde(default = "white")]
+    pub color: [f32; 3],
+    #[serde(default = "one")]
+    pub intensity: f32,
+    pub range: Option<f32>,
+}
+
+/// `count` point lights placed uniformly in a box (default: the scene bounds) with random hues:
+/// the knob that scales shading cost.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RandomPointsDesc {
+    pub count: u32,
+    #[serde(default = "one")]
+    pub intensity: f32,
+    pub range: Option<f32>,
+    pub seed: Option<u64>,
+    pub min: Option<[f64; 3]>,
+    pub max: Option<[f64; 3]>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnimDesc {
+    /// OBJ object/group name; every object of that name moves.
+    pub object: String,
+    /// Spin centre; default the centre of the objects' bounds.
+    pub pivot: Option<[f64; 3]>,
+    pub spin_axis: Option<[f64; 3]>,
+    #[serde(default)]
+    pub spin_deg_per_s: f64,
+    pub velocity: Option<[f64; 3]>,
+}
+
+fn white() -> [f32; 3] {
+    [1.0; 3]
+}
+fn one() -> f32 {
+    1.0
+}
+
+/// Line (1-based) of a byte offset.
+fn line_of(text: &str, offset: usize) -> usize {
+    text[..offset.min(text.len())].bytes().filter(|&b| b == b'\n').count() + 1
+}
+
+impl SceneDesc {
+    pub fn parse(text: &str, file: &Path) -> Result<SceneDesc> {
+        let de = toml::Deserializer::parse(text).map_err(|e| {
+            let line = e.span().map(|s| line_of(text, s.start)).unwrap_or(1);
+            SceneError::syntax(file, line, e.message().to_string())
+        })?;
+        serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            let inner = e.into_inner();
+            let line = inner.span().map(|s| line_of(text, s.start)).unwrap_or(1);
+            SceneError::syntax(file, line, format!("`{path}`: {}", inner.message()))
+        })
+    }
+}
+
+pub(crate) fn camera_path(desc: Option<&CameraDesc>) -> Option<CameraPath> {
+    let c = desc?;
+    if c.keys.is_empty() {
+        return None;
+    }
+    let fov = c.fov_y_deg.unwrap_or(50.0);
+    let mut keys: Vec<CameraKey> = c
+        .keys
+        .iter()
+        .map(|k| CameraKey { time: k.time, position: k.position, target: k.target, fov_y_deg: k.fov_y_deg.unwrap_or(fov) })
+        .collect();
+    keys.sort_by(|a, b| a.time.total_cmp(&b.time));
+    Some(CameraPath { keys, near: c.near.unwrap_or(0.05) })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(s: &str) -> Result<SceneDesc> {
+        SceneDesc::parse(s, Path::new("s.toml"))
+    }
+
+    #[test]
+    fn unknown_keys_name_the_path_and_line() {
+        let err = parse("obj = \"a.obj\"\n[camera]\nnear = 0.1\n[[camera.keys]]\ntime = 0\nposition = [0,0,0]\ntarget = [0,0,-1]\nfvo = 3\n")
+            .unwrap_err()
+            .to_string();
+        assert!(err.starts_with("s.toml:8:"), "{err}");
+        assert!(err.contains("camera.keys[0]"), "{err}");
+        assert!(err.contains("fvo"), "{err}");
+    }
+
+    #[test]
+    fn wrong_types_name_the_path() {
+        let err = parse("width = \"wide\"\n").unwrap_err().to_string();
+        assert!(err.starts_with("s.toml:1:"), "{err}");
+        assert!(err.contains("`width`"), "{err}");
+        let err = parse("[lights]\n[[lights.point]]\nposition = [0, 0]\n").unwrap_err().to_string();
+        assert!(err.contains("lights.point[0].position"), "{err}");
+    }
+
+    #[test]
+    fn syntax_errors_name_the_line() {
+        let err = parse("width = 3\nheight = = 4\n").unwrap_err().to_string();
+        assert!(err.starts_with("s.toml:2:"), "{err}");
+    }
+
+    #[test]
+    fn full_description_parses() {
+        let d = parse(
+            "procedural = \"demo\"\nwidth = 64\nheight = 32\nframes = 3\n[camera]\n[[camera.keys]]\ntime = 1\nposition = [0,1,2]\ntarget = [0,0,0]\n[[camera.keys]]\ntime = 0\nposition = [0,1,3]\ntarget = [0,0,0]\n[lights.random_points]\ncount = 10\n[[animate]]\nobject = \"x\"\nspin_deg_per_s = 90\n",
+        )
+        .expect("parses");
+        assert_eq!(d.width, Some(64));
+        let path = camera_path(d.camera.as_ref()).expect("path");
+        assert_eq!(path.keys[0].time, 0.0, "keys sorted by time");
+        assert_eq!(d.lights.and_then(|l| l.random_points).map(|r| r.count), Some(10));
+    }
+}

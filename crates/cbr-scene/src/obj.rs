@@ -1,0 +1,562 @@
+//! OBJ/MTL through tobj, hardened against what real files do.
+//!
+//! tobj gives no line numbers and panics on some malformed MTL lines, so a validating pre-pass reads
+//! every statement cbr relies on first (and reports `file:line`); the normalised text (LF line ends,
+//! faces with fewer than three vertices removed, one-value colours expanded) then goes to tobj.
+
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::io::Cursor;
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+
+use crate::error::{Result, SceneError};
+use crate::scene::{AlphaSource, LoadStats, Material, Object, Up, Vertex};
+use crate::texture::Texture;
+
+/// What to do when a texture file named by an MTL is missing or unreadable.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MissingTextures {
+    /// Fail, naming the texture and the MTL (default).
+    #[default]
+    Error,
+    /// Substitute a magenta checker and record a warning.
+    Fallback,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct ObjOptions {
+    /// Use this MTL instead of the OBJ's `mtllib` (paths inside it are relative to it).
+    pub mtl_override: Option<PathBuf>,
+    /// Material for faces without `usemtl` (by name, from the MTL).
+    pub default_material: Option<String>,
+    pub missing_textures: MissingTextures,
+    pub up: Up,
+}
+
+/// Geometry, materials and textures read from one OBJ, ready to append to a scene.
+pub struct ObjData {
+    pub objects: Vec<Object>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    pub stats: LoadStats,
+}
+
+fn read_text(path: &Path) -> Result<String> {
+    let bytes = std::fs::read(path).map_err(|e| SceneError::file(path, format!("cannot read: {e}")))?;
+    // Real files carry Latin-1 names; decode lossily and normalise line ends.
+    Ok(String::from_utf8_lossy(&bytes).replace("\r\n", "\n").replace('\r', "\n"))
+}
+
+fn parse_finite(tok: Option<&str>, file: &Path, line: usize, what: &str) -> Result<f32> {
+    let tok = tok.ok_or_else(|| SceneError::syntax(file, line, format!("{what}: missing number")))?;
+    let v: f32 = tok
+        .parse()
+        .map_err(|_| SceneError::syntax(file, line, format!("{what}: `{tok}` is not a number")))?;
+    if !v.is_finite() {
+        return Err(SceneError::syntax(file, line, format!("{what}: `{tok}` is not a finite number")));
+    }
+    Ok(v)
+}
+
+/// What the pre-pass counted.
+#[derive(Debug, Default, PartialEq, Eq)]
+pub(crate) struct ObjCounts {
+    /// Faces with fewer than three vertices, removed.
+    pub dropped: usize,
+    /// Faces without texture coordinates (they sample UV (0,0)).
+    pub faces_without_uvs: usize,
+}
+
+/// Validates the OBJ statements cbr uses and returns the normalised text.
+///
+/// tobj gives a face without `vt` texture coordinate 0 when the file has other UVs, so when the
+/// file has any `vt`, a sentinel `vt 0 1` (UV (0,0) after the V flip) is prepended, positive `vt`
+/// references shift by one, and faces without UVs point at the sentinel.
+pub(crate) fn validate_obj(text: &str, file: &Path) -> Result<(String, ObjCounts)> {
+    let (mut nv, mut nt, mut nn) = (0i64, 0i64, 0i64);
+    let mut out = String::with_capacity(text.len() + 64);
+    let mut counts = ObjCounts::default();
+    let sentinel = text.lines().any(|l| l.trim_start().starts_with("vt "));
+    if sentinel {
+        out.push_str("vt 0 1\n");
+    }
+    for (i, raw) in text.lines().enumerate() {
+        let ln = i + 1;
+        let line = raw.split('#').next().unwrap_or("");
+        let mut toks = line.split_whitespace();
+        match toks.next() {
+            Some("v") => {
+                for axis in ["x", "y", "z"] {
+                    parse_finite(toks.next(), file, ln, &format!("vertex {axis}"))?;
+                }
+                nv += 1;
+            }
+            Some("vt") => {
+                for axis in ["u", "v"] {
+                    // A lone `vt u` is legal (v = 0).
+                    if axis == "v" && toks.clone().next().is_none() {
+                        break;
+                    }
+                    parse_finite(toks.next(), file, ln, &format!("texture coordinate {axis}"))?;
+                }
+                nt += 1;
+            }
+            Some("vn") => {
+                for axis in ["x", "y", "z"] {
+                    parse_finite(toks.next(), file, ln, &format!("normal {axis}"))?;
+                }
+                nn += 1;
+            }
+            Some("f") => {
+                let refs: Vec<&str> = toks.collect();
+                for r in &refs {
+                    let mut parts = r.split('/');
+                    for (k, (count, what)) in [(nv, "vertex"), (nt, "texture coordinate"), (nn, "normal")].into_iter().enumerate() {
+                        let Some(p) = parts.next() else { break };
+                        if p.is_empty() && k > 0 {
+                            continue;
+                        }
+                        let idx: i64 = p
+                            .parse()
+                            .map_err(|_| SceneError::syntax(file, ln, format!("face: `{r}` is not a valid vertex reference")))?;
+                        let resolved = if idx < 0 { count + idx + 1 } else { idx };
+                        if idx == 0 || resolved < 1 || resolved > count {
+                            return Err(SceneError::syntax(
+                                file,
+                                ln,
+                                format!("face refers to {what} {idx}, but {count} are defined before this line"),
+                            ));
+                        }
+                    }
+                }
+                if refs.len() < 3 {
+                    counts.dropped += 1;
+                    out.push('\n');
+                    continue;
+                }
+                let missing_uv = refs.iter().any(|r| r.split('/').nth(1).is_none_or(str::is_empty));
+                if missing_uv {
+                    counts.faces_without_uvs += 1;
+                }
+                if sentinel {
+                    out.push('f');
+                    for r in &refs {
+                        let parts: Vec<&str> = r.split('/').collect();
+                        let vt = match parts.get(1) {
+                            Some(t) if !t.is_empty() => match t.parse::<i64>() {
+                                Ok(i) if i > 0 => (i + 1).to_string(),
+                                _ => t.to_string(),
+                            },
+                            _ => "1".to_string(),
+                        };
+                        let vn = parts.get(2).filter(|n| !n.is_empty()).map(|n| format!("/{n}")).unwrap_or_default();
+                        out.push_str(&format!(" {}/{vt}{vn}", parts[0]));
+                    }
+                    out.push('\n');
+                    continue;
+                }
+            }
+            _ => {}
+        }
+        out.push_str(raw);
+        out.push('\n');
+    }
+    Ok((out, counts))
+}
+
+/// Validates an MTL (tobj panics on short colour lines) and returns normalised text.
+pub(crate) fn validate_mtl(text: &str, file: &Path) -> Result<String> {
+    let mut out = String::with_capacity(text.len());
+    for (i, raw) in text.lines().enumerate() {
+        let ln = i + 1;
+        let line = raw.split('#').next().unwrap_or("").trim();
+        let mut toks = line.split_whitespace();
+        let key = toks.next();
+        match key {
+            Some(k @ ("Ka" | "Kd" | "Ks" | "Ke")) => {
+                let vals: Vec<&str> = toks.collect();
+                let nums = vals
+                    .iter()
+                    .map(|t| parse_finite(Some(t), file, ln, k))
+                    .collect::<Result<Vec<f32>>>()?;
+                match nums.len() {
+                    1 => {
+                        out.push_str(&format!("{k} {0} {0} {0}\n", nums[0]));
+                        continue;
+                    }
+                    n if n >= 3 => {}
+                    n => return Err(SceneError::syntax(file, ln, format!("{k} needs 3 numbers, found {n}"))),
+                }
+                out.push_str(&format!("{k} {} {} {}\n", nums[0], nums[1], nums[2]));
+                continue;
+            }
+            Some(k @ ("Ns" | "Ni" | "d")) => {
+                parse_finite(toks.next(), file, ln, k)?;
+            }
+            Some("newmtl") if toks.next().is_none() => {
+                return Err(SceneError::syntax(file, ln, "newmtl without a name"));
+            }
+            Some(k) if k.starts_with("map_") || k == "bump" || k == "disp" || k == "decal" => {
+                if toks.next().is_none() {
+                    return Err(SceneError::syntax(file, ln, format!("{k} without a file name")));
+                }
+            }
+            _ => {}
+        }
+        out.push_str(line);
+        out.push('\n');
+    }
+    Ok(out)
+}
+
+/// The file name of a texture statement (`map_Kd -bm 0.5 dir\\file.png`): the last word, with
+/// Windows separators normalised; plus the `-bm` bump multiplier if present.
+fn texture_ref(spec: &str) -> (String, Option<f32>) {
+    let words: Vec<&str> = spec.split_whitespace().collect();
+    let bm = words.windows(2).find(|w| w[0] == "-bm").and_then(|w| w[1].parse().ok());
+    let name = words.last().copied().unwrap_or("").replace('\\', "/");
+    (name, bm)
+}
+
+struct TextureCache<'a> {
+    textures: Vec<Texture>,
+    index: HashMap<(PathBuf, bool), u32>,
+    missing: MissingTextures,
+    stats: &'a mut LoadStats,
+}
+
+impl TextureCache<'_> {
+    fn get(&mut self, path: &Path, srgb: bool, mtl: &Path, material: &str) -> Result<u32> {
+        let key = (path.to_path_buf(), srgb);
+        if let Some(&i) = self.index.get(&key) {
+            return Ok(i);
+        }
+        let tex = match Texture::load(path, srgb) {
+            Ok(t) => t,
+            Err(e) if self.missing == MissingTextures::Fallback => {
+                self.stats.warnings.push(format!("{e} (material `{material}` in {}); using the fallback checker", mtl.display()));
+                self.stats.fallback_textures += 1;
+                Texture::fallback(&path.to_string_lossy())
+            }
+            Err(e) => {
+                return Err(SceneError::file(
+                    path,
+                    format!("{e} (named by material `{material}` in {}); pass --missing-textures fallback to render anyway", mtl.display()),
+                ));
+            }
+        };
+        let i = self.textures.len() as u32;
+        self.textures.push(tex);
+        self.index.insert(key, i);
+        Ok(i)
+    }
+}
+
+fn convert_material(m: &tobj::Material, mtl: &Path, cache: &mut TextureCache) -> Result<Material> {
+    let dir = mtl.parent().unwrap_or(Path::new("."));
+    let mut out = Material::named(&m.name);
+    if let Some(kd) = m.diffuse {
+        out.kd = kd;
+    }
+    if let Some(ks) = m.specular {
+        out.ks = ks;
+    }
+    if let Some(ns) = m.shininess {
+        out.ns = ns.max(1.0);
+    }
+    if let Some(ke) = m.emissive {
+        out.ke = ke;
+    }
+    if let Some(t) = &m.diffuse_texture {
+        let (name, _) = texture_ref(t);
+        let tex = cache.get(&dir.join(&name), true, mtl, &m.name)?;
+        out.kd_tex = Some(tex);
+        // Textured materials take their colour from the texture (scaled by Kd).
+        if cache.textures[tex as usize].has_alpha {
+            out.alpha = AlphaSource::Texture { tex, channel: 3 };
+        }
+    }
+    if let Some(t) = &m.dissolve_texture {
+        let (name, _) = texture_ref(t);
+        let path = dir.join(&name);
+        // The same file as map_Kd: its alpha channel is the mask (sRGB does not touch alpha).
+        let same_as_kd = m.diffuse_texture.as_ref().map(|d| dir.join(texture_ref(d).0)) == Some(path.clone());
+        let tex = cache.get(&path, same_as_kd, mtl, &m.name)?;
+        let channel = if cache.textures[tex as usize].has_alpha { 3 } else { 0 };
+        out.alpha = AlphaSource::Texture { tex, channel };
+    }
+    if let Some(t) = &m.normal_texture {
+        let (name, bm) = texture_ref(t);
+        out.bump_tex = Some(cache.get(&dir.join(&name), false, mtl, &m.name)?);
+        out.bump_scale = bm.unwrap_or(1.0);
+    }
+    Ok(out)
+}
+
+type MtlLib = <tobj::MTLLoadResult as IntoIterator>::Item;
+
+fn load_mtl(path: &Path) -> Result<MtlLib> {
+    let text = validate_mtl(&read_text(path)?, path)?;
+    tobj::load_mtl_buf(&mut Cursor::new(text.as_bytes())).map_err(|e| SceneError::file(path, format!("cannot parse MTL: {e}")))
+}
+
+/// Loads an OBJ with its materials and textures.
+pub fn load_obj(path: &Path, opts: &ObjOptions) -> Result<ObjData> {
+    let text = read_text(path)?;
+    let (text, counts) = validate_obj(&text, path)?;
+    let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let mut stats =
+        LoadStats { dropped_faces: counts.dropped, faces_without_uvs: counts.faces_without_uvs, ..Default::default() };
+
+    // Materials in tobj's order (material_id indexes this list), with the file each came from.
+    let mtls: RefCell<Vec<(tobj::Material, PathBuf)>> = RefCell::new(Vec::new());
+    let warnings: RefCell<Vec<String>> = RefCell::new(Vec::new());
+    let mtl_error: RefCell<Option<SceneError>> = RefCell::new(None);
+    let load_opts = tobj::LoadOptions {
+        triangulate: true,
+        single_index: false,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    let loaded = tobj::load_obj_buf(&mut Cursor::new(text.as_bytes()), &load_opts, |requested| {
+        let named = dir.join(requested.to_string_lossy().replace('\\', "/"));
+        let chosen = if let Some(o) = &opts.mtl_override {
+            if !mtls.borrow().is_empty() {
+                return Ok((Vec::new(), Default::default()));
+            }
+            o.clone()
+        } else if named.is_file() {
+            named
+        } else {
+            let guess = path.with_extension("mtl");
+            if guess.is_file() {
+                warnings.borrow_mut().push(format!(
+                    "{}: mtllib `{}` not found; using {} instead",
+                    path.display(),
+                    requested.display(),
+                    guess.display()
+                ));
+                guess
+            } else {
+                warnings.borrow_mut().push(format!(
+                    "{}: mtllib `{}` not found; faces use the default material",
+                    path.display(),
+                    requested.display()
+                ));
+                return Ok((Vec::new(), Default::default()));
+            }
+        };
+        match load_mtl(&chosen) {
+            Ok((mats, names)) => {
+                let mut list = mtls.borrow_mut();
+                list.extend(mats.iter().cloned().map(|m| (m, chosen.clone())));
+                // tobj resolves `usemtl` through this name -> index map (it offsets it itself).
+                Ok((mats, names))
+            }
+            Err(e) => {
+                *mtl_error.borrow_mut() = Some(e);
+                Err(tobj::LoadError::MaterialParseError)
+            }
+        }
+    });
+    if let Some(e) = mtl_error.into_inner() {
+        return Err(e);
+    }
+    let (models, _) = loaded.map_err(|e| SceneError::file(path, format!("cannot parse OBJ: {e}")))?;
+    stats.warnings.extend(warnings.into_inner());
+    let mut mtls = mtls.into_inner();
+    if mtls.is_empty()
+        && let Some(o) = &opts.mtl_override
+    {
+        mtls.extend(load_mtl(o)?.0.into_iter().map(|m| (m, o.clone())));
+    }
+
+    let mut cache = TextureCache { textures: Vec::new(), index: HashMap::new(), missing: opts.missing_textures, stats: &mut stats };
+    let mut materials = Vec::with_capacity(mtls.len() + 1);
+    for (m, file) in &mtls {
+        materials.push(convert_material(m, file, &mut cache)?);
+    }
+    let textures = cache.textures;
+    let default_material = match &opts.default_material {
+        Some(name) => materials.iter().position(|m| &m.name == name).ok_or_else(|| {
+            SceneError::file(path, format!("default material `{name}` is not defined by the MTL"))
+        })?,
+        None => {
+            materials.push(Material::named("default"));
+            materials.len() - 1
+        }
+    };
+
+    let mut objects = Vec::with_capacity(models.len());
+    for model in &models {
+        let material = model.mesh.material_id.unwrap_or(default_material) as u32;
+        let mut model = model.clone();
+        if model.name == "unnamed_object" {
+            // tobj's name for geometry before any `o`/`g`: use the file's name instead.
+            model.name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        }
+        if let Some(obj) = build_object(&model, material, opts.up, &mut stats) {
+            objects.push(obj);
+        }
+    }
+    if objects.is_empty() {
+        return Err(SceneError::file(path, "no drawable triangles"));
+    }
+    Ok(ObjData { objects, materials, textures, stats })
+}
+
+fn convert_up(p: [f32; 3], up: Up) -> [f32; 3] {
+    match up {
+        Up::Y => p,
+        // Z-up to Y-up: rotate -90 degrees about X.
+        Up::Z => [p[0], p[2], -p[1]],
+    }
+}
+
+fn build_object(model: &tobj::Model, material: u32, up: Up, stats: &mut LoadStats) -> Option<Object> {
+    let m = &model.mesh;
+    let pos = |i: u32| -> Vec3 {
+        let i = i as usize * 3;
+        Vec3::from(convert_up([m.positions[i], m.positions[i + 1], m.positions[i + 2]], up))
+    };
+    let has_normals = !m.normals.is_empty() && m.normal_indices.len() == m.indices.len();
+    let has_uvs = !m.texcoords.is_empty() && m.texcoord_indices.len() == m.indices.len();
+    // Keep only triangles with three distinct corners.
+    let tris: Vec<usize> = (0..m.indices.len() / 3)
+        .filter(|&t| {
+            let [a, b, c] = [m.indices[3 * t], m.indices[3 * t + 1], m.indices[3 * t + 2]];
+            let ok = a != b && b != c && a != c && pos(a) != pos(b) && pos(b) != pos(c) && pos(a) != pos(c);
+            if !ok {
+                stats.dropped_faces += 1;
+            }
+            ok
+        })
+        .collect();
+    if tris.is_empty() {
+        return None;
+    }
+    // Smooth normals per position index (area-weighted), for meshes without normals.
+    let smooth: Vec<Vec3> = if has_normals {
+        Vec::new()
+    } else {
+        stats.computed_normals += 1;
+        let mut acc = vec![Vec3::ZERO; m.positions.len() / 3];
+        for &t in &tris {
+            let [a, b, c] = [m.indices[3 * t], m.indices[3 * t + 1], m.indices[3 * t + 2]];
+            let n = (pos(b) - pos(a)).cross(pos(c) - pos(a));
+            for i in [a, b, c] {
+                acc[i as usize] += n;
+            }
+        }
+        acc.into_iter().map(|n| n.normalize_or_zero()).collect()
+    };
+    let mut remap: HashMap<(u32, u32, u32), u32> = HashMap::new();
+    let mut vertices = Vec::new();
+    let mut indices = Vec::with_capacity(tris.len() * 3);
+    for &t in &tris {
+        let face_n = {
+            let [a, b, c] = [m.indices[3 * t], m.indices[3 * t + 1], m.indices[3 * t + 2]];
+            (pos(b) - pos(a)).cross(pos(c) - pos(a)).normalize_or_zero()
+        };
+        for k in 3 * t..3 * t + 3 {
+            let p = m.indices[k];
+            let n = if has_normals { m.normal_indices[k] } else { u32::MAX };
+            let uv = if has_uvs { m.texcoord_indices[k] } else { u32::MAX };
+            let next = vertices.len() as u32;
+            let idx = *remap.entry((p, n, uv)).or_insert_with(|| {
+                let normal = if has_normals {
+                    let j = n as usize * 3;
+                    Vec3::from(convert_up([m.normals[j], m.normals[j + 1], m.normals[j + 2]], up)).normalize_or_zero()
+                } else {
+                    smooth[p as usize]
+                };
+                let normal = if normal == Vec3::ZERO || !normal.is_finite() { face_n } else { normal };
+                let uv = if has_uvs {
+                    let j = uv as usize * 2;
+                    [m.texcoords[j], 1.0 - m.texcoords.get(j + 1).copied().unwrap_or(0.0)]
+                } else {
+                    [0.0, 0.0]
+                };
+                vertices.push(Vertex { pos: pos(p).to_array(), normal: normal.to_array(), uv });
+                next
+            });
+            indices.push(idx);
+        }
+    }
+    stats.triangles += tris.len();
+    Some(Object { name: model.name.clone(), vertices, indices, material })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn f() -> PathBuf {
+        PathBuf::from("t.obj")
+    }
+
+    #[test]
+    fn nan_vertex_names_the_line() {
+        let err = validate_obj("v 0 0 0\nv 1 nan 0\n", &f()).unwrap_err().to_string();
+        assert_eq!(err, "t.obj:2: vertex y: `nan` is not a finite number");
+        let err = validate_obj("v 0 0 inf\n", &f()).unwrap_err().to_string();
+        assert!(err.starts_with("t.obj:1: vertex z"), "{err}");
+        let err = validate_obj("v 0 0\n", &f()).unwrap_err().to_string();
+        assert!(err.contains("t.obj:1: vertex z: missing number"), "{err}");
+    }
+
+    #[test]
+    fn face_indices_are_checked_with_negative_ones_resolved() {
+        let ok = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nf 1/1 2/1 3/1\n";
+        assert!(validate_obj(ok, &f()).is_err(), "vt 1 is not defined");
+        let ok = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf -3 -2 -1\nf 1/1 2/1 3/1\nf 1//1 2//1 3//1\n";
+        let err = validate_obj(ok, &f()).unwrap_err().to_string();
+        assert!(err.contains("t.obj:7: face refers to normal 1, but 0 are defined"), "{err}");
+        let err = validate_obj("v 0 0 0\nf 1 2 3\n", &f()).unwrap_err().to_string();
+        assert!(err.contains("t.obj:2: face refers to vertex 2, but 1 are defined"), "{err}");
+        let err = validate_obj("v 0 0 0\nf 1 x 1\n", &f()).unwrap_err().to_string();
+        assert!(err.contains("`x` is not a valid vertex reference"), "{err}");
+    }
+
+    #[test]
+    fn short_faces_are_dropped_and_counted() {
+        let (text, counts) = validate_obj("v 0 0 0\nv 1 0 0\nf 1 2\n", &f()).expect("valid");
+        assert_eq!(counts.dropped, 1);
+        assert!(!text.contains("f 1 2"));
+    }
+
+    #[test]
+    fn faces_without_uvs_point_at_the_sentinel() {
+        let src = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.5 0.5\nvn 0 0 1\nf 1/1/1 2/1/1 3/-1/1\nf 1//1 2//1 3//1\nf 1 2 3\n";
+        let (text, counts) = validate_obj(src, &f()).expect("valid");
+        assert!(text.starts_with("vt 0 1\n"), "{text}");
+        assert!(text.contains("f 1/2/1 2/2/1 3/-1/1"), "positive vt shift, negative kept: {text}");
+        assert!(text.contains("f 1/1/1 2/1/1 3/1/1"), "{text}");
+        assert!(text.contains("f 1/1 2/1 3/1"), "{text}");
+        assert_eq!(counts.faces_without_uvs, 2);
+        let (text, counts) = validate_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", &f()).expect("valid");
+        assert!(!text.contains("vt"), "no UVs anywhere: no sentinel");
+        assert_eq!(counts.faces_without_uvs, 1);
+    }
+
+    #[test]
+    fn mtl_colours_are_checked_and_expanded() {
+        let err = validate_mtl("newmtl a\nKd 0.5 0.5\n", &f()).unwrap_err().to_string();
+        assert!(err.contains("t.obj:2: Kd needs 3 numbers, found 2"), "{err}");
+        let err = validate_mtl("newmtl a\nNs abc\n", &f()).unwrap_err().to_string();
+        assert!(err.contains("t.obj:2: Ns: `abc` is not a number"), "{err}");
+        let text = validate_mtl("newmtl a\n  Kd 0.25 # grey\nKa 0.1 0.2 0.3 # Red\n", &f()).expect("valid");
+        assert!(text.contains("Kd 0.25 0.25 0.25"), "{text}");
+        assert!(text.contains("Ka 0.1 0.2 0.3"), "{text}");
+    }
+
+    #[test]
+    fn texture_refs_normalise_backslashes_and_options() {
+        assert_eq!(texture_ref(".\\wal67ar_small.jpg"), ("./wal67ar_small.jpg".into(), None));
+        assert_eq!(texture_ref("-bm 0.5 maps/h.png"), ("maps/h.png".into(), Some(0.5)));
+    }
+}
