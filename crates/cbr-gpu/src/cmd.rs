@@ -207,8 +207,9 @@ impl Cmd {
         };
     }
 
+    /// Binds u32 indices. Declare the buffer's use (`use_buffer(.., GraphicsRead)`) before the
+    /// rendering pass begins: barriers are not allowed inside it.
     pub fn bind_index_buffer(&mut self, b: &Buffer) {
-        self.use_buffer(b, Access::GraphicsRead);
         // SAFETY: u32 indices.
         unsafe {
             self.dev()

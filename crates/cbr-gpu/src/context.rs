@@ -124,7 +124,7 @@ unsafe extern "system" fn debug_callback(
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
     let msg = format!("[{severity:?} {kind:?}] {id}: {text}");
-    tracing::warn!(target: "vulkan", "{msg}");
+    eprintln!("vulkan: {msg}");
     // SAFETY: `user` is the `ValidationLog` pointer installed in `Gpu::new`, alive while the
     // messenger exists.
     unsafe { &*(user as *const ValidationLog) }.push(msg);
@@ -152,15 +152,12 @@ fn required_features(
     f10: &vk::PhysicalDeviceFeatures,
     f12: &vk::PhysicalDeviceVulkan12Features,
     f13: &vk::PhysicalDeviceVulkan13Features,
-) -> [(&'static str, bool); 4] {
+) -> [(&'static str, bool); 3] {
+    let _ = f10;
     [
         ("dynamicRendering", f13.dynamic_rendering != 0),
         ("synchronization2", f13.synchronization2 != 0),
         ("hostQueryReset", f12.host_query_reset != 0),
-        (
-            "shaderSampledImageArrayDynamicIndexing",
-            f10.shader_sampled_image_array_dynamic_indexing != 0,
-        ),
     ]
 }
 
@@ -401,7 +398,6 @@ impl Gpu {
             .shader_clip_distance(caps.clip_distance)
             .geometry_shader(caps.geometry_shader)
             .pipeline_statistics_query(caps.pipeline_statistics)
-            .shader_sampled_image_array_dynamic_indexing(true)
             .fragment_stores_and_atomics(p.f10.fragment_stores_and_atomics != 0)
             .shader_storage_image_write_without_format(p.f10.shader_storage_image_write_without_format != 0)
             .independent_blend(p.f10.independent_blend != 0);

@@ -3,6 +3,10 @@
 //! lavapipe rule (PLATFORM.md): a compute dispatch between two timestamps reads ~0 ms unless a
 //! barrier sits right after the start timestamp and right before the end one. Compute scopes get
 //! those barriers (`compute_fences`, on by default); graphics intervals are right without them.
+//!
+//! Statistics: lavapipe 22.3 crashes (SIGSEGV in its queue thread, no validation message) when a
+//! query counting COMPUTE_SHADER_INVOCATIONS encloses draws, so graphics and compute scopes count
+//! in separate pools with only their own counters.
 
 use std::sync::Arc;
 
@@ -36,17 +40,31 @@ pub struct PassTiming {
     pub stats: Option<PipelineStats>,
 }
 
-const STATS: vk::QueryPipelineStatisticFlags = vk::QueryPipelineStatisticFlags::from_raw(
+/// Counted in graphics scopes, in flag-bit order: vertex (bit 2), clipping primitives (6),
+/// fragment (7).
+const GRAPHICS_STATS: vk::QueryPipelineStatisticFlags = vk::QueryPipelineStatisticFlags::from_raw(
     vk::QueryPipelineStatisticFlags::VERTEX_SHADER_INVOCATIONS.as_raw()
         | vk::QueryPipelineStatisticFlags::CLIPPING_PRIMITIVES.as_raw()
-        | vk::QueryPipelineStatisticFlags::FRAGMENT_SHADER_INVOCATIONS.as_raw()
-        | vk::QueryPipelineStatisticFlags::COMPUTE_SHADER_INVOCATIONS.as_raw(),
+        | vk::QueryPipelineStatisticFlags::FRAGMENT_SHADER_INVOCATIONS.as_raw(),
 );
+const COMPUTE_STATS: vk::QueryPipelineStatisticFlags = vk::QueryPipelineStatisticFlags::COMPUTE_SHADER_INVOCATIONS;
+
+fn stats_pool(gpu: &Gpu, name: &str, capacity: u32, flags: vk::QueryPipelineStatisticFlags) -> Result<vk::QueryPool> {
+    let info = vk::QueryPoolCreateInfo::default()
+        .query_type(vk::QueryType::PIPELINE_STATISTICS)
+        .query_count(capacity)
+        .pipeline_statistics(flags);
+    // SAFETY: valid create info; the feature is enabled (checked by the caller).
+    let pool = unsafe { gpu.device().create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
+    gpu.name_object(pool, name);
+    Ok(pool)
+}
 
 pub struct Profiler {
     gpu: Arc<Inner>,
     timestamps: vk::QueryPool,
-    stats: Option<vk::QueryPool>,
+    /// (graphics, compute) statistics pools, indexed by scope.
+    stats: Option<(vk::QueryPool, vk::QueryPool)>,
     capacity: u32,
     scopes: Vec<(String, PassKind)>,
     open: Option<u32>,
@@ -69,14 +87,10 @@ impl Profiler {
         let timestamps = unsafe { dev.create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
         gpu.name_object(timestamps, &format!("{name}.timestamps"));
         let stats = if gpu.caps().pipeline_statistics {
-            let info = vk::QueryPoolCreateInfo::default()
-                .query_type(vk::QueryType::PIPELINE_STATISTICS)
-                .query_count(capacity)
-                .pipeline_statistics(STATS);
-            // SAFETY: valid create info; the feature is enabled.
-            let pool = unsafe { dev.create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
-            gpu.name_object(pool, &format!("{name}.statistics"));
-            Some(pool)
+            Some((
+                stats_pool(gpu, &format!("{name}.graphics_statistics"), capacity, GRAPHICS_STATS)?,
+                stats_pool(gpu, &format!("{name}.compute_statistics"), capacity, COMPUTE_STATS)?,
+            ))
         } else {
             None
         };
@@ -100,8 +114,9 @@ impl Profiler {
         // are waited on before results are read and before the next reset).
         unsafe {
             self.gpu.device.reset_query_pool(self.timestamps, 0, self.capacity * 2);
-            if let Some(s) = self.stats {
-                self.gpu.device.reset_query_pool(s, 0, self.capacity);
+            if let Some((g, c)) = self.stats {
+                self.gpu.device.reset_query_pool(g, 0, self.capacity);
+                self.gpu.device.reset_query_pool(c, 0, self.capacity);
             }
         }
     }
@@ -123,8 +138,8 @@ impl Profiler {
         // SAFETY: queries were reset; indices are in range.
         unsafe {
             dev.cmd_write_timestamp2(cmd.cb, vk::PipelineStageFlags2::ALL_COMMANDS, self.timestamps, 2 * i);
-            if let Some(s) = self.stats {
-                dev.cmd_begin_query(cmd.cb, s, i, vk::QueryControlFlags::empty());
+            if let Some(pool) = self.stats_pool(kind) {
+                dev.cmd_begin_query(cmd.cb, pool, i, vk::QueryControlFlags::empty());
             }
         }
         if kind == PassKind::Compute && self.compute_fences {
@@ -133,16 +148,25 @@ impl Profiler {
         Scope(i)
     }
 
+    fn stats_pool(&self, kind: PassKind) -> Option<vk::QueryPool> {
+        match (self.stats, kind) {
+            (Some((g, _)), PassKind::Graphics) => Some(g),
+            (Some((_, c)), PassKind::Compute) => Some(c),
+            _ => None,
+        }
+    }
+
     pub fn end(&mut self, cmd: &mut Cmd, scope: Scope) {
         let i = scope.0;
-        if self.scopes[i as usize].1 == PassKind::Compute && self.compute_fences {
+        let kind = self.scopes[i as usize].1;
+        if kind == PassKind::Compute && self.compute_fences {
             cmd.full_barrier();
         }
         let dev = &self.gpu.device;
         // SAFETY: paired with `begin`.
         unsafe {
-            if let Some(s) = self.stats {
-                dev.cmd_end_query(cmd.cb, s, i);
+            if let Some(pool) = self.stats_pool(kind) {
+                dev.cmd_end_query(cmd.cb, pool, i);
             }
             dev.cmd_write_timestamp2(cmd.cb, vk::PipelineStageFlags2::ALL_COMMANDS, self.timestamps, 2 * i + 1);
         }
@@ -160,36 +184,46 @@ impl Profiler {
         // SAFETY: the submission was waited on; WAIT makes the call block until available.
         unsafe { dev.get_query_pool_results(self.timestamps, 0, &mut ts, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT) }
             .vk("vkGetQueryPoolResults")?;
-        let mut stats = vec![[0u64; 4]; n];
-        if let Some(s) = self.stats {
-            // SAFETY: as above; 4 counters per query, in flag-bit order.
-            unsafe { dev.get_query_pool_results(s, 0, &mut stats, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT) }
-                .vk("vkGetQueryPoolResults")?;
-        }
-        Ok(self
-            .scopes
-            .iter()
-            .enumerate()
-            .map(|(i, (name, _))| PassTiming {
+        let mut out = Vec::with_capacity(n);
+        for (i, (name, kind)) in self.scopes.iter().enumerate() {
+            let stats = match self.stats_pool(*kind) {
+                Some(pool) if *kind == PassKind::Graphics => {
+                    let mut v = [[0u64; 3]; 1];
+                    // SAFETY: the submission was waited on; 3 counters in flag-bit order.
+                    unsafe { dev.get_query_pool_results(pool, i as u32, &mut v, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT) }
+                        .vk("vkGetQueryPoolResults")?;
+                    Some(PipelineStats {
+                        vertex_invocations: v[0][0],
+                        clipping_primitives: v[0][1],
+                        fragment_invocations: v[0][2],
+                        compute_invocations: 0,
+                    })
+                }
+                Some(pool) => {
+                    let mut v = [0u64; 1];
+                    // SAFETY: as above; one counter.
+                    unsafe { dev.get_query_pool_results(pool, i as u32, &mut v, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT) }
+                        .vk("vkGetQueryPoolResults")?;
+                    Some(PipelineStats { compute_invocations: v[0], ..Default::default() })
+                }
+                None => None,
+            };
+            out.push(PassTiming {
                 name: name.clone(),
                 gpu_ms: ts[2 * i + 1].saturating_sub(ts[2 * i]) as f64 * self.period_ns * 1e-6,
-                // Flag-bit order: VERTEX_SHADER (bit 2), CLIPPING_PRIMITIVES (6), FRAGMENT (7), COMPUTE (10).
-                stats: self.stats.map(|_| PipelineStats {
-                    vertex_invocations: stats[i][0],
-                    clipping_primitives: stats[i][1],
-                    fragment_invocations: stats[i][2],
-                    compute_invocations: stats[i][3],
-                }),
-            })
-            .collect())
+                stats,
+            });
+        }
+        Ok(out)
     }
 }
 
 impl Drop for Profiler {
     fn drop(&mut self) {
         self.gpu.defer(Garbage::QueryPool(self.timestamps));
-        if let Some(s) = self.stats {
-            self.gpu.defer(Garbage::QueryPool(s));
+        if let Some((g, c)) = self.stats {
+            self.gpu.defer(Garbage::QueryPool(g));
+            self.gpu.defer(Garbage::QueryPool(c));
         }
     }
 }

@@ -1,0 +1,221 @@
+//! The scene on the GPU: geometry, materials and textures uploaded once; per-frame object
+//! transforms, lights and constants rewritten each frame (camera-relative, computed in f64).
+
+use cbr_gpu::{Buffer, Gpu, Image, ImageDesc, LevelCopy, Location, Result, Sampler, SamplerDesc, vk};
+use cbr_scene::{AlphaSource, Camera, Scene};
+use glam::{DMat3, DMat4, DVec3, Mat4};
+
+use crate::gpu_types::{FrameConstants, LightData, MaterialData, ObjectData};
+
+/// One draw: an object's index range in the shared index buffer.
+#[derive(Clone, Copy, Debug)]
+pub struct Draw {
+    pub object: u32,
+    pub material: u32,
+    pub first_index: u32,
+    pub index_count: u32,
+}
+
+pub struct GpuScene {
+    pub vertices: Buffer,
+    pub indices: Buffer,
+    pub materials: Buffer,
+    pub textures: Vec<Image>,
+    /// Bound in material slots without a texture.
+    pub white: Image,
+    /// Per material: the textures of its albedo, mask and bump slots.
+    pub material_textures: Vec<[Option<u32>; 3]>,
+    pub sampler: Sampler,
+    pub draws: Vec<Draw>,
+    pub objects: Buffer,
+    pub lights: Buffer,
+    pub frame: Buffer,
+    pub light_count: (u32, u32),
+}
+
+/// Where the camera is for one frame, with its previous-frame state for velocities.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameView {
+    pub camera: Camera,
+    pub prev_camera: Camera,
+    pub time: f64,
+    pub prev_time: f64,
+    pub width: u32,
+    pub height: u32,
+    /// Sub-pixel raster offset in pixels (0 for the native technique).
+    pub jitter: [f32; 2],
+    pub lod_bias: f32,
+    pub frame_index: u32,
+}
+
+fn to_f32(m: DMat4) -> [f32; 16] {
+    m.as_mat4().to_cols_array()
+}
+
+fn material_data(m: &cbr_scene::Material) -> MaterialData {
+    let tex = |t: Option<u32>| t.map(|t| t as i32).unwrap_or(-1);
+    let (alpha_tex, channel) = match m.alpha {
+        AlphaSource::Opaque => (-1, 0),
+        AlphaSource::Texture { tex, channel } => (tex as i32, channel as i32),
+    };
+    // Height maps: a texel value of 1 is 1 cm of relief, times the MTL's -bm multiplier.
+    let bump_height = 0.01 * m.bump_scale;
+    MaterialData {
+        kd: [m.kd[0], m.kd[1], m.kd[2], 0.0],
+        ks: [m.ks[0], m.ks[1], m.ks[2], if m.ks.iter().any(|&k| k > 0.0) { m.ns } else { 0.0 }],
+        ke: [m.ke[0], m.ke[1], m.ke[2], bump_height],
+        tex: [tex(m.kd_tex), alpha_tex, channel, tex(m.bump_tex)],
+    }
+}
+
+/// Uploads the scene's textures and, last, a 1x1 white one.
+fn upload_textures(gpu: &Gpu, scene: &Scene) -> Result<Vec<Image>> {
+    let mut images = Vec::with_capacity(scene.textures.len() + 1);
+    let mut staging_bytes = Vec::new();
+    let mut copies: Vec<Vec<LevelCopy>> = Vec::new();
+    let white = cbr_scene::Texture::from_rgba8("white", 1, 1, vec![255; 4], false);
+    for (i, t) in scene.textures.iter().chain(std::iter::once(&white)).enumerate() {
+        let format = if t.srgb { vk::Format::R8G8B8A8_SRGB } else { vk::Format::R8G8B8A8_UNORM };
+        let name = format!("texture[{i}] {}", t.name);
+        images.push(Image::new(
+            gpu,
+            &ImageDesc {
+                name: &name,
+                format,
+                width: t.width(),
+                height: t.height(),
+                mip_levels: t.levels.len() as u32,
+                layers: 1,
+                samples: 1,
+                usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+            },
+        )?);
+        let mut levels = Vec::new();
+        for (l, level) in t.levels.iter().enumerate() {
+            levels.push(LevelCopy { buffer_offset: staging_bytes.len() as u64, level: l as u32, width: level.width, height: level.height });
+            staging_bytes.extend_from_slice(&level.rgba);
+        }
+        copies.push(levels);
+    }
+    let mut staging = Buffer::new(gpu, "textures.staging", staging_bytes.len() as u64, vk::BufferUsageFlags::TRANSFER_SRC, Location::CpuToGpu)?;
+    staging.write(0, &staging_bytes)?;
+    gpu.submit("upload textures", |cmd| {
+        for (img, levels) in images.iter().zip(&copies) {
+            cmd.upload_levels(&staging, img, levels, cbr_gpu::Access::FragmentSampled);
+        }
+        Ok(())
+    })?;
+    Ok(images)
+}
+
+impl GpuScene {
+    pub fn new(gpu: &Gpu, scene: &Scene) -> Result<GpuScene> {
+        let mut vertex_bytes: Vec<u8> = Vec::new();
+        let mut index_data: Vec<u32> = Vec::new();
+        let mut draws = Vec::with_capacity(scene.objects.len());
+        for (i, o) in scene.objects.iter().enumerate() {
+            let base = (vertex_bytes.len() / std::mem::size_of::<cbr_scene::Vertex>()) as u32;
+            draws.push(Draw { object: i as u32, material: o.material, first_index: index_data.len() as u32, index_count: o.indices.len() as u32 });
+            vertex_bytes.extend_from_slice(bytemuck::cast_slice(&o.vertices));
+            index_data.extend(o.indices.iter().map(|&k| k + base));
+        }
+        let usage_storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let vertices = Buffer::with_data(gpu, "scene.vertices", usage_storage, &vertex_bytes)?;
+        let indices = Buffer::with_data(gpu, "scene.indices", vk::BufferUsageFlags::INDEX_BUFFER, bytemuck::cast_slice(&index_data))?;
+        let mats: Vec<MaterialData> = scene.materials.iter().map(material_data).collect();
+        let materials = Buffer::with_data(gpu, "scene.materials", usage_storage, bytemuck::cast_slice(&mats))?;
+        let mut textures = upload_textures(gpu, scene)?;
+        let white = textures.pop().ok_or_else(|| cbr_gpu::GpuError::Other("no white texture".into()))?;
+        let material_textures = scene
+            .materials
+            .iter()
+            .map(|m| {
+                let mask = match m.alpha {
+                    AlphaSource::Opaque => None,
+                    AlphaSource::Texture { tex, .. } => Some(tex),
+                };
+                [m.kd_tex, mask, m.bump_tex]
+            })
+            .collect();
+        let sampler = Sampler::new(gpu, "scene.sampler", SamplerDesc { linear: true, mipmaps: true, repeat: true })?;
+        let objects = Buffer::new(
+            gpu,
+            "scene.objects",
+            (scene.objects.len().max(1) * std::mem::size_of::<ObjectData>()) as u64,
+            usage_storage,
+            Location::CpuToGpu,
+        )?;
+        let light_count = (scene.directional.len() as u32, scene.points.len() as u32);
+        let lights = Buffer::new(
+            gpu,
+            "scene.lights",
+            ((scene.directional.len() + scene.points.len()).max(1) * std::mem::size_of::<LightData>()) as u64,
+            usage_storage,
+            Location::CpuToGpu,
+        )?;
+        let frame = Buffer::new(
+            gpu,
+            "scene.frame",
+            std::mem::size_of::<FrameConstants>() as u64,
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            Location::CpuToGpu,
+        )?;
+        Ok(GpuScene { vertices, indices, materials, textures, white, material_textures, sampler, draws, objects, lights, frame, light_count })
+    }
+
+    /// Writes this frame's transforms, lights and constants. Callers make sure no submission
+    /// reading them is in flight (frames are submitted and waited on one at a time).
+    pub fn update(&mut self, scene: &Scene, view: &FrameView) -> Result<()> {
+        let aspect = f64::from(view.width) / f64::from(view.height);
+        let (cam, prev) = (&view.camera, &view.prev_camera);
+        let clip_from_rel = cam.projection(aspect) * cam.rotation();
+        let prev_clip_from_rel = prev.projection(aspect) * prev.rotation();
+        let objects: Vec<ObjectData> = (0..scene.objects.len())
+            .map(|i| {
+                let world = scene.object_transform(i, view.time);
+                let prev_world = scene.object_transform(i, view.prev_time);
+                let rel = DMat4::from_translation(-cam.position) * world;
+                let prev_rel = DMat4::from_translation(-prev.position) * prev_world;
+                let normal = DMat4::from_mat3(DMat3::from_mat4(rel).inverse().transpose());
+                ObjectData {
+                    clip_from_local: to_f32(clip_from_rel * rel),
+                    prev_clip_from_local: to_f32(prev_clip_from_rel * prev_rel),
+                    world_from_local: to_f32(rel),
+                    normal_from_local: to_f32(normal),
+                    ids: [i as u32 + 1, scene.objects[i].material, 0, 0],
+                }
+            })
+            .collect();
+        self.objects.write(0, bytemuck::cast_slice(&objects))?;
+        let mut lights: Vec<LightData> = scene
+            .directional
+            .iter()
+            .map(|d| {
+                let c = d.color.map(|c| c * d.intensity);
+                LightData { position: [d.direction[0], d.direction[1], d.direction[2], 0.0], color: [c[0], c[1], c[2], 0.0] }
+            })
+            .collect();
+        lights.extend(scene.points.iter().map(|p| {
+            let rel = (DVec3::from(p.position) - cam.position).as_vec3();
+            let c = p.color.map(|c| c * p.intensity);
+            LightData { position: [rel.x, rel.y, rel.z, 1.0], color: [c[0], c[1], c[2], p.range] }
+        }));
+        if !lights.is_empty() {
+            self.lights.write(0, bytemuck::cast_slice(&lights))?;
+        }
+        let a = scene.settings.ambient;
+        let constants = FrameConstants {
+            viewport: [view.width as f32, view.height as f32, 1.0 / view.width as f32, 1.0 / view.height as f32],
+            jitter: [view.jitter[0], view.jitter[1], 0.0, 0.0],
+            ambient: [a[0], a[1], a[2], view.lod_bias],
+            counts: [self.light_count.0, self.light_count.1, view.frame_index, 0],
+        };
+        self.frame.write(0, bytemuck::bytes_of(&constants))?;
+        Ok(())
+    }
+}
+
+/// The matrix that takes camera-relative world positions to clip space (for tests and tools).
+pub fn clip_from_world(camera: &Camera, aspect: f64) -> Mat4 {
+    (camera.projection(aspect) * camera.rotation() * DMat4::from_translation(-camera.position)).as_mat4()
+}

@@ -1,0 +1,35 @@
+//! The per-frame outputs of a scene raster pass, and their formats (one place).
+
+use cbr_gpu::{Gpu, Image, ImageDesc, Result, vk};
+
+pub const COLOR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+pub const VELOCITY_FORMAT: vk::Format = vk::Format::R32G32_SFLOAT;
+pub const ID_FORMAT: vk::Format = vk::Format::R32G32_UINT;
+pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+
+/// Colour (HDR), velocity (pixels), IDs (object, primitive) and reverse-Z depth.
+pub struct FrameTargets {
+    pub color: Image,
+    pub velocity: Image,
+    pub ids: Image,
+    pub depth: Image,
+}
+
+impl FrameTargets {
+    pub fn new(gpu: &Gpu, prefix: &str, width: u32, height: u32) -> Result<FrameTargets> {
+        let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::SAMPLED;
+        let img = |name: &str, format, usage| {
+            Image::new(gpu, &ImageDesc::new_2d(&format!("{prefix}.{name}"), format, width, height, usage))
+        };
+        Ok(FrameTargets {
+            color: img("color", COLOR_FORMAT, usage)?,
+            velocity: img("velocity", VELOCITY_FORMAT, usage)?,
+            ids: img("ids", ID_FORMAT, usage)?,
+            depth: img(
+                "depth",
+                DEPTH_FORMAT,
+                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::SAMPLED,
+            )?,
+        })
+    }
+}
