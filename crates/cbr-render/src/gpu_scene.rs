@@ -31,6 +31,7 @@ pub struct GpuScene {
     pub lights: Buffer,
     pub frame: Buffer,
     pub light_count: (u32, u32),
+    pub background: [f32; 3],
 }
 
 /// Where the camera is for one frame, with its previous-frame state for velocities.
@@ -52,7 +53,7 @@ fn to_f32(m: DMat4) -> [f32; 16] {
     m.as_mat4().to_cols_array()
 }
 
-fn material_data(m: &cbr_scene::Material) -> MaterialData {
+fn material_data(m: &cbr_scene::Material, bump: bool) -> MaterialData {
     let tex = |t: Option<u32>| t.map(|t| t as i32).unwrap_or(-1);
     let (alpha_tex, channel) = match m.alpha {
         AlphaSource::Opaque => (-1, 0),
@@ -64,7 +65,7 @@ fn material_data(m: &cbr_scene::Material) -> MaterialData {
         kd: [m.kd[0], m.kd[1], m.kd[2], 0.0],
         ks: [m.ks[0], m.ks[1], m.ks[2], if m.ks.iter().any(|&k| k > 0.0) { m.ns } else { 0.0 }],
         ke: [m.ke[0], m.ke[1], m.ke[2], bump_height],
-        tex: [tex(m.kd_tex), alpha_tex, channel, tex(m.bump_tex)],
+        tex: [tex(m.kd_tex), alpha_tex, channel, if bump { tex(m.bump_tex) } else { -1 }],
     }
 }
 
@@ -122,7 +123,7 @@ impl GpuScene {
         let usage_storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let vertices = Buffer::with_data(gpu, "scene.vertices", usage_storage, &vertex_bytes)?;
         let indices = Buffer::with_data(gpu, "scene.indices", vk::BufferUsageFlags::INDEX_BUFFER, bytemuck::cast_slice(&index_data))?;
-        let mats: Vec<MaterialData> = scene.materials.iter().map(material_data).collect();
+        let mats: Vec<MaterialData> = scene.materials.iter().map(|m| material_data(m, scene.settings.bump)).collect();
         let materials = Buffer::with_data(gpu, "scene.materials", usage_storage, bytemuck::cast_slice(&mats))?;
         let mut textures = upload_textures(gpu, scene)?;
         let white = textures.pop().ok_or_else(|| cbr_gpu::GpuError::Other("no white texture".into()))?;
@@ -160,7 +161,21 @@ impl GpuScene {
             vk::BufferUsageFlags::UNIFORM_BUFFER,
             Location::CpuToGpu,
         )?;
-        Ok(GpuScene { vertices, indices, materials, textures, white, material_textures, sampler, draws, objects, lights, frame, light_count })
+        Ok(GpuScene {
+            vertices,
+            indices,
+            materials,
+            textures,
+            white,
+            material_textures,
+            sampler,
+            draws,
+            objects,
+            lights,
+            frame,
+            light_count,
+            background: scene.settings.background,
+        })
     }
 
     /// Writes this frame's transforms, lights and constants. Callers make sure no submission

@@ -113,8 +113,9 @@ impl ScenePass {
         let clear_f = |c: [f32; 4]| Some(vk::ClearValue { color: vk::ClearColorValue { float32: c } });
         cmd.begin_rendering(
             &[
-                // Background: radiance 0, alpha 1 (every pixel is rendered by the native pass).
-                Attachment { image: &targets.color, clear: clear_f([0.0, 0.0, 0.0, 1.0]) },
+                // Background: the scene's constant sky radiance, alpha 1 (the native pass renders
+                // every pixel).
+                Attachment { image: &targets.color, clear: clear_f([scene.background[0], scene.background[1], scene.background[2], 1.0]) },
                 Attachment { image: &targets.velocity, clear: clear_f([0.0; 4]) },
                 Attachment { image: &targets.ids, clear: Some(vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } }) },
             ],

@@ -39,7 +39,7 @@ fn scene(objects: Vec<Object>, keys: Vec<CameraKey>, width: u32, height: u32) ->
         directional: vec![DirLight { direction: [0.0, 0.0, -1.0], color: [1.0; 3], intensity: 2.0 }],
         points: vec![],
         motions: vec![],
-        settings: Settings { width, height, frames: 2, fps: 10.0, seed: 0, exposure: 0.0, ambient: [0.0; 3] },
+        settings: Settings { width, height, frames: 2, fps: 10.0, seed: 0, exposure: 0.0, ambient: [0.0; 3], background: [0.0; 3], bump: false },
         stats: LoadStats::default(),
     }
 }

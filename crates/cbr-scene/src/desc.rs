@@ -49,6 +49,8 @@ pub struct SceneDesc {
     pub seed: Option<u64>,
     pub exposure: Option<f32>,
     pub ambient: Option<[f32; 3]>,
+    pub background: Option<[f32; 3]>,
+    pub bump: Option<bool>,
     pub camera: Option<CameraDesc>,
     pub lights: Option<LightsDesc>,
     #[serde(default)]

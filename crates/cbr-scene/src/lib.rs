@@ -166,6 +166,8 @@ fn apply_settings(scene: &mut Scene, d: &desc::SceneDesc, path: &Path) -> Result
     s.seed = d.seed.unwrap_or(s.seed);
     s.exposure = d.exposure.unwrap_or(s.exposure);
     s.ambient = d.ambient.unwrap_or(s.ambient);
+    s.background = d.background.unwrap_or(s.background);
+    s.bump = d.bump.unwrap_or(s.bump);
     Ok(())
 }
 

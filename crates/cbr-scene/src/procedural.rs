@@ -276,7 +276,17 @@ pub fn demo() -> Scene {
             spin_rad_per_s: 1.5 * std::f64::consts::TAU,
             velocity: [0.0; 3],
         }],
-        settings: Settings { width: 960, height: 540, frames: 16, fps: 30.0, seed: 0, exposure: 0.0, ambient: [0.05, 0.06, 0.08] },
+        settings: Settings {
+            width: 960,
+            height: 540,
+            frames: 16,
+            fps: 30.0,
+            seed: 0,
+            exposure: 0.0,
+            ambient: [0.05, 0.06, 0.08],
+            background: [0.35, 0.5, 0.8],
+            bump: false,
+        },
         stats,
     }
 }

@@ -118,11 +118,16 @@ pub struct Settings {
     /// Exposure in stops, applied by the display transform only.
     pub exposure: f32,
     pub ambient: [f32; 3],
+    /// Radiance where no geometry is drawn (a constant sky).
+    pub background: [f32; 3],
+    /// Shade with `map_bump` height maps (screen-space derivative bump mapping). Off by default:
+    /// it shows bright seams along triangle edges on Šibenik (docs/native.md).
+    pub bump: bool,
 }
 
 impl Default for Settings {
     fn default() -> Self {
-        Settings { width: 1280, height: 720, frames: 1, fps: 30.0, seed: 0, exposure: 0.0, ambient: [0.03; 3] }
+        Settings { width: 1280, height: 720, frames: 1, fps: 30.0, seed: 0, exposure: 0.0, ambient: [0.03; 3], background: [0.0; 3], bump: false }
     }
 }
 

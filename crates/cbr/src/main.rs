@@ -1,1 +1,51 @@
-fn main() {}
+//! `cbr`: render OBJ scenes with checkerboard techniques, compare, benchmark, report.
+#![forbid(unsafe_code)]
+#![deny(clippy::unwrap_used)]
+
+mod info;
+mod render;
+mod stats;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(name = "cbr", version, about = "Headless checkerboard-rendering research renderer (Vulkan)")]
+struct Cli {
+    /// More log output (-v info, -vv debug).
+    #[arg(short, long, action = clap::ArgAction::Count, global = true)]
+    verbose: u8,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene (TOML, OBJ, or builtin:demo) to EXR + PNG per frame and run.json.
+    Render(render::RenderArgs),
+    /// List Vulkan devices, the chosen one's limits, and which checkerboard layouts it can run.
+    Info(info::InfoArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let level = match cli.verbose {
+        0 => "warn",
+        1 => "info",
+        _ => "debug",
+    };
+    let filter = tracing_subscriber::EnvFilter::try_from_env("CBR_LOG").unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level));
+    tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).init();
+    let result = match cli.command {
+        Command::Render(a) => render::run(&a),
+        Command::Info(a) => info::run(&a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
