@@ -32,9 +32,9 @@ impl Access {
             Access::ColorAttachmentWrite => S::COLOR_ATTACHMENT_OUTPUT,
             Access::DepthAttachmentWrite => S::EARLY_FRAGMENT_TESTS | S::LATE_FRAGMENT_TESTS,
             Access::FragmentSampled => S::FRAGMENT_SHADER,
-            Access::ComputeSampled | Access::ComputeStorageWrite | Access::ComputeStorageReadWrite => {
-                S::COMPUTE_SHADER
-            }
+            Access::ComputeSampled
+            | Access::ComputeStorageWrite
+            | Access::ComputeStorageReadWrite => S::COMPUTE_SHADER,
             Access::TransferSrc | Access::TransferDst => S::COPY | S::BLIT | S::CLEAR,
             Access::HostRead => S::HOST,
             Access::GraphicsRead => {
@@ -48,15 +48,23 @@ impl Access {
         match self {
             Access::Undefined => A::NONE,
             Access::ColorAttachmentWrite => A::COLOR_ATTACHMENT_WRITE | A::COLOR_ATTACHMENT_READ,
-            Access::DepthAttachmentWrite => A::DEPTH_STENCIL_ATTACHMENT_WRITE | A::DEPTH_STENCIL_ATTACHMENT_READ,
-            Access::FragmentSampled | Access::ComputeSampled => A::SHADER_SAMPLED_READ | A::SHADER_STORAGE_READ,
+            Access::DepthAttachmentWrite => {
+                A::DEPTH_STENCIL_ATTACHMENT_WRITE | A::DEPTH_STENCIL_ATTACHMENT_READ
+            }
+            Access::FragmentSampled | Access::ComputeSampled => {
+                A::SHADER_SAMPLED_READ | A::SHADER_STORAGE_READ
+            }
             Access::ComputeStorageWrite => A::SHADER_STORAGE_WRITE,
             Access::ComputeStorageReadWrite => A::SHADER_STORAGE_WRITE | A::SHADER_STORAGE_READ,
             Access::TransferSrc => A::TRANSFER_READ,
             Access::TransferDst => A::TRANSFER_WRITE,
             Access::HostRead => A::HOST_READ,
             Access::GraphicsRead => {
-                A::VERTEX_ATTRIBUTE_READ | A::INDEX_READ | A::UNIFORM_READ | A::SHADER_STORAGE_READ | A::SHADER_SAMPLED_READ
+                A::VERTEX_ATTRIBUTE_READ
+                    | A::INDEX_READ
+                    | A::UNIFORM_READ
+                    | A::SHADER_STORAGE_READ
+                    | A::SHADER_SAMPLED_READ
             }
         }
     }
@@ -106,7 +114,11 @@ pub fn image_barrier(
         vk::ImageMemoryBarrier2::default()
             .image(image)
             .src_stage_mask(from.stage())
-            .src_access_mask(if from.is_write() { from.access() } else { vk::AccessFlags2::NONE })
+            .src_access_mask(if from.is_write() {
+                from.access()
+            } else {
+                vk::AccessFlags2::NONE
+            })
             .dst_stage_mask(to.stage())
             .dst_access_mask(to.access())
             .old_layout(old)
@@ -128,7 +140,11 @@ pub fn memory_barrier(from: Access, to: Access) -> Option<vk::MemoryBarrier2<'st
     Some(
         vk::MemoryBarrier2::default()
             .src_stage_mask(from.stage())
-            .src_access_mask(if from.is_write() { from.access() } else { vk::AccessFlags2::NONE })
+            .src_access_mask(if from.is_write() {
+                from.access()
+            } else {
+                vk::AccessFlags2::NONE
+            })
             .dst_stage_mask(to.stage())
             .dst_access_mask(to.access()),
     )
@@ -157,7 +173,10 @@ mod tests {
         .expect("barrier");
         assert_eq!(b.old_layout, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
         assert_eq!(b.new_layout, vk::ImageLayout::TRANSFER_SRC_OPTIMAL);
-        assert!(b.src_access_mask.contains(vk::AccessFlags2::COLOR_ATTACHMENT_WRITE));
+        assert!(
+            b.src_access_mask
+                .contains(vk::AccessFlags2::COLOR_ATTACHMENT_WRITE)
+        );
         assert!(b.dst_access_mask.contains(vk::AccessFlags2::TRANSFER_READ));
         let d = image_barrier(
             vk::Image::null(),

@@ -41,7 +41,12 @@ pub enum Layout {
 }
 
 impl Layout {
-    pub const ALL: [Layout; 4] = [Layout::Msaa2x, Layout::Rotated, Layout::Split, Layout::Masked];
+    pub const ALL: [Layout; 4] = [
+        Layout::Msaa2x,
+        Layout::Rotated,
+        Layout::Split,
+        Layout::Masked,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {

@@ -81,11 +81,20 @@ impl Cmd {
         self.use_buffer(dst, Access::TransferDst);
         let r = [vk::BufferCopy::default().size(size)];
         // SAFETY: both buffers are at least `size` bytes (callers size them from the same data).
-        unsafe { self.dev().cmd_copy_buffer(self.cb, src.raw(), dst.raw(), &r) };
+        unsafe {
+            self.dev()
+                .cmd_copy_buffer(self.cb, src.raw(), dst.raw(), &r)
+        };
     }
 
     /// Copies mip levels from a staging buffer into `image`, leaving it ready for sampling.
-    pub fn upload_levels(&mut self, src: &Buffer, image: &Image, levels: &[LevelCopy], then: Access) {
+    pub fn upload_levels(
+        &mut self,
+        src: &Buffer,
+        image: &Image,
+        levels: &[LevelCopy],
+        then: Access,
+    ) {
         self.use_buffer(src, Access::TransferSrc);
         self.use_image(image, Access::TransferDst);
         let regions: Vec<vk::BufferImageCopy> = levels
@@ -99,7 +108,11 @@ impl Cmd {
                             .mip_level(l.level)
                             .layer_count(1),
                     )
-                    .image_extent(vk::Extent3D { width: l.width, height: l.height, depth: 1 })
+                    .image_extent(vk::Extent3D {
+                        width: l.width,
+                        height: l.height,
+                        depth: 1,
+                    })
             })
             .collect();
         // SAFETY: regions lie inside both resources (computed from the same mip chain).
@@ -125,7 +138,11 @@ impl Cmd {
                     .aspect_mask(image.aspect())
                     .layer_count(image.layers),
             )
-            .image_extent(vk::Extent3D { width: image.width, height: image.height, depth: 1 })];
+            .image_extent(vk::Extent3D {
+                width: image.width,
+                height: image.height,
+                depth: 1,
+            })];
         // SAFETY: the readback buffer was sized for this image.
         unsafe {
             self.dev().cmd_copy_image_to_buffer(
@@ -140,7 +157,12 @@ impl Cmd {
     }
 
     /// Begins dynamic rendering into the given attachments over their full extent.
-    pub fn begin_rendering(&mut self, colors: &[Attachment], depth: Option<Attachment>, layers: u32) {
+    pub fn begin_rendering(
+        &mut self,
+        colors: &[Attachment],
+        depth: Option<Attachment>,
+        layers: u32,
+    ) {
         let mut extent = vk::Extent2D::default();
         let color_infos: Vec<vk::RenderingAttachmentInfo> = colors
             .iter()
@@ -156,7 +178,10 @@ impl Cmd {
             attachment_info(a, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
         });
         let mut info = vk::RenderingInfo::default()
-            .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent })
+            .render_area(vk::Rect2D {
+                offset: vk::Offset2D::default(),
+                extent,
+            })
             .layer_count(layers)
             .color_attachments(&color_infos);
         if let Some(d) = depth_info.as_ref() {
@@ -174,10 +199,23 @@ impl Cmd {
 
     /// Sets the viewport (sub-pixel offsets allowed) and a scissor covering it.
     pub fn set_viewport(&mut self, x: f32, y: f32, w: f32, h: f32) {
-        let vp = [vk::Viewport { x, y, width: w, height: h, min_depth: 0.0, max_depth: 1.0 }];
+        let vp = [vk::Viewport {
+            x,
+            y,
+            width: w,
+            height: h,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        }];
         let sc = [vk::Rect2D {
-            offset: vk::Offset2D { x: x.floor().max(0.0) as i32, y: y.floor().max(0.0) as i32 },
-            extent: vk::Extent2D { width: w.ceil() as u32 + 1, height: h.ceil() as u32 + 1 },
+            offset: vk::Offset2D {
+                x: x.floor().max(0.0) as i32,
+                y: y.floor().max(0.0) as i32,
+            },
+            extent: vk::Extent2D {
+                width: w.ceil() as u32 + 1,
+                height: h.ceil() as u32 + 1,
+            },
         }];
         // SAFETY: recording state; pipelines declare viewport and scissor dynamic.
         unsafe {
@@ -194,8 +232,14 @@ impl Cmd {
     pub fn bind_set(&mut self, p: &Pipeline, index: u32, set: &DescriptorSet) {
         // SAFETY: the set's layout is the pipeline's layout at `index` (checked when the set was made).
         unsafe {
-            self.dev()
-                .cmd_bind_descriptor_sets(self.cb, p.bind_point, p.layout, index, &[set.raw], &[])
+            self.dev().cmd_bind_descriptor_sets(
+                self.cb,
+                p.bind_point,
+                p.layout,
+                index,
+                &[set.raw],
+                &[],
+            )
         };
     }
 
@@ -217,11 +261,23 @@ impl Cmd {
         };
     }
 
-    pub fn draw_indexed(&mut self, index_count: u32, instances: u32, first_index: u32, first_instance: u32) {
+    pub fn draw_indexed(
+        &mut self,
+        index_count: u32,
+        instances: u32,
+        first_index: u32,
+        first_instance: u32,
+    ) {
         // SAFETY: recording state inside a rendering pass.
         unsafe {
-            self.dev()
-                .cmd_draw_indexed(self.cb, index_count, instances, first_index, 0, first_instance)
+            self.dev().cmd_draw_indexed(
+                self.cb,
+                index_count,
+                instances,
+                first_index,
+                0,
+                first_instance,
+            )
         };
     }
 

@@ -108,7 +108,8 @@ unsafe extern "system" fn debug_callback(
     user: *mut c_void,
 ) -> vk::Bool32 {
     let important = severity.intersects(
-        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+            | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
     );
     if !important || data.is_null() || user.is_null() {
         return vk::FALSE;
@@ -220,8 +221,14 @@ fn probe(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Probe {
         props,
         f10,
         f11_multiview,
-        f12: vk::PhysicalDeviceVulkan12Features { p_next: std::ptr::null_mut(), ..f12 },
-        f13: vk::PhysicalDeviceVulkan13Features { p_next: std::ptr::null_mut(), ..f13 },
+        f12: vk::PhysicalDeviceVulkan12Features {
+            p_next: std::ptr::null_mut(),
+            ..f12
+        },
+        f13: vk::PhysicalDeviceVulkan13Features {
+            p_next: std::ptr::null_mut(),
+            ..f13
+        },
         queue_family,
         extensions,
         driver_name,
@@ -298,13 +305,18 @@ impl Gpu {
         let entry = load_entry()?;
         if opts.validation {
             // SAFETY: plain enumeration.
-            let layers = unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
-            if !layers.iter().any(|l| l.layer_name_as_c_str().ok() == Some(VALIDATION_LAYER)) {
+            let layers = unsafe { entry.enumerate_instance_layer_properties() }
+                .vk("vkEnumerateInstanceLayerProperties")?;
+            if !layers
+                .iter()
+                .any(|l| l.layer_name_as_c_str().ok() == Some(VALIDATION_LAYER))
+            {
                 return Err(GpuError::NoValidationLayer);
             }
         }
         // SAFETY: plain enumeration.
-        let inst_exts = unsafe { entry.enumerate_instance_extension_properties(None) }.unwrap_or_default();
+        let inst_exts =
+            unsafe { entry.enumerate_instance_extension_properties(None) }.unwrap_or_default();
         let has_debug_utils = inst_exts
             .iter()
             .any(|e| e.extension_name_as_c_str().ok() == Some(ash::ext::debug_utils::NAME));
@@ -313,10 +325,19 @@ impl Gpu {
             .application_name(c"cbr")
             .engine_name(c"cbr")
             .api_version(vk::API_VERSION_1_3);
-        let layers = if opts.validation { vec![VALIDATION_LAYER.as_ptr()] } else { vec![] };
-        let extensions = if has_debug_utils { vec![ash::ext::debug_utils::NAME.as_ptr()] } else { vec![] };
+        let layers = if opts.validation {
+            vec![VALIDATION_LAYER.as_ptr()]
+        } else {
+            vec![]
+        };
+        let extensions = if has_debug_utils {
+            vec![ash::ext::debug_utils::NAME.as_ptr()]
+        } else {
+            vec![]
+        };
         let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
-        let mut vfeatures = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
+        let mut vfeatures =
+            vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
         let mut info = vk::InstanceCreateInfo::default()
             .application_info(&app)
             .enabled_layer_names(&layers)
@@ -327,7 +348,10 @@ impl Gpu {
         // SAFETY: every pointer in `info` refers to locals alive for the call.
         let instance = unsafe { entry.create_instance(&info, None) }.map_err(|e| match e {
             vk::Result::ERROR_INCOMPATIBLE_DRIVER => GpuError::NoDevices(driver_env()),
-            r => GpuError::Vk { call: "vkCreateInstance", result: r },
+            r => GpuError::Vk {
+                call: "vkCreateInstance",
+                result: r,
+            },
         })?;
 
         let validation = Arc::new(ValidationLog::default());
@@ -336,7 +360,8 @@ impl Gpu {
             let du = ash::ext::debug_utils::Instance::new(&entry, &instance);
             let mi = vk::DebugUtilsMessengerCreateInfoEXT::default()
                 .message_severity(
-                    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+                    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                        | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
                 )
                 .message_type(
                     vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
@@ -346,21 +371,23 @@ impl Gpu {
                 .pfn_user_callback(Some(debug_callback))
                 .user_data(validation_raw as *mut c_void);
             // SAFETY: the callback's user data outlives the messenger (destroyed in Drop first).
-            let m = unsafe { du.create_debug_utils_messenger(&mi, None) }.vk("vkCreateDebugUtilsMessengerEXT")?;
+            let m = unsafe { du.create_debug_utils_messenger(&mi, None) }
+                .vk("vkCreateDebugUtilsMessengerEXT")?;
             Some((du, m))
         } else {
             None
         };
 
-        let destroy_instance = |di: &Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| {
-            // SAFETY: nothing else was created from the instance yet.
-            unsafe {
-                if let Some((du, m)) = di {
-                    du.destroy_debug_utils_messenger(*m, None);
+        let destroy_instance =
+            |di: &Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| {
+                // SAFETY: nothing else was created from the instance yet.
+                unsafe {
+                    if let Some((du, m)) = di {
+                        du.destroy_debug_utils_messenger(*m, None);
+                    }
+                    instance.destroy_instance(None);
                 }
-                instance.destroy_instance(None);
-            }
-        };
+            };
 
         // SAFETY: plain enumeration.
         let pds = match unsafe { instance.enumerate_physical_devices() } {
@@ -371,7 +398,11 @@ impl Gpu {
             }
         };
         let probes: Vec<Probe> = pds.iter().map(|&pd| probe(&instance, pd)).collect();
-        let cands: Vec<Candidate> = probes.iter().enumerate().map(|(i, p)| candidate(i, p)).collect();
+        let cands: Vec<Candidate> = probes
+            .iter()
+            .enumerate()
+            .map(|(i, p)| candidate(i, p))
+            .collect();
         let index = match select::choose(&cands, opts.device.as_deref()) {
             Ok(i) => i,
             Err(report) => {
@@ -388,8 +419,10 @@ impl Gpu {
             let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut p12);
             // SAFETY: `pd` belongs to `instance`.
             unsafe { instance.get_physical_device_properties2(pd, &mut p2) };
-            let both = p.props.limits.framebuffer_color_sample_counts & p.props.limits.framebuffer_depth_sample_counts;
-            caps.integer_color_sample_counts = sample_count_list(p12.framebuffer_integer_color_sample_counts & both);
+            let both = p.props.limits.framebuffer_color_sample_counts
+                & p.props.limits.framebuffer_depth_sample_counts;
+            caps.integer_color_sample_counts =
+                sample_count_list(p12.framebuffer_integer_color_sample_counts & both);
         }
 
         // Enable what is required plus what is available and useful.
@@ -399,7 +432,9 @@ impl Gpu {
             .geometry_shader(caps.geometry_shader)
             .pipeline_statistics_query(caps.pipeline_statistics)
             .fragment_stores_and_atomics(p.f10.fragment_stores_and_atomics != 0)
-            .shader_storage_image_write_without_format(p.f10.shader_storage_image_write_without_format != 0)
+            .shader_storage_image_write_without_format(
+                p.f10.shader_storage_image_write_without_format != 0,
+            )
             .independent_blend(p.f10.independent_blend != 0);
         let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
             .host_query_reset(true)
@@ -411,7 +446,9 @@ impl Gpu {
             .synchronization2(true)
             .maintenance4(caps.maintenance4);
         let prio = [1.0f32];
-        let qinfo = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&prio)];
+        let qinfo = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(queue_family)
+            .queue_priorities(&prio)];
         let mut dev_exts = Vec::new();
         if caps.sample_locations {
             dev_exts.push(ash::ext::sample_locations::NAME.as_ptr());
@@ -427,12 +464,16 @@ impl Gpu {
             Ok(d) => d,
             Err(r) => {
                 destroy_instance(&debug_instance);
-                return Err(GpuError::Vk { call: "vkCreateDevice", result: r });
+                return Err(GpuError::Vk {
+                    call: "vkCreateDevice",
+                    result: r,
+                });
             }
         };
         // SAFETY: queue 0 of the family we created.
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
-        let debug_device = has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
+        let debug_device =
+            has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
         let allocator = Allocator::new(&AllocatorCreateDesc {
             instance: instance.clone(),
             device: device.clone(),
@@ -441,12 +482,16 @@ impl Gpu {
             buffer_device_address: false,
             allocation_sizes: Default::default(),
         })
-        .map_err(|e| GpuError::Alloc { name: "allocator".into(), source: e })?;
+        .map_err(|e| GpuError::Alloc {
+            name: "allocator".into(),
+            source: e,
+        })?;
         let pool_info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(queue_family)
             .flags(vk::CommandPoolCreateFlags::TRANSIENT);
         // SAFETY: valid device and family.
-        let command_pool = unsafe { device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
+        let command_pool =
+            unsafe { device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
 
         let cand = &cands[index];
         let info = DeviceInfo {
@@ -464,7 +509,12 @@ impl Gpu {
             vendor_id: p.props.vendor_id,
             device_id: p.props.device_id,
         };
-        tracing::info!("device [{index}] {} ({}, {})", info.name, info.driver_name, info.driver_info);
+        tracing::info!(
+            "device [{index}] {} ({}, {})",
+            info.name,
+            info.driver_name,
+            info.driver_info
+        );
         let gpu = Gpu {
             inner: Arc::new(Inner {
                 _entry: entry,
@@ -499,7 +549,10 @@ impl Gpu {
         // SAFETY: minimal instance, destroyed below.
         let instance = unsafe { entry.create_instance(&info, None) }.map_err(|e| match e {
             vk::Result::ERROR_INCOMPATIBLE_DRIVER => GpuError::NoDevices(driver_env()),
-            r => GpuError::Vk { call: "vkCreateInstance", result: r },
+            r => GpuError::Vk {
+                call: "vkCreateInstance",
+                result: r,
+            },
         })?;
         // SAFETY: plain enumeration.
         let pds = unsafe { instance.enumerate_physical_devices() }.unwrap_or_default();
@@ -542,18 +595,32 @@ impl Gpu {
 
     /// Gives a Vulkan object a debug name (visible in validation messages and capture tools).
     pub fn name_object<H: vk::Handle>(&self, handle: H, name: &str) {
-        let Some(du) = &self.inner.debug_device else { return };
-        let Ok(cname) = CString::new(name) else { return };
-        let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&cname);
+        let Some(du) = &self.inner.debug_device else {
+            return;
+        };
+        let Ok(cname) = CString::new(name) else {
+            return;
+        };
+        let info = vk::DebugUtilsObjectNameInfoEXT::default()
+            .object_handle(handle)
+            .object_name(&cname);
         // SAFETY: the handle is a live object of this device.
         let _ = unsafe { du.set_debug_utils_object_name(&info) };
     }
 
     /// Records commands with `record`, submits them and waits for completion, then frees the
     /// resources whose last use was in this or an earlier submission.
-    pub fn submit<R>(&self, label: &str, record: impl FnOnce(&mut crate::cmd::Cmd) -> Result<R>) -> Result<R> {
+    pub fn submit<R>(
+        &self,
+        label: &str,
+        record: impl FnOnce(&mut crate::cmd::Cmd) -> Result<R>,
+    ) -> Result<R> {
         let dev = &self.inner.device;
-        let pool = self.inner.command_pool.lock().map_err(|_| GpuError::Other("command pool lock poisoned".into()))?;
+        let pool = self
+            .inner
+            .command_pool
+            .lock()
+            .map_err(|_| GpuError::Other("command pool lock poisoned".into()))?;
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(*pool)
             .level(vk::CommandBufferLevel::PRIMARY)
@@ -561,7 +628,8 @@ impl Gpu {
         // SAFETY: pool is valid and externally synchronised by the mutex held for this function.
         let cb = unsafe { dev.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?[0];
         self.name_object(cb, label);
-        let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         // SAFETY: freshly allocated command buffer.
         unsafe { dev.begin_command_buffer(cb, &begin) }.vk("vkBeginCommandBuffer")?;
         let mut cmd = crate::cmd::Cmd::new(self.clone(), cb);
@@ -574,13 +642,20 @@ impl Gpu {
             let cbs = [vk::CommandBufferSubmitInfo::default().command_buffer(cb)];
             let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cbs)];
             // SAFETY: default fence info.
-            let fence = unsafe { dev.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
-            let queue = self.inner.queue.lock().map_err(|_| GpuError::Other("queue lock poisoned".into()))?;
+            let fence = unsafe { dev.create_fence(&vk::FenceCreateInfo::default(), None) }
+                .vk("vkCreateFence")?;
+            let queue = self
+                .inner
+                .queue
+                .lock()
+                .map_err(|_| GpuError::Other("queue lock poisoned".into()))?;
             // SAFETY: the command buffer is executable; queue access is serialised by the mutex.
             let r = unsafe { dev.queue_submit2(*queue, &submit, fence) }
                 .vk("vkQueueSubmit2")
                 // SAFETY: fence belongs to this device.
-                .and_then(|_| unsafe { dev.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences"));
+                .and_then(|_| {
+                    unsafe { dev.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")
+                });
             drop(queue);
             // SAFETY: the fence is signalled (or the submit failed); no longer in use.
             unsafe { dev.destroy_fence(fence, None) };

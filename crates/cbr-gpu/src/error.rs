@@ -21,7 +21,10 @@ pub enum GpuError {
     #[error("device `{device}` does not support {feature}")]
     Unsupported { device: String, feature: String },
     #[error("Vulkan call {call} failed: {result}")]
-    Vk { call: &'static str, result: ash::vk::Result },
+    Vk {
+        call: &'static str,
+        result: ash::vk::Result,
+    },
     #[error("GPU memory allocation `{name}` failed: {source}")]
     Alloc {
         name: String,

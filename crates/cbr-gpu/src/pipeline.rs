@@ -40,7 +40,10 @@ pub struct BindingDesc {
 impl BindingDesc {
     /// `("BINDING_<NAME>", "<n>")`, for shader defines.
     pub fn define(&self) -> (String, String) {
-        (format!("BINDING_{}", self.name.to_uppercase()), self.binding.to_string())
+        (
+            format!("BINDING_{}", self.name.to_uppercase()),
+            self.binding.to_string(),
+        )
     }
 }
 
@@ -64,9 +67,14 @@ impl SetLayout {
             .collect();
         let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&vk_bindings);
         // SAFETY: valid create info.
-        let raw = unsafe { gpu.device().create_descriptor_set_layout(&info, None) }.vk("vkCreateDescriptorSetLayout")?;
+        let raw = unsafe { gpu.device().create_descriptor_set_layout(&info, None) }
+            .vk("vkCreateDescriptorSetLayout")?;
         gpu.name_object(raw, name);
-        Ok(SetLayout { gpu: gpu.inner.clone(), raw, bindings: bindings.to_vec() })
+        Ok(SetLayout {
+            gpu: gpu.inner.clone(),
+            raw,
+            bindings: bindings.to_vec(),
+        })
     }
 }
 
@@ -93,30 +101,50 @@ pub struct DescriptorSet {
 }
 
 impl DescriptorSet {
-    pub fn new(gpu: &Gpu, name: &str, layout: &SetLayout, writes: &[Write]) -> Result<DescriptorSet> {
+    pub fn new(
+        gpu: &Gpu,
+        name: &str,
+        layout: &SetLayout,
+        writes: &[Write],
+    ) -> Result<DescriptorSet> {
         let sizes: Vec<vk::DescriptorPoolSize> = layout
             .bindings
             .iter()
-            .map(|b| vk::DescriptorPoolSize { ty: b.kind.vk(), descriptor_count: b.count })
+            .map(|b| vk::DescriptorPoolSize {
+                ty: b.kind.vk(),
+                descriptor_count: b.count,
+            })
             .collect();
-        let pinfo = vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes);
+        let pinfo = vk::DescriptorPoolCreateInfo::default()
+            .max_sets(1)
+            .pool_sizes(&sizes);
         let dev = gpu.device();
         // SAFETY: valid create info.
-        let pool = unsafe { dev.create_descriptor_pool(&pinfo, None) }.vk("vkCreateDescriptorPool")?;
+        let pool =
+            unsafe { dev.create_descriptor_pool(&pinfo, None) }.vk("vkCreateDescriptorPool")?;
         gpu.name_object(pool, &format!("{name}.pool"));
         let layouts = [layout.raw];
-        let ainfo = vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&layouts);
+        let ainfo = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(pool)
+            .set_layouts(&layouts);
         // SAFETY: the pool was sized for this layout.
         let raw = match unsafe { dev.allocate_descriptor_sets(&ainfo) } {
             Ok(s) => s[0],
             Err(r) => {
                 // SAFETY: nothing allocated from the pool.
                 unsafe { dev.destroy_descriptor_pool(pool, None) };
-                return Err(GpuError::Vk { call: "vkAllocateDescriptorSets", result: r });
+                return Err(GpuError::Vk {
+                    call: "vkAllocateDescriptorSets",
+                    result: r,
+                });
             }
         };
         gpu.name_object(raw, name);
-        let set = DescriptorSet { gpu: gpu.inner.clone(), pool, raw };
+        let set = DescriptorSet {
+            gpu: gpu.inner.clone(),
+            pool,
+            raw,
+        };
         set.write(gpu, layout, writes)?;
         Ok(set)
     }
@@ -135,7 +163,13 @@ impl DescriptorSet {
         for w in writes {
             match w {
                 Write::Buffer(b, buf) => {
-                    buffer_infos.push((*b, kind_of(*b)?, [vk::DescriptorBufferInfo::default().buffer(buf.raw()).range(vk::WHOLE_SIZE)]));
+                    buffer_infos.push((
+                        *b,
+                        kind_of(*b)?,
+                        [vk::DescriptorBufferInfo::default()
+                            .buffer(buf.raw())
+                            .range(vk::WHOLE_SIZE)],
+                    ));
                 }
                 Write::Sampled(b, imgs) => {
                     let infos: Vec<vk::DescriptorImageInfo> = imgs
@@ -146,13 +180,20 @@ impl DescriptorSet {
                             } else {
                                 vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL
                             };
-                            vk::DescriptorImageInfo::default().image_view(img.view()).sampler(s.raw()).image_layout(layout)
+                            vk::DescriptorImageInfo::default()
+                                .image_view(img.view())
+                                .sampler(s.raw())
+                                .image_layout(layout)
                         })
                         .collect();
                     image_infos.push((*b, kind_of(*b)?, infos));
                 }
                 Write::Storage(b, img) => {
-                    let infos = vec![vk::DescriptorImageInfo::default().image_view(img.view()).image_layout(vk::ImageLayout::GENERAL)];
+                    let infos = vec![
+                        vk::DescriptorImageInfo::default()
+                            .image_view(img.view())
+                            .image_layout(vk::ImageLayout::GENERAL),
+                    ];
                     image_infos.push((*b, kind_of(*b)?, infos));
                 }
             }
@@ -222,15 +263,25 @@ pub struct Pipeline {
     pub push_constant_bytes: u32,
 }
 
-fn make_layout(gpu: &Gpu, name: &str, sets: &[&SetLayout], push: u32) -> Result<vk::PipelineLayout> {
+fn make_layout(
+    gpu: &Gpu,
+    name: &str,
+    sets: &[&SetLayout],
+    push: u32,
+) -> Result<vk::PipelineLayout> {
     let raw_sets: Vec<vk::DescriptorSetLayout> = sets.iter().map(|s| s.raw).collect();
-    let ranges = [vk::PushConstantRange { stage_flags: vk::ShaderStageFlags::ALL, offset: 0, size: push }];
+    let ranges = [vk::PushConstantRange {
+        stage_flags: vk::ShaderStageFlags::ALL,
+        offset: 0,
+        size: push,
+    }];
     let mut info = vk::PipelineLayoutCreateInfo::default().set_layouts(&raw_sets);
     if push > 0 {
         info = info.push_constant_ranges(&ranges);
     }
     // SAFETY: valid create info.
-    let layout = unsafe { gpu.device().create_pipeline_layout(&info, None) }.vk("vkCreatePipelineLayout")?;
+    let layout =
+        unsafe { gpu.device().create_pipeline_layout(&info, None) }.vk("vkCreatePipelineLayout")?;
     gpu.name_object(layout, &format!("{name}.layout"));
     Ok(layout)
 }
@@ -263,7 +314,10 @@ impl Pipeline {
     pub fn graphics(gpu: &Gpu, d: &GraphicsDesc) -> Result<Pipeline> {
         let dev = gpu.device();
         let layout = make_layout(gpu, d.name, d.set_layouts, d.push_constant_bytes)?;
-        let mut modules = Modules { dev, list: Vec::new() };
+        let mut modules = Modules {
+            dev,
+            list: Vec::new(),
+        };
         let mut stages = vec![
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::VERTEX)
@@ -285,14 +339,22 @@ impl Pipeline {
                 .name(c"main"),
         );
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
-        let ia = vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
-        let vp = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+        let ia = vk::PipelineInputAssemblyStateCreateInfo::default()
+            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let vp = vk::PipelineViewportStateCreateInfo::default()
+            .viewport_count(1)
+            .scissor_count(1);
         let rs = vk::PipelineRasterizationStateCreateInfo::default()
             .polygon_mode(vk::PolygonMode::FILL)
-            .cull_mode(if d.cull_back_faces { vk::CullModeFlags::BACK } else { vk::CullModeFlags::NONE })
+            .cull_mode(if d.cull_back_faces {
+                vk::CullModeFlags::BACK
+            } else {
+                vk::CullModeFlags::NONE
+            })
             .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
             .line_width(1.0);
-        let mut ms = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::from_raw(d.samples));
+        let mut ms = vk::PipelineMultisampleStateCreateInfo::default()
+            .rasterization_samples(vk::SampleCountFlags::from_raw(d.samples));
         if let Some(m) = d.min_sample_shading {
             ms = ms.sample_shading_enable(true).min_sample_shading(m);
         }
@@ -303,7 +365,10 @@ impl Pipeline {
         let blend: Vec<vk::PipelineColorBlendAttachmentState> = d
             .color_formats
             .iter()
-            .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA))
+            .map(|_| {
+                vk::PipelineColorBlendAttachmentState::default()
+                    .color_write_mask(vk::ColorComponentFlags::RGBA)
+            })
             .collect();
         let cb = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
         let dyn_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
@@ -324,8 +389,12 @@ impl Pipeline {
             .layout(layout)
             .push_next(&mut rendering);
         // SAFETY: all referenced state lives until the call returns.
-        let raw = unsafe { dev.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }
-            .map_err(|(_, r)| GpuError::Vk { call: "vkCreateGraphicsPipelines", result: r });
+        let raw =
+            unsafe { dev.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }
+                .map_err(|(_, r)| GpuError::Vk {
+                    call: "vkCreateGraphicsPipelines",
+                    result: r,
+                });
         let raw = match raw {
             Ok(p) => p[0],
             Err(e) => {
@@ -347,15 +416,23 @@ impl Pipeline {
     pub fn compute(gpu: &Gpu, d: &ComputeDesc) -> Result<Pipeline> {
         let dev = gpu.device();
         let layout = make_layout(gpu, d.name, d.set_layouts, d.push_constant_bytes)?;
-        let mut modules = Modules { dev, list: Vec::new() };
+        let mut modules = Modules {
+            dev,
+            list: Vec::new(),
+        };
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(modules.add(d.shader)?)
             .name(c"main");
-        let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
+        let info = vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(layout);
         // SAFETY: valid create info.
         let raw = unsafe { dev.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) }
-            .map_err(|(_, r)| GpuError::Vk { call: "vkCreateComputePipelines", result: r });
+            .map_err(|(_, r)| GpuError::Vk {
+                call: "vkCreateComputePipelines",
+                result: r,
+            });
         let raw = match raw {
             Ok(p) => p[0],
             Err(e) => {

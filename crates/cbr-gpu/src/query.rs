@@ -47,9 +47,15 @@ const GRAPHICS_STATS: vk::QueryPipelineStatisticFlags = vk::QueryPipelineStatist
         | vk::QueryPipelineStatisticFlags::CLIPPING_PRIMITIVES.as_raw()
         | vk::QueryPipelineStatisticFlags::FRAGMENT_SHADER_INVOCATIONS.as_raw(),
 );
-const COMPUTE_STATS: vk::QueryPipelineStatisticFlags = vk::QueryPipelineStatisticFlags::COMPUTE_SHADER_INVOCATIONS;
+const COMPUTE_STATS: vk::QueryPipelineStatisticFlags =
+    vk::QueryPipelineStatisticFlags::COMPUTE_SHADER_INVOCATIONS;
 
-fn stats_pool(gpu: &Gpu, name: &str, capacity: u32, flags: vk::QueryPipelineStatisticFlags) -> Result<vk::QueryPool> {
+fn stats_pool(
+    gpu: &Gpu,
+    name: &str,
+    capacity: u32,
+    flags: vk::QueryPipelineStatisticFlags,
+) -> Result<vk::QueryPool> {
     let info = vk::QueryPoolCreateInfo::default()
         .query_type(vk::QueryType::PIPELINE_STATISTICS)
         .query_count(capacity)
@@ -88,8 +94,18 @@ impl Profiler {
         gpu.name_object(timestamps, &format!("{name}.timestamps"));
         let stats = if gpu.caps().pipeline_statistics {
             Some((
-                stats_pool(gpu, &format!("{name}.graphics_statistics"), capacity, GRAPHICS_STATS)?,
-                stats_pool(gpu, &format!("{name}.compute_statistics"), capacity, COMPUTE_STATS)?,
+                stats_pool(
+                    gpu,
+                    &format!("{name}.graphics_statistics"),
+                    capacity,
+                    GRAPHICS_STATS,
+                )?,
+                stats_pool(
+                    gpu,
+                    &format!("{name}.compute_statistics"),
+                    capacity,
+                    COMPUTE_STATS,
+                )?,
             ))
         } else {
             None
@@ -113,7 +129,9 @@ impl Profiler {
         // SAFETY: hostQueryReset is enabled; no submission using the pools is in flight (submissions
         // are waited on before results are read and before the next reset).
         unsafe {
-            self.gpu.device.reset_query_pool(self.timestamps, 0, self.capacity * 2);
+            self.gpu
+                .device
+                .reset_query_pool(self.timestamps, 0, self.capacity * 2);
             if let Some((g, c)) = self.stats {
                 self.gpu.device.reset_query_pool(g, 0, self.capacity);
                 self.gpu.device.reset_query_pool(c, 0, self.capacity);
@@ -130,14 +148,23 @@ impl Profiler {
     /// Opens a named scope. Scopes do not nest.
     pub fn begin(&mut self, cmd: &mut Cmd, name: &str, kind: PassKind) -> Scope {
         let i = self.scopes.len() as u32;
-        assert!(i < self.capacity, "profiler capacity {} exceeded", self.capacity);
+        assert!(
+            i < self.capacity,
+            "profiler capacity {} exceeded",
+            self.capacity
+        );
         assert!(self.open.is_none(), "profiler scopes do not nest");
         self.scopes.push((name.to_string(), kind));
         self.open = Some(i);
         let dev = &self.gpu.device;
         // SAFETY: queries were reset; indices are in range.
         unsafe {
-            dev.cmd_write_timestamp2(cmd.cb, vk::PipelineStageFlags2::ALL_COMMANDS, self.timestamps, 2 * i);
+            dev.cmd_write_timestamp2(
+                cmd.cb,
+                vk::PipelineStageFlags2::ALL_COMMANDS,
+                self.timestamps,
+                2 * i,
+            );
             if let Some(pool) = self.stats_pool(kind) {
                 dev.cmd_begin_query(cmd.cb, pool, i, vk::QueryControlFlags::empty());
             }
@@ -168,7 +195,12 @@ impl Profiler {
             if let Some(pool) = self.stats_pool(kind) {
                 dev.cmd_end_query(cmd.cb, pool, i);
             }
-            dev.cmd_write_timestamp2(cmd.cb, vk::PipelineStageFlags2::ALL_COMMANDS, self.timestamps, 2 * i + 1);
+            dev.cmd_write_timestamp2(
+                cmd.cb,
+                vk::PipelineStageFlags2::ALL_COMMANDS,
+                self.timestamps,
+                2 * i + 1,
+            );
         }
         self.open = None;
     }
@@ -182,16 +214,30 @@ impl Profiler {
         let mut ts = vec![0u64; 2 * n];
         let dev = &self.gpu.device;
         // SAFETY: the submission was waited on; WAIT makes the call block until available.
-        unsafe { dev.get_query_pool_results(self.timestamps, 0, &mut ts, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT) }
-            .vk("vkGetQueryPoolResults")?;
+        unsafe {
+            dev.get_query_pool_results(
+                self.timestamps,
+                0,
+                &mut ts,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .vk("vkGetQueryPoolResults")?;
         let mut out = Vec::with_capacity(n);
         for (i, (name, kind)) in self.scopes.iter().enumerate() {
             let stats = match self.stats_pool(*kind) {
                 Some(pool) if *kind == PassKind::Graphics => {
                     let mut v = [[0u64; 3]; 1];
                     // SAFETY: the submission was waited on; 3 counters in flag-bit order.
-                    unsafe { dev.get_query_pool_results(pool, i as u32, &mut v, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT) }
-                        .vk("vkGetQueryPoolResults")?;
+                    unsafe {
+                        dev.get_query_pool_results(
+                            pool,
+                            i as u32,
+                            &mut v,
+                            vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                        )
+                    }
+                    .vk("vkGetQueryPoolResults")?;
                     Some(PipelineStats {
                         vertex_invocations: v[0][0],
                         clipping_primitives: v[0][1],
@@ -202,9 +248,19 @@ impl Profiler {
                 Some(pool) => {
                     let mut v = [0u64; 1];
                     // SAFETY: as above; one counter.
-                    unsafe { dev.get_query_pool_results(pool, i as u32, &mut v, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT) }
-                        .vk("vkGetQueryPoolResults")?;
-                    Some(PipelineStats { compute_invocations: v[0], ..Default::default() })
+                    unsafe {
+                        dev.get_query_pool_results(
+                            pool,
+                            i as u32,
+                            &mut v,
+                            vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                        )
+                    }
+                    .vk("vkGetQueryPoolResults")?;
+                    Some(PipelineStats {
+                        compute_invocations: v[0],
+                        ..Default::default()
+                    })
                 }
                 None => None,
             };

@@ -14,13 +14,21 @@ use crate::error::{GpuError, Result, VkContext};
 
 pub use gpu_allocator::MemoryLocation as Location;
 
-fn allocate(gpu: &Gpu, name: &str, req: vk::MemoryRequirements, location: MemoryLocation, linear: bool) -> Result<Allocation> {
+fn allocate(
+    gpu: &Gpu,
+    name: &str,
+    req: vk::MemoryRequirements,
+    location: MemoryLocation,
+    linear: bool,
+) -> Result<Allocation> {
     let mut guard = gpu
         .inner
         .allocator
         .lock()
         .map_err(|_| GpuError::Other("allocator lock poisoned".into()))?;
-    let al = guard.as_mut().ok_or_else(|| GpuError::Other("allocator already destroyed".into()))?;
+    let al = guard
+        .as_mut()
+        .ok_or_else(|| GpuError::Other("allocator already destroyed".into()))?;
     al.allocate(&AllocationCreateDesc {
         name,
         requirements: req,
@@ -28,7 +36,10 @@ fn allocate(gpu: &Gpu, name: &str, req: vk::MemoryRequirements, location: Memory
         linear,
         allocation_scheme: AllocationScheme::GpuAllocatorManaged,
     })
-    .map_err(|e| GpuError::Alloc { name: name.to_string(), source: e })
+    .map_err(|e| GpuError::Alloc {
+        name: name.to_string(),
+        source: e,
+    })
 }
 
 /// A named buffer with its memory.
@@ -41,7 +52,13 @@ pub struct Buffer {
 }
 
 impl Buffer {
-    pub fn new(gpu: &Gpu, name: &str, size: u64, usage: vk::BufferUsageFlags, location: MemoryLocation) -> Result<Buffer> {
+    pub fn new(
+        gpu: &Gpu,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+    ) -> Result<Buffer> {
         let size = size.max(4);
         let info = vk::BufferCreateInfo::default()
             .size(size)
@@ -61,14 +78,32 @@ impl Buffer {
             }
         };
         // SAFETY: memory from the allocator satisfies `req`.
-        unsafe { dev.bind_buffer_memory(raw, alloc.memory(), alloc.offset()) }.vk("vkBindBufferMemory")?;
+        unsafe { dev.bind_buffer_memory(raw, alloc.memory(), alloc.offset()) }
+            .vk("vkBindBufferMemory")?;
         gpu.name_object(raw, name);
-        Ok(Buffer { gpu: gpu.inner.clone(), raw, alloc: Some(alloc), size, last: Cell::new(Access::Undefined) })
+        Ok(Buffer {
+            gpu: gpu.inner.clone(),
+            raw,
+            alloc: Some(alloc),
+            size,
+            last: Cell::new(Access::Undefined),
+        })
     }
 
     /// A device-local buffer holding `data`, uploaded through a staging buffer.
-    pub fn with_data(gpu: &Gpu, name: &str, usage: vk::BufferUsageFlags, data: &[u8]) -> Result<Buffer> {
-        let buf = Buffer::new(gpu, name, data.len() as u64, usage | vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuOnly)?;
+    pub fn with_data(
+        gpu: &Gpu,
+        name: &str,
+        usage: vk::BufferUsageFlags,
+        data: &[u8],
+    ) -> Result<Buffer> {
+        let buf = Buffer::new(
+            gpu,
+            name,
+            data.len() as u64,
+            usage | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
         if data.is_empty() {
             return Ok(buf);
         }
@@ -111,7 +146,10 @@ impl Buffer {
             .ok_or_else(|| GpuError::Other("buffer is not host visible".into()))?;
         let end = offset + data.len();
         if end > dst.len() {
-            return Err(GpuError::Other(format!("write of {end} bytes past a {}-byte buffer", dst.len())));
+            return Err(GpuError::Other(format!(
+                "write of {end} bytes past a {}-byte buffer",
+                dst.len()
+            )));
         }
         dst[offset..end].copy_from_slice(data);
         Ok(())
@@ -141,8 +179,23 @@ pub struct ImageDesc<'a> {
 
 impl<'a> ImageDesc<'a> {
     /// A single-level, single-layer, single-sample 2D image.
-    pub fn new_2d(name: &'a str, format: vk::Format, width: u32, height: u32, usage: vk::ImageUsageFlags) -> Self {
-        ImageDesc { name, format, width, height, mip_levels: 1, layers: 1, samples: 1, usage }
+    pub fn new_2d(
+        name: &'a str,
+        format: vk::Format,
+        width: u32,
+        height: u32,
+        usage: vk::ImageUsageFlags,
+    ) -> Self {
+        ImageDesc {
+            name,
+            format,
+            width,
+            height,
+            mip_levels: 1,
+            layers: 1,
+            samples: 1,
+            usage,
+        }
     }
 }
 
@@ -164,7 +217,10 @@ pub struct Image {
 pub fn is_depth_format(f: vk::Format) -> bool {
     matches!(
         f,
-        vk::Format::D32_SFLOAT | vk::Format::D16_UNORM | vk::Format::D24_UNORM_S8_UINT | vk::Format::D32_SFLOAT_S8_UINT
+        vk::Format::D32_SFLOAT
+            | vk::Format::D16_UNORM
+            | vk::Format::D24_UNORM_S8_UINT
+            | vk::Format::D32_SFLOAT_S8_UINT
     )
 }
 
@@ -173,7 +229,12 @@ pub fn texel_size(f: vk::Format) -> Option<usize> {
     use vk::Format as F;
     Some(match f {
         F::R8_UNORM | F::R8_UINT => 1,
-        F::R8G8B8A8_UNORM | F::R8G8B8A8_SRGB | F::R32_SFLOAT | F::R32_UINT | F::D32_SFLOAT | F::R16G16_SFLOAT => 4,
+        F::R8G8B8A8_UNORM
+        | F::R8G8B8A8_SRGB
+        | F::R32_SFLOAT
+        | F::R32_UINT
+        | F::D32_SFLOAT
+        | F::R16G16_SFLOAT => 4,
         F::R16G16B16A16_SFLOAT | F::R32G32_SFLOAT | F::R32G32_UINT => 8,
         F::R32G32B32A32_SFLOAT | F::R32G32B32A32_UINT => 16,
         _ => return None,
@@ -186,13 +247,20 @@ impl Image {
         if d.width == 0 || d.height == 0 || d.width > max || d.height > max {
             return Err(GpuError::Unsupported {
                 device: gpu.info().name.clone(),
-                feature: format!("a {}x{} image `{}` (limit {max}x{max})", d.width, d.height, d.name),
+                feature: format!(
+                    "a {}x{} image `{}` (limit {max}x{max})",
+                    d.width, d.height, d.name
+                ),
             });
         }
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
             .format(d.format)
-            .extent(vk::Extent3D { width: d.width, height: d.height, depth: 1 })
+            .extent(vk::Extent3D {
+                width: d.width,
+                height: d.height,
+                depth: 1,
+            })
             .mip_levels(d.mip_levels)
             .array_layers(d.layers)
             .samples(vk::SampleCountFlags::from_raw(d.samples))
@@ -214,11 +282,16 @@ impl Image {
             }
         };
         // SAFETY: memory satisfies `req`.
-        unsafe { dev.bind_image_memory(raw, alloc.memory(), alloc.offset()) }.vk("vkBindImageMemory")?;
+        unsafe { dev.bind_image_memory(raw, alloc.memory(), alloc.offset()) }
+            .vk("vkBindImageMemory")?;
         let aspect = aspect_of(d.format);
         let vinfo = vk::ImageViewCreateInfo::default()
             .image(raw)
-            .view_type(if d.layers > 1 { vk::ImageViewType::TYPE_2D_ARRAY } else { vk::ImageViewType::TYPE_2D })
+            .view_type(if d.layers > 1 {
+                vk::ImageViewType::TYPE_2D_ARRAY
+            } else {
+                vk::ImageViewType::TYPE_2D
+            })
             .format(d.format)
             .subresource_range(
                 vk::ImageSubresourceRange::default()
@@ -255,17 +328,25 @@ impl Image {
         aspect_of(self.format)
     }
     pub fn extent(&self) -> vk::Extent2D {
-        vk::Extent2D { width: self.width, height: self.height }
+        vk::Extent2D {
+            width: self.width,
+            height: self.height,
+        }
     }
     /// Bytes of one full-resolution layer of level 0.
     pub fn level0_bytes(&self) -> Result<usize> {
-        let t = texel_size(self.format).ok_or_else(|| GpuError::Other(format!("no texel size for {:?}", self.format)))?;
+        let t = texel_size(self.format)
+            .ok_or_else(|| GpuError::Other(format!("no texel size for {:?}", self.format)))?;
         Ok(self.width as usize * self.height as usize * t)
     }
 }
 
 pub(crate) fn aspect_of(f: vk::Format) -> vk::ImageAspectFlags {
-    if is_depth_format(f) { vk::ImageAspectFlags::DEPTH } else { vk::ImageAspectFlags::COLOR }
+    if is_depth_format(f) {
+        vk::ImageAspectFlags::DEPTH
+    } else {
+        vk::ImageAspectFlags::COLOR
+    }
 }
 
 impl Drop for Image {
@@ -291,12 +372,24 @@ pub struct Sampler {
 
 impl Sampler {
     pub fn new(gpu: &Gpu, name: &str, d: SamplerDesc) -> Result<Sampler> {
-        let filter = if d.linear { vk::Filter::LINEAR } else { vk::Filter::NEAREST };
-        let mode = if d.repeat { vk::SamplerAddressMode::REPEAT } else { vk::SamplerAddressMode::CLAMP_TO_EDGE };
+        let filter = if d.linear {
+            vk::Filter::LINEAR
+        } else {
+            vk::Filter::NEAREST
+        };
+        let mode = if d.repeat {
+            vk::SamplerAddressMode::REPEAT
+        } else {
+            vk::SamplerAddressMode::CLAMP_TO_EDGE
+        };
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(filter)
             .min_filter(filter)
-            .mipmap_mode(if d.linear { vk::SamplerMipmapMode::LINEAR } else { vk::SamplerMipmapMode::NEAREST })
+            .mipmap_mode(if d.linear {
+                vk::SamplerMipmapMode::LINEAR
+            } else {
+                vk::SamplerMipmapMode::NEAREST
+            })
             .address_mode_u(mode)
             .address_mode_v(mode)
             .address_mode_w(mode)
@@ -305,7 +398,10 @@ impl Sampler {
         // SAFETY: valid create info.
         let raw = unsafe { gpu.device().create_sampler(&info, None) }.vk("vkCreateSampler")?;
         gpu.name_object(raw, name);
-        Ok(Sampler { gpu: gpu.inner.clone(), raw })
+        Ok(Sampler {
+            gpu: gpu.inner.clone(),
+            raw,
+        })
     }
     pub fn raw(&self) -> vk::Sampler {
         self.raw
@@ -329,7 +425,13 @@ pub struct Readback {
 impl Readback {
     pub fn for_image(gpu: &Gpu, name: &str, image: &Image) -> Result<Readback> {
         let bytes = image.level0_bytes()? * image.layers as usize;
-        let buffer = Buffer::new(gpu, name, bytes as u64, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
+        let buffer = Buffer::new(
+            gpu,
+            name,
+            bytes as u64,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
         Ok(Readback {
             buffer,
             width: image.width,

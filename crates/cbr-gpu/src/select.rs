@@ -85,7 +85,11 @@ pub fn choose(candidates: &[Candidate], pick: Option<&str>) -> Result<usize, Str
         } else {
             c.rejection().unwrap_or_default()
         };
-        let _ = writeln!(report, "  [{}] {} ({:?}): {}", c.index, c.name, c.kind, reason);
+        let _ = writeln!(
+            report,
+            "  [{}] {} ({:?}): {}",
+            c.index, c.name, c.kind, reason
+        );
     }
     if candidates.is_empty() {
         report.push_str("  (no devices)\n");
@@ -140,7 +144,10 @@ mod tests {
         assert!(err.contains("[0] old"), "{err}");
         assert!(err.contains("Vulkan 1.1 < required 1.3"), "{err}");
         assert!(err.contains("missing features: dynamicRendering"), "{err}");
-        assert!(err.contains("no queue family with both graphics and compute"), "{err}");
+        assert!(
+            err.contains("no queue family with both graphics and compute"),
+            "{err}"
+        );
         let err = choose(&[cand(0, "a", DeviceKind::Cpu)], Some("7")).unwrap_err();
         assert!(err.contains("does not match --device \"7\""), "{err}");
         assert!(choose(&[], None).unwrap_err().contains("no devices"));

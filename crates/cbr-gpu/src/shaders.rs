@@ -28,7 +28,10 @@ pub struct StaticTree(pub &'static [(&'static str, &'static str)]);
 
 impl SourceTree for StaticTree {
     fn read(&self, path: &str) -> Option<String> {
-        self.0.iter().find(|(p, _)| *p == path).map(|(_, s)| s.to_string())
+        self.0
+            .iter()
+            .find(|(p, _)| *p == path)
+            .map(|(_, s)| s.to_string())
     }
 }
 
@@ -55,7 +58,10 @@ fn normalise(p: &Path) -> String {
 
 impl Shaders {
     pub fn new(sources: Box<dyn SourceTree>) -> Shaders {
-        Shaders { sources, cache: Mutex::new(HashMap::new()) }
+        Shaders {
+            sources,
+            cache: Mutex::new(HashMap::new()),
+        }
     }
 
     /// Compiles `path` (stage from its extension: .vert .geom .frag .comp) with `defines`.
@@ -82,12 +88,19 @@ impl Shaders {
             .sources
             .read(path)
             .ok_or_else(|| GpuError::ShaderNotFound(PathBuf::from(path)))?;
-        let compiler = shaderc::Compiler::new()
-            .map_err(|e| GpuError::Shader { file: path.into(), message: format!("shaderc unavailable: {e}") })?;
-        let mut opts = shaderc::CompileOptions::new()
-            .map_err(|e| GpuError::Shader { file: path.into(), message: format!("shaderc options: {e}") })?;
+        let compiler = shaderc::Compiler::new().map_err(|e| GpuError::Shader {
+            file: path.into(),
+            message: format!("shaderc unavailable: {e}"),
+        })?;
+        let mut opts = shaderc::CompileOptions::new().map_err(|e| GpuError::Shader {
+            file: path.into(),
+            message: format!("shaderc options: {e}"),
+        })?;
         // Vulkan 1.2 SPIR-V: 1.3 would emit LocalSizeId, which needs maintenance4 (PLATFORM.md).
-        opts.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
+        opts.set_target_env(
+            shaderc::TargetEnv::Vulkan,
+            shaderc::EnvVersion::Vulkan1_2 as u32,
+        );
         opts.set_optimization_level(shaderc::OptimizationLevel::Performance);
         opts.set_generate_debug_info();
         for (k, v) in &defs {
@@ -98,19 +111,28 @@ impl Shaders {
             let candidates = match ty {
                 shaderc::IncludeType::Relative => {
                     let dir = Path::new(requesting).parent().unwrap_or(Path::new(""));
-                    vec![normalise(&dir.join(requested)), normalise(Path::new(requested))]
+                    vec![
+                        normalise(&dir.join(requested)),
+                        normalise(Path::new(requested)),
+                    ]
                 }
                 shaderc::IncludeType::Standard => vec![normalise(Path::new(requested))],
             };
             candidates
                 .iter()
                 .find_map(|c| sources.read(c).map(|text| (c.clone(), text)))
-                .map(|(name, content)| shaderc::ResolvedInclude { resolved_name: name, content })
+                .map(|(name, content)| shaderc::ResolvedInclude {
+                    resolved_name: name,
+                    content,
+                })
                 .ok_or_else(|| format!("cannot find include `{requested}` (from {requesting})"))
         });
         let art = compiler
             .compile_into_spirv(&source, kind, path, "main", Some(&opts))
-            .map_err(|e| GpuError::Shader { file: path.into(), message: compile_message(e) })?;
+            .map_err(|e| GpuError::Shader {
+                file: path.into(),
+                message: compile_message(e),
+            })?;
         let words = Arc::new(art.as_binary().to_vec());
         if let Ok(mut c) = self.cache.lock() {
             c.insert(key, words.clone());
@@ -131,13 +153,22 @@ mod tests {
     use super::*;
 
     const TREE: &[(&str, &str)] = &[
-        ("inc/common.glsl", "#define ONE 1.0\nfloat helper() { return ONE; }\n"),
+        (
+            "inc/common.glsl",
+            "#define ONE 1.0\nfloat helper() { return ONE; }\n",
+        ),
         (
             "pass/ok.comp",
             "#version 460\n#extension GL_GOOGLE_include_directive : require\n#include \"../inc/common.glsl\"\nlayout(local_size_x = 8) in;\nlayout(std430, binding = 0) buffer B { float v[]; };\nvoid main() { v[gl_GlobalInvocationID.x] = helper() * SCALE; }\n",
         ),
-        ("pass/broken.frag", "#version 460\nvoid main() {\n  float x = undefined_thing;\n}\n"),
-        ("pass/missing_inc.frag", "#version 460\n#extension GL_GOOGLE_include_directive : require\n#include <nope.glsl>\nvoid main() {}\n"),
+        (
+            "pass/broken.frag",
+            "#version 460\nvoid main() {\n  float x = undefined_thing;\n}\n",
+        ),
+        (
+            "pass/missing_inc.frag",
+            "#version 460\n#extension GL_GOOGLE_include_directive : require\n#include <nope.glsl>\nvoid main() {}\n",
+        ),
     ];
 
     fn shaders() -> Shaders {
@@ -147,22 +178,40 @@ mod tests {
     #[test]
     fn compiles_with_includes_and_defines() {
         let s = shaders();
-        let words = s.compile("pass/ok.comp", &[("SCALE".into(), "2.0".into())]).expect("compiles");
+        let words = s
+            .compile("pass/ok.comp", &[("SCALE".into(), "2.0".into())])
+            .expect("compiles");
         assert_eq!(words[0], 0x0723_0203, "SPIR-V magic");
-        let again = s.compile("pass/ok.comp", &[("SCALE".into(), "2.0".into())]).expect("cached");
-        assert!(Arc::ptr_eq(&words, &again), "second compile comes from the cache");
-        let other = s.compile("pass/ok.comp", &[("SCALE".into(), "3.0".into())]).expect("compiles");
+        let again = s
+            .compile("pass/ok.comp", &[("SCALE".into(), "2.0".into())])
+            .expect("cached");
+        assert!(
+            Arc::ptr_eq(&words, &again),
+            "second compile comes from the cache"
+        );
+        let other = s
+            .compile("pass/ok.comp", &[("SCALE".into(), "3.0".into())])
+            .expect("compiles");
         assert!(!Arc::ptr_eq(&words, &other), "defines are part of the key");
     }
 
     #[test]
     fn errors_name_file_and_line() {
-        let err = shaders().compile("pass/broken.frag", &[]).unwrap_err().to_string();
+        let err = shaders()
+            .compile("pass/broken.frag", &[])
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("pass/broken.frag:3"), "{err}");
         assert!(err.contains("undefined_thing"), "{err}");
-        let err = shaders().compile("pass/missing_inc.frag", &[]).unwrap_err().to_string();
+        let err = shaders()
+            .compile("pass/missing_inc.frag", &[])
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("nope.glsl"), "{err}");
-        let err = shaders().compile("pass/absent.frag", &[]).unwrap_err().to_string();
+        let err = shaders()
+            .compile("pass/absent.frag", &[])
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("absent.frag"), "{err}");
     }
 }

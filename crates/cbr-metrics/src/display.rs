@@ -17,7 +17,9 @@ pub struct DisplayTransform {
 
 impl Default for DisplayTransform {
     fn default() -> Self {
-        DisplayTransform { exposure_stops: 0.0 }
+        DisplayTransform {
+            exposure_stops: 0.0,
+        }
     }
 }
 
@@ -28,7 +30,11 @@ pub fn aces_narkowicz(x: f32) -> f32 {
 
 pub fn srgb_oetf(c: f32) -> f32 {
     let c = c.clamp(0.0, 1.0);
-    if c <= 0.003_130_8 { 12.92 * c } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 }
+    if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
 }
 
 impl DisplayTransform {
@@ -52,7 +58,12 @@ impl DisplayTransform {
         let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
         rgba.chunks_exact(4)
             .flat_map(|p| {
-                [q(self.apply(p[0].to_f32())), q(self.apply(p[1].to_f32())), q(self.apply(p[2].to_f32())), q(p[3].to_f32())]
+                [
+                    q(self.apply(p[0].to_f32())),
+                    q(self.apply(p[1].to_f32())),
+                    q(self.apply(p[2].to_f32())),
+                    q(p[3].to_f32()),
+                ]
             })
             .collect()
     }
@@ -68,10 +79,16 @@ mod tests {
         assert_eq!(d.apply(0.0), 0.0);
         assert!(d.apply(1e6) > 0.999);
         // ACES fit at 0.18: 0.2669..., sRGB-encoded: 0.5535...
-        assert!((aces_narkowicz(0.18) - 0.266_98).abs() < 1e-4, "{}", aces_narkowicz(0.18));
+        assert!(
+            (aces_narkowicz(0.18) - 0.266_98).abs() < 1e-4,
+            "{}",
+            aces_narkowicz(0.18)
+        );
         assert!((srgb_oetf(0.5) - 0.735_36).abs() < 1e-4);
         assert_eq!(d.apply(f32::NAN), 0.0);
-        let brighter = DisplayTransform { exposure_stops: 1.0 };
+        let brighter = DisplayTransform {
+            exposure_stops: 1.0,
+        };
         assert!((brighter.apply(0.09) - d.apply(0.18)).abs() < 1e-6);
     }
 

@@ -4,8 +4,8 @@
 use std::path::{Path, PathBuf};
 
 use exr::prelude::*;
-use std::result::Result;
 use half::f16;
+use std::result::Result;
 
 #[derive(Debug, thiserror::Error)]
 pub enum IoError {
@@ -16,10 +16,19 @@ pub enum IoError {
 }
 
 /// Runs `write` on a temporary path beside `path`, then renames it into place.
-pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), IoError> {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+pub fn write_atomic(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), String>,
+) -> Result<(), IoError> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
-    let err = |msg: String| IoError::Write { path: path.to_path_buf(), msg };
+    let err = |msg: String| IoError::Write {
+        path: path.to_path_buf(),
+        msg,
+    };
     if let Err(e) = write(&tmp) {
         let _ = std::fs::remove_file(&tmp);
         return Err(err(e));
@@ -31,13 +40,22 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>
 }
 
 pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
-    write_atomic(path, |tmp| std::fs::write(tmp, bytes).map_err(|e| e.to_string()))
+    write_atomic(path, |tmp| {
+        std::fs::write(tmp, bytes).map_err(|e| e.to_string())
+    })
 }
 
 pub fn write_png_rgba8(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<(), IoError> {
     write_atomic(path, |tmp| {
-        image::save_buffer_with_format(tmp, rgba, width, height, image::ExtendedColorType::Rgba8, image::ImageFormat::Png)
-            .map_err(|e| e.to_string())
+        image::save_buffer_with_format(
+            tmp,
+            rgba,
+            width,
+            height,
+            image::ExtendedColorType::Rgba8,
+            image::ImageFormat::Png,
+        )
+        .map_err(|e| e.to_string())
     })
 }
 
@@ -62,7 +80,11 @@ pub const PRIMITIVE_ID_LAYER: &str = "primitive_id";
 
 /// Scanline ZIP: read by every EXR reader (OpenImageIO, exrheader), unlike the crate's tiled preset.
 fn encoding() -> Encoding {
-    Encoding { compression: Compression::ZIP16, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing }
+    Encoding {
+        compression: Compression::ZIP16,
+        blocks: Blocks::ScanLines,
+        line_order: LineOrder::Increasing,
+    }
 }
 
 /// Writes a multi-part EXR: `color` (R,G,B,A half), `depth` (Z float: view distance, +inf where
@@ -72,7 +94,10 @@ pub fn write_frame_exr(path: &Path, f: &FrameLayers) -> Result<(), IoError> {
     let size = Vec2(f.width as usize, f.height as usize);
     let n = size.area();
     let check = |what: &str, len: usize| {
-        (len == n).then_some(()).ok_or_else(|| IoError::Write { path: path.to_path_buf(), msg: format!("{what}: {len} values for {n} pixels") })
+        (len == n).then_some(()).ok_or_else(|| IoError::Write {
+            path: path.to_path_buf(),
+            msg: format!("{what}: {len} values for {n} pixels"),
+        })
     };
     check("color", f.color.len() / 4)?;
     check("depth", f.depth.len())?;
@@ -81,7 +106,10 @@ pub fn write_frame_exr(path: &Path, f: &FrameLayers) -> Result<(), IoError> {
     let attrs = |name: &str| {
         let mut a = LayerAttributes::named(name);
         for (k, v) in &f.metadata {
-            a.other.insert(Text::from(k.as_str()), AttributeValue::Text(Text::from(v.as_str())));
+            a.other.insert(
+                Text::from(k.as_str()),
+                AttributeValue::Text(Text::from(v.as_str())),
+            );
         }
         a
     };
@@ -99,42 +127,91 @@ pub fn write_frame_exr(path: &Path, f: &FrameLayers) -> Result<(), IoError> {
                 channel("A", rgba(3)),
             ]),
         ),
-        Layer::new(size, attrs(DEPTH_LAYER), encoding(), AnyChannels::sort(smallvec::smallvec![channel("Z", FlatSamples::F32(f.depth.to_vec()))])),
+        Layer::new(
+            size,
+            attrs(DEPTH_LAYER),
+            encoding(),
+            AnyChannels::sort(smallvec::smallvec![channel(
+                "Z",
+                FlatSamples::F32(f.depth.to_vec())
+            )])
+        ),
         Layer::new(
             size,
             attrs(VELOCITY_LAYER),
             encoding(),
             AnyChannels::sort(smallvec::smallvec![
-                channel("X", FlatSamples::F32(f.velocity.iter().map(|v| v[0]).collect())),
-                channel("Y", FlatSamples::F32(f.velocity.iter().map(|v| v[1]).collect())),
+                channel(
+                    "X",
+                    FlatSamples::F32(f.velocity.iter().map(|v| v[0]).collect())
+                ),
+                channel(
+                    "Y",
+                    FlatSamples::F32(f.velocity.iter().map(|v| v[1]).collect())
+                ),
             ]),
         ),
         Layer::new(
             size,
             attrs(OBJECT_ID_LAYER),
             encoding(),
-            AnyChannels::sort(smallvec::smallvec![channel("id", FlatSamples::U32(f.ids.iter().map(|v| v[0]).collect()))]),
+            AnyChannels::sort(smallvec::smallvec![channel(
+                "id",
+                FlatSamples::U32(f.ids.iter().map(|v| v[0]).collect())
+            )]),
         ),
         Layer::new(
             size,
             attrs(PRIMITIVE_ID_LAYER),
             encoding(),
-            AnyChannels::sort(smallvec::smallvec![channel("id", FlatSamples::U32(f.ids.iter().map(|v| v[1]).collect()))]),
+            AnyChannels::sort(smallvec::smallvec![channel(
+                "id",
+                FlatSamples::U32(f.ids.iter().map(|v| v[1]).collect())
+            )]),
         ),
     ];
-    let image = Image::from_layers(ImageAttributes::new(IntegerBounds::from_dimensions(size)), layers);
-    write_atomic(path, |tmp| image.write().to_file(tmp).map_err(|e| e.to_string()))
+    let image = Image::from_layers(
+        ImageAttributes::new(IntegerBounds::from_dimensions(size)),
+        layers,
+    );
+    write_atomic(path, |tmp| {
+        image.write().to_file(tmp).map_err(|e| e.to_string())
+    })
 }
 
 /// One channel of one layer read back as f32 (for tests and `cbr compare`).
-pub fn read_exr_channel(path: &Path, layer: &str, channel: &str) -> Result<(usize, usize, Vec<f32>), IoError> {
-    let err = |msg: String| IoError::Read { path: path.to_path_buf(), msg };
+pub fn read_exr_channel(
+    path: &Path,
+    layer: &str,
+    channel: &str,
+) -> Result<(usize, usize, Vec<f32>), IoError> {
+    let err = |msg: String| IoError::Read {
+        path: path.to_path_buf(),
+        msg,
+    };
     let img = read_all_flat_layers_from_file(path).map_err(|e| err(e.to_string()))?;
-    let names: Vec<String> = img.layer_data.iter().map(|l| l.attributes.layer_name.as_ref().map(|t| t.to_string()).unwrap_or_default()).collect();
+    let names: Vec<String> = img
+        .layer_data
+        .iter()
+        .map(|l| {
+            l.attributes
+                .layer_name
+                .as_ref()
+                .map(|t| t.to_string())
+                .unwrap_or_default()
+        })
+        .collect();
     let l = img
         .layer_data
         .iter()
-        .find(|l| l.attributes.layer_name.as_ref().map(|t| t.to_string()).as_deref() == Some(layer))
+        .find(|l| {
+            l.attributes
+                .layer_name
+                .as_ref()
+                .map(|t| t.to_string())
+                .as_deref()
+                == Some(layer)
+        })
         .ok_or_else(|| err(format!("no layer `{layer}` (layers: {})", names.join(", "))))?;
     let c = l
         .channel_data
@@ -155,22 +232,53 @@ mod tests {
         let dir = tempfile::tempdir().expect("tempdir");
         let path = dir.path().join("f.exr");
         let (w, h) = (3u32, 2u32);
-        let color: Vec<f16> = (0..w * h * 4).map(|i| f16::from_f32(i as f32 * 0.25)).collect();
-        let depth: Vec<f32> = (0..w * h).map(|i| if i == 0 { f32::INFINITY } else { i as f32 }).collect();
+        let color: Vec<f16> = (0..w * h * 4)
+            .map(|i| f16::from_f32(i as f32 * 0.25))
+            .collect();
+        let depth: Vec<f32> = (0..w * h)
+            .map(|i| if i == 0 { f32::INFINITY } else { i as f32 })
+            .collect();
         let velocity: Vec<[f32; 2]> = (0..w * h).map(|i| [i as f32, -(i as f32)]).collect();
         let ids: Vec<[u32; 2]> = (0..w * h).map(|i| [i, 1000 + i]).collect();
-        let layers = FrameLayers { width: w, height: h, color: &color, depth: &depth, velocity: &velocity, ids: &ids, metadata: vec![("cbr.frame".into(), "7".into())] };
+        let layers = FrameLayers {
+            width: w,
+            height: h,
+            color: &color,
+            depth: &depth,
+            velocity: &velocity,
+            ids: &ids,
+            metadata: vec![("cbr.frame".into(), "7".into())],
+        };
         write_frame_exr(&path, &layers).expect("write");
         let (rw, rh, g) = read_exr_channel(&path, COLOR_LAYER, "G").expect("G");
         assert_eq!((rw, rh), (3, 2));
         assert_eq!(g[1], 5.0 * 0.25);
-        assert_eq!(read_exr_channel(&path, DEPTH_LAYER, "Z").expect("Z").2[0], f32::INFINITY);
-        assert_eq!(read_exr_channel(&path, VELOCITY_LAYER, "Y").expect("Y").2[3], -3.0);
-        assert_eq!(read_exr_channel(&path, PRIMITIVE_ID_LAYER, "id").expect("id").2[5], 1005.0);
-        let err = read_exr_channel(&path, "nope", "R").unwrap_err().to_string();
-        assert!(err.contains("no layer `nope`") && err.contains("color"), "{err}");
+        assert_eq!(
+            read_exr_channel(&path, DEPTH_LAYER, "Z").expect("Z").2[0],
+            f32::INFINITY
+        );
+        assert_eq!(
+            read_exr_channel(&path, VELOCITY_LAYER, "Y").expect("Y").2[3],
+            -3.0
+        );
+        assert_eq!(
+            read_exr_channel(&path, PRIMITIVE_ID_LAYER, "id")
+                .expect("id")
+                .2[5],
+            1005.0
+        );
+        let err = read_exr_channel(&path, "nope", "R")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("no layer `nope`") && err.contains("color"),
+            "{err}"
+        );
         // Nothing but the finished file is left behind.
-        let names: Vec<_> = std::fs::read_dir(dir.path()).expect("dir").map(|e| e.expect("e").file_name()).collect();
+        let names: Vec<_> = std::fs::read_dir(dir.path())
+            .expect("dir")
+            .map(|e| e.expect("e").file_name())
+            .collect();
         assert_eq!(names.len(), 1, "{names:?}");
     }
 

@@ -1,7 +1,9 @@
 //! The scene on the GPU: geometry, materials and textures uploaded once; per-frame object
 //! transforms, lights and constants rewritten each frame (camera-relative, computed in f64).
 
-use cbr_gpu::{Buffer, Gpu, Image, ImageDesc, LevelCopy, Location, Result, Sampler, SamplerDesc, vk};
+use cbr_gpu::{
+    Buffer, Gpu, Image, ImageDesc, LevelCopy, Location, Result, Sampler, SamplerDesc, vk,
+};
 use cbr_scene::{AlphaSource, Camera, Scene};
 use glam::{DMat3, DMat4, DVec3, Mat4};
 
@@ -63,9 +65,23 @@ fn material_data(m: &cbr_scene::Material, bump: bool) -> MaterialData {
     let bump_height = 0.01 * m.bump_scale;
     MaterialData {
         kd: [m.kd[0], m.kd[1], m.kd[2], 0.0],
-        ks: [m.ks[0], m.ks[1], m.ks[2], if m.ks.iter().any(|&k| k > 0.0) { m.ns } else { 0.0 }],
+        ks: [
+            m.ks[0],
+            m.ks[1],
+            m.ks[2],
+            if m.ks.iter().any(|&k| k > 0.0) {
+                m.ns
+            } else {
+                0.0
+            },
+        ],
         ke: [m.ke[0], m.ke[1], m.ke[2], bump_height],
-        tex: [tex(m.kd_tex), alpha_tex, channel, if bump { tex(m.bump_tex) } else { -1 }],
+        tex: [
+            tex(m.kd_tex),
+            alpha_tex,
+            channel,
+            if bump { tex(m.bump_tex) } else { -1 },
+        ],
     }
 }
 
@@ -75,8 +91,17 @@ fn upload_textures(gpu: &Gpu, scene: &Scene) -> Result<Vec<Image>> {
     let mut staging_bytes = Vec::new();
     let mut copies: Vec<Vec<LevelCopy>> = Vec::new();
     let white = cbr_scene::Texture::from_rgba8("white", 1, 1, vec![255; 4], false);
-    for (i, t) in scene.textures.iter().chain(std::iter::once(&white)).enumerate() {
-        let format = if t.srgb { vk::Format::R8G8B8A8_SRGB } else { vk::Format::R8G8B8A8_UNORM };
+    for (i, t) in scene
+        .textures
+        .iter()
+        .chain(std::iter::once(&white))
+        .enumerate()
+    {
+        let format = if t.srgb {
+            vk::Format::R8G8B8A8_SRGB
+        } else {
+            vk::Format::R8G8B8A8_UNORM
+        };
         let name = format!("texture[{i}] {}", t.name);
         images.push(Image::new(
             gpu,
@@ -93,12 +118,23 @@ fn upload_textures(gpu: &Gpu, scene: &Scene) -> Result<Vec<Image>> {
         )?);
         let mut levels = Vec::new();
         for (l, level) in t.levels.iter().enumerate() {
-            levels.push(LevelCopy { buffer_offset: staging_bytes.len() as u64, level: l as u32, width: level.width, height: level.height });
+            levels.push(LevelCopy {
+                buffer_offset: staging_bytes.len() as u64,
+                level: l as u32,
+                width: level.width,
+                height: level.height,
+            });
             staging_bytes.extend_from_slice(&level.rgba);
         }
         copies.push(levels);
     }
-    let mut staging = Buffer::new(gpu, "textures.staging", staging_bytes.len() as u64, vk::BufferUsageFlags::TRANSFER_SRC, Location::CpuToGpu)?;
+    let mut staging = Buffer::new(
+        gpu,
+        "textures.staging",
+        staging_bytes.len() as u64,
+        vk::BufferUsageFlags::TRANSFER_SRC,
+        Location::CpuToGpu,
+    )?;
     staging.write(0, &staging_bytes)?;
     gpu.submit("upload textures", |cmd| {
         for (img, levels) in images.iter().zip(&copies) {
@@ -116,17 +152,38 @@ impl GpuScene {
         let mut draws = Vec::with_capacity(scene.objects.len());
         for (i, o) in scene.objects.iter().enumerate() {
             let base = (vertex_bytes.len() / std::mem::size_of::<cbr_scene::Vertex>()) as u32;
-            draws.push(Draw { object: i as u32, material: o.material, first_index: index_data.len() as u32, index_count: o.indices.len() as u32 });
+            draws.push(Draw {
+                object: i as u32,
+                material: o.material,
+                first_index: index_data.len() as u32,
+                index_count: o.indices.len() as u32,
+            });
             vertex_bytes.extend_from_slice(bytemuck::cast_slice(&o.vertices));
             index_data.extend(o.indices.iter().map(|&k| k + base));
         }
         let usage_storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let vertices = Buffer::with_data(gpu, "scene.vertices", usage_storage, &vertex_bytes)?;
-        let indices = Buffer::with_data(gpu, "scene.indices", vk::BufferUsageFlags::INDEX_BUFFER, bytemuck::cast_slice(&index_data))?;
-        let mats: Vec<MaterialData> = scene.materials.iter().map(|m| material_data(m, scene.settings.bump)).collect();
-        let materials = Buffer::with_data(gpu, "scene.materials", usage_storage, bytemuck::cast_slice(&mats))?;
+        let indices = Buffer::with_data(
+            gpu,
+            "scene.indices",
+            vk::BufferUsageFlags::INDEX_BUFFER,
+            bytemuck::cast_slice(&index_data),
+        )?;
+        let mats: Vec<MaterialData> = scene
+            .materials
+            .iter()
+            .map(|m| material_data(m, scene.settings.bump))
+            .collect();
+        let materials = Buffer::with_data(
+            gpu,
+            "scene.materials",
+            usage_storage,
+            bytemuck::cast_slice(&mats),
+        )?;
         let mut textures = upload_textures(gpu, scene)?;
-        let white = textures.pop().ok_or_else(|| cbr_gpu::GpuError::Other("no white texture".into()))?;
+        let white = textures
+            .pop()
+            .ok_or_else(|| cbr_gpu::GpuError::Other("no white texture".into()))?;
         let material_textures = scene
             .materials
             .iter()
@@ -138,7 +195,15 @@ impl GpuScene {
                 [m.kd_tex, mask, m.bump_tex]
             })
             .collect();
-        let sampler = Sampler::new(gpu, "scene.sampler", SamplerDesc { linear: true, mipmaps: true, repeat: true })?;
+        let sampler = Sampler::new(
+            gpu,
+            "scene.sampler",
+            SamplerDesc {
+                linear: true,
+                mipmaps: true,
+                repeat: true,
+            },
+        )?;
         let objects = Buffer::new(
             gpu,
             "scene.objects",
@@ -150,7 +215,8 @@ impl GpuScene {
         let lights = Buffer::new(
             gpu,
             "scene.lights",
-            ((scene.directional.len() + scene.points.len()).max(1) * std::mem::size_of::<LightData>()) as u64,
+            ((scene.directional.len() + scene.points.len()).max(1)
+                * std::mem::size_of::<LightData>()) as u64,
             usage_storage,
             Location::CpuToGpu,
         )?;
@@ -207,20 +273,31 @@ impl GpuScene {
             .iter()
             .map(|d| {
                 let c = d.color.map(|c| c * d.intensity);
-                LightData { position: [d.direction[0], d.direction[1], d.direction[2], 0.0], color: [c[0], c[1], c[2], 0.0] }
+                LightData {
+                    position: [d.direction[0], d.direction[1], d.direction[2], 0.0],
+                    color: [c[0], c[1], c[2], 0.0],
+                }
             })
             .collect();
         lights.extend(scene.points.iter().map(|p| {
             let rel = (DVec3::from(p.position) - cam.position).as_vec3();
             let c = p.color.map(|c| c * p.intensity);
-            LightData { position: [rel.x, rel.y, rel.z, 1.0], color: [c[0], c[1], c[2], p.range] }
+            LightData {
+                position: [rel.x, rel.y, rel.z, 1.0],
+                color: [c[0], c[1], c[2], p.range],
+            }
         }));
         if !lights.is_empty() {
             self.lights.write(0, bytemuck::cast_slice(&lights))?;
         }
         let a = scene.settings.ambient;
         let constants = FrameConstants {
-            viewport: [view.width as f32, view.height as f32, 1.0 / view.width as f32, 1.0 / view.height as f32],
+            viewport: [
+                view.width as f32,
+                view.height as f32,
+                1.0 / view.width as f32,
+                1.0 / view.height as f32,
+            ],
             jitter: [view.jitter[0], view.jitter[1], 0.0, 0.0],
             ambient: [a[0], a[1], a[2], view.lod_bias],
             counts: [self.light_count.0, self.light_count.1, view.frame_index, 0],
@@ -232,5 +309,6 @@ impl GpuScene {
 
 /// The matrix that takes camera-relative world positions to clip space (for tests and tools).
 pub fn clip_from_world(camera: &Camera, aspect: f64) -> Mat4 {
-    (camera.projection(aspect) * camera.rotation() * DMat4::from_translation(-camera.position)).as_mat4()
+    (camera.projection(aspect) * camera.rotation() * DMat4::from_translation(-camera.position))
+        .as_mat4()
 }

@@ -60,7 +60,11 @@ pub(crate) mod tests {
             match op {
                 5 => {
                     // OpName target "name"
-                    let bytes: Vec<u8> = ops[1..].iter().flat_map(|w| w.to_le_bytes()).take_while(|&b| b != 0).collect();
+                    let bytes: Vec<u8> = ops[1..]
+                        .iter()
+                        .flat_map(|w| w.to_le_bytes())
+                        .take_while(|&b| b != 0)
+                        .collect();
                     names.insert(ops[0], String::from_utf8_lossy(&bytes).into_owned());
                 }
                 72 if ops[2] == 35 => offsets.push((ops[0], ops[1], ops[3])), // OpMemberDecorate .. Offset
@@ -79,7 +83,9 @@ pub(crate) mod tests {
         use std::mem::offset_of;
         let shaders = crate::shader_library();
         let defs = crate::native::shader_defines();
-        let words = shaders.compile("scene/forward.frag", &defs).expect("compiles");
+        let words = shaders
+            .compile("scene/forward.frag", &defs)
+            .expect("compiles");
         let off = member_offsets(&words);
         let check = |s: &str, m: u32, host: usize| {
             let dev = off.get(&(s.to_string(), m)).copied();
@@ -91,7 +97,11 @@ pub(crate) mod tests {
         check("FrameConstants", 2, offset_of!(FrameConstants, ambient));
         check("FrameConstants", 3, offset_of!(FrameConstants, counts));
         check("ObjectData", 0, offset_of!(ObjectData, clip_from_local));
-        check("ObjectData", 1, offset_of!(ObjectData, prev_clip_from_local));
+        check(
+            "ObjectData",
+            1,
+            offset_of!(ObjectData, prev_clip_from_local),
+        );
         check("ObjectData", 2, offset_of!(ObjectData, world_from_local));
         check("ObjectData", 3, offset_of!(ObjectData, normal_from_local));
         check("ObjectData", 4, offset_of!(ObjectData, ids));

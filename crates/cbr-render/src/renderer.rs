@@ -52,7 +52,12 @@ pub struct Renderer {
 }
 
 impl Renderer {
-    pub fn new(gpu: &Gpu, shaders: &Shaders, scene: &Scene, settings: RenderSettings) -> Result<Renderer> {
+    pub fn new(
+        gpu: &Gpu,
+        shaders: &Shaders,
+        scene: &Scene,
+        settings: RenderSettings,
+    ) -> Result<Renderer> {
         let gpu_scene = GpuScene::new(gpu, scene)?;
         let pass = ScenePass::new(gpu, shaders, &gpu_scene, "native.raster")?;
         let targets = FrameTargets::new(gpu, "native", settings.width, settings.height)?;
@@ -63,7 +68,15 @@ impl Renderer {
             ids: Readback::for_image(gpu, "readback.ids", &targets.ids)?,
         };
         let profiler = Profiler::new(gpu, "native.profiler", 8)?;
-        Ok(Renderer { gpu: gpu.clone(), scene: gpu_scene, pass, targets, readbacks, profiler, settings })
+        Ok(Renderer {
+            gpu: gpu.clone(),
+            scene: gpu_scene,
+            pass,
+            targets,
+            readbacks,
+            profiler,
+            settings,
+        })
     }
 
     pub fn view(&self, scene: &Scene, frame: u32) -> FrameView {
@@ -87,7 +100,13 @@ impl Renderer {
         let view = self.view(scene, frame);
         self.scene.update(scene, &view)?;
         self.profiler.begin_frame();
-        let (pass, gs, targets, rb, profiler) = (&self.pass, &self.scene, &self.targets, &self.readbacks, &mut self.profiler);
+        let (pass, gs, targets, rb, profiler) = (
+            &self.pass,
+            &self.scene,
+            &self.targets,
+            &self.readbacks,
+            &mut self.profiler,
+        );
         self.gpu.submit("frame", |cmd| {
             pass.record(cmd, profiler, gs, targets);
             let scope = profiler.begin(cmd, "readback", PassKind::Transfer);

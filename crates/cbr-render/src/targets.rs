@@ -17,9 +17,14 @@ pub struct FrameTargets {
 
 impl FrameTargets {
     pub fn new(gpu: &Gpu, prefix: &str, width: u32, height: u32) -> Result<FrameTargets> {
-        let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::SAMPLED;
+        let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT
+            | vk::ImageUsageFlags::TRANSFER_SRC
+            | vk::ImageUsageFlags::SAMPLED;
         let img = |name: &str, format, usage| {
-            Image::new(gpu, &ImageDesc::new_2d(&format!("{prefix}.{name}"), format, width, height, usage))
+            Image::new(
+                gpu,
+                &ImageDesc::new_2d(&format!("{prefix}.{name}"), format, width, height, usage),
+            )
         };
         Ok(FrameTargets {
             color: img("color", COLOR_FORMAT, usage)?,
@@ -28,7 +33,9 @@ impl FrameTargets {
             depth: img(
                 "depth",
                 DEPTH_FORMAT,
-                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::SAMPLED,
+                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+                    | vk::ImageUsageFlags::TRANSFER_SRC
+                    | vk::ImageUsageFlags::SAMPLED,
             )?,
         })
     }

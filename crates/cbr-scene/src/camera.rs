@@ -26,7 +26,11 @@ impl Camera {
     /// renderer keeps world translation in f64 and feeds the GPU camera-relative coordinates.
     pub fn rotation(&self) -> DMat4 {
         let fwd = (self.target - self.position).normalize_or(DVec3::NEG_Z);
-        let up = if fwd.cross(DVec3::Y).length_squared() < 1e-12 { DVec3::Z } else { DVec3::Y };
+        let up = if fwd.cross(DVec3::Y).length_squared() < 1e-12 {
+            DVec3::Z
+        } else {
+            DVec3::Y
+        };
         let right = fwd.cross(up).normalize();
         let true_up = right.cross(fwd);
         // Rows are the camera axes: x = right, y = up, z = backwards.
@@ -56,29 +60,57 @@ pub struct CameraPath {
 fn catmull_rom(p0: DVec3, p1: DVec3, p2: DVec3, p3: DVec3, s: f64) -> DVec3 {
     let s2 = s * s;
     let s3 = s2 * s;
-    0.5 * ((2.0 * p1) + (p2 - p0) * s + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * s2 + (3.0 * p1 - p0 - 3.0 * p2 + p3) * s3)
+    0.5 * ((2.0 * p1)
+        + (p2 - p0) * s
+        + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * s2
+        + (3.0 * p1 - p0 - 3.0 * p2 + p3) * s3)
 }
 
 impl CameraPath {
     pub fn at(&self, t: f64) -> Camera {
         let k = &self.keys;
-        let cam = |i: usize| (DVec3::from(k[i].position), DVec3::from(k[i].target), k[i].fov_y_deg);
+        let cam = |i: usize| {
+            (
+                DVec3::from(k[i].position),
+                DVec3::from(k[i].target),
+                k[i].fov_y_deg,
+            )
+        };
         if k.len() == 1 || t <= k[0].time {
             let (position, target, fov_y_deg) = cam(0);
-            return Camera { position, target, fov_y_deg, near: self.near };
+            return Camera {
+                position,
+                target,
+                fov_y_deg,
+                near: self.near,
+            };
         }
         let last = k.len() - 1;
         if t >= k[last].time {
             let (position, target, fov_y_deg) = cam(last);
-            return Camera { position, target, fov_y_deg, near: self.near };
+            return Camera {
+                position,
+                target,
+                fov_y_deg,
+                near: self.near,
+            };
         }
-        let i = k.iter().rposition(|key| key.time <= t).unwrap_or(0).min(last - 1);
+        let i = k
+            .iter()
+            .rposition(|key| key.time <= t)
+            .unwrap_or(0)
+            .min(last - 1);
         let s = (t - k[i].time) / (k[i + 1].time - k[i].time).max(1e-12);
         let (a, b) = (i.saturating_sub(1), (i + 2).min(last));
         let pos = catmull_rom(cam(a).0, cam(i).0, cam(i + 1).0, cam(b).0, s);
         let tgt = catmull_rom(cam(a).1, cam(i).1, cam(i + 1).1, cam(b).1, s);
         let fov = cam(i).2 + (cam(i + 1).2 - cam(i).2) * s;
-        Camera { position: pos, target: tgt, fov_y_deg: fov, near: self.near }
+        Camera {
+            position: pos,
+            target: tgt,
+            fov_y_deg: fov,
+            near: self.near,
+        }
     }
 
     /// A static camera framing the bounds (for a bare OBJ on the command line).
@@ -86,7 +118,10 @@ impl CameraPath {
         let fov: f64 = 50.0;
         let r = bounds.radius().max(1e-3);
         // Fit the bounding sphere in the narrower field of view.
-        let half = (fov.to_radians() * 0.5).tan().atan().min((aspect * (fov.to_radians() * 0.5).tan()).atan());
+        let half = (fov.to_radians() * 0.5)
+            .tan()
+            .atan()
+            .min((aspect * (fov.to_radians() * 0.5).tan()).atan());
         let dist = r / half.sin() * 1.05;
         let dir = DVec3::new(0.35, 0.3, 1.0).normalize();
         let c = bounds.center();
@@ -107,12 +142,20 @@ mod tests {
     use super::*;
 
     fn key(t: f64, x: f64) -> CameraKey {
-        CameraKey { time: t, position: [x, 0.0, 0.0], target: [x, 0.0, -1.0], fov_y_deg: 40.0 + x }
+        CameraKey {
+            time: t,
+            position: [x, 0.0, 0.0],
+            target: [x, 0.0, -1.0],
+            fov_y_deg: 40.0 + x,
+        }
     }
 
     #[test]
     fn passes_through_keys_and_holds_at_the_ends() {
-        let p = CameraPath { keys: vec![key(0.0, 0.0), key(1.0, 2.0), key(2.0, 3.0)], near: 0.1 };
+        let p = CameraPath {
+            keys: vec![key(0.0, 0.0), key(1.0, 2.0), key(2.0, 3.0)],
+            near: 0.1,
+        };
         assert!((p.at(1.0).position.x - 2.0).abs() < 1e-12);
         assert!((p.at(-5.0).position.x - 0.0).abs() < 1e-12);
         assert!((p.at(9.0).position.x - 3.0).abs() < 1e-12);
@@ -123,11 +166,19 @@ mod tests {
 
     #[test]
     fn projection_is_reverse_z_with_y_down() {
-        let cam = Camera { position: DVec3::ZERO, target: DVec3::NEG_Z, fov_y_deg: 90.0, near: 0.5 };
+        let cam = Camera {
+            position: DVec3::ZERO,
+            target: DVec3::NEG_Z,
+            fov_y_deg: 90.0,
+            near: 0.5,
+        };
         let p = cam.projection(1.0) * cam.rotation();
         let clip = p * glam::DVec4::new(0.0, 1.0, -2.0, 1.0);
         let ndc = clip.truncate() / clip.w;
         assert!((ndc.z - 0.25).abs() < 1e-12, "depth = near / z = 0.5 / 2");
-        assert!((ndc.y + 0.5).abs() < 1e-12, "up in the world is up on screen (negative NDC y)");
+        assert!(
+            (ndc.y + 0.5).abs() < 1e-12,
+            "up in the world is up on screen (negative NDC y)"
+        );
     }
 }

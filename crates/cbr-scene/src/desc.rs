@@ -142,7 +142,11 @@ fn one() -> f32 {
 
 /// Line (1-based) of a byte offset.
 fn line_of(text: &str, offset: usize) -> usize {
-    text[..offset.min(text.len())].bytes().filter(|&b| b == b'\n').count() + 1
+    text[..offset.min(text.len())]
+        .bytes()
+        .filter(|&b| b == b'\n')
+        .count()
+        + 1
 }
 
 impl SceneDesc {
@@ -169,10 +173,18 @@ pub(crate) fn camera_path(desc: Option<&CameraDesc>) -> Option<CameraPath> {
     let mut keys: Vec<CameraKey> = c
         .keys
         .iter()
-        .map(|k| CameraKey { time: k.time, position: k.position, target: k.target, fov_y_deg: k.fov_y_deg.unwrap_or(fov) })
+        .map(|k| CameraKey {
+            time: k.time,
+            position: k.position,
+            target: k.target,
+            fov_y_deg: k.fov_y_deg.unwrap_or(fov),
+        })
         .collect();
     keys.sort_by(|a, b| a.time.total_cmp(&b.time));
-    Some(CameraPath { keys, near: c.near.unwrap_or(0.05) })
+    Some(CameraPath {
+        keys,
+        near: c.near.unwrap_or(0.05),
+    })
 }
 
 #[cfg(test)]
@@ -198,7 +210,9 @@ mod tests {
         let err = parse("width = \"wide\"\n").unwrap_err().to_string();
         assert!(err.starts_with("s.toml:1:"), "{err}");
         assert!(err.contains("`width`"), "{err}");
-        let err = parse("[lights]\n[[lights.point]]\nposition = [0, 0]\n").unwrap_err().to_string();
+        let err = parse("[lights]\n[[lights.point]]\nposition = [0, 0]\n")
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("lights.point[0].position"), "{err}");
     }
 
@@ -217,6 +231,9 @@ mod tests {
         assert_eq!(d.width, Some(64));
         let path = camera_path(d.camera.as_ref()).expect("path");
         assert_eq!(path.keys[0].time, 0.0, "keys sorted by time");
-        assert_eq!(d.lights.and_then(|l| l.random_points).map(|r| r.count), Some(10));
+        assert_eq!(
+            d.lights.and_then(|l| l.random_points).map(|r| r.count),
+            Some(10)
+        );
     }
 }

@@ -4,7 +4,11 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     #[error("{}:{line}: {msg}", file.display())]
-    Syntax { file: PathBuf, line: usize, msg: String },
+    Syntax {
+        file: PathBuf,
+        line: usize,
+        msg: String,
+    },
     #[error("{}: {msg}", file.display())]
     File { file: PathBuf, msg: String },
     #[error("{0}")]
@@ -13,10 +17,17 @@ pub enum SceneError {
 
 impl SceneError {
     pub fn syntax(file: &Path, line: usize, msg: impl Into<String>) -> Self {
-        SceneError::Syntax { file: file.to_path_buf(), line, msg: msg.into() }
+        SceneError::Syntax {
+            file: file.to_path_buf(),
+            line,
+            msg: msg.into(),
+        }
     }
     pub fn file(file: &Path, msg: impl Into<String>) -> Self {
-        SceneError::File { file: file.to_path_buf(), msg: msg.into() }
+        SceneError::File {
+            file: file.to_path_buf(),
+            msg: msg.into(),
+        }
     }
 }
 

@@ -1,7 +1,7 @@
 //! Scenes for cbr: OBJ/MTL (through tobj), textures (through image) with mip chains, the scene
 //! TOML, camera paths, rigid animation, lights and the procedural scenes. No Vulkan.
 #![forbid(unsafe_code)]
-#![deny(clippy::unwrap_used)]
+#![cfg_attr(not(test), deny(clippy::unwrap_used))]
 
 pub mod camera;
 pub mod desc;
@@ -20,8 +20,8 @@ pub use camera::{Camera, CameraKey, CameraPath};
 pub use error::{Result, SceneError};
 pub use obj::{MissingTextures, ObjOptions};
 pub use scene::{
-    AlphaSource, Bounds, DirLight, LoadStats, MAX_RESOLUTION, Material, Motion, Object, PointLight, Scene, Settings, Up, Vertex,
-    check_resolution,
+    AlphaSource, Bounds, DirLight, LoadStats, MAX_RESOLUTION, Material, Motion, Object, PointLight,
+    Scene, Settings, Up, Vertex, check_resolution,
 };
 pub use texture::Texture;
 
@@ -40,28 +40,46 @@ pub fn load(spec: &str, opts: &LoadOptions) -> Result<Scene> {
         return builtin(name);
     }
     let path = Path::new(spec);
-    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
         Some("toml") => load_toml(path, opts),
         Some("obj") => load_bare_obj(path, opts),
-        _ => Err(SceneError::file(path, "expected a .toml scene, an .obj file, or builtin:NAME (builtin:demo)")),
+        _ => Err(SceneError::file(
+            path,
+            "expected a .toml scene, an .obj file, or builtin:NAME (builtin:demo)",
+        )),
     }
 }
 
 pub fn builtin(name: &str) -> Result<Scene> {
     match name {
         "demo" => Ok(procedural::demo()),
-        other => Err(SceneError::Invalid(format!("no built-in scene `{other}`; built-ins: {}", BUILTINS.join(", ")))),
+        other => Err(SceneError::Invalid(format!(
+            "no built-in scene `{other}`; built-ins: {}",
+            BUILTINS.join(", ")
+        ))),
     }
 }
 
 fn default_lights(scene: &mut Scene) {
-    scene.directional = vec![DirLight { direction: [-0.3, -1.0, -0.5], color: [1.0; 3], intensity: 2.5 }];
+    scene.directional = vec![DirLight {
+        direction: [-0.3, -1.0, -0.5],
+        color: [1.0; 3],
+        intensity: 2.5,
+    }];
     scene.settings.ambient = [0.15; 3];
 }
 
 fn scene_from_obj(path: &Path, obj_opts: &ObjOptions) -> Result<Scene> {
     let data = obj::load_obj(path, obj_opts)?;
-    let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let settings = Settings::default();
     let bounds = scene::bounds_of(&data.objects);
     let aspect = f64::from(settings.width) / f64::from(settings.height);
@@ -83,12 +101,16 @@ fn scene_from_obj(path: &Path, obj_opts: &ObjOptions) -> Result<Scene> {
 }
 
 fn load_bare_obj(path: &Path, opts: &LoadOptions) -> Result<Scene> {
-    let o = ObjOptions { missing_textures: opts.missing_textures.unwrap_or_default(), ..Default::default() };
+    let o = ObjOptions {
+        missing_textures: opts.missing_textures.unwrap_or_default(),
+        ..Default::default()
+    };
     scene_from_obj(path, &o)
 }
 
 fn load_toml(path: &Path, opts: &LoadOptions) -> Result<Scene> {
-    let text = std::fs::read_to_string(path).map_err(|e| SceneError::file(path, format!("cannot read: {e}")))?;
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| SceneError::file(path, format!("cannot read: {e}")))?;
     let d = desc::SceneDesc::parse(&text, path)?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut scene = match (&d.obj, &d.procedural) {
@@ -96,13 +118,21 @@ fn load_toml(path: &Path, opts: &LoadOptions) -> Result<Scene> {
             let o = ObjOptions {
                 mtl_override: d.mtl.as_ref().map(|m| dir.join(m)),
                 default_material: d.default_material.clone(),
-                missing_textures: opts.missing_textures.or(d.missing_textures).unwrap_or_default(),
+                missing_textures: opts
+                    .missing_textures
+                    .or(d.missing_textures)
+                    .unwrap_or_default(),
                 up: d.up,
             };
             scene_from_obj(&dir.join(obj), &o)?
         }
         (None, Some(name)) => builtin(name).map_err(|e| SceneError::file(path, e.to_string()))?,
-        _ => return Err(SceneError::file(path, "give exactly one of `obj` and `procedural`")),
+        _ => {
+            return Err(SceneError::file(
+                path,
+                "give exactly one of `obj` and `procedural`",
+            ));
+        }
     };
     scene.source = path.display().to_string();
     if let Some(n) = &d.name {
@@ -111,7 +141,13 @@ fn load_toml(path: &Path, opts: &LoadOptions) -> Result<Scene> {
         scene.name = stem.to_string_lossy().into_owned();
     }
     apply_settings(&mut scene, &d, path)?;
-    let up = |v: [f64; 3]| -> [f64; 3] { if d.up == Up::Z { [v[0], v[2], -v[1]] } else { v } };
+    let up = |v: [f64; 3]| -> [f64; 3] {
+        if d.up == Up::Z {
+            [v[0], v[2], -v[1]]
+        } else {
+            v
+        }
+    };
     if let Some(mut cam) = desc::camera_path(d.camera.as_ref()) {
         for k in &mut cam.keys {
             k.position = up(k.position);
@@ -126,18 +162,33 @@ fn load_toml(path: &Path, opts: &LoadOptions) -> Result<Scene> {
         apply_lights(&mut scene, l, d.up);
     }
     for (i, a) in d.animate.iter().enumerate() {
-        let objects: Vec<u32> =
-            scene.objects.iter().enumerate().filter(|(_, o)| o.name == a.object).map(|(k, _)| k as u32).collect();
+        let objects: Vec<u32> = scene
+            .objects
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| o.name == a.object)
+            .map(|(k, _)| k as u32)
+            .collect();
         if objects.is_empty() {
             let mut names: Vec<&str> = scene.objects.iter().map(|o| o.name.as_str()).collect();
             names.dedup();
             return Err(SceneError::file(
                 path,
-                format!("`animate[{i}].object`: `{}` matches no object (objects: {})", a.object, names.join(", ")),
+                format!(
+                    "`animate[{i}].object`: `{}` matches no object (objects: {})",
+                    a.object,
+                    names.join(", ")
+                ),
             ));
         }
-        let picked: Vec<Object> = objects.iter().map(|&k| scene.objects[k as usize].clone()).collect();
-        let pivot = a.pivot.map(up).unwrap_or_else(|| scene::bounds_of(&picked).center().to_array());
+        let picked: Vec<Object> = objects
+            .iter()
+            .map(|&k| scene.objects[k as usize].clone())
+            .collect();
+        let pivot = a
+            .pivot
+            .map(up)
+            .unwrap_or_else(|| scene::bounds_of(&picked).center().to_array());
         scene.motions.push(Motion {
             name: a.object.clone(),
             objects,
@@ -172,18 +223,39 @@ fn apply_settings(scene: &mut Scene, d: &desc::SceneDesc, path: &Path) -> Result
 }
 
 fn apply_lights(scene: &mut Scene, l: &desc::LightsDesc, up_axis: Up) {
-    let up32 = |v: [f32; 3]| if up_axis == Up::Z { [v[0], v[2], -v[1]] } else { v };
-    let up64 = |v: [f64; 3]| if up_axis == Up::Z { [v[0], v[2], -v[1]] } else { v };
+    let up32 = |v: [f32; 3]| {
+        if up_axis == Up::Z {
+            [v[0], v[2], -v[1]]
+        } else {
+            v
+        }
+    };
+    let up64 = |v: [f64; 3]| {
+        if up_axis == Up::Z {
+            [v[0], v[2], -v[1]]
+        } else {
+            v
+        }
+    };
     scene.directional = l
         .directional
         .iter()
-        .map(|d| DirLight { direction: up32(d.direction), color: d.color, intensity: d.intensity })
+        .map(|d| DirLight {
+            direction: up32(d.direction),
+            color: d.color,
+            intensity: d.intensity,
+        })
         .collect();
     let radius = scene.bounds().radius() as f32;
     scene.points = l
         .point
         .iter()
-        .map(|p| PointLight { position: up64(p.position), color: p.color, intensity: p.intensity, range: p.range.unwrap_or(radius) })
+        .map(|p| PointLight {
+            position: up64(p.position),
+            color: p.color,
+            intensity: p.intensity,
+            range: p.range.unwrap_or(radius),
+        })
         .collect();
     if let Some(r) = &l.random_points {
         let b = scene.bounds();
@@ -194,7 +266,12 @@ fn apply_lights(scene: &mut Scene, l: &desc::LightsDesc, up_axis: Up) {
         let range = r.range.unwrap_or(radius * 0.25);
         for _ in 0..r.count {
             let p = lo + (hi - lo) * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
-            scene.points.push(PointLight { position: p.to_array(), color: rng.hue(), intensity: r.intensity, range });
+            scene.points.push(PointLight {
+                position: p.to_array(),
+                color: rng.hue(),
+                intensity: r.intensity,
+                range,
+            });
         }
     }
 }

@@ -45,18 +45,26 @@ pub struct ObjData {
 }
 
 fn read_text(path: &Path) -> Result<String> {
-    let bytes = std::fs::read(path).map_err(|e| SceneError::file(path, format!("cannot read: {e}")))?;
+    let bytes =
+        std::fs::read(path).map_err(|e| SceneError::file(path, format!("cannot read: {e}")))?;
     // Real files carry Latin-1 names; decode lossily and normalise line ends.
-    Ok(String::from_utf8_lossy(&bytes).replace("\r\n", "\n").replace('\r', "\n"))
+    Ok(String::from_utf8_lossy(&bytes)
+        .replace("\r\n", "\n")
+        .replace('\r', "\n"))
 }
 
 fn parse_finite(tok: Option<&str>, file: &Path, line: usize, what: &str) -> Result<f32> {
-    let tok = tok.ok_or_else(|| SceneError::syntax(file, line, format!("{what}: missing number")))?;
+    let tok =
+        tok.ok_or_else(|| SceneError::syntax(file, line, format!("{what}: missing number")))?;
     let v: f32 = tok
         .parse()
         .map_err(|_| SceneError::syntax(file, line, format!("{what}: `{tok}` is not a number")))?;
     if !v.is_finite() {
-        return Err(SceneError::syntax(file, line, format!("{what}: `{tok}` is not a finite number")));
+        return Err(SceneError::syntax(
+            file,
+            line,
+            format!("{what}: `{tok}` is not a finite number"),
+        ));
     }
     Ok(v)
 }
@@ -114,20 +122,30 @@ pub(crate) fn validate_obj(text: &str, file: &Path) -> Result<(String, ObjCounts
                 let refs: Vec<&str> = toks.collect();
                 for r in &refs {
                     let mut parts = r.split('/');
-                    for (k, (count, what)) in [(nv, "vertex"), (nt, "texture coordinate"), (nn, "normal")].into_iter().enumerate() {
+                    for (k, (count, what)) in
+                        [(nv, "vertex"), (nt, "texture coordinate"), (nn, "normal")]
+                            .into_iter()
+                            .enumerate()
+                    {
                         let Some(p) = parts.next() else { break };
                         if p.is_empty() && k > 0 {
                             continue;
                         }
-                        let idx: i64 = p
-                            .parse()
-                            .map_err(|_| SceneError::syntax(file, ln, format!("face: `{r}` is not a valid vertex reference")))?;
+                        let idx: i64 = p.parse().map_err(|_| {
+                            SceneError::syntax(
+                                file,
+                                ln,
+                                format!("face: `{r}` is not a valid vertex reference"),
+                            )
+                        })?;
                         let resolved = if idx < 0 { count + idx + 1 } else { idx };
                         if idx == 0 || resolved < 1 || resolved > count {
                             return Err(SceneError::syntax(
                                 file,
                                 ln,
-                                format!("face refers to {what} {idx}, but {count} are defined before this line"),
+                                format!(
+                                    "face refers to {what} {idx}, but {count} are defined before this line"
+                                ),
                             ));
                         }
                     }
@@ -137,7 +155,9 @@ pub(crate) fn validate_obj(text: &str, file: &Path) -> Result<(String, ObjCounts
                     out.push('\n');
                     continue;
                 }
-                let missing_uv = refs.iter().any(|r| r.split('/').nth(1).is_none_or(str::is_empty));
+                let missing_uv = refs
+                    .iter()
+                    .any(|r| r.split('/').nth(1).is_none_or(str::is_empty));
                 if missing_uv {
                     counts.faces_without_uvs += 1;
                 }
@@ -152,7 +172,11 @@ pub(crate) fn validate_obj(text: &str, file: &Path) -> Result<(String, ObjCounts
                             },
                             _ => "1".to_string(),
                         };
-                        let vn = parts.get(2).filter(|n| !n.is_empty()).map(|n| format!("/{n}")).unwrap_or_default();
+                        let vn = parts
+                            .get(2)
+                            .filter(|n| !n.is_empty())
+                            .map(|n| format!("/{n}"))
+                            .unwrap_or_default();
                         out.push_str(&format!(" {}/{vt}{vn}", parts[0]));
                     }
                     out.push('\n');
@@ -188,7 +212,13 @@ pub(crate) fn validate_mtl(text: &str, file: &Path) -> Result<String> {
                         continue;
                     }
                     n if n >= 3 => {}
-                    n => return Err(SceneError::syntax(file, ln, format!("{k} needs 3 numbers, found {n}"))),
+                    n => {
+                        return Err(SceneError::syntax(
+                            file,
+                            ln,
+                            format!("{k} needs 3 numbers, found {n}"),
+                        ));
+                    }
                 }
                 out.push_str(&format!("{k} {} {} {}\n", nums[0], nums[1], nums[2]));
                 continue;
@@ -199,10 +229,15 @@ pub(crate) fn validate_mtl(text: &str, file: &Path) -> Result<String> {
             Some("newmtl") if toks.next().is_none() => {
                 return Err(SceneError::syntax(file, ln, "newmtl without a name"));
             }
-            Some(k) if k.starts_with("map_") || k == "bump" || k == "disp" || k == "decal" => {
-                if toks.next().is_none() {
-                    return Err(SceneError::syntax(file, ln, format!("{k} without a file name")));
-                }
+            Some(k)
+                if (k.starts_with("map_") || k == "bump" || k == "disp" || k == "decal")
+                    && toks.next().is_none() =>
+            {
+                return Err(SceneError::syntax(
+                    file,
+                    ln,
+                    format!("{k} without a file name"),
+                ));
             }
             _ => {}
         }
@@ -216,7 +251,10 @@ pub(crate) fn validate_mtl(text: &str, file: &Path) -> Result<String> {
 /// Windows separators normalised; plus the `-bm` bump multiplier if present.
 fn texture_ref(spec: &str) -> (String, Option<f32>) {
     let words: Vec<&str> = spec.split_whitespace().collect();
-    let bm = words.windows(2).find(|w| w[0] == "-bm").and_then(|w| w[1].parse().ok());
+    let bm = words
+        .windows(2)
+        .find(|w| w[0] == "-bm")
+        .and_then(|w| w[1].parse().ok());
     let name = words.last().copied().unwrap_or("").replace('\\', "/");
     (name, bm)
 }
@@ -237,14 +275,20 @@ impl TextureCache<'_> {
         let tex = match Texture::load(path, srgb) {
             Ok(t) => t,
             Err(e) if self.missing == MissingTextures::Fallback => {
-                self.stats.warnings.push(format!("{e} (material `{material}` in {}); using the fallback checker", mtl.display()));
+                self.stats.warnings.push(format!(
+                    "{e} (material `{material}` in {}); using the fallback checker",
+                    mtl.display()
+                ));
                 self.stats.fallback_textures += 1;
                 Texture::fallback(&path.to_string_lossy())
             }
             Err(e) => {
                 return Err(SceneError::file(
                     path,
-                    format!("{e} (named by material `{material}` in {}); pass --missing-textures fallback to render anyway", mtl.display()),
+                    format!(
+                        "{e} (named by material `{material}` in {}); pass --missing-textures fallback to render anyway",
+                        mtl.display()
+                    ),
                 ));
             }
         };
@@ -283,9 +327,17 @@ fn convert_material(m: &tobj::Material, mtl: &Path, cache: &mut TextureCache) ->
         let (name, _) = texture_ref(t);
         let path = dir.join(&name);
         // The same file as map_Kd: its alpha channel is the mask (sRGB does not touch alpha).
-        let same_as_kd = m.diffuse_texture.as_ref().map(|d| dir.join(texture_ref(d).0)) == Some(path.clone());
+        let same_as_kd = m
+            .diffuse_texture
+            .as_ref()
+            .map(|d| dir.join(texture_ref(d).0))
+            == Some(path.clone());
         let tex = cache.get(&path, same_as_kd, mtl, &m.name)?;
-        let channel = if cache.textures[tex as usize].has_alpha { 3 } else { 0 };
+        let channel = if cache.textures[tex as usize].has_alpha {
+            3
+        } else {
+            0
+        };
         out.alpha = AlphaSource::Texture { tex, channel };
     }
     if let Some(t) = &m.normal_texture {
@@ -300,7 +352,8 @@ type MtlLib = <tobj::MTLLoadResult as IntoIterator>::Item;
 
 fn load_mtl(path: &Path) -> Result<MtlLib> {
     let text = validate_mtl(&read_text(path)?, path)?;
-    tobj::load_mtl_buf(&mut Cursor::new(text.as_bytes())).map_err(|e| SceneError::file(path, format!("cannot parse MTL: {e}")))
+    tobj::load_mtl_buf(&mut Cursor::new(text.as_bytes()))
+        .map_err(|e| SceneError::file(path, format!("cannot parse MTL: {e}")))
 }
 
 /// Loads an OBJ with its materials and textures.
@@ -308,8 +361,11 @@ pub fn load_obj(path: &Path, opts: &ObjOptions) -> Result<ObjData> {
     let text = read_text(path)?;
     let (text, counts) = validate_obj(&text, path)?;
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-    let mut stats =
-        LoadStats { dropped_faces: counts.dropped, faces_without_uvs: counts.faces_without_uvs, ..Default::default() };
+    let mut stats = LoadStats {
+        dropped_faces: counts.dropped,
+        faces_without_uvs: counts.faces_without_uvs,
+        ..Default::default()
+    };
 
     // Materials in tobj's order (material_id indexes this list), with the file each came from.
     let mtls: RefCell<Vec<(tobj::Material, PathBuf)>> = RefCell::new(Vec::new());
@@ -320,7 +376,6 @@ pub fn load_obj(path: &Path, opts: &ObjOptions) -> Result<ObjData> {
         single_index: false,
         ignore_points: true,
         ignore_lines: true,
-        ..Default::default()
     };
     let loaded = tobj::load_obj_buf(&mut Cursor::new(text.as_bytes()), &load_opts, |requested| {
         let named = dir.join(requested.to_string_lossy().replace('\\', "/"));
@@ -366,7 +421,8 @@ pub fn load_obj(path: &Path, opts: &ObjOptions) -> Result<ObjData> {
     if let Some(e) = mtl_error.into_inner() {
         return Err(e);
     }
-    let (models, _) = loaded.map_err(|e| SceneError::file(path, format!("cannot parse OBJ: {e}")))?;
+    let (models, _) =
+        loaded.map_err(|e| SceneError::file(path, format!("cannot parse OBJ: {e}")))?;
     stats.warnings.extend(warnings.into_inner());
     let mut mtls = mtls.into_inner();
     if mtls.is_empty()
@@ -375,16 +431,27 @@ pub fn load_obj(path: &Path, opts: &ObjOptions) -> Result<ObjData> {
         mtls.extend(load_mtl(o)?.0.into_iter().map(|m| (m, o.clone())));
     }
 
-    let mut cache = TextureCache { textures: Vec::new(), index: HashMap::new(), missing: opts.missing_textures, stats: &mut stats };
+    let mut cache = TextureCache {
+        textures: Vec::new(),
+        index: HashMap::new(),
+        missing: opts.missing_textures,
+        stats: &mut stats,
+    };
     let mut materials = Vec::with_capacity(mtls.len() + 1);
     for (m, file) in &mtls {
         materials.push(convert_material(m, file, &mut cache)?);
     }
     let textures = cache.textures;
     let default_material = match &opts.default_material {
-        Some(name) => materials.iter().position(|m| &m.name == name).ok_or_else(|| {
-            SceneError::file(path, format!("default material `{name}` is not defined by the MTL"))
-        })?,
+        Some(name) => materials
+            .iter()
+            .position(|m| &m.name == name)
+            .ok_or_else(|| {
+                SceneError::file(
+                    path,
+                    format!("default material `{name}` is not defined by the MTL"),
+                )
+            })?,
         None => {
             materials.push(Material::named("default"));
             materials.len() - 1
@@ -397,7 +464,10 @@ pub fn load_obj(path: &Path, opts: &ObjOptions) -> Result<ObjData> {
         let mut model = model.clone();
         if model.name == "unnamed_object" {
             // tobj's name for geometry before any `o`/`g`: use the file's name instead.
-            model.name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+            model.name = path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
         }
         if let Some(obj) = build_object(&model, material, opts.up, &mut stats) {
             objects.push(obj);
@@ -406,7 +476,12 @@ pub fn load_obj(path: &Path, opts: &ObjOptions) -> Result<ObjData> {
     if objects.is_empty() {
         return Err(SceneError::file(path, "no drawable triangles"));
     }
-    Ok(ObjData { objects, materials, textures, stats })
+    Ok(ObjData {
+        objects,
+        materials,
+        textures,
+        stats,
+    })
 }
 
 fn convert_up(p: [f32; 3], up: Up) -> [f32; 3] {
@@ -417,11 +492,19 @@ fn convert_up(p: [f32; 3], up: Up) -> [f32; 3] {
     }
 }
 
-fn build_object(model: &tobj::Model, material: u32, up: Up, stats: &mut LoadStats) -> Option<Object> {
+fn build_object(
+    model: &tobj::Model,
+    material: u32,
+    up: Up,
+    stats: &mut LoadStats,
+) -> Option<Object> {
     let m = &model.mesh;
     let pos = |i: u32| -> Vec3 {
         let i = i as usize * 3;
-        Vec3::from(convert_up([m.positions[i], m.positions[i + 1], m.positions[i + 2]], up))
+        Vec3::from(convert_up(
+            [m.positions[i], m.positions[i + 1], m.positions[i + 2]],
+            up,
+        ))
     };
     let has_normals = !m.normals.is_empty() && m.normal_indices.len() == m.indices.len();
     let has_uvs = !m.texcoords.is_empty() && m.texcoord_indices.len() == m.indices.len();
@@ -429,7 +512,12 @@ fn build_object(model: &tobj::Model, material: u32, up: Up, stats: &mut LoadStat
     let tris: Vec<usize> = (0..m.indices.len() / 3)
         .filter(|&t| {
             let [a, b, c] = [m.indices[3 * t], m.indices[3 * t + 1], m.indices[3 * t + 2]];
-            let ok = a != b && b != c && a != c && pos(a) != pos(b) && pos(b) != pos(c) && pos(a) != pos(c);
+            let ok = a != b
+                && b != c
+                && a != c
+                && pos(a) != pos(b)
+                && pos(b) != pos(c)
+                && pos(a) != pos(c);
             if !ok {
                 stats.dropped_faces += 1;
             }
@@ -464,31 +552,59 @@ fn build_object(model: &tobj::Model, material: u32, up: Up, stats: &mut LoadStat
         };
         for k in 3 * t..3 * t + 3 {
             let p = m.indices[k];
-            let n = if has_normals { m.normal_indices[k] } else { u32::MAX };
-            let uv = if has_uvs { m.texcoord_indices[k] } else { u32::MAX };
+            let n = if has_normals {
+                m.normal_indices[k]
+            } else {
+                u32::MAX
+            };
+            let uv = if has_uvs {
+                m.texcoord_indices[k]
+            } else {
+                u32::MAX
+            };
             let next = vertices.len() as u32;
             let idx = *remap.entry((p, n, uv)).or_insert_with(|| {
                 let normal = if has_normals {
                     let j = n as usize * 3;
-                    Vec3::from(convert_up([m.normals[j], m.normals[j + 1], m.normals[j + 2]], up)).normalize_or_zero()
+                    Vec3::from(convert_up(
+                        [m.normals[j], m.normals[j + 1], m.normals[j + 2]],
+                        up,
+                    ))
+                    .normalize_or_zero()
                 } else {
                     smooth[p as usize]
                 };
-                let normal = if normal == Vec3::ZERO || !normal.is_finite() { face_n } else { normal };
+                let normal = if normal == Vec3::ZERO || !normal.is_finite() {
+                    face_n
+                } else {
+                    normal
+                };
                 let uv = if has_uvs {
                     let j = uv as usize * 2;
-                    [m.texcoords[j], 1.0 - m.texcoords.get(j + 1).copied().unwrap_or(0.0)]
+                    [
+                        m.texcoords[j],
+                        1.0 - m.texcoords.get(j + 1).copied().unwrap_or(0.0),
+                    ]
                 } else {
                     [0.0, 0.0]
                 };
-                vertices.push(Vertex { pos: pos(p).to_array(), normal: normal.to_array(), uv });
+                vertices.push(Vertex {
+                    pos: pos(p).to_array(),
+                    normal: normal.to_array(),
+                    uv,
+                });
                 next
             });
             indices.push(idx);
         }
     }
     stats.triangles += tris.len();
-    Some(Object { name: model.name.clone(), vertices, indices, material })
+    Some(Object {
+        name: model.name.clone(),
+        vertices,
+        indices,
+        material,
+    })
 }
 
 #[cfg(test)]
@@ -501,7 +617,9 @@ mod tests {
 
     #[test]
     fn nan_vertex_names_the_line() {
-        let err = validate_obj("v 0 0 0\nv 1 nan 0\n", &f()).unwrap_err().to_string();
+        let err = validate_obj("v 0 0 0\nv 1 nan 0\n", &f())
+            .unwrap_err()
+            .to_string();
         assert_eq!(err, "t.obj:2: vertex y: `nan` is not a finite number");
         let err = validate_obj("v 0 0 inf\n", &f()).unwrap_err().to_string();
         assert!(err.starts_with("t.obj:1: vertex z"), "{err}");
@@ -515,10 +633,20 @@ mod tests {
         assert!(validate_obj(ok, &f()).is_err(), "vt 1 is not defined");
         let ok = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf -3 -2 -1\nf 1/1 2/1 3/1\nf 1//1 2//1 3//1\n";
         let err = validate_obj(ok, &f()).unwrap_err().to_string();
-        assert!(err.contains("t.obj:7: face refers to normal 1, but 0 are defined"), "{err}");
-        let err = validate_obj("v 0 0 0\nf 1 2 3\n", &f()).unwrap_err().to_string();
-        assert!(err.contains("t.obj:2: face refers to vertex 2, but 1 are defined"), "{err}");
-        let err = validate_obj("v 0 0 0\nf 1 x 1\n", &f()).unwrap_err().to_string();
+        assert!(
+            err.contains("t.obj:7: face refers to normal 1, but 0 are defined"),
+            "{err}"
+        );
+        let err = validate_obj("v 0 0 0\nf 1 2 3\n", &f())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("t.obj:2: face refers to vertex 2, but 1 are defined"),
+            "{err}"
+        );
+        let err = validate_obj("v 0 0 0\nf 1 x 1\n", &f())
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("`x` is not a valid vertex reference"), "{err}");
     }
 
@@ -534,29 +662,47 @@ mod tests {
         let src = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.5 0.5\nvn 0 0 1\nf 1/1/1 2/1/1 3/-1/1\nf 1//1 2//1 3//1\nf 1 2 3\n";
         let (text, counts) = validate_obj(src, &f()).expect("valid");
         assert!(text.starts_with("vt 0 1\n"), "{text}");
-        assert!(text.contains("f 1/2/1 2/2/1 3/-1/1"), "positive vt shift, negative kept: {text}");
+        assert!(
+            text.contains("f 1/2/1 2/2/1 3/-1/1"),
+            "positive vt shift, negative kept: {text}"
+        );
         assert!(text.contains("f 1/1/1 2/1/1 3/1/1"), "{text}");
         assert!(text.contains("f 1/1 2/1 3/1"), "{text}");
         assert_eq!(counts.faces_without_uvs, 2);
-        let (text, counts) = validate_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", &f()).expect("valid");
+        let (text, counts) =
+            validate_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", &f()).expect("valid");
         assert!(!text.contains("vt"), "no UVs anywhere: no sentinel");
         assert_eq!(counts.faces_without_uvs, 1);
     }
 
     #[test]
     fn mtl_colours_are_checked_and_expanded() {
-        let err = validate_mtl("newmtl a\nKd 0.5 0.5\n", &f()).unwrap_err().to_string();
-        assert!(err.contains("t.obj:2: Kd needs 3 numbers, found 2"), "{err}");
-        let err = validate_mtl("newmtl a\nNs abc\n", &f()).unwrap_err().to_string();
+        let err = validate_mtl("newmtl a\nKd 0.5 0.5\n", &f())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("t.obj:2: Kd needs 3 numbers, found 2"),
+            "{err}"
+        );
+        let err = validate_mtl("newmtl a\nNs abc\n", &f())
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("t.obj:2: Ns: `abc` is not a number"), "{err}");
-        let text = validate_mtl("newmtl a\n  Kd 0.25 # grey\nKa 0.1 0.2 0.3 # Red\n", &f()).expect("valid");
+        let text = validate_mtl("newmtl a\n  Kd 0.25 # grey\nKa 0.1 0.2 0.3 # Red\n", &f())
+            .expect("valid");
         assert!(text.contains("Kd 0.25 0.25 0.25"), "{text}");
         assert!(text.contains("Ka 0.1 0.2 0.3"), "{text}");
     }
 
     #[test]
     fn texture_refs_normalise_backslashes_and_options() {
-        assert_eq!(texture_ref(".\\wal67ar_small.jpg"), ("./wal67ar_small.jpg".into(), None));
-        assert_eq!(texture_ref("-bm 0.5 maps/h.png"), ("maps/h.png".into(), Some(0.5)));
+        assert_eq!(
+            texture_ref(".\\wal67ar_small.jpg"),
+            ("./wal67ar_small.jpg".into(), None)
+        );
+        assert_eq!(
+            texture_ref("-bm 0.5 maps/h.png"),
+            ("maps/h.png".into(), Some(0.5))
+        );
     }
 }

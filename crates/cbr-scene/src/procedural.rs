@@ -7,7 +7,9 @@ use glam::{Vec2, Vec3};
 
 use crate::camera::{CameraKey, CameraPath};
 use crate::rng::SplitMix;
-use crate::scene::{AlphaSource, DirLight, LoadStats, Material, Motion, Object, PointLight, Scene, Settings, Vertex};
+use crate::scene::{
+    AlphaSource, DirLight, LoadStats, Material, Motion, Object, PointLight, Scene, Settings, Vertex,
+};
 use crate::texture::Texture;
 
 /// Builds meshes one quad at a time.
@@ -19,12 +21,19 @@ struct MeshBuilder {
 
 impl MeshBuilder {
     fn quad(&mut self, corners: [Vec3; 4], uvs: [Vec2; 4]) {
-        let n = (corners[1] - corners[0]).cross(corners[3] - corners[0]).normalize_or_zero();
+        let n = (corners[1] - corners[0])
+            .cross(corners[3] - corners[0])
+            .normalize_or_zero();
         let base = self.vertices.len() as u32;
         for (p, uv) in corners.iter().zip(uvs) {
-            self.vertices.push(Vertex { pos: p.to_array(), normal: n.to_array(), uv: uv.to_array() });
+            self.vertices.push(Vertex {
+                pos: p.to_array(),
+                normal: n.to_array(),
+                uv: uv.to_array(),
+            });
         }
-        self.indices.extend([base, base + 1, base + 2, base, base + 2, base + 3]);
+        self.indices
+            .extend([base, base + 1, base + 2, base, base + 2, base + 3]);
     }
 
     /// An axis-aligned box given by its two extreme corners (UVs in metres / `uv_scale`).
@@ -32,17 +41,55 @@ impl MeshBuilder {
         let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
         let (a, b) = (min, max);
         let faces = [
-            [c(a.x, a.y, b.z), c(b.x, a.y, b.z), c(b.x, b.y, b.z), c(a.x, b.y, b.z)], // +z
-            [c(b.x, a.y, a.z), c(a.x, a.y, a.z), c(a.x, b.y, a.z), c(b.x, b.y, a.z)], // -z
-            [c(b.x, a.y, b.z), c(b.x, a.y, a.z), c(b.x, b.y, a.z), c(b.x, b.y, b.z)], // +x
-            [c(a.x, a.y, a.z), c(a.x, a.y, b.z), c(a.x, b.y, b.z), c(a.x, b.y, a.z)], // -x
-            [c(a.x, b.y, b.z), c(b.x, b.y, b.z), c(b.x, b.y, a.z), c(a.x, b.y, a.z)], // +y
-            [c(a.x, a.y, a.z), c(b.x, a.y, a.z), c(b.x, a.y, b.z), c(a.x, a.y, b.z)], // -y
+            [
+                c(a.x, a.y, b.z),
+                c(b.x, a.y, b.z),
+                c(b.x, b.y, b.z),
+                c(a.x, b.y, b.z),
+            ], // +z
+            [
+                c(b.x, a.y, a.z),
+                c(a.x, a.y, a.z),
+                c(a.x, b.y, a.z),
+                c(b.x, b.y, a.z),
+            ], // -z
+            [
+                c(b.x, a.y, b.z),
+                c(b.x, a.y, a.z),
+                c(b.x, b.y, a.z),
+                c(b.x, b.y, b.z),
+            ], // +x
+            [
+                c(a.x, a.y, a.z),
+                c(a.x, a.y, b.z),
+                c(a.x, b.y, b.z),
+                c(a.x, b.y, a.z),
+            ], // -x
+            [
+                c(a.x, b.y, b.z),
+                c(b.x, b.y, b.z),
+                c(b.x, b.y, a.z),
+                c(a.x, b.y, a.z),
+            ], // +y
+            [
+                c(a.x, a.y, a.z),
+                c(b.x, a.y, a.z),
+                c(b.x, a.y, b.z),
+                c(a.x, a.y, b.z),
+            ], // -y
         ];
         for f in faces {
             let w = (f[1] - f[0]).length() / uv_scale;
             let h = (f[3] - f[0]).length() / uv_scale;
-            self.quad(f, [Vec2::new(0.0, h), Vec2::new(w, h), Vec2::new(w, 0.0), Vec2::new(0.0, 0.0)]);
+            self.quad(
+                f,
+                [
+                    Vec2::new(0.0, h),
+                    Vec2::new(w, h),
+                    Vec2::new(w, 0.0),
+                    Vec2::new(0.0, 0.0),
+                ],
+            );
         }
     }
 
@@ -69,7 +116,11 @@ impl MeshBuilder {
             for i in 0..=nu {
                 let (u, v) = (i as f32 / nu as f32, j as f32 / nv as f32);
                 let (p, n) = f(u, v);
-                self.vertices.push(Vertex { pos: p.to_array(), normal: n.to_array(), uv: [u * uv_repeat.x, v * uv_repeat.y] });
+                self.vertices.push(Vertex {
+                    pos: p.to_array(),
+                    normal: n.to_array(),
+                    uv: [u * uv_repeat.x, v * uv_repeat.y],
+                });
             }
         }
         for j in 0..nv {
@@ -82,12 +133,19 @@ impl MeshBuilder {
     }
 
     fn object(self, name: &str, material: u32) -> Object {
-        Object { name: name.to_string(), vertices: self.vertices, indices: self.indices, material }
+        Object {
+            name: name.to_string(),
+            vertices: self.vertices,
+            indices: self.indices,
+            material,
+        }
     }
 }
 
 fn texture(name: &str, size: u32, srgb: bool, f: impl Fn(u32, u32) -> [u8; 4]) -> Texture {
-    let rgba = (0..size * size).flat_map(|i| f(i % size, i / size)).collect();
+    let rgba = (0..size * size)
+        .flat_map(|i| f(i % size, i / size))
+        .collect();
     Texture::from_rgba8(name, size, size, rgba, srgb)
 }
 
@@ -97,7 +155,13 @@ fn leaf_texture(seed: u64) -> Texture {
     let leaves: Vec<(f32, f32, f32, f32, f32)> = (0..70)
         .map(|_| {
             let r = 0.035 + 0.05 * rng.next_f32();
-            (0.1 + 0.8 * rng.next_f32(), 0.05 + 0.9 * rng.next_f32(), r, r * (0.35 + 0.3 * rng.next_f32()), rng.next_f32() * 3.14)
+            (
+                0.1 + 0.8 * rng.next_f32(),
+                0.05 + 0.9 * rng.next_f32(),
+                r,
+                r * (0.35 + 0.3 * rng.next_f32()),
+                rng.next_f32() * std::f32::consts::PI,
+            )
         })
         .collect();
     texture("demo.leaves", 256, true, |x, y| {
@@ -109,7 +173,11 @@ fn leaf_texture(seed: u64) -> Texture {
             (u / a).powi(2) + (v / b).powi(2) <= 1.0
         });
         let shade = 90 + ((x * 7 + y * 13) % 40) as u8;
-        if hit { [40, shade, 30, 255] } else { [40, 90, 30, 0] }
+        if hit {
+            [40, shade, 30, 255]
+        } else {
+            [40, 90, 30, 0]
+        }
     })
 }
 
@@ -120,17 +188,29 @@ pub fn demo() -> Scene {
         textures.len() as u32 - 1
     };
     let checker = add_tex(texture("demo.checker", 256, true, |x, y| {
-        let v = if ((x / 16) + (y / 16)) % 2 == 0 { 225 } else { 35 };
+        let v = if ((x / 16) + (y / 16)) % 2 == 0 {
+            225
+        } else {
+            35
+        };
         [v, v, v, 255]
     }));
     let leaves = add_tex(leaf_texture(7));
     let stripes = add_tex(texture("demo.stripes", 128, true, |x, _| {
-        if (x / 8) % 2 == 0 { [230, 80, 40, 255] } else { [240, 220, 200, 255] }
+        if (x / 8) % 2 == 0 {
+            [230, 80, 40, 255]
+        } else {
+            [240, 220, 200, 255]
+        }
     }));
     let bricks = add_tex(texture("demo.bricks", 128, true, |x, y| {
         let row = y / 16;
         let xs = x + if row % 2 == 0 { 0 } else { 16 };
-        if y % 16 < 2 || xs % 32 < 2 { [200, 200, 190, 255] } else { [150, 60 + ((row * 17) % 30) as u8, 45, 255] }
+        if y % 16 < 2 || xs % 32 < 2 {
+            [200, 200, 190, 255]
+        } else {
+            [150, 60 + ((row * 17) % 30) as u8, 45, 255]
+        }
     }));
 
     let m = |name: &str, kd: [f32; 3], tex: Option<u32>| {
@@ -149,7 +229,10 @@ pub fn demo() -> Scene {
     ];
     materials[1].ks = [0.5; 3];
     materials[1].ns = 64.0;
-    materials[2].alpha = AlphaSource::Texture { tex: leaves, channel: 3 };
+    materials[2].alpha = AlphaSource::Texture {
+        tex: leaves,
+        channel: 3,
+    };
     materials[3].ks = [0.9; 3];
     materials[3].ns = 400.0;
     materials[4].ke = [6.0, 4.5, 2.0];
@@ -159,8 +242,18 @@ pub fn demo() -> Scene {
     let mut g = MeshBuilder::default();
     let s = 600.0;
     g.quad(
-        [Vec3::new(-s, 0.0, s), Vec3::new(s, 0.0, s), Vec3::new(s, 0.0, -s), Vec3::new(-s, 0.0, -s)],
-        [Vec2::new(0.0, 0.0), Vec2::new(2.0 * s / 4.0, 0.0), Vec2::new(2.0 * s / 4.0, 2.0 * s / 4.0), Vec2::new(0.0, 2.0 * s / 4.0)],
+        [
+            Vec3::new(-s, 0.0, s),
+            Vec3::new(s, 0.0, s),
+            Vec3::new(s, 0.0, -s),
+            Vec3::new(-s, 0.0, -s),
+        ],
+        [
+            Vec2::new(0.0, 0.0),
+            Vec2::new(2.0 * s / 4.0, 0.0),
+            Vec2::new(2.0 * s / 4.0, 2.0 * s / 4.0),
+            Vec2::new(0.0, 2.0 * s / 4.0),
+        ],
     );
     objects.push(g.object("ground", 0));
 
@@ -168,7 +261,10 @@ pub fn demo() -> Scene {
     let mut w = MeshBuilder::default();
     w.cuboid(Vec3::new(-6.1, 0.0, -8.1), Vec3::new(-5.9, 5.0, -7.9), 1.0);
     w.cuboid(Vec3::new(5.9, 0.0, -8.1), Vec3::new(6.1, 5.5, -7.9), 1.0);
-    for (k, t) in [0.02f32, 0.012, 0.008, 0.006, 0.004].into_iter().enumerate() {
+    for (k, t) in [0.02f32, 0.012, 0.008, 0.006, 0.004]
+        .into_iter()
+        .enumerate()
+    {
         let y = 3.4 + 0.35 * k as f32;
         w.beam(Vec3::new(-6.0, y, -8.0), Vec3::new(6.0, y + 0.45, -8.0), t);
     }
@@ -178,10 +274,18 @@ pub fn demo() -> Scene {
     let mut f = MeshBuilder::default();
     for i in 0..70 {
         let x = -10.0 + 0.12 * i as f32;
-        f.cuboid(Vec3::new(x, 0.0, -3.0), Vec3::new(x + 0.03, 1.2, -2.97), 1.0);
+        f.cuboid(
+            Vec3::new(x, 0.0, -3.0),
+            Vec3::new(x + 0.03, 1.2, -2.97),
+            1.0,
+        );
     }
     for y in [0.3f32, 0.95] {
-        f.cuboid(Vec3::new(-10.0, y, -3.03), Vec3::new(-1.6, y + 0.06, -3.0), 1.0);
+        f.cuboid(
+            Vec3::new(-10.0, y, -3.03),
+            Vec3::new(-1.6, y + 0.06, -3.0),
+            1.0,
+        );
     }
     objects.push(f.object("fence", 1));
 
@@ -191,13 +295,18 @@ pub fn demo() -> Scene {
     for _ in 0..14 {
         let c = Vec3::new(2.0 + 8.0 * rng.next_f32(), 0.0, -7.0 + 8.0 * rng.next_f32());
         let h = 1.0 + 1.2 * rng.next_f32();
-        let a0 = rng.next_f32() * 3.14;
+        let a0 = rng.next_f32() * std::f32::consts::PI;
         for k in 0..3 {
             let a = a0 + k as f32 * std::f32::consts::FRAC_PI_3;
             let d = Vec3::new(a.cos(), 0.0, a.sin()) * (h * 0.5);
             leaves_mesh.quad(
                 [c - d, c + d, c + d + Vec3::Y * h, c - d + Vec3::Y * h],
-                [Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)],
+                [
+                    Vec2::new(0.0, 1.0),
+                    Vec2::new(1.0, 1.0),
+                    Vec2::new(1.0, 0.0),
+                    Vec2::new(0.0, 0.0),
+                ],
             );
         }
     }
@@ -239,19 +348,43 @@ pub fn demo() -> Scene {
 
     // A textured tower 2.9 km from the origin: float precision far away.
     let mut tw = MeshBuilder::default();
-    tw.cuboid(Vec3::new(1460.0, 0.0, -2540.0), Vec3::new(1540.0, 140.0, -2460.0), 8.0);
+    tw.cuboid(
+        Vec3::new(1460.0, 0.0, -2540.0),
+        Vec3::new(1540.0, 140.0, -2460.0),
+        8.0,
+    );
     objects.push(tw.object("far_tower", 5));
 
     let mut points = Vec::new();
     let mut rng = SplitMix(5);
     for _ in 0..48 {
-        let p = [-10.0 + 20.0 * rng.next_f64(), 0.3 + 2.0 * rng.next_f64(), -10.0 + 14.0 * rng.next_f64()];
-        points.push(PointLight { position: p, color: rng.hue(), intensity: 1.5, range: 4.0 });
+        let p = [
+            -10.0 + 20.0 * rng.next_f64(),
+            0.3 + 2.0 * rng.next_f64(),
+            -10.0 + 14.0 * rng.next_f64(),
+        ];
+        points.push(PointLight {
+            position: p,
+            color: rng.hue(),
+            intensity: 1.5,
+            range: 4.0,
+        });
     }
 
-    let key = |time: f64, position: [f64; 3], target: [f64; 3]| CameraKey { time, position, target, fov_y_deg: 50.0 };
-    let spinner_index = objects.iter().position(|o| o.name == "spinner").unwrap_or(0) as u32;
-    let stats = LoadStats { triangles: objects.iter().map(Object::triangles).sum(), ..Default::default() };
+    let key = |time: f64, position: [f64; 3], target: [f64; 3]| CameraKey {
+        time,
+        position,
+        target,
+        fov_y_deg: 50.0,
+    };
+    let spinner_index = objects
+        .iter()
+        .position(|o| o.name == "spinner")
+        .unwrap_or(0) as u32;
+    let stats = LoadStats {
+        triangles: objects.iter().map(Object::triangles).sum(),
+        ..Default::default()
+    };
     Scene {
         name: "demo".into(),
         source: "builtin:demo".into(),
@@ -266,12 +399,20 @@ pub fn demo() -> Scene {
             ],
             near: 0.05,
         },
-        directional: vec![DirLight { direction: [-0.4, -0.8, -0.45], color: [1.0, 0.95, 0.85], intensity: 2.0 }],
+        directional: vec![DirLight {
+            direction: [-0.4, -0.8, -0.45],
+            color: [1.0, 0.95, 0.85],
+            intensity: 2.0,
+        }],
         points,
         motions: vec![Motion {
             name: "spinner".into(),
             objects: vec![spinner_index],
-            pivot: [f64::from(centre.x), f64::from(centre.y), f64::from(centre.z)],
+            pivot: [
+                f64::from(centre.x),
+                f64::from(centre.y),
+                f64::from(centre.z),
+            ],
             spin_axis: [0.0, 1.0, 0.0],
             spin_rad_per_s: 1.5 * std::f64::consts::TAU,
             velocity: [0.0; 3],

@@ -29,7 +29,10 @@ pub enum Up {
 pub enum AlphaSource {
     Opaque,
     /// A channel (0 = red for grey masks, 3 = alpha) of a texture.
-    Texture { tex: u32, channel: u32 },
+    Texture {
+        tex: u32,
+        channel: u32,
+    },
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -127,7 +130,17 @@ pub struct Settings {
 
 impl Default for Settings {
     fn default() -> Self {
-        Settings { width: 1280, height: 720, frames: 1, fps: 30.0, seed: 0, exposure: 0.0, ambient: [0.03; 3], background: [0.0; 3], bump: false }
+        Settings {
+            width: 1280,
+            height: 720,
+            frames: 1,
+            fps: 30.0,
+            seed: 0,
+            exposure: 0.0,
+            ambient: [0.03; 3],
+            background: [0.0; 3],
+            bump: false,
+        }
     }
 }
 
@@ -137,7 +150,9 @@ pub const MAX_RESOLUTION: u32 = 16384;
 
 pub fn check_resolution(width: u32, height: u32) -> Result<(), String> {
     if width == 0 || height == 0 || width > MAX_RESOLUTION || height > MAX_RESOLUTION {
-        return Err(format!("resolution {width}x{height} is outside 1..={MAX_RESOLUTION} per side"));
+        return Err(format!(
+            "resolution {width}x{height} is outside 1..={MAX_RESOLUTION} per side"
+        ));
     }
     Ok(())
 }
@@ -222,7 +237,11 @@ pub fn bounds_of(objects: &[Object]) -> Bounds {
     let mut min = DVec3::splat(f64::INFINITY);
     let mut max = DVec3::splat(f64::NEG_INFINITY);
     for v in objects.iter().flat_map(|o| o.vertices.iter()) {
-        let p = DVec3::new(f64::from(v.pos[0]), f64::from(v.pos[1]), f64::from(v.pos[2]));
+        let p = DVec3::new(
+            f64::from(v.pos[0]),
+            f64::from(v.pos[1]),
+            f64::from(v.pos[2]),
+        );
         min = min.min(p);
         max = max.max(p);
     }

@@ -27,47 +27,73 @@ pub struct Texture {
 }
 
 fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 fn linear_to_srgb(c: f32) -> f32 {
-    if c <= 0.003_130_8 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 }
+    if c <= 0.003_130_8 {
+        c * 12.92
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
 }
 
 fn downsample(src: &Level, srgb: bool, lut: &[f32; 256]) -> Level {
     let w = (src.width / 2).max(1);
     let h = (src.height / 2).max(1);
     let mut rgba = vec![0u8; (w * h * 4) as usize];
-    rgba.par_chunks_mut((w * 4) as usize).enumerate().for_each(|(y, row)| {
-        for x in 0..w as usize {
-            let mut acc = [0f32; 4];
-            // Box filter over the (up to) 2x2 source texels; odd sizes clamp at the edge.
-            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                let sx = (2 * x + dx).min(src.width as usize - 1);
-                let sy = (2 * y + dy).min(src.height as usize - 1);
-                let i = (sy * src.width as usize + sx) * 4;
-                for c in 0..4 {
-                    let v = src.rgba[i + c];
-                    acc[c] += if srgb && c < 3 { lut[v as usize] } else { f32::from(v) / 255.0 };
+    rgba.par_chunks_mut((w * 4) as usize)
+        .enumerate()
+        .for_each(|(y, row)| {
+            for x in 0..w as usize {
+                let mut acc = [0f32; 4];
+                // Box filter over the (up to) 2x2 source texels; odd sizes clamp at the edge.
+                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    let sx = (2 * x + dx).min(src.width as usize - 1);
+                    let sy = (2 * y + dy).min(src.height as usize - 1);
+                    let i = (sy * src.width as usize + sx) * 4;
+                    for (c, a) in acc.iter_mut().enumerate() {
+                        let v = src.rgba[i + c];
+                        *a += if srgb && c < 3 {
+                            lut[v as usize]
+                        } else {
+                            f32::from(v) / 255.0
+                        };
+                    }
+                }
+                for (c, a) in acc.iter().enumerate() {
+                    let v = a * 0.25;
+                    let v = if srgb && c < 3 { linear_to_srgb(v) } else { v };
+                    row[x * 4 + c] = (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
                 }
             }
-            for c in 0..4 {
-                let v = acc[c] * 0.25;
-                let v = if srgb && c < 3 { linear_to_srgb(v) } else { v };
-                row[x * 4 + c] = (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
-            }
-        }
-    });
-    Level { width: w, height: h, rgba }
+        });
+    Level {
+        width: w,
+        height: h,
+        rgba,
+    }
 }
 
 impl Texture {
     /// A texture from level-0 RGBA8 texels; builds the full mip chain down to 1x1.
     pub fn from_rgba8(name: &str, width: u32, height: u32, rgba: Vec<u8>, srgb: bool) -> Texture {
-        assert_eq!(rgba.len(), (width * height * 4) as usize, "texture {name}: size mismatch");
+        assert_eq!(
+            rgba.len(),
+            (width * height * 4) as usize,
+            "texture {name}: size mismatch"
+        );
         let has_alpha = rgba.chunks_exact(4).any(|p| p[3] < 255);
         let lut: [f32; 256] = std::array::from_fn(|i| srgb_to_linear(i as f32 / 255.0));
-        let mut levels = vec![Level { width, height, rgba }];
+        let mut levels = vec![Level {
+            width,
+            height,
+            rgba,
+        }];
         while let Some(last) = levels.last() {
             if last.width == 1 && last.height == 1 {
                 break;
@@ -75,13 +101,20 @@ impl Texture {
             let next = downsample(last, srgb, &lut);
             levels.push(next);
         }
-        Texture { name: name.to_string(), srgb, has_alpha, levels }
+        Texture {
+            name: name.to_string(),
+            srgb,
+            has_alpha,
+            levels,
+        }
     }
 
     /// Decodes an image file (PNG, JPEG, TGA, BMP). Errors name the file.
     pub fn load(path: &Path, srgb: bool) -> Result<Texture> {
         let img = image::open(path).map_err(|e| match e {
-            image::ImageError::IoError(io) => SceneError::file(path, format!("cannot read texture: {io}")),
+            image::ImageError::IoError(io) => {
+                SceneError::file(path, format!("cannot read texture: {io}"))
+            }
             other => SceneError::file(path, format!("cannot decode texture: {other}")),
         })?;
         let rgba = img.to_rgba8();
@@ -89,7 +122,10 @@ impl Texture {
         if w == 0 || h == 0 {
             return Err(SceneError::file(path, "texture has zero size"));
         }
-        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
         Ok(Texture::from_rgba8(&name, w, h, rgba.into_raw(), srgb))
     }
 
@@ -99,7 +135,11 @@ impl Texture {
         let rgba = (0..n * n)
             .flat_map(|i| {
                 let (x, y) = (i % n, i / n);
-                if ((x / 4) + (y / 4)) % 2 == 0 { [255, 0, 255, 255] } else { [0, 0, 0, 255] }
+                if ((x / 4) + (y / 4)) % 2 == 0 {
+                    [255, 0, 255, 255]
+                } else {
+                    [0, 0, 0, 255]
+                }
             })
             .collect();
         Texture::from_rgba8(name, n, n, rgba, true)
@@ -128,7 +168,9 @@ mod tests {
     #[test]
     fn srgb_mips_average_in_linear_space() {
         // Black and white texels average to linear 0.5, which is sRGB 188, not 128.
-        let rgba = vec![0, 0, 0, 255, 255, 255, 255, 255, 0, 0, 0, 255, 255, 255, 255, 255];
+        let rgba = vec![
+            0, 0, 0, 255, 255, 255, 255, 255, 0, 0, 0, 255, 255, 255, 255, 255,
+        ];
         let t = Texture::from_rgba8("t", 2, 2, rgba.clone(), true);
         assert_eq!(t.levels[1].rgba[0], 188);
         let lin = Texture::from_rgba8("t", 2, 2, rgba, false);

@@ -12,14 +12,17 @@ fn repo() -> PathBuf {
 fn shared_present() -> bool {
     let ok = repo().join("../shared/scenes").is_dir();
     if !ok {
-        eprintln!("SKIPPED: ../shared/scenes is absent; real-scene tests need it beside the repository");
+        eprintln!(
+            "SKIPPED: ../shared/scenes is absent; real-scene tests need it beside the repository"
+        );
     }
     ok
 }
 
 fn load(toml: &str) -> Scene {
     let path = repo().join("scenes").join(toml);
-    cbr_scene::load(&path.to_string_lossy(), &LoadOptions::default()).unwrap_or_else(|e| panic!("{toml}: {e}"))
+    cbr_scene::load(&path.to_string_lossy(), &LoadOptions::default())
+        .unwrap_or_else(|e| panic!("{toml}: {e}"))
 }
 
 #[test]
@@ -30,8 +33,17 @@ fn cornell_box_crlf_negative_indices_and_emission() {
     let s = load("cornell-box.toml");
     // 18 quads + the rest triangles; the light material is emissive.
     assert!(s.triangle_count() >= 30, "{}", s.triangle_count());
-    assert!(s.objects.iter().all(|o| s.materials[o.material as usize].name != "default"), "usemtl resolved");
-    let light = s.materials.iter().find(|m| m.name == "light").expect("light material");
+    assert!(
+        s.objects
+            .iter()
+            .all(|o| s.materials[o.material as usize].name != "default"),
+        "usemtl resolved"
+    );
+    let light = s
+        .materials
+        .iter()
+        .find(|m| m.name == "light")
+        .expect("light material");
     assert!(light.ke.iter().any(|&k| k > 0.0), "Ke read: {:?}", light.ke);
     assert!(s.stats.warnings.is_empty(), "{:?}", s.stats.warnings);
 }
@@ -42,7 +54,11 @@ fn spider_backslash_texture_paths_resolve() {
         return;
     }
     let s = load("spider.toml");
-    assert_eq!(s.textures.len(), 5, "all five textures load after normalising backslashes");
+    assert_eq!(
+        s.textures.len(),
+        5,
+        "all five textures load after normalising backslashes"
+    );
     assert_eq!(s.triangle_count() + s.stats.dropped_faces, 1368);
 }
 
@@ -80,9 +96,17 @@ fn sibenik_mtllib_name_and_bump_maps() {
     }
     let s = load("sibenik.toml");
     assert!(s.triangle_count() > 70_000, "{}", s.triangle_count());
-    assert!(s.materials.iter().any(|m| m.bump_tex.is_some()), "map_bump read");
+    assert!(
+        s.materials.iter().any(|m| m.bump_tex.is_some()),
+        "map_bump read"
+    );
     assert!(s.materials.iter().any(|m| m.name == "sprljci"));
-    assert!(s.objects.iter().all(|o| s.materials[o.material as usize].name != "default"), "usemtl resolved");
+    assert!(
+        s.objects
+            .iter()
+            .all(|o| s.materials[o.material as usize].name != "default"),
+        "usemtl resolved"
+    );
     assert_eq!(s.points.len(), 64);
 }
 
@@ -92,15 +116,31 @@ fn foliage_alpha_masks_and_the_invisible_cylinder() {
         return;
     }
     let s = load("foliage.toml");
-    let masked = s.materials.iter().filter(|m| matches!(m.alpha, AlphaSource::Texture { channel: 3, .. })).count();
+    let masked = s
+        .materials
+        .iter()
+        .filter(|m| matches!(m.alpha, AlphaSource::Texture { channel: 3, .. }))
+        .count();
     assert!(masked >= 7, "7 alpha-tested textures, got {masked}");
-    let cyl = s.objects.iter().find(|o| o.name == "Cylinder01").expect("cylinder");
-    assert!(cyl.vertices.iter().all(|v| v.uv == [0.0, 0.0]), "no UVs: sampled at (0,0)");
+    let cyl = s
+        .objects
+        .iter()
+        .find(|o| o.name == "Cylinder01")
+        .expect("cylinder");
+    assert!(
+        cyl.vertices.iter().all(|v| v.uv == [0.0, 0.0]),
+        "no UVs: sampled at (0,0)"
+    );
     assert_eq!(s.stats.faces_without_uvs, 48);
     let m = &s.materials[cyl.material as usize];
-    let AlphaSource::Texture { tex, channel } = m.alpha else { panic!("cylinder must be alpha tested") };
+    let AlphaSource::Texture { tex, channel } = m.alpha else {
+        panic!("cylinder must be alpha tested")
+    };
     let t = &s.textures[tex as usize];
-    assert_eq!(t.levels[0].rgba[channel as usize], 0, "alpha at uv (0,0) is 0: invisible");
+    assert_eq!(
+        t.levels[0].rgba[channel as usize], 0,
+        "alpha at uv (0,0) is 0: invisible"
+    );
     // Z-up converted to Y-up: the ground spans X and Z, height is Y.
     let b = s.bounds();
     assert!(b.max.y - b.min.y < b.max.x - b.min.x);

@@ -15,7 +15,10 @@ pub struct InfoArgs {
 
 pub fn run(a: &InfoArgs) -> Result<()> {
     let report = Gpu::enumerate()?;
-    let gpu = Gpu::new(&GpuOptions { device: a.device.clone(), validation: false })?;
+    let gpu = Gpu::new(&GpuOptions {
+        device: a.device.clone(),
+        validation: false,
+    })?;
     let caps = gpu.caps();
     let layouts: Vec<serde_json::Value> = Layout::ALL
         .iter()
@@ -39,24 +42,53 @@ pub fn run(a: &InfoArgs) -> Result<()> {
     }
     println!("Vulkan devices:");
     for c in &report.candidates {
-        let mark = if c.index == gpu.info().index { "*" } else { " " };
-        let why = c.rejection().map(|r| format!("  (unusable: {r})")).unwrap_or_default();
-        println!(" {mark}[{}] {} ({:?}, Vulkan {}.{}){why}", c.index, c.name, c.kind, c.api.0, c.api.1);
+        let mark = if c.index == gpu.info().index {
+            "*"
+        } else {
+            " "
+        };
+        let why = c
+            .rejection()
+            .map(|r| format!("  (unusable: {r})"))
+            .unwrap_or_default();
+        println!(
+            " {mark}[{}] {} ({:?}, Vulkan {}.{}){why}",
+            c.index, c.name, c.kind, c.api.0, c.api.1
+        );
     }
     let i = gpu.info();
-    println!("\nchosen: [{}] {}\n  driver: {} {}\n  API: {}", i.index, i.name, i.driver_name, i.driver_info, i.api_version);
-    println!("  sample counts (colour+depth): {:?}; integer colour: {:?}", caps.sample_counts, caps.integer_color_sample_counts);
+    println!(
+        "\nchosen: [{}] {}\n  driver: {} {}\n  API: {}",
+        i.index, i.name, i.driver_name, i.driver_info, i.api_version
+    );
+    println!(
+        "  sample counts (colour+depth): {:?}; integer colour: {:?}",
+        caps.sample_counts, caps.integer_color_sample_counts
+    );
     println!(
         "  sampleRateShading {}, sample locations {}, maintenance4 {}, dynamic rendering {}, geometry shader {}, gl_Layer from VS {}, multiview {} (cbr does not use it)",
-        caps.sample_rate_shading, caps.sample_locations, caps.maintenance4, caps.dynamic_rendering, caps.geometry_shader, caps.shader_output_layer, caps.multiview
+        caps.sample_rate_shading,
+        caps.sample_locations,
+        caps.maintenance4,
+        caps.dynamic_rendering,
+        caps.geometry_shader,
+        caps.shader_output_layer,
+        caps.multiview
     );
     println!(
         "  timestamps {} ({} valid bits, {} ns/tick), pipeline statistics {}",
-        caps.timestamps, caps.timestamp_valid_bits, caps.timestamp_period_ns, caps.pipeline_statistics
+        caps.timestamps,
+        caps.timestamp_valid_bits,
+        caps.timestamp_period_ns,
+        caps.pipeline_statistics
     );
     println!(
         "  max image {}, max framebuffer {}x{}, sub-pixel bits {} (viewport {})",
-        caps.max_image_dimension_2d, caps.max_framebuffer[0], caps.max_framebuffer[1], caps.sub_pixel_precision_bits, caps.viewport_sub_pixel_bits
+        caps.max_image_dimension_2d,
+        caps.max_framebuffer[0],
+        caps.max_framebuffer[1],
+        caps.sub_pixel_precision_bits,
+        caps.viewport_sub_pixel_bits
     );
     println!("\ncheckerboard layouts:");
     for l in Layout::ALL {
@@ -67,7 +99,10 @@ pub fn run(a: &InfoArgs) -> Result<()> {
     }
     if caps.layout_unsupported(Layout::Msaa2x).is_some() {
         let portable: Vec<&str> = caps.supported_layouts().iter().map(|l| l.name()).collect();
-        println!("  (msaa2x needs 2x MSAA; on this device use the portable layouts: {})", portable.join(", "));
+        println!(
+            "  (msaa2x needs 2x MSAA; on this device use the portable layouts: {})",
+            portable.join(", ")
+        );
     }
     Ok(())
 }

@@ -62,7 +62,9 @@ pub struct RenderArgs {
 }
 
 fn env_flag(name: &str) -> bool {
-    std::env::var(name).map(|v| v == "1" || v.eq_ignore_ascii_case("true")).unwrap_or(false)
+    std::env::var(name)
+        .map(|v| v == "1" || v.eq_ignore_ascii_case("true"))
+        .unwrap_or(false)
 }
 
 pub fn run(a: &RenderArgs) -> Result<()> {
@@ -90,17 +92,34 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     }
 
     let validation = a.validation || env_flag("CBR_VALIDATION");
-    let gpu = Gpu::new(&GpuOptions { device: a.device.clone(), validation })?;
+    let gpu = Gpu::new(&GpuOptions {
+        device: a.device.clone(),
+        validation,
+    })?;
     let shaders = cbr_render::shader_library();
-    let settings = RenderSettings { width: scene.settings.width, height: scene.settings.height, lod_bias: a.lod_bias };
-    let mut renderer = Renderer::new(&gpu, &shaders, &scene, settings.clone())
-        .with_context(|| format!("setting up the {:?} technique on {}", a.technique, gpu.info().name))?;
+    let settings = RenderSettings {
+        width: scene.settings.width,
+        height: scene.settings.height,
+        lod_bias: a.lod_bias,
+    };
+    let mut renderer =
+        Renderer::new(&gpu, &shaders, &scene, settings.clone()).with_context(|| {
+            format!(
+                "setting up the {:?} technique on {}",
+                a.technique,
+                gpu.info().name
+            )
+        })?;
 
-    std::fs::create_dir_all(&a.out).with_context(|| format!("cannot create the output folder {}", a.out.display()))?;
-    let display = DisplayTransform { exposure_stops: scene.settings.exposure };
+    std::fs::create_dir_all(&a.out)
+        .with_context(|| format!("cannot create the output folder {}", a.out.display()))?;
+    let display = DisplayTransform {
+        exposure_stops: scene.settings.exposure,
+    };
     let frames = scene.settings.frames;
     let bar = ProgressBar::new(u64::from(frames)).with_style(
-        ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} frames {elapsed}").unwrap_or_else(|_| ProgressStyle::default_bar()),
+        ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} frames {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     bar.set_prefix(format!("render {}", scene.name));
     let mut frame_records = Vec::new();
@@ -111,14 +130,25 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         let png = a.out.join(format!("frame_{f:04}.png"));
         let meta = vec![
             ("cbr.scene".to_string(), scene.source.clone()),
-            ("cbr.technique".to_string(), format!("{:?}", a.technique).to_lowercase()),
+            (
+                "cbr.technique".to_string(),
+                format!("{:?}", a.technique).to_lowercase(),
+            ),
             ("cbr.frame".to_string(), f.to_string()),
             ("cbr.time".to_string(), format!("{}", out.time)),
             ("cbr.device".to_string(), gpu.info().name.clone()),
         ];
         write_frame_exr(
             &exr,
-            &FrameLayers { width: out.width, height: out.height, color: &out.color, depth: &out.depth, velocity: &out.velocity, ids: &out.ids, metadata: meta },
+            &FrameLayers {
+                width: out.width,
+                height: out.height,
+                color: &out.color,
+                depth: &out.depth,
+                velocity: &out.velocity,
+                ids: &out.ids,
+                metadata: meta,
+            },
         )?;
         write_png_rgba8(&png, out.width, out.height, &display.to_rgba8(&out.color))?;
         for t in &out.timings {
@@ -172,14 +202,27 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         "validation": {"enabled": validation, "messages": messages.len(), "list": messages},
         "wall_s": started.elapsed().as_secs_f64(),
     });
-    write_bytes(&a.out.join("run.json"), serde_json::to_string_pretty(&run)?.as_bytes())?;
+    write_bytes(
+        &a.out.join("run.json"),
+        serde_json::to_string_pretty(&run)?.as_bytes(),
+    )?;
     if !messages.is_empty() {
-        eprintln!("warning: {} validation message(s); see run.json", messages.len());
+        eprintln!(
+            "warning: {} validation message(s); see run.json",
+            messages.len()
+        );
     }
-    println!("{} frame(s) of {} written to {}", frames, scene.name, a.out.display());
+    println!(
+        "{} frame(s) of {} written to {}",
+        frames,
+        scene.name,
+        a.out.display()
+    );
     Ok(())
 }
 
 fn file_name(p: &Path) -> String {
-    p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
+    p.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
 }
