@@ -22,7 +22,12 @@ fn stderr(o: &Output) -> String {
 fn expect_failure(scene: &Path, extra: &[&str], env: &[(&str, &str)], expect: &[&str]) {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("out");
-    let mut args = vec!["render", scene.to_str().expect("utf8"), "-o", out.to_str().expect("utf8")];
+    let mut args = vec![
+        "render",
+        scene.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+    ];
     args.extend_from_slice(extra);
     let o = cbr(&args, env);
     let err = stderr(&o);
@@ -47,19 +52,52 @@ const TRI: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\n";
 fn malformed_obj_inputs_name_the_file_and_line() {
     let d = tempfile::tempdir().expect("tempdir");
     let cases: &[(&str, &str, &[&str])] = &[
-        ("nan.obj", "v 0 0 0\nv 1 NaN 0\nv 0 1 0\nf 1 2 3\n", &["nan.obj:2:", "not a finite number"]),
-        ("inf.obj", "v 0 0 0\nv 1 0 0\nv 0 1 inf\nf 1 2 3\n", &["inf.obj:3:", "not a finite number"]),
-        ("garbage.obj", "v 0 0 0\nv 1 zero 0\n", &["garbage.obj:2:", "`zero` is not a number"]),
-        ("range.obj", "v 0 0 0\nv 1 0 0\nf 1 2 9\n", &["range.obj:3:", "face refers to vertex 9"]),
-        ("neg.obj", "v 0 0 0\nf -1 -2 -3\n", &["neg.obj:2:", "vertex -2"]),
-        ("degenerate.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 1 2\nf 1 2\n", &["degenerate.obj", "no drawable triangles"]),
-        ("empty.obj", "# nothing\n", &["empty.obj", "no drawable triangles"]),
+        (
+            "nan.obj",
+            "v 0 0 0\nv 1 NaN 0\nv 0 1 0\nf 1 2 3\n",
+            &["nan.obj:2:", "not a finite number"],
+        ),
+        (
+            "inf.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 inf\nf 1 2 3\n",
+            &["inf.obj:3:", "not a finite number"],
+        ),
+        (
+            "garbage.obj",
+            "v 0 0 0\nv 1 zero 0\n",
+            &["garbage.obj:2:", "`zero` is not a number"],
+        ),
+        (
+            "range.obj",
+            "v 0 0 0\nv 1 0 0\nf 1 2 9\n",
+            &["range.obj:3:", "face refers to vertex 9"],
+        ),
+        (
+            "neg.obj",
+            "v 0 0 0\nf -1 -2 -3\n",
+            &["neg.obj:2:", "vertex -2"],
+        ),
+        (
+            "degenerate.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 1 2\nf 1 2\n",
+            &["degenerate.obj", "no drawable triangles"],
+        ),
+        (
+            "empty.obj",
+            "# nothing\n",
+            &["empty.obj", "no drawable triangles"],
+        ),
     ];
     for (name, text, expect) in cases {
         let p = write(d.path(), name, text.as_bytes());
         expect_failure(&p, &[], &[], expect);
     }
-    expect_failure(&d.path().join("absent.obj"), &[], &[], &["absent.obj", "cannot read"]);
+    expect_failure(
+        &d.path().join("absent.obj"),
+        &[],
+        &[],
+        &["absent.obj", "cannot read"],
+    );
 }
 
 #[test]
@@ -72,9 +110,18 @@ fn malformed_mtl_and_textures_name_the_file() {
 
     write(d.path(), "missing.mtl", b"newmtl m\nmap_Kd nothere.png\n");
     let p = write(d.path(), "missing.obj", obj("missing.mtl").as_bytes());
-    expect_failure(&p, &[], &[], &["nothere.png", "missing.mtl", "--missing-textures fallback"]);
+    expect_failure(
+        &p,
+        &[],
+        &[],
+        &["nothere.png", "missing.mtl", "--missing-textures fallback"],
+    );
 
-    write(d.path(), "corrupt.png", b"\x89PNG\r\n\x1a\nthis is not a png");
+    write(
+        d.path(),
+        "corrupt.png",
+        b"\x89PNG\r\n\x1a\nthis is not a png",
+    );
     write(d.path(), "corrupt.mtl", b"newmtl m\nmap_Kd corrupt.png\n");
     let p = write(d.path(), "corrupt.obj", obj("corrupt.mtl").as_bytes());
     expect_failure(&p, &[], &[], &["corrupt.png", "cannot decode texture"]);
@@ -82,11 +129,32 @@ fn malformed_mtl_and_textures_name_the_file() {
     // The fallback renders, flagged in run.json.
     let out = d.path().join("fallback-out");
     let p = d.path().join("missing.obj");
-    let o = cbr(&["render", p.to_str().expect("utf8"), "-o", out.to_str().expect("utf8"), "--width", "32", "--height", "32", "--missing-textures", "fallback"], &[]);
+    let o = cbr(
+        &[
+            "render",
+            p.to_str().expect("utf8"),
+            "-o",
+            out.to_str().expect("utf8"),
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--missing-textures",
+            "fallback",
+        ],
+        &[],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
-    let run: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json")).expect("json");
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json"))
+            .expect("json");
     assert_eq!(run["scene"]["load"]["fallback_textures"], 1);
-    assert!(run["scene"]["load"]["warnings"][0].as_str().unwrap_or("").contains("nothere.png"));
+    assert!(
+        run["scene"]["load"]["warnings"][0]
+            .as_str()
+            .unwrap_or("")
+            .contains("nothere.png")
+    );
 }
 
 #[test]
@@ -94,13 +162,41 @@ fn malformed_scene_toml_names_the_file_line_and_key() {
     let d = tempfile::tempdir().expect("tempdir");
     write(d.path(), "t.obj", format!("{TRI}f 1 2 3\n").as_bytes());
     let cases: &[(&str, &str, &[&str])] = &[
-        ("syntax.toml", "obj = \"t.obj\"\nwidth = = 3\n", &["syntax.toml:2:"]),
-        ("unknown.toml", "obj = \"t.obj\"\n[camera]\nfov = 3\n", &["unknown.toml:3:", "camera.fov", "unknown field"]),
-        ("type.toml", "obj = \"t.obj\"\nframes = \"many\"\n", &["type.toml:2:", "`frames`"]),
-        ("both.toml", "obj = \"t.obj\"\nprocedural = \"demo\"\n", &["both.toml", "exactly one of `obj` and `procedural`"]),
-        ("res.toml", "obj = \"t.obj\"\nwidth = 100000\n", &["res.toml", "100000x720", "outside"]),
-        ("anim.toml", "obj = \"t.obj\"\n[[animate]]\nobject = \"ghost\"\n", &["anim.toml", "`ghost` matches no object"]),
-        ("objmissing.toml", "obj = \"nope.obj\"\n", &["nope.obj", "cannot read"]),
+        (
+            "syntax.toml",
+            "obj = \"t.obj\"\nwidth = = 3\n",
+            &["syntax.toml:2:"],
+        ),
+        (
+            "unknown.toml",
+            "obj = \"t.obj\"\n[camera]\nfov = 3\n",
+            &["unknown.toml:3:", "camera.fov", "unknown field"],
+        ),
+        (
+            "type.toml",
+            "obj = \"t.obj\"\nframes = \"many\"\n",
+            &["type.toml:2:", "`frames`"],
+        ),
+        (
+            "both.toml",
+            "obj = \"t.obj\"\nprocedural = \"demo\"\n",
+            &["both.toml", "exactly one of `obj` and `procedural`"],
+        ),
+        (
+            "res.toml",
+            "obj = \"t.obj\"\nwidth = 100000\n",
+            &["res.toml", "100000x720", "outside"],
+        ),
+        (
+            "anim.toml",
+            "obj = \"t.obj\"\n[[animate]]\nobject = \"ghost\"\n",
+            &["anim.toml", "`ghost` matches no object"],
+        ),
+        (
+            "objmissing.toml",
+            "obj = \"nope.obj\"\n",
+            &["nope.obj", "cannot read"],
+        ),
     ];
     for (name, text, expect) in cases {
         let p = write(d.path(), name, text.as_bytes());
@@ -114,8 +210,18 @@ fn absurd_arguments_and_unknown_scenes_fail_cleanly() {
     let p = write(d.path(), "t.obj", format!("{TRI}f 1 2 3\n").as_bytes());
     expect_failure(&p, &["--width", "0"], &[], &["resolution 0x720"]);
     expect_failure(&p, &["--height", "999999"], &[], &["outside 1..=16384"]);
-    expect_failure(&p, &["--frames", "0"], &[], &["--frames must be at least 1"]);
-    expect_failure(Path::new("builtin:nope"), &[], &[], &["no built-in scene `nope`"]);
+    expect_failure(
+        &p,
+        &["--frames", "0"],
+        &[],
+        &["--frames must be at least 1"],
+    );
+    expect_failure(
+        Path::new("builtin:nope"),
+        &[],
+        &[],
+        &["no built-in scene `nope`"],
+    );
     let txt = write(d.path(), "scene.txt", b"hello");
     expect_failure(&txt, &[], &[], &["scene.txt", "expected a .toml scene"]);
 }
@@ -124,9 +230,25 @@ fn absurd_arguments_and_unknown_scenes_fail_cleanly() {
 fn no_vulkan_device_is_a_clear_error() {
     let d = tempfile::tempdir().expect("tempdir");
     let p = write(d.path(), "t.obj", format!("{TRI}f 1 2 3\n").as_bytes());
-    let env = [("VK_DRIVER_FILES", "/nonexistent/icd.json"), ("VK_ICD_FILENAMES", "/nonexistent/icd.json")];
-    expect_failure(&p, &[], &env, &["no Vulkan device found", "/nonexistent/icd.json"]);
-    expect_failure(&p, &["--device", "no-such-gpu"], &[], &["no usable Vulkan device", "does not match --device \"no-such-gpu\""]);
+    let env = [
+        ("VK_DRIVER_FILES", "/nonexistent/icd.json"),
+        ("VK_ICD_FILENAMES", "/nonexistent/icd.json"),
+    ];
+    expect_failure(
+        &p,
+        &[],
+        &env,
+        &["no Vulkan device found", "/nonexistent/icd.json"],
+    );
+    expect_failure(
+        &p,
+        &["--device", "no-such-gpu"],
+        &[],
+        &[
+            "no usable Vulkan device",
+            "does not match --device \"no-such-gpu\"",
+        ],
+    );
 }
 
 #[test]
@@ -144,40 +266,106 @@ fn shader_errors_name_the_file_and_line() {
     }
     let frag = shaders.join("scene/forward.frag");
     let text = std::fs::read_to_string(&frag).expect("frag");
-    std::fs::write(&frag, text.replacen("void main() {", "void main() {\n    undefined_symbol = 1;", 1)).expect("write");
-    let line = std::fs::read_to_string(&frag).expect("frag").lines().position(|l| l.contains("undefined_symbol")).expect("line") + 1;
-    expect_failure(&p, &[], &[("CBR_SHADER_DIR", shaders.to_str().expect("utf8"))], &[&format!("scene/forward.frag:{line}"), "undefined_symbol"]);
+    std::fs::write(
+        &frag,
+        text.replacen(
+            "void main() {",
+            "void main() {\n    undefined_symbol = 1;",
+            1,
+        ),
+    )
+    .expect("write");
+    let line = std::fs::read_to_string(&frag)
+        .expect("frag")
+        .lines()
+        .position(|l| l.contains("undefined_symbol"))
+        .expect("line")
+        + 1;
+    expect_failure(
+        &p,
+        &[],
+        &[("CBR_SHADER_DIR", shaders.to_str().expect("utf8"))],
+        &[&format!("scene/forward.frag:{line}"), "undefined_symbol"],
+    );
 }
 
 #[test]
 fn demo_renders_readable_outputs_with_zero_validation_messages() {
     let d = tempfile::tempdir().expect("tempdir");
     let out = d.path().join("demo");
-    let o = cbr(&["render", "builtin:demo", "-o", out.to_str().expect("utf8"), "--width", "96", "--height", "54", "--frames", "2", "--validation"], &[]);
+    let o = cbr(
+        &[
+            "render",
+            "builtin:demo",
+            "-o",
+            out.to_str().expect("utf8"),
+            "--width",
+            "96",
+            "--height",
+            "54",
+            "--frames",
+            "2",
+            "--validation",
+        ],
+        &[],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
-    let run: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json")).expect("json");
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json"))
+            .expect("json");
     assert_eq!(run["validation"]["enabled"], true);
-    assert_eq!(run["validation"]["messages"], 0, "{}", run["validation"]["list"]);
+    assert_eq!(
+        run["validation"]["messages"], 0,
+        "{}",
+        run["validation"]["list"]
+    );
     assert_eq!(run["frames"].as_array().map(Vec::len), Some(2));
-    assert!(run["passes"][0]["gpu_ms"]["median"].as_f64().unwrap_or(0.0) > 0.0, "{}", run["passes"]);
-    assert!(run["device"]["name"].as_str().is_some_and(|n| !n.is_empty()));
-    for f in ["frame_0000.exr", "frame_0001.exr", "frame_0000.png", "frame_0001.png"] {
+    assert!(
+        run["passes"][0]["gpu_ms"]["median"].as_f64().unwrap_or(0.0) > 0.0,
+        "{}",
+        run["passes"]
+    );
+    assert!(
+        run["device"]["name"]
+            .as_str()
+            .is_some_and(|n| !n.is_empty())
+    );
+    for f in [
+        "frame_0000.exr",
+        "frame_0001.exr",
+        "frame_0000.png",
+        "frame_0001.png",
+    ] {
         assert!(out.join(f).is_file(), "{f}");
     }
-    let leftovers: Vec<_> = std::fs::read_dir(&out).expect("dir").filter_map(|e| e.ok()).filter(|e| e.file_name().to_string_lossy().contains(".tmp")).collect();
+    let leftovers: Vec<_> = std::fs::read_dir(&out)
+        .expect("dir")
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains(".tmp"))
+        .collect();
     assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
     // Our own reader, and OpenEXR's exrheader when installed.
-    let (w, h, ids) = cbr_metrics::io::read_exr_channel(&out.join("frame_0001.exr"), "object_id", "id").expect("object_id layer");
+    let (w, h, ids) =
+        cbr_metrics::io::read_exr_channel(&out.join("frame_0001.exr"), "object_id", "id")
+            .expect("object_id layer");
     assert_eq!((w, h), (96, 54));
     assert!(ids.iter().any(|&i| i > 0.0));
-    match Command::new("exrheader").arg(out.join("frame_0000.exr")).output() {
+    match Command::new("exrheader")
+        .arg(out.join("frame_0000.exr"))
+        .output()
+    {
         Ok(o) => {
             let text = String::from_utf8_lossy(&o.stdout);
             assert!(o.status.success(), "exrheader failed: {}", stderr(&o));
             for part in ["color", "depth", "velocity", "object_id", "primitive_id"] {
-                assert!(text.contains(&format!("\"{part}\"")), "exrheader does not list part {part}:\n{text}");
+                assert!(
+                    text.contains(&format!("\"{part}\"")),
+                    "exrheader does not list part {part}:\n{text}"
+                );
             }
         }
-        Err(_) => eprintln!("SKIPPED exrheader check: exrheader is not installed (apt-get install openexr)"),
+        Err(_) => eprintln!(
+            "SKIPPED exrheader check: exrheader is not installed (apt-get install openexr)"
+        ),
     }
 }
