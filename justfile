@@ -25,6 +25,12 @@ test: lint
     @echo "[test] cargo test --workspace (GPU tests on ${VK_DRIVER_FILES:-the default Vulkan device}, validation layers on)"
     cargo test --workspace --no-fail-fast
 
+# Criterion benchmarks of the metrics on 1080p pairs, then peak memory on a 4K HDR pair
+# (figures in docs/metrics.md).
+bench-metrics: setup
+    cargo bench -p cbr-metrics --bench metrics
+    scripts/metrics-memory.sh ./target/release/cbr
+
 # Formatting.
 fmt:
     cargo fmt --all

@@ -11,8 +11,6 @@ use std::result::Result;
 pub enum IoError {
     #[error("{}: {msg}", path.display())]
     Write { path: PathBuf, msg: String },
-    #[error("{}: {msg}", path.display())]
-    Read { path: PathBuf, msg: String },
 }
 
 /// Runs `write` on a temporary path beside `path`, then renames it into place.
@@ -179,50 +177,6 @@ pub fn write_frame_exr(path: &Path, f: &FrameLayers) -> Result<(), IoError> {
     })
 }
 
-/// One channel of one layer read back as f32 (for tests and `cbr compare`).
-pub fn read_exr_channel(
-    path: &Path,
-    layer: &str,
-    channel: &str,
-) -> Result<(usize, usize, Vec<f32>), IoError> {
-    let err = |msg: String| IoError::Read {
-        path: path.to_path_buf(),
-        msg,
-    };
-    let img = read_all_flat_layers_from_file(path).map_err(|e| err(e.to_string()))?;
-    let names: Vec<String> = img
-        .layer_data
-        .iter()
-        .map(|l| {
-            l.attributes
-                .layer_name
-                .as_ref()
-                .map(|t| t.to_string())
-                .unwrap_or_default()
-        })
-        .collect();
-    let l = img
-        .layer_data
-        .iter()
-        .find(|l| {
-            l.attributes
-                .layer_name
-                .as_ref()
-                .map(|t| t.to_string())
-                .as_deref()
-                == Some(layer)
-        })
-        .ok_or_else(|| err(format!("no layer `{layer}` (layers: {})", names.join(", "))))?;
-    let c = l
-        .channel_data
-        .list
-        .iter()
-        .find(|c| c.name.to_string() == channel)
-        .ok_or_else(|| err(format!("layer `{layer}` has no channel `{channel}`")))?;
-    let values = c.sample_data.values_as_f32().collect();
-    Ok((l.size.0, l.size.1, values))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -250,25 +204,19 @@ mod tests {
             metadata: vec![("cbr.frame".into(), "7".into())],
         };
         write_frame_exr(&path, &layers).expect("write");
-        let (rw, rh, g) = read_exr_channel(&path, COLOR_LAYER, "G").expect("G");
+        let channel = |layer: &str, c: &str| {
+            let img = crate::input::load(&path, Some(layer), Some(&[c.to_string()])).expect(c);
+            (img.rgb.width, img.rgb.height, img.rgb.c[0].data.clone())
+        };
+        let (rw, rh, g) = channel(COLOR_LAYER, "G");
         assert_eq!((rw, rh), (3, 2));
         assert_eq!(g[1], 5.0 * 0.25);
-        assert_eq!(
-            read_exr_channel(&path, DEPTH_LAYER, "Z").expect("Z").2[0],
-            f32::INFINITY
-        );
-        assert_eq!(
-            read_exr_channel(&path, VELOCITY_LAYER, "Y").expect("Y").2[3],
-            -3.0
-        );
-        assert_eq!(
-            read_exr_channel(&path, PRIMITIVE_ID_LAYER, "id")
-                .expect("id")
-                .2[5],
-            1005.0
-        );
-        let err = read_exr_channel(&path, "nope", "R")
-            .unwrap_err()
+        assert_eq!(channel(DEPTH_LAYER, "Z").2[0], f32::INFINITY);
+        assert_eq!(channel(VELOCITY_LAYER, "Y").2[3], -3.0);
+        assert_eq!(channel(PRIMITIVE_ID_LAYER, "id").2[5], 1005.0);
+        let err = crate::input::load(&path, Some("nope"), None)
+            .err()
+            .expect("no such layer")
             .to_string();
         assert!(
             err.contains("no layer `nope`") && err.contains("color"),

@@ -2,6 +2,7 @@
 #![forbid(unsafe_code)]
 #![cfg_attr(not(test), deny(clippy::unwrap_used))]
 
+mod compare;
 mod info;
 mod render;
 mod stats;
@@ -9,6 +10,11 @@ mod stats;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+
+/// mimalloc keeps freed memory for reuse; with glibc's allocator the metrics' short-lived band
+/// buffers cost ~30% of LDR-FLIP's time in page faults (docs/metrics.md).
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 #[derive(Parser)]
 #[command(
@@ -30,6 +36,9 @@ enum Command {
     Render(render::RenderArgs),
     /// List Vulkan devices, the chosen one's limits, and which checkerboard layouts it can run.
     Info(info::InfoArgs),
+    /// Compare two images or two folders of frames: PSNR, SSIM, FLIP, HDR-FLIP, MSE, relMSE.
+    /// Exit 0 when every --fail-above holds, 1 when one fails, 2 on errors.
+    Compare(compare::CompareArgs),
 }
 
 fn main() -> ExitCode {
@@ -48,6 +57,16 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(a) => render::run(&a),
         Command::Info(a) => info::run(&a),
+        Command::Compare(a) => {
+            return match compare::run(&a) {
+                Ok(true) => ExitCode::SUCCESS,
+                Ok(false) => ExitCode::from(1),
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::from(2)
+                }
+            };
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -345,11 +345,14 @@ fn demo_renders_readable_outputs_with_zero_validation_messages() {
         .collect();
     assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
     // Our own reader, and OpenEXR's exrheader when installed.
-    let (w, h, ids) =
-        cbr_metrics::io::read_exr_channel(&out.join("frame_0001.exr"), "object_id", "id")
-            .expect("object_id layer");
-    assert_eq!((w, h), (96, 54));
-    assert!(ids.iter().any(|&i| i > 0.0));
+    let ids = cbr_metrics::input::load(
+        &out.join("frame_0001.exr"),
+        Some("object_id"),
+        Some(&["id".to_string()]),
+    )
+    .expect("object_id layer");
+    assert_eq!((ids.rgb.width, ids.rgb.height), (96, 54));
+    assert!(ids.rgb.c[0].data.iter().any(|&i| i > 0.0));
     match Command::new("exrheader")
         .arg(out.join("frame_0000.exr"))
         .output()

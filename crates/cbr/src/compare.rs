@@ -1,0 +1,329 @@
+//! `cbr compare`: the image-diff harness (pbrt's `imgtool diff` contract): metrics, error maps,
+//! thresholds; exit 0 when every threshold holds, 1 when one fails, 2 on errors.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, anyhow, bail};
+use cbr_metrics::io::write_png_rgba8;
+use cbr_metrics::{
+    CompareOptions, DisplayTransform, Metric, PairResult, compare_images, compare_sequences,
+    heatmap,
+};
+
+#[derive(clap::Args)]
+pub struct CompareArgs {
+    /// Reference image (EXR, PNG, JPEG) or folder of frames.
+    reference: PathBuf,
+    /// Test image or folder of frames (matched to the reference's by file name).
+    test: PathBuf,
+    /// Metrics to compute: psnr, ssim, flip, hdrflip, mse, relmse.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "psnr,ssim,flip,hdrflip,mse,relmse"
+    )]
+    metrics: Vec<String>,
+    /// EXR layer to read (default: color, else the first layer with R, G, B).
+    #[arg(long)]
+    layer: Option<String>,
+    /// EXR channels to read: three (R,G,B) or one (shown as grey).
+    #[arg(long, value_delimiter = ',')]
+    channels: Option<Vec<String>>,
+    /// Compare only this rectangle: x,y,w,h.
+    #[arg(long, value_delimiter = ',', num_args = 1)]
+    crop: Option<Vec<usize>>,
+    /// Write the FLIP error map (magma, colour bar on the right) to this PNG.
+    #[arg(long)]
+    heatmap: Option<PathBuf>,
+    /// Write the absolute-difference map (display values, x4) to this PNG.
+    #[arg(long)]
+    diff: Option<PathBuf>,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+    /// Fail (exit 1) when METRIC is worse than VALUE: above it for errors (flip, hdrflip, mse,
+    /// relmse; FLIP = mean), below it for psnr and ssim. Repeatable.
+    #[arg(long = "fail-above", value_name = "METRIC=VALUE")]
+    fail_above: Vec<String>,
+    /// Frames to skip at the start of sequences before averaging.
+    #[arg(long, default_value_t = 0)]
+    warmup: usize,
+    /// Display exposure in stops for HDR inputs (PSNR, SSIM, LDR-FLIP and the maps).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    exposure: f32,
+    /// FLIP's pixels per degree (default 67.02: a 0.7 m wide 4K display at 0.7 m).
+    #[arg(long)]
+    ppd: Option<f32>,
+}
+
+fn thresholds(specs: &[String]) -> Result<Vec<(Metric, f64)>> {
+    specs
+        .iter()
+        .map(|s| {
+            let (m, v) = s
+                .split_once('=')
+                .ok_or_else(|| anyhow!("--fail-above `{s}`: expected METRIC=VALUE"))?;
+            let metric = Metric::parse(m)
+                .ok_or_else(|| anyhow!("--fail-above `{s}`: unknown metric `{m}`"))?;
+            let value: f64 = v
+                .trim()
+                .parse()
+                .map_err(|_| anyhow!("--fail-above `{s}`: `{v}` is not a number"))?;
+            Ok((metric, value))
+        })
+        .collect()
+}
+
+fn options(a: &CompareArgs) -> Result<CompareOptions> {
+    let mut metrics = Vec::new();
+    for m in &a.metrics {
+        metrics.push(Metric::parse(m).ok_or_else(|| {
+            anyhow!("unknown metric `{m}` (psnr, ssim, flip, hdrflip, mse, relmse)")
+        })?);
+    }
+    let crop = match &a.crop {
+        None => None,
+        Some(v) if v.len() == 4 => Some([v[0], v[1], v[2], v[3]]),
+        Some(v) => bail!("--crop takes x,y,w,h (4 numbers), got {}", v.len()),
+    };
+    let mut o = CompareOptions {
+        metrics,
+        crop,
+        display: DisplayTransform {
+            exposure_stops: a.exposure,
+        },
+        keep_maps: a.heatmap.is_some() || a.diff.is_some(),
+        ..Default::default()
+    };
+    if let Some(p) = a.ppd {
+        if !(p.is_finite() && p > 0.0) {
+            bail!("--ppd must be positive");
+        }
+        o.ppd = p;
+    }
+    Ok(o)
+}
+
+/// Runs the comparison; `Ok(false)` when a threshold failed.
+pub fn run(a: &CompareArgs) -> Result<bool> {
+    let o = options(a)?;
+    let limits = thresholds(&a.fail_above)?;
+    let load = |p: &Path| cbr_metrics::input::load(p, a.layer.as_deref(), a.channels.as_deref());
+    let (values, json) = if a.reference.is_dir() && a.test.is_dir() {
+        if a.heatmap.is_some() || a.diff.is_some() {
+            bail!("--heatmap and --diff apply to image pairs, not folders");
+        }
+        let seq = compare_sequences(&a.reference, &a.test, load, &o, a.warmup)?;
+        if !a.json {
+            print_sequence(&seq, &o);
+        }
+        let values: Vec<(Metric, f64)> = o
+            .metrics
+            .iter()
+            .filter_map(|m| seq.mean.get(m.name()).map(|d| (*m, d.0)))
+            .collect();
+        (values, serde_json::to_value(&seq)?)
+    } else if a.reference.is_dir() || a.test.is_dir() {
+        bail!("compare two images or two folders of frames, not one of each");
+    } else {
+        let (r, t) = (load(&a.reference)?, load(&a.test)?);
+        let res = compare_images(&r, &t, &o)?;
+        write_maps(a, &res)?;
+        if !a.json {
+            print_pair(&res, &o);
+        }
+        let values: Vec<(Metric, f64)> = o
+            .metrics
+            .iter()
+            .filter_map(|m| res.value(*m).map(|v| (*m, v)))
+            .collect();
+        (values, serde_json::to_value(&res)?)
+    };
+    let mut ok = true;
+    let mut failures = Vec::new();
+    for (m, limit) in &limits {
+        let Some(&(_, v)) = values.iter().find(|(vm, _)| vm == m) else {
+            bail!(
+                "--fail-above {}: that metric was not computed (add it to --metrics)",
+                m.name()
+            );
+        };
+        let worse = if m.higher_is_better() {
+            v < *limit
+        } else {
+            v > *limit
+        };
+        if worse {
+            ok = false;
+            failures.push(format!(
+                "{} = {v} is {} the limit {limit}",
+                m.name(),
+                if m.higher_is_better() {
+                    "below"
+                } else {
+                    "above"
+                }
+            ));
+        }
+    }
+    if a.json {
+        let mut j = json;
+        j["display"] = serde_json::json!(o.display.describe());
+        j["relmse_eps"] = serde_json::json!(o.relmse_eps);
+        j["flip_ppd"] = serde_json::json!(o.ppd);
+        j["thresholds_failed"] = serde_json::json!(failures);
+        println!("{}", serde_json::to_string_pretty(&j)?);
+    } else {
+        for f in &failures {
+            println!("FAIL: {f}");
+        }
+    }
+    Ok(ok)
+}
+
+fn write_maps(a: &CompareArgs, res: &PairResult) -> Result<()> {
+    if let Some(path) = &a.heatmap {
+        let map = res
+            .flip_map
+            .as_ref()
+            .ok_or_else(|| anyhow!("--heatmap needs flip or hdrflip in --metrics"))?;
+        let (w, h, px) = heatmap::flip_heatmap(map);
+        write_png_rgba8(path, w as u32, h as u32, &px).with_context(|| "writing the heatmap")?;
+    }
+    if let (Some(path), Some(map)) = (&a.diff, &res.diff_map) {
+        write_png_rgba8(
+            path,
+            map.width as u32,
+            map.height as u32,
+            &heatmap::difference_image(map),
+        )?;
+    }
+    Ok(())
+}
+
+fn fmt(v: f64) -> String {
+    if v.is_infinite() {
+        "inf".into()
+    } else if v != 0.0 && v.abs() < 1e-3 {
+        format!("{v:.4e}")
+    } else {
+        format!("{v:.6}")
+    }
+}
+
+fn print_pair(r: &PairResult, o: &CompareOptions) {
+    let src = |s: &cbr_metrics::compare::Source| {
+        if s.layer.is_empty() {
+            format!("{} ({:?})", s.path.display(), s.encoding)
+        } else {
+            format!(
+                "{} (layer {} [{}], {:?})",
+                s.path.display(),
+                s.layer,
+                s.channels.join(","),
+                s.encoding
+            )
+        }
+    };
+    println!(
+        "reference {}\ntest      {}",
+        src(&r.reference),
+        src(&r.test)
+    );
+    println!(
+        "{}x{}, non-finite pixels: reference {}, test {} ({} excluded)",
+        r.width, r.height, r.reference.nonfinite_pixels, r.test.nonfinite_pixels, r.excluded_pixels
+    );
+    if let Some(p) = r.psnr {
+        println!(
+            "  PSNR      {} dB          (display values, peak 1)",
+            fmt(p.0)
+        );
+    }
+    if let Some(s) = r.ssim {
+        println!(
+            "  SSIM      {}            (display, per RGB channel, averaged)",
+            fmt(s)
+        );
+    }
+    if let Some(f) = &r.flip {
+        println!(
+            "  FLIP      mean {}  weighted median {}  quartiles {} / {}  min {}  max {}  ({:.2} ppd)",
+            fmt(f.mean),
+            fmt(f.weighted_median),
+            fmt(f.weighted_q1),
+            fmt(f.weighted_q3),
+            fmt(f.min),
+            fmt(f.max),
+            o.ppd
+        );
+    }
+    if let Some(h) = &r.hdrflip {
+        println!(
+            "  HDR-FLIP  mean {}  weighted median {}  max {}  (exposures {:.3} .. {:.3}, {} steps)",
+            fmt(h.pooled.mean),
+            fmt(h.pooled.weighted_median),
+            fmt(h.pooled.max),
+            h.exposures.start,
+            h.exposures.stop,
+            h.exposures.count
+        );
+    }
+    if let Some(m) = r.mse {
+        println!("  MSE       {}            (linear)", fmt(m));
+    }
+    if let Some(m) = r.relmse {
+        println!(
+            "  relMSE    {}            (linear, eps {})",
+            fmt(m),
+            o.relmse_eps
+        );
+    }
+    println!("display transform: {}", o.display.describe());
+}
+
+fn print_sequence(s: &cbr_metrics::SequenceResult, o: &CompareOptions) {
+    let names: Vec<&str> = o.metrics.iter().map(|m| m.name()).collect();
+    println!(
+        "{:<20} {}  flicker",
+        "frame",
+        names.iter().map(|n| format!("{n:>12}")).collect::<String>()
+    );
+    for f in &s.frames {
+        let vals: String = o
+            .metrics
+            .iter()
+            .map(|m| {
+                format!(
+                    "{:>12}",
+                    f.result.value(*m).map(fmt).unwrap_or_else(|| "-".into())
+                )
+            })
+            .collect();
+        let fl = f.flicker.map(fmt).unwrap_or_else(|| "-".into());
+        println!(
+            "{:<20} {vals}  {fl}{}",
+            f.frame,
+            if f.warmup { "  (warm-up)" } else { "" }
+        );
+    }
+    let means: String = o
+        .metrics
+        .iter()
+        .map(|m| {
+            format!(
+                "{:>12}",
+                s.mean
+                    .get(m.name())
+                    .map(|d| fmt(d.0))
+                    .unwrap_or_else(|| "-".into())
+            )
+        })
+        .collect();
+    println!(
+        "{:<20} {means}  {}",
+        format!("mean (after {})", s.warmup),
+        s.flicker.map(fmt).unwrap_or_else(|| "-".into())
+    );
+    println!("display transform: {}", o.display.describe());
+}
