@@ -175,6 +175,23 @@ impl Profiler {
         Scope(i)
     }
 
+    /// The N 64-bit counters of one statistics query, in flag-bit order.
+    fn counters<const N: usize>(&self, pool: vk::QueryPool, query: u32) -> Result<[u64; N]> {
+        let mut v = [[0u64; N]; 1];
+        // SAFETY: the submission was waited on (and WAIT blocks until available); the pool was
+        // created with exactly N counters per query.
+        unsafe {
+            self.gpu.device.get_query_pool_results(
+                pool,
+                query,
+                &mut v,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .vk("vkGetQueryPoolResults")?;
+        Ok(v[0])
+    }
+
     fn stats_pool(&self, kind: PassKind) -> Option<vk::QueryPool> {
         match (self.stats, kind) {
             (Some((g, _)), PassKind::Graphics) => Some(g),
@@ -227,38 +244,18 @@ impl Profiler {
         for (i, (name, kind)) in self.scopes.iter().enumerate() {
             let stats = match self.stats_pool(*kind) {
                 Some(pool) if *kind == PassKind::Graphics => {
-                    let mut v = [[0u64; 3]; 1];
-                    // SAFETY: the submission was waited on; 3 counters in flag-bit order.
-                    unsafe {
-                        dev.get_query_pool_results(
-                            pool,
-                            i as u32,
-                            &mut v,
-                            vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-                        )
-                    }
-                    .vk("vkGetQueryPoolResults")?;
+                    let [vertex, clipping, fragment] = self.counters::<3>(pool, i as u32)?;
                     Some(PipelineStats {
-                        vertex_invocations: v[0][0],
-                        clipping_primitives: v[0][1],
-                        fragment_invocations: v[0][2],
+                        vertex_invocations: vertex,
+                        clipping_primitives: clipping,
+                        fragment_invocations: fragment,
                         compute_invocations: 0,
                     })
                 }
                 Some(pool) => {
-                    let mut v = [0u64; 1];
-                    // SAFETY: as above; one counter.
-                    unsafe {
-                        dev.get_query_pool_results(
-                            pool,
-                            i as u32,
-                            &mut v,
-                            vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-                        )
-                    }
-                    .vk("vkGetQueryPoolResults")?;
+                    let [compute] = self.counters::<1>(pool, i as u32)?;
                     Some(PipelineStats {
-                        compute_invocations: v[0],
+                        compute_invocations: compute,
                         ..Default::default()
                     })
                 }

@@ -141,13 +141,7 @@ fn load_toml(path: &Path, opts: &LoadOptions) -> Result<Scene> {
         scene.name = stem.to_string_lossy().into_owned();
     }
     apply_settings(&mut scene, &d, path)?;
-    let up = |v: [f64; 3]| -> [f64; 3] {
-        if d.up == Up::Z {
-            [v[0], v[2], -v[1]]
-        } else {
-            v
-        }
-    };
+    let up = |v: [f64; 3]| d.up.to_y_up(v);
     if let Some(mut cam) = desc::camera_path(d.camera.as_ref()) {
         for k in &mut cam.keys {
             k.position = up(k.position);
@@ -223,25 +217,11 @@ fn apply_settings(scene: &mut Scene, d: &desc::SceneDesc, path: &Path) -> Result
 }
 
 fn apply_lights(scene: &mut Scene, l: &desc::LightsDesc, up_axis: Up) {
-    let up32 = |v: [f32; 3]| {
-        if up_axis == Up::Z {
-            [v[0], v[2], -v[1]]
-        } else {
-            v
-        }
-    };
-    let up64 = |v: [f64; 3]| {
-        if up_axis == Up::Z {
-            [v[0], v[2], -v[1]]
-        } else {
-            v
-        }
-    };
     scene.directional = l
         .directional
         .iter()
         .map(|d| DirLight {
-            direction: up32(d.direction),
+            direction: up_axis.to_y_up(d.direction),
             color: d.color,
             intensity: d.intensity,
         })
@@ -251,7 +231,7 @@ fn apply_lights(scene: &mut Scene, l: &desc::LightsDesc, up_axis: Up) {
         .point
         .iter()
         .map(|p| PointLight {
-            position: up64(p.position),
+            position: up_axis.to_y_up(p.position),
             color: p.color,
             intensity: p.intensity,
             range: p.range.unwrap_or(radius),
@@ -259,8 +239,14 @@ fn apply_lights(scene: &mut Scene, l: &desc::LightsDesc, up_axis: Up) {
         .collect();
     if let Some(r) = &l.random_points {
         let b = scene.bounds();
-        let min = r.min.map(|v| DVec3::from(up64(v))).unwrap_or(b.min);
-        let max = r.max.map(|v| DVec3::from(up64(v))).unwrap_or(b.max);
+        let min = r
+            .min
+            .map(|v| DVec3::from(up_axis.to_y_up(v)))
+            .unwrap_or(b.min);
+        let max = r
+            .max
+            .map(|v| DVec3::from(up_axis.to_y_up(v)))
+            .unwrap_or(b.max);
         let (lo, hi) = (min.min(max), min.max(max));
         let mut rng = rng::SplitMix(r.seed.unwrap_or(scene.settings.seed));
         let range = r.range.unwrap_or(radius * 0.25);

@@ -484,14 +484,6 @@ pub fn load_obj(path: &Path, opts: &ObjOptions) -> Result<ObjData> {
     })
 }
 
-fn convert_up(p: [f32; 3], up: Up) -> [f32; 3] {
-    match up {
-        Up::Y => p,
-        // Z-up to Y-up: rotate -90 degrees about X.
-        Up::Z => [p[0], p[2], -p[1]],
-    }
-}
-
 fn build_object(
     model: &tobj::Model,
     material: u32,
@@ -501,10 +493,7 @@ fn build_object(
     let m = &model.mesh;
     let pos = |i: u32| -> Vec3 {
         let i = i as usize * 3;
-        Vec3::from(convert_up(
-            [m.positions[i], m.positions[i + 1], m.positions[i + 2]],
-            up,
-        ))
+        Vec3::from(up.to_y_up([m.positions[i], m.positions[i + 1], m.positions[i + 2]]))
     };
     let has_normals = !m.normals.is_empty() && m.normal_indices.len() == m.indices.len();
     let has_uvs = !m.texcoords.is_empty() && m.texcoord_indices.len() == m.indices.len();
@@ -566,11 +555,8 @@ fn build_object(
             let idx = *remap.entry((p, n, uv)).or_insert_with(|| {
                 let normal = if has_normals {
                     let j = n as usize * 3;
-                    Vec3::from(convert_up(
-                        [m.normals[j], m.normals[j + 1], m.normals[j + 2]],
-                        up,
-                    ))
-                    .normalize_or_zero()
+                    Vec3::from(up.to_y_up([m.normals[j], m.normals[j + 1], m.normals[j + 2]]))
+                        .normalize_or_zero()
                 } else {
                     smooth[p as usize]
                 };

@@ -24,6 +24,17 @@ pub enum Up {
     Z,
 }
 
+impl Up {
+    /// A point or direction given in this up convention, in cbr's (Y-up): Z-up rotates by -90
+    /// degrees about X, (x, y, z) -> (x, z, -y).
+    pub fn to_y_up<T: Copy + std::ops::Neg<Output = T>>(self, v: [T; 3]) -> [T; 3] {
+        match self {
+            Up::Y => v,
+            Up::Z => [v[0], v[2], -v[1]],
+        }
+    }
+}
+
 /// Where a material's alpha-test mask comes from (alpha < 0.5 is discarded).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub enum AlphaSource {
