@@ -259,3 +259,42 @@ fn renders_are_bit_identical() {
     assert!(a.ids.iter().filter(|i| i[0] != 0).count() > 160 * 90 / 2);
     assert_clean(&gpu);
 }
+
+#[test]
+fn moving_object_velocity_is_its_projected_motion() {
+    let gpu = gpu();
+    // A quad 5 m in front of a static camera, translating +x at 2 m/s; at 10 fps it moves 0.2 m
+    // per frame, i.e. 0.2 * f_px / 5 pixels with f_px = (H / 2) / tan(fov / 2).
+    let mut s = scene(
+        vec![quad("mover", -1.0, 1.0, -1.0, 1.0, 0.0, 0)],
+        vec![key(0.0, 0.0)],
+        64,
+        48,
+    );
+    s.motions.push(cbr_scene::Motion {
+        name: "mover".into(),
+        objects: vec![0],
+        pivot: [0.0; 3],
+        spin_axis: [0.0, 1.0, 0.0],
+        spin_rad_per_s: 0.0,
+        velocity: [2.0, 0.0, 0.0],
+    });
+    let out = render(&gpu, &s, 4);
+    let f_px = 24.0 / (30.0f64.to_radians()).tan();
+    let expected = 0.2 * f_px / 5.0;
+    let (mut on, mut off) = (0, 0);
+    for (v, id) in out.velocity.iter().zip(&out.ids) {
+        if id[0] == 1 {
+            assert!(
+                (f64::from(v[0]) - expected).abs() < 1e-3 && v[1].abs() < 1e-3,
+                "{v:?} vs {expected}"
+            );
+            on += 1;
+        } else {
+            assert_eq!(*v, [0.0, 0.0], "the static background does not move");
+            off += 1;
+        }
+    }
+    assert!(on > 100 && off > 100, "{on} {off}");
+    assert_clean(&gpu);
+}
