@@ -1,13 +1,28 @@
-// Host/shader shared structures of the scene pass. Mirrored by #[repr(C)] structs in
+// Host/shader shared structures of the scene passes. Mirrored by #[repr(C)] structs in
 // crates/cbr-render/src/gpu_types.rs; a test compares their offsets with this file's SPIR-V.
 #ifndef SCENE_TYPES_GLSL
 #define SCENE_TYPES_GLSL
 
+// Raster layouts (the LAYOUT define of the scene shaders; crates/cbr-render/src/layouts.rs).
+#define LAYOUT_NATIVE 0
+#define LAYOUT_MASKED 1
+#define LAYOUT_SPLIT 2
+#define LAYOUT_ROTATED 3
+#define LAYOUT_MSAA2X 4
+
+// counts.w flags
+#define FLAG_PARITY 1u          // the frame's checkerboard parity (x + y) mod 2
+#define FLAG_COUNT_SHADED 2u    // count shaded (non-helper) fragments in the counter buffer
+#define FLAG_LOD_GRADIENTS 4u   // textureGrad with derivatives scaled to full-res pixels
+
 struct FrameConstants {
-    vec4 viewport;      // width, height, 1/width, 1/height (pixels of the target being drawn)
-    vec4 jitter;        // xy: sub-pixel offset in pixels added to the raster position; zw: 0
+    vec4 viewport;      // the viewport NDC maps to, in target pixels: width, height, 1/width, 1/height
+    vec4 output_size;   // full-resolution W, H, 1/W, 1/H (velocity is in these pixels)
+    vec4 jitter;        // sub-pixel raster offsets in target pixels: xy layer/instance 0, zw layer 1
     vec4 ambient;       // rgb: ambient irradiance; w: texture LOD bias
     uvec4 counts;       // x: directional lights, y: point lights, z: frame index, w: flags
+    ivec4 tangram;      // x: side L, y: number of pieces
+    ivec4 pieces[8];    // xy: the (m, n) translation of each tangram piece, in units of L
 };
 
 struct ObjectData {

@@ -1,12 +1,16 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_demote_to_helper_invocation : require
 // Scene raster, fragment stage: alpha test, bump, lighting; writes colour, velocity and IDs.
+// Discards are demotions, so the remaining lanes of a quad keep valid derivatives (the masked
+// layout drops half of every quad).
 #include "../inc/scene_types.glsl"
 
 layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
 layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
 layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
 layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
+layout(std430, set = 0, binding = BINDING_COUNTER) buffer Counter { uint shaded_fragments; };
 // Per-material set; slots a material does not use hold a 1x1 white texture.
 layout(set = 1, binding = BINDING_ALBEDO) uniform sampler2D albedo_tex;
 layout(set = 1, binding = BINDING_MASK) uniform sampler2D mask_tex;
@@ -15,18 +19,40 @@ layout(push_constant) uniform Push { uint object_index; } pc;
 
 #include "../inc/shading.glsl"
 
-layout(location = 0) in vec3 v_world;
-layout(location = 1) in vec3 v_normal;
-layout(location = 2) in vec2 v_uv;
-layout(location = 3) in vec4 v_clip;
-layout(location = 4) in vec4 v_prev_clip;
+// msaa2x shades per sample: every input is interpolated at the sample position.
+#if LAYOUT == LAYOUT_MSAA2X
+#define INTERP sample
+#else
+#define INTERP
+#endif
+layout(location = 0) INTERP in vec3 v_world;
+layout(location = 1) INTERP in vec3 v_normal;
+layout(location = 2) INTERP in vec2 v_uv;
+layout(location = 3) INTERP in vec4 v_clip;
+layout(location = 4) INTERP in vec4 v_prev_clip;
 
 layout(location = 0) out vec4 o_color;     // HDR radiance; alpha 1 = shaded this frame
-layout(location = 1) out vec2 o_velocity;  // pixels moved since the previous frame (current - previous)
+layout(location = 1) out vec2 o_velocity;  // full-res pixels moved since the previous frame (current - previous)
 layout(location = 2) out uvec2 o_ids;      // x: object ID, y: primitive ID within the object
 
 vec2 to_pixels(vec4 clip) {
-    return (clip.xy / clip.w * 0.5 + 0.5) * frame.viewport.xy;
+    return (clip.xy / clip.w * 0.5 + 0.5) * frame.output_size.xy;
+}
+
+// Texture lookup at the layout's footprint: a LOD bias, or (FLAG_LOD_GRADIENTS) derivatives turned
+// into full-res screen derivatives. Neighbouring samples are 2 px apart in split/msaa2x; in the
+// tangram a texel step is a diagonal screen step: d/du = d/dx - d/dy, d/dv = d/dx + d/dy.
+vec4 tex(sampler2D t, vec2 uv) {
+    if ((frame.counts.w & FLAG_LOD_GRADIENTS) == 0u) return texture(t, uv, frame.ambient.w);
+    vec2 a = dFdx(uv);
+    vec2 b = dFdy(uv);
+#if LAYOUT == LAYOUT_SPLIT || LAYOUT == LAYOUT_MSAA2X
+    return textureGrad(t, uv, 0.5 * a, 0.5 * b);
+#elif LAYOUT == LAYOUT_ROTATED
+    return textureGrad(t, uv, 0.5 * (a + b), 0.5 * (b - a));
+#else
+    return textureGrad(t, uv, a, b);
+#endif
 }
 
 // Bump mapping from a height map without tangents (Mikkelsen 2010, screen-space derivatives).
@@ -46,21 +72,25 @@ vec3 bump(vec3 n, vec3 p, float height) {
 void main() {
     ObjectData o = objects[pc.object_index];
     MaterialData m = materials[o.ids.y];
-    float bias = frame.ambient.w;
+#if LAYOUT == LAYOUT_MASKED
+    if (((int(gl_FragCoord.x) + int(gl_FragCoord.y)) & 1) != int(frame.counts.w & FLAG_PARITY)) demote;
+#endif
     vec3 albedo = m.kd.rgb;
-    if (m.tex.x >= 0) albedo *= texture(albedo_tex, v_uv, bias).rgb;
+    if (m.tex.x >= 0) albedo *= tex(albedo_tex, v_uv).rgb;
     if (m.tex.y >= 0) {
-        float a = texture(mask_tex, v_uv, bias)[m.tex.z];
-        if (a < 0.5) discard;
+        float a = tex(mask_tex, v_uv)[m.tex.z];
+        if (a < 0.5) demote;
     }
     vec3 n = normalize(v_normal);
     // Double-sided: OBJ winding is unreliable, so face the normal towards the camera.
     if (dot(n, -v_world) < 0.0) n = -n;
     if (m.tex.w >= 0) {
-        float h = texture(bump_tex, v_uv, bias).r * m.ke.w;
+        float h = tex(bump_tex, v_uv).r * m.ke.w;
         n = bump(n, v_world, h);
     }
     o_color = vec4(shade(v_world, n, albedo, m, frame), 1.0);
     o_velocity = to_pixels(v_clip) - to_pixels(v_prev_clip);
     o_ids = uvec2(o.ids.x, uint(gl_PrimitiveID));
+    // Helpers (and demoted lanes) do not count: their atomics have no effect.
+    if ((frame.counts.w & FLAG_COUNT_SHADED) != 0u) atomicAdd(shaded_fragments, 1u);
 }

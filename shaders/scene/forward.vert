@@ -1,7 +1,11 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Scene raster, vertex stage: vertices pulled from a storage buffer (8 floats each).
+// Scene raster, vertex stage: vertices pulled from a storage buffer (8 floats each), placed in
+// the raster target of the layout (LAYOUT define).
 #include "../inc/scene_types.glsl"
+#if LAYOUT == LAYOUT_SPLIT
+#extension GL_ARB_shader_viewport_layer_array : require
+#endif
 
 layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
 layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
@@ -11,8 +15,12 @@ layout(push_constant) uniform Push { uint object_index; } pc;
 layout(location = 0) out vec3 v_world;   // camera-relative world position
 layout(location = 1) out vec3 v_normal;
 layout(location = 2) out vec2 v_uv;
-layout(location = 3) out vec4 v_clip;       // unjittered, this frame
+layout(location = 3) out vec4 v_clip;       // unjittered screen clip position, this frame
 layout(location = 4) out vec4 v_prev_clip;  // previous frame
+
+#if LAYOUT == LAYOUT_ROTATED
+out float gl_ClipDistance[4];
+#endif
 
 void main() {
     uint b = uint(gl_VertexIndex) * 8u;
@@ -25,7 +33,37 @@ void main() {
     v_clip = o.clip_from_local * local;
     v_prev_clip = o.prev_clip_from_local * local;
     vec4 pos = v_clip;
+#if LAYOUT == LAYOUT_SPLIT || LAYOUT == LAYOUT_MSAA2X
+    // The target is ceil(W/2) (+1) x ceil(H/2) pixels; scale clip space so that full-res pixel X
+    // lands at X / 2 whatever the rounding.
+    vec2 half_scale = 0.5 * frame.output_size.xy * frame.viewport.zw;
+    pos.xy = (pos.xy + pos.w) * half_scale - pos.w;
+#endif
+#if LAYOUT == LAYOUT_SPLIT
+    // One instance per layer; each layer samples its pixel of every 2x2 quad through a jitter.
+    gl_Layer = gl_InstanceIndex;
+    vec2 jitter = gl_InstanceIndex == 0 ? frame.jitter.xy : frame.jitter.zw;
+    pos.xy += jitter * 2.0 * frame.viewport.zw * pos.w;
+#elif LAYOUT == LAYOUT_ROTATED
+    // Clip exactly to the screen rectangle, then map screen pixels (x_s, y_s) to tangram texels
+    // u = (x_s - y_s - p + 1) / 2 + m L, v = (x_s + y_s - p) / 2 + n L (all times w: the map is
+    // linear in homogeneous coordinates), one instance per wrapped piece (m, n).
+    gl_ClipDistance[0] = pos.x + pos.w;
+    gl_ClipDistance[1] = pos.w - pos.x;
+    gl_ClipDistance[2] = pos.y + pos.w;
+    gl_ClipDistance[3] = pos.w - pos.y;
+    float p = float(frame.counts.w & FLAG_PARITY);
+    float l = float(frame.tangram.x);
+    vec2 piece = vec2(frame.pieces[gl_InstanceIndex].xy);
+    float xs = 0.5 * frame.output_size.x * (pos.x + pos.w);
+    float ys = 0.5 * frame.output_size.y * (pos.y + pos.w);
+    float u = 0.5 * (xs - ys + (1.0 - p) * pos.w) + piece.x * l * pos.w;
+    float v = 0.5 * (xs + ys - p * pos.w) + piece.y * l * pos.w;
+    pos.x = 2.0 * u / l - pos.w;
+    pos.y = 2.0 * v / l - pos.w;
+#else
     // A jitter of j pixels moves NDC by 2j / size.
     pos.xy += frame.jitter.xy * 2.0 * frame.viewport.zw * pos.w;
+#endif
     gl_Position = pos;
 }

@@ -22,6 +22,8 @@ pub enum Access {
     HostRead,
     /// Vertex/index/uniform/storage reads by the graphics pipeline (buffers).
     GraphicsRead,
+    /// Storage writes (atomics) from fragment shaders (buffers).
+    FragmentStorageWrite,
 }
 
 impl Access {
@@ -40,6 +42,7 @@ impl Access {
             Access::GraphicsRead => {
                 S::VERTEX_INPUT | S::VERTEX_SHADER | S::FRAGMENT_SHADER | S::GEOMETRY_SHADER
             }
+            Access::FragmentStorageWrite => S::FRAGMENT_SHADER,
         }
     }
 
@@ -66,6 +69,7 @@ impl Access {
                     | A::SHADER_STORAGE_READ
                     | A::SHADER_SAMPLED_READ
             }
+            Access::FragmentStorageWrite => A::SHADER_STORAGE_WRITE | A::SHADER_STORAGE_READ,
         }
     }
 
@@ -81,7 +85,7 @@ impl Access {
             Access::ComputeStorageWrite | Access::ComputeStorageReadWrite => L::GENERAL,
             Access::TransferSrc => L::TRANSFER_SRC_OPTIMAL,
             Access::TransferDst => L::TRANSFER_DST_OPTIMAL,
-            Access::HostRead | Access::GraphicsRead => L::GENERAL,
+            Access::HostRead | Access::GraphicsRead | Access::FragmentStorageWrite => L::GENERAL,
         }
     }
 
@@ -93,6 +97,7 @@ impl Access {
                 | Access::ComputeStorageWrite
                 | Access::ComputeStorageReadWrite
                 | Access::TransferDst
+                | Access::FragmentStorageWrite
         )
     }
 }

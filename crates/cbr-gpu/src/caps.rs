@@ -15,6 +15,8 @@ pub struct Caps {
     pub maintenance4: bool,
     pub dynamic_rendering: bool,
     pub pipeline_statistics: bool,
+    /// Whether a COMPUTE_SHADER_INVOCATIONS statistics query is safe: lavapipe 22.3 crashes on it.
+    pub compute_invocation_query: bool,
     pub timestamps: bool,
     /// Nanoseconds per timestamp tick.
     pub timestamp_period_ns: f32,
@@ -117,6 +119,7 @@ mod tests {
             maintenance4: true,
             dynamic_rendering: true,
             pipeline_statistics: true,
+            compute_invocation_query: false,
             timestamps: true,
             timestamp_period_ns: 1.0,
             timestamp_valid_bits: 64,

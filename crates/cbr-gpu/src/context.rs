@@ -153,12 +153,19 @@ fn required_features(
     f10: &vk::PhysicalDeviceFeatures,
     f12: &vk::PhysicalDeviceVulkan12Features,
     f13: &vk::PhysicalDeviceVulkan13Features,
-) -> [(&'static str, bool); 3] {
-    let _ = f10;
+) -> [(&'static str, bool); 5] {
     [
         ("dynamicRendering", f13.dynamic_rendering != 0),
         ("synchronization2", f13.synchronization2 != 0),
         ("hostQueryReset", f12.host_query_reset != 0),
+        (
+            "shaderDemoteToHelperInvocation",
+            f13.shader_demote_to_helper_invocation != 0,
+        ),
+        (
+            "fragmentStoresAndAtomics",
+            f10.fragment_stores_and_atomics != 0,
+        ),
     ]
 }
 
@@ -274,6 +281,9 @@ fn caps_of(instance: &ash::Instance, pd: vk::PhysicalDevice, p: &Probe) -> Caps 
         maintenance4: p.f13.maintenance4 != 0,
         dynamic_rendering: p.f13.dynamic_rendering != 0,
         pipeline_statistics: p.f10.pipeline_statistics_query != 0,
+        // lavapipe (driver "llvmpipe") crashes in its queue thread on compute-invocation queries.
+        compute_invocation_query: p.f10.pipeline_statistics_query != 0
+            && p.driver_name != "llvmpipe",
         timestamps: l.timestamp_compute_and_graphics != 0 && ts_bits > 0,
         timestamp_period_ns: l.timestamp_period,
         timestamp_valid_bits: ts_bits,
@@ -431,7 +441,7 @@ impl Gpu {
             .shader_clip_distance(caps.clip_distance)
             .geometry_shader(caps.geometry_shader)
             .pipeline_statistics_query(caps.pipeline_statistics)
-            .fragment_stores_and_atomics(p.f10.fragment_stores_and_atomics != 0)
+            .fragment_stores_and_atomics(true)
             .shader_storage_image_write_without_format(
                 p.f10.shader_storage_image_write_without_format != 0,
             )
@@ -444,6 +454,7 @@ impl Gpu {
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
             .dynamic_rendering(true)
             .synchronization2(true)
+            .shader_demote_to_helper_invocation(true)
             .maintenance4(caps.maintenance4);
         let prio = [1.0f32];
         let qinfo = [vk::DeviceQueueCreateInfo::default()

@@ -4,9 +4,10 @@
 //! barrier sits right after the start timestamp and right before the end one. Compute scopes get
 //! those barriers (`compute_fences`, on by default); graphics intervals are right without them.
 //!
-//! Statistics: lavapipe 22.3 crashes (SIGSEGV in its queue thread, no validation message) when a
-//! query counting COMPUTE_SHADER_INVOCATIONS encloses draws, so graphics and compute scopes count
-//! in separate pools with only their own counters.
+//! Statistics: graphics and compute scopes count in separate pools with only their own counters.
+//! lavapipe 22.3 crashes (SIGSEGV in its queue thread, no validation message) on any query that
+//! counts COMPUTE_SHADER_INVOCATIONS, whatever it encloses, so there the compute pool is not made
+//! (`Caps::compute_invocation_query`) and compute scopes have timestamps only.
 
 use std::sync::Arc;
 
@@ -70,7 +71,7 @@ pub struct Profiler {
     gpu: Arc<Inner>,
     timestamps: vk::QueryPool,
     /// (graphics, compute) statistics pools, indexed by scope.
-    stats: Option<(vk::QueryPool, vk::QueryPool)>,
+    stats: Option<(vk::QueryPool, Option<vk::QueryPool>)>,
     capacity: u32,
     scopes: Vec<(String, PassKind)>,
     open: Option<u32>,
@@ -100,12 +101,16 @@ impl Profiler {
                     capacity,
                     GRAPHICS_STATS,
                 )?,
-                stats_pool(
-                    gpu,
-                    &format!("{name}.compute_statistics"),
-                    capacity,
-                    COMPUTE_STATS,
-                )?,
+                if gpu.caps().compute_invocation_query {
+                    Some(stats_pool(
+                        gpu,
+                        &format!("{name}.compute_statistics"),
+                        capacity,
+                        COMPUTE_STATS,
+                    )?)
+                } else {
+                    None
+                },
             ))
         } else {
             None
@@ -134,7 +139,9 @@ impl Profiler {
                 .reset_query_pool(self.timestamps, 0, self.capacity * 2);
             if let Some((g, c)) = self.stats {
                 self.gpu.device.reset_query_pool(g, 0, self.capacity);
-                self.gpu.device.reset_query_pool(c, 0, self.capacity);
+                if let Some(c) = c {
+                    self.gpu.device.reset_query_pool(c, 0, self.capacity);
+                }
             }
         }
     }
@@ -195,7 +202,7 @@ impl Profiler {
     fn stats_pool(&self, kind: PassKind) -> Option<vk::QueryPool> {
         match (self.stats, kind) {
             (Some((g, _)), PassKind::Graphics) => Some(g),
-            (Some((_, c)), PassKind::Compute) => Some(c),
+            (Some((_, Some(c))), PassKind::Compute) => Some(c),
             _ => None,
         }
     }
@@ -276,7 +283,9 @@ impl Drop for Profiler {
         self.gpu.defer(Garbage::QueryPool(self.timestamps));
         if let Some((g, c)) = self.stats {
             self.gpu.defer(Garbage::QueryPool(g));
-            self.gpu.defer(Garbage::QueryPool(c));
+            if let Some(c) = c {
+                self.gpu.defer(Garbage::QueryPool(c));
+            }
         }
     }
 }

@@ -65,6 +65,8 @@ pub struct FrameLayers<'a> {
     pub depth: &'a [f32],
     pub velocity: &'a [[f32; 2]],
     pub ids: &'a [[u32; 2]],
+    /// Checkerboard frames: 1 where the frame shaded the pixel (written as layer `mask`, `Y`).
+    pub mask: Option<&'a [u8]>,
     /// Text attributes attached to every part (scene, technique, frame, ...).
     pub metadata: Vec<(String, String)>,
 }
@@ -75,6 +77,7 @@ pub const DEPTH_LAYER: &str = "depth";
 pub const VELOCITY_LAYER: &str = "velocity";
 pub const OBJECT_ID_LAYER: &str = "object_id";
 pub const PRIMITIVE_ID_LAYER: &str = "primitive_id";
+pub const MASK_LAYER: &str = "mask";
 
 /// Scanline ZIP: read by every EXR reader (OpenImageIO, exrheader), unlike the crate's tiled preset.
 fn encoding() -> Encoding {
@@ -113,7 +116,7 @@ pub fn write_frame_exr(path: &Path, f: &FrameLayers) -> Result<(), IoError> {
     };
     let channel = |name: &str, s: FlatSamples| AnyChannel::new(name, s);
     let rgba = |c: usize| FlatSamples::F16(f.color.iter().skip(c).step_by(4).copied().collect());
-    let layers = smallvec::smallvec![
+    let mut layers: smallvec::SmallVec<[Layer<AnyChannels<FlatSamples>>; 2]> = smallvec::smallvec![
         Layer::new(
             size,
             attrs(COLOR_LAYER),
@@ -168,6 +171,20 @@ pub fn write_frame_exr(path: &Path, f: &FrameLayers) -> Result<(), IoError> {
             )]),
         ),
     ];
+    if let Some(mask) = f.mask {
+        check("mask", mask.len())?;
+        let samples = FlatSamples::F16(
+            mask.iter()
+                .map(|&m| half::f16::from_f32(f32::from(m)))
+                .collect(),
+        );
+        layers.push(Layer::new(
+            size,
+            attrs(MASK_LAYER),
+            encoding(),
+            AnyChannels::sort(smallvec::smallvec![channel("Y", samples)]),
+        ));
+    }
     let image = Image::from_layers(
         ImageAttributes::new(IntegerBounds::from_dimensions(size)),
         layers,
@@ -201,6 +218,7 @@ mod tests {
             depth: &depth,
             velocity: &velocity,
             ids: &ids,
+            mask: None,
             metadata: vec![("cbr.frame".into(), "7".into())],
         };
         write_frame_exr(&path, &layers).expect("write");

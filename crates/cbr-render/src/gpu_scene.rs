@@ -7,7 +7,7 @@ use cbr_gpu::{
 use cbr_scene::{AlphaSource, Camera, Scene};
 use glam::{DMat3, DMat4, DVec3, Mat4};
 
-use crate::gpu_types::{FrameConstants, LightData, MaterialData, ObjectData};
+use crate::gpu_types::{FrameConstants, LightData, MAX_PIECES, MaterialData, ObjectData};
 
 /// One draw: an object's index range in the shared index buffer.
 #[derive(Clone, Copy, Debug)]
@@ -36,8 +36,22 @@ pub struct GpuScene {
     pub background: [f32; 3],
 }
 
+/// What the raster pass needs to know about its layout (scene_types.glsl's FrameConstants).
+#[derive(Clone, Debug, Default)]
+pub struct RasterUniforms {
+    /// Size of the viewport that NDC maps to, in target pixels (jitters are scaled by it): the full
+    /// resolution for native and masked, W/2 x H/2 for split and msaa2x, L x L for rotated.
+    pub viewport: (f32, f32),
+    /// Sub-pixel offsets of layers/instances 0 and 1, in target pixels.
+    pub jitter: [[f32; 2]; 2],
+    /// `counts.w` flags (FLAG_*).
+    pub flags: u32,
+    pub tangram: u32,
+    pub pieces: Vec<[i32; 2]>,
+}
+
 /// Where the camera is for one frame, with its previous-frame state for velocities.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct FrameView {
     pub camera: Camera,
     pub prev_camera: Camera,
@@ -45,10 +59,9 @@ pub struct FrameView {
     pub prev_time: f64,
     pub width: u32,
     pub height: u32,
-    /// Sub-pixel raster offset in pixels (0 for the native technique).
-    pub jitter: [f32; 2],
     pub lod_bias: f32,
     pub frame_index: u32,
+    pub raster: RasterUniforms,
 }
 
 fn to_f32(m: DMat4) -> [f32; 16] {
@@ -291,16 +304,37 @@ impl GpuScene {
             self.lights.write(0, bytemuck::cast_slice(&lights))?;
         }
         let a = scene.settings.ambient;
+        let r = &view.raster;
+        let (tw, th) = r.viewport;
+        let (w, h) = (view.width as f32, view.height as f32);
+        if r.pieces.len() > MAX_PIECES {
+            return Err(cbr_gpu::GpuError::Other(format!(
+                "{} tangram pieces; the constants hold {MAX_PIECES}",
+                r.pieces.len()
+            )));
+        }
+        let mut pieces = [[0i32; 4]; MAX_PIECES];
+        for (dst, src) in pieces.iter_mut().zip(&r.pieces) {
+            *dst = [src[0], src[1], 0, 0];
+        }
         let constants = FrameConstants {
-            viewport: [
-                view.width as f32,
-                view.height as f32,
-                1.0 / view.width as f32,
-                1.0 / view.height as f32,
+            viewport: [tw, th, 1.0 / tw, 1.0 / th],
+            output_size: [w, h, 1.0 / w, 1.0 / h],
+            jitter: [
+                r.jitter[0][0],
+                r.jitter[0][1],
+                r.jitter[1][0],
+                r.jitter[1][1],
             ],
-            jitter: [view.jitter[0], view.jitter[1], 0.0, 0.0],
             ambient: [a[0], a[1], a[2], view.lod_bias],
-            counts: [self.light_count.0, self.light_count.1, view.frame_index, 0],
+            counts: [
+                self.light_count.0,
+                self.light_count.1,
+                view.frame_index,
+                r.flags,
+            ],
+            tangram: [r.tangram as i32, r.pieces.len() as i32, 0, 0],
+            pieces,
         };
         self.frame.write(0, bytemuck::bytes_of(&constants))?;
         Ok(())

@@ -7,10 +7,21 @@ use bytemuck::{Pod, Zeroable};
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct FrameConstants {
     pub viewport: [f32; 4],
+    pub output_size: [f32; 4],
     pub jitter: [f32; 4],
     pub ambient: [f32; 4],
     pub counts: [u32; 4],
+    pub tangram: [i32; 4],
+    pub pieces: [[i32; 4]; MAX_PIECES],
 }
+
+/// Tangram pieces the constants can hold (`pieces[8]` in scene_types.glsl).
+pub const MAX_PIECES: usize = 8;
+
+/// `counts.w` flags and `LAYOUT` values, as in scene_types.glsl.
+pub const FLAG_PARITY: u32 = 1;
+pub const FLAG_COUNT_SHADED: u32 = 2;
+pub const FLAG_LOD_GRADIENTS: u32 = 4;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -82,7 +93,7 @@ pub(crate) mod tests {
     fn host_structs_match_the_shader_layout() {
         use std::mem::offset_of;
         let shaders = crate::shader_library();
-        let defs = crate::native::shader_defines();
+        let defs = crate::native::shader_defines(crate::native::LAYOUT_ROTATED);
         let words = shaders
             .compile("scene/forward.frag", &defs)
             .expect("compiles");
@@ -93,9 +104,12 @@ pub(crate) mod tests {
         };
         use super::*;
         check("FrameConstants", 0, offset_of!(FrameConstants, viewport));
-        check("FrameConstants", 1, offset_of!(FrameConstants, jitter));
-        check("FrameConstants", 2, offset_of!(FrameConstants, ambient));
-        check("FrameConstants", 3, offset_of!(FrameConstants, counts));
+        check("FrameConstants", 1, offset_of!(FrameConstants, output_size));
+        check("FrameConstants", 2, offset_of!(FrameConstants, jitter));
+        check("FrameConstants", 3, offset_of!(FrameConstants, ambient));
+        check("FrameConstants", 4, offset_of!(FrameConstants, counts));
+        check("FrameConstants", 5, offset_of!(FrameConstants, tangram));
+        check("FrameConstants", 6, offset_of!(FrameConstants, pieces));
         check("ObjectData", 0, offset_of!(ObjectData, clip_from_local));
         check(
             "ObjectData",

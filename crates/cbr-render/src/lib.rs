@@ -3,13 +3,15 @@
 #![forbid(unsafe_code)]
 #![cfg_attr(not(test), deny(clippy::unwrap_used))]
 
+pub mod checkerboard;
 pub mod gpu_scene;
 pub mod gpu_types;
+pub mod layouts;
 pub mod native;
 pub mod renderer;
 pub mod targets;
 
-pub use renderer::{FrameOutput, RenderSettings, Renderer};
+pub use renderer::{FrameOutput, LodMode, RenderSettings, Renderer, Technique};
 
 mod embedded {
     include!(concat!(env!("OUT_DIR"), "/shader_sources.rs"));

@@ -1,18 +1,35 @@
-//! The scene raster pass at full resolution, one sample at each pixel centre: the `native`
-//! technique and the reference every other technique is measured against.
+//! The scene raster pass, for the `native` technique (full resolution, one sample at each pixel
+//! centre: the reference) and for every checkerboard layout (the LAYOUT define).
 
 use cbr_gpu::{
-    Attachment, BindingDesc, Cmd, DescriptorKind, DescriptorSet, Gpu, GraphicsDesc, PassKind,
-    Pipeline, Profiler, Result, SetLayout, Shaders, Write, vk,
+    Attachment, BindingDesc, Buffer, Cmd, DescriptorKind, DescriptorSet, Gpu, GraphicsDesc, Layout,
+    PassKind, Pipeline, Profiler, Result, SetLayout, Shaders, Write, vk,
 };
 
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::ScenePush;
+use crate::layouts::LayoutPlan;
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, FrameTargets, ID_FORMAT, VELOCITY_FORMAT};
+
+/// `LAYOUT` values of the scene shaders (shaders/inc/scene_types.glsl).
+pub const LAYOUT_NATIVE: u32 = 0;
+pub const LAYOUT_MASKED: u32 = 1;
+pub const LAYOUT_SPLIT: u32 = 2;
+pub const LAYOUT_ROTATED: u32 = 3;
+pub const LAYOUT_MSAA2X: u32 = 4;
+
+pub fn layout_id(l: Layout) -> u32 {
+    match l {
+        Layout::Masked => LAYOUT_MASKED,
+        Layout::Split => LAYOUT_SPLIT,
+        Layout::Rotated => LAYOUT_ROTATED,
+        Layout::Msaa2x => LAYOUT_MSAA2X,
+    }
+}
 
 /// The scene pass's descriptor set: the one definition the pipeline layout, the descriptor writes
 /// and (through `shader_defines`) the GLSL binding numbers all come from.
-pub const BINDINGS: [BindingDesc; 5] = [
+pub const BINDINGS: [BindingDesc; 6] = [
     BindingDesc {
         name: "frame",
         binding: 0,
@@ -40,6 +57,12 @@ pub const BINDINGS: [BindingDesc; 5] = [
     BindingDesc {
         name: "lights",
         binding: 4,
+        kind: DescriptorKind::StorageBuffer,
+        count: 1,
+    },
+    BindingDesc {
+        name: "counter",
+        binding: 5,
         kind: DescriptorKind::StorageBuffer,
         count: 1,
     },
@@ -77,13 +100,61 @@ fn binding(name: &str) -> u32 {
         .unwrap_or(u32::MAX)
 }
 
-/// Defines for the scene shaders: the binding numbers.
-pub fn shader_defines() -> Vec<(String, String)> {
-    BINDINGS
+/// Defines for the scene shaders: the binding numbers and the layout.
+pub fn shader_defines(layout: u32) -> Vec<(String, String)> {
+    let mut d: Vec<(String, String)> = BINDINGS
         .iter()
         .chain(&MATERIAL_BINDINGS)
         .map(BindingDesc::define)
-        .collect()
+        .collect();
+    d.push(("LAYOUT".into(), layout.to_string()));
+    d
+}
+
+/// How a scene pass rasterises: which layout, into what, with how many instances.
+#[derive(Clone, Debug)]
+pub struct RasterConfig {
+    pub layout: u32,
+    pub samples: u32,
+    /// Array layers of the targets (split: 2).
+    pub layers: u32,
+    /// Instances per draw: layers (split), tangram pieces (rotated), else 1.
+    pub instances: u32,
+    /// Viewport (x, y, width, height) in target pixels.
+    pub viewport: [f32; 4],
+}
+
+impl RasterConfig {
+    pub fn native(width: u32, height: u32) -> RasterConfig {
+        RasterConfig {
+            layout: LAYOUT_NATIVE,
+            samples: 1,
+            layers: 1,
+            instances: 1,
+            viewport: [0.0, 0.0, width as f32, height as f32],
+        }
+    }
+
+    pub fn for_plan(plan: &LayoutPlan) -> RasterConfig {
+        let (tw, th) = (plan.target.0 as f32, plan.target.1 as f32);
+        // Whole-pixel viewports (lavapipe has no viewport sub-pixel bits); for split and msaa2x the
+        // vertex shader scales clip space so that full-res X lands at X / 2 in the target.
+        let viewport = match plan.layout {
+            Layout::Msaa2x => [plan.viewport_x, 0.0, tw, th],
+            _ => [0.0, 0.0, tw, th],
+        };
+        RasterConfig {
+            layout: layout_id(plan.layout),
+            samples: plan.samples,
+            layers: plan.layers,
+            instances: match plan.layout {
+                Layout::Split => 2,
+                Layout::Rotated => plan.pieces.len() as u32,
+                _ => 1,
+            },
+            viewport,
+        }
+    }
 }
 
 pub struct ScenePass {
@@ -95,11 +166,19 @@ pub struct ScenePass {
 }
 
 impl ScenePass {
-    pub fn new(gpu: &Gpu, shaders: &Shaders, scene: &GpuScene, name: &str) -> Result<ScenePass> {
+    /// Builds the pipeline for `config`'s layout and sample count (the same for both parities).
+    pub fn new(
+        gpu: &Gpu,
+        shaders: &Shaders,
+        scene: &GpuScene,
+        name: &str,
+        config: &RasterConfig,
+        counter: &Buffer,
+    ) -> Result<ScenePass> {
         let layout = SetLayout::new(gpu, &format!("{name}.set_layout"), &BINDINGS)?;
         let material_layout =
             SetLayout::new(gpu, &format!("{name}.material_layout"), &MATERIAL_BINDINGS)?;
-        let defines = shader_defines();
+        let defines = shader_defines(config.layout);
         let vs = shaders.compile("scene/forward.vert", &defines)?;
         let fs = shaders.compile("scene/forward.frag", &defines)?;
         let pipeline = Pipeline::graphics(
@@ -116,8 +195,8 @@ impl ScenePass {
                 // Reverse-Z: nearer is larger.
                 depth_compare: vk::CompareOp::GREATER,
                 depth_write: true,
-                samples: 1,
-                min_sample_shading: None,
+                samples: config.samples,
+                min_sample_shading: (config.samples > 1).then_some(1.0),
                 cull_back_faces: false,
             },
         )?;
@@ -131,6 +210,7 @@ impl ScenePass {
                 Write::Buffer(binding("vertices"), &scene.vertices),
                 Write::Buffer(binding("materials"), &scene.materials),
                 Write::Buffer(binding("lights"), &scene.lights),
+                Write::Buffer(binding("counter"), counter),
             ],
         )?;
         let material_sets = scene
@@ -166,13 +246,16 @@ impl ScenePass {
         })
     }
 
-    /// Clears the targets and draws every object.
+    /// Clears the targets and draws every object. `background` alpha: 1 for native (every pixel
+    /// is rendered), 0 for checkerboard layouts (unrendered samples stay marked).
     pub fn record(
         &self,
         cmd: &mut Cmd,
         profiler: &mut Profiler,
         scene: &GpuScene,
         targets: &FrameTargets,
+        counter: &Buffer,
+        config: &RasterConfig,
     ) {
         let scope = profiler.begin(cmd, &self.name, PassKind::Graphics);
         for buf in [
@@ -185,23 +268,23 @@ impl ScenePass {
         ] {
             cmd.use_buffer(buf, cbr_gpu::Access::GraphicsRead);
         }
+        cmd.use_buffer(counter, cbr_gpu::Access::FragmentStorageWrite);
         let clear_f = |c: [f32; 4]| {
             Some(vk::ClearValue {
                 color: vk::ClearColorValue { float32: c },
             })
         };
+        let bg = scene.background;
+        let alpha = if config.layout == LAYOUT_NATIVE {
+            1.0
+        } else {
+            0.0
+        };
         cmd.begin_rendering(
             &[
-                // Background: the scene's constant sky radiance, alpha 1 (the native pass renders
-                // every pixel).
                 Attachment {
                     image: &targets.color,
-                    clear: clear_f([
-                        scene.background[0],
-                        scene.background[1],
-                        scene.background[2],
-                        1.0,
-                    ]),
+                    clear: clear_f([bg[0], bg[1], bg[2], alpha]),
                 },
                 Attachment {
                     image: &targets.velocity,
@@ -223,8 +306,10 @@ impl ScenePass {
                     },
                 }),
             }),
-            1,
+            config.layers,
         );
+        let [x, y, w, h] = config.viewport;
+        cmd.set_viewport(x, y, w, h);
         cmd.bind_pipeline(&self.pipeline);
         cmd.bind_set(&self.pipeline, 0, &self.set);
         cmd.bind_index_buffer(&scene.indices);
@@ -234,7 +319,7 @@ impl ScenePass {
                 object_index: d.object,
             };
             cmd.push_constants(&self.pipeline, bytemuck::bytes_of(&push));
-            cmd.draw_indexed(d.index_count, 1, d.first_index, 0);
+            cmd.draw_indexed(d.index_count, config.instances, d.first_index, 0);
         }
         cmd.end_rendering();
         profiler.end(cmd, scope);

@@ -1,20 +1,85 @@
 //! The frame sequencer: one scene, one technique, frames rendered and read back in order.
 
-use cbr_gpu::{Gpu, PassKind, PassTiming, Profiler, Readback, Result, Shaders};
+use cbr_gpu::{
+    Buffer, Gpu, GpuError, Layout, Location, PassKind, PassTiming, Profiler, Readback, Result,
+    Shaders, vk,
+};
 use cbr_scene::Scene;
 use half::f16;
 
-use crate::gpu_scene::{FrameView, GpuScene};
-use crate::native::ScenePass;
+use crate::checkerboard::{UnpackPass, UnpackedPixel};
+use crate::gpu_scene::{FrameView, GpuScene, RasterUniforms};
+use crate::gpu_types::{FLAG_COUNT_SHADED, FLAG_LOD_GRADIENTS, FLAG_PARITY};
+use crate::layouts::LayoutPlan;
+use crate::native::{RasterConfig, ScenePass};
 use crate::targets::FrameTargets;
+
+/// How texture LOD follows the sample spacing of a layout.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LodMode {
+    /// A LOD bias (`lod_bias`, default per layout).
+    Bias,
+    /// `textureGrad` with the derivatives turned into full-res screen derivatives.
+    Gradients,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[serde(rename_all = "lowercase", tag = "technique")]
+pub enum Technique {
+    Native,
+    Checkerboard { layout: Layout, lod_mode: LodMode },
+}
+
+impl Technique {
+    /// The mip bias that matches the layout's sample spacing: 2 px (split, msaa2x) is one level,
+    /// sqrt(2) px (rotated) half a level.
+    pub fn default_lod_bias(&self) -> f32 {
+        match self {
+            Technique::Native => 0.0,
+            Technique::Checkerboard { layout, .. } => match layout {
+                Layout::Masked => 0.0,
+                Layout::Split | Layout::Msaa2x => -1.0,
+                Layout::Rotated => -0.5,
+            },
+        }
+    }
+
+    pub fn name(&self) -> String {
+        match self {
+            Technique::Native => "native".into(),
+            Technique::Checkerboard { layout, .. } => format!("checkerboard:{}", layout.name()),
+        }
+    }
+}
 
 /// How to render.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct RenderSettings {
     pub width: u32,
     pub height: u32,
-    /// Added to every texture lookup's LOD.
-    pub lod_bias: f32,
+    pub technique: Technique,
+    /// Added to every texture lookup's LOD; `None`: the technique's default.
+    pub lod_bias: Option<f32>,
+    /// Count shaded (non-helper) fragments with an atomic counter (tests, `--count-shaded`).
+    pub count_shaded: bool,
+}
+
+impl RenderSettings {
+    pub fn native(width: u32, height: u32) -> RenderSettings {
+        RenderSettings {
+            width,
+            height,
+            technique: Technique::Native,
+            lod_bias: None,
+            count_shaded: false,
+        }
+    }
+
+    pub fn effective_lod_bias(&self) -> f32 {
+        self.lod_bias
+            .unwrap_or_else(|| self.technique.default_lod_bias())
+    }
 }
 
 /// One rendered frame, read back to the host.
@@ -31,14 +96,31 @@ pub struct FrameOutput {
     pub velocity: Vec<[f32; 2]>,
     /// [object ID (index + 1, 0 = background), primitive ID within the object].
     pub ids: Vec<[u32; 2]>,
+    /// Checkerboard frames: 1 where this frame shaded the pixel, and the frame's parity.
+    pub mask: Option<Vec<u8>>,
+    pub parity: Option<u32>,
+    /// Shaded (non-helper) fragments, when counted.
+    pub shaded_fragments: Option<u64>,
     pub timings: Vec<PassTiming>,
 }
 
-struct Readbacks {
+struct NativeReadbacks {
     color: Readback,
     depth: Readback,
     velocity: Readback,
     ids: Readback,
+}
+
+enum Mode {
+    Native {
+        readbacks: NativeReadbacks,
+        config: RasterConfig,
+    },
+    Checkerboard {
+        plans: [LayoutPlan; 2],
+        configs: [RasterConfig; 2],
+        unpack: UnpackPass,
+    },
 }
 
 pub struct Renderer {
@@ -46,7 +128,8 @@ pub struct Renderer {
     scene: GpuScene,
     pass: ScenePass,
     targets: FrameTargets,
-    readbacks: Readbacks,
+    mode: Mode,
+    counter: Buffer,
     profiler: Profiler,
     settings: RenderSettings,
 }
@@ -59,80 +142,249 @@ impl Renderer {
         settings: RenderSettings,
     ) -> Result<Renderer> {
         let gpu_scene = GpuScene::new(gpu, scene)?;
-        let pass = ScenePass::new(gpu, shaders, &gpu_scene, "native.raster")?;
-        let targets = FrameTargets::new(gpu, "native", settings.width, settings.height)?;
-        let readbacks = Readbacks {
-            color: Readback::for_image(gpu, "readback.color", &targets.color)?,
-            depth: Readback::for_image(gpu, "readback.depth", &targets.depth)?,
-            velocity: Readback::for_image(gpu, "readback.velocity", &targets.velocity)?,
-            ids: Readback::for_image(gpu, "readback.ids", &targets.ids)?,
+        let counter = Buffer::new(
+            gpu,
+            "shaded_fragments",
+            4,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            Location::GpuToCpu,
+        )?;
+        let (w, h) = (settings.width, settings.height);
+        let (pass, targets, mode) = match settings.technique {
+            Technique::Native => {
+                let config = RasterConfig::native(w, h);
+                let pass =
+                    ScenePass::new(gpu, shaders, &gpu_scene, "native.raster", &config, &counter)?;
+                let targets = FrameTargets::new(gpu, "native", w, h)?;
+                let readbacks = NativeReadbacks {
+                    color: Readback::for_image(gpu, "readback.color", &targets.color)?,
+                    depth: Readback::for_image(gpu, "readback.depth", &targets.depth)?,
+                    velocity: Readback::for_image(gpu, "readback.velocity", &targets.velocity)?,
+                    ids: Readback::for_image(gpu, "readback.ids", &targets.ids)?,
+                };
+                (pass, targets, Mode::Native { readbacks, config })
+            }
+            Technique::Checkerboard { layout, .. } => {
+                if let Some(missing) = gpu.caps().layout_unsupported(layout) {
+                    let portable: Vec<&str> = gpu
+                        .caps()
+                        .supported_layouts()
+                        .iter()
+                        .map(|l| l.name())
+                        .collect();
+                    return Err(GpuError::Unsupported {
+                        device: gpu.info().name.clone(),
+                        feature: format!(
+                            "the {} layout (it needs {missing}); layouts this device runs: {}",
+                            layout.name(),
+                            portable.join(", ")
+                        ),
+                    });
+                }
+                let plans = [
+                    LayoutPlan::new(layout, w, h, 0),
+                    LayoutPlan::new(layout, w, h, 1),
+                ];
+                let configs = [
+                    RasterConfig::for_plan(&plans[0]),
+                    RasterConfig::for_plan(&plans[1]),
+                ];
+                let name = format!("checkerboard.{}.raster", layout.name());
+                let pass = ScenePass::new(gpu, shaders, &gpu_scene, &name, &configs[0], &counter)?;
+                let (tw, th) = plans[0].target;
+                let targets = FrameTargets::layered(
+                    gpu,
+                    &format!("checkerboard.{}", layout.name()),
+                    tw,
+                    th,
+                    plans[0].layers,
+                    plans[0].samples,
+                )?;
+                let unpack = UnpackPass::new(gpu, shaders, &plans[0], &targets)?;
+                (
+                    pass,
+                    targets,
+                    Mode::Checkerboard {
+                        plans,
+                        configs,
+                        unpack,
+                    },
+                )
+            }
         };
-        let profiler = Profiler::new(gpu, "native.profiler", 8)?;
+        let profiler = Profiler::new(gpu, "renderer.profiler", 8)?;
         Ok(Renderer {
             gpu: gpu.clone(),
             scene: gpu_scene,
             pass,
             targets,
-            readbacks,
+            mode,
+            counter,
             profiler,
             settings,
         })
     }
 
-    pub fn view(&self, scene: &Scene, frame: u32) -> FrameView {
+    pub fn settings(&self) -> &RenderSettings {
+        &self.settings
+    }
+
+    /// Bytes of the raster targets (what a layout costs in memory).
+    pub fn target_bytes(&self) -> u64 {
+        let t = &self.targets.color;
+        u64::from(t.width)
+            * u64::from(t.height)
+            * u64::from(t.layers)
+            * u64::from(t.samples)
+            * (8 + 8 + 8 + 4)
+    }
+
+    fn view(&self, scene: &Scene, frame: u32) -> FrameView {
         let time = scene.time_of_frame(frame);
         let prev_time = time - 1.0 / scene.settings.fps;
+        let s = &self.settings;
+        let mut flags = if s.count_shaded { FLAG_COUNT_SHADED } else { 0 };
+        let raster = match (&self.mode, s.technique) {
+            (Mode::Checkerboard { plans, .. }, Technique::Checkerboard { lod_mode, .. }) => {
+                let plan = &plans[(frame % 2) as usize];
+                flags |= plan.parity * FLAG_PARITY;
+                if lod_mode == LodMode::Gradients {
+                    flags |= FLAG_LOD_GRADIENTS;
+                }
+                let vp = RasterConfig::for_plan(plan).viewport;
+                RasterUniforms {
+                    viewport: (vp[2], vp[3]),
+                    jitter: plan.jitter,
+                    flags,
+                    tangram: plan.tangram,
+                    pieces: plan.pieces.clone(),
+                }
+            }
+            _ => RasterUniforms {
+                viewport: (s.width as f32, s.height as f32),
+                flags,
+                ..Default::default()
+            },
+        };
         FrameView {
             camera: scene.camera.at(time),
             prev_camera: scene.camera.at(prev_time),
             time,
             prev_time,
-            width: self.settings.width,
-            height: self.settings.height,
-            jitter: [0.0, 0.0],
-            lod_bias: self.settings.lod_bias,
+            width: s.width,
+            height: s.height,
+            lod_bias: s.effective_lod_bias(),
             frame_index: frame,
+            raster,
         }
     }
 
     /// Renders frame `frame` of `scene` (the scene this renderer was built for) and reads it back.
+    /// Checkerboard frames alternate parity: frame f shades the pixels with (x + y) mod 2 = f mod 2.
     pub fn render(&mut self, scene: &Scene, frame: u32) -> Result<FrameOutput> {
         let view = self.view(scene, frame);
         self.scene.update(scene, &view)?;
+        self.counter.write(0, &0u32.to_le_bytes())?;
         self.profiler.begin_frame();
-        let (pass, gs, targets, rb, profiler) = (
+        let (pass, gs, targets, counter, profiler, mode) = (
             &self.pass,
             &self.scene,
             &self.targets,
-            &self.readbacks,
+            &self.counter,
             &mut self.profiler,
+            &self.mode,
         );
+        let parity = frame % 2;
         self.gpu.submit("frame", |cmd| {
-            pass.record(cmd, profiler, gs, targets);
-            let scope = profiler.begin(cmd, "readback", PassKind::Transfer);
-            cmd.read_image(&targets.color, &rb.color);
-            cmd.read_image(&targets.depth, &rb.depth);
-            cmd.read_image(&targets.velocity, &rb.velocity);
-            cmd.read_image(&targets.ids, &rb.ids);
-            profiler.end(cmd, scope);
+            match mode {
+                Mode::Native {
+                    readbacks: rb,
+                    config,
+                } => {
+                    pass.record(cmd, profiler, gs, targets, counter, config);
+                    let scope = profiler.begin(cmd, "readback", PassKind::Transfer);
+                    cmd.read_image(&targets.color, &rb.color);
+                    cmd.read_image(&targets.depth, &rb.depth);
+                    cmd.read_image(&targets.velocity, &rb.velocity);
+                    cmd.read_image(&targets.ids, &rb.ids);
+                    profiler.end(cmd, scope);
+                }
+                Mode::Checkerboard {
+                    plans,
+                    configs,
+                    unpack,
+                } => {
+                    pass.record(
+                        cmd,
+                        profiler,
+                        gs,
+                        targets,
+                        counter,
+                        &configs[parity as usize],
+                    );
+                    unpack.record(cmd, profiler, targets, &plans[parity as usize]);
+                }
+            }
+            cmd.use_buffer(counter, cbr_gpu::Access::HostRead);
             Ok(())
         })?;
         let timings = self.profiler.results()?;
         let near = view.camera.near as f32;
-        let depth = bytemuck::cast_slice::<u8, f32>(rb.depth.bytes()?)
-            .iter()
-            .map(|&d| if d > 0.0 { near / d } else { f32::INFINITY })
-            .collect();
-        Ok(FrameOutput {
+        let linear = |d: f32| if d > 0.0 { near / d } else { f32::INFINITY };
+        let shaded = self
+            .settings
+            .count_shaded
+            .then(|| {
+                self.counter
+                    .bytes()
+                    .map(|b| u64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])))
+            })
+            .transpose()?;
+        let base = |color, depth, velocity, ids, mask, parity| FrameOutput {
             index: frame,
             time: view.time,
             width: self.settings.width,
             height: self.settings.height,
-            color: bytemuck::cast_slice::<u8, f16>(rb.color.bytes()?).to_vec(),
+            color,
             depth,
-            velocity: bytemuck::cast_slice::<u8, [f32; 2]>(rb.velocity.bytes()?).to_vec(),
-            ids: bytemuck::cast_slice::<u8, [u32; 2]>(rb.ids.bytes()?).to_vec(),
-            timings,
+            velocity,
+            ids,
+            mask,
+            parity,
+            shaded_fragments: shaded,
+            timings: timings.clone(),
+        };
+        Ok(match &self.mode {
+            Mode::Native { readbacks: rb, .. } => base(
+                bytemuck::cast_slice::<u8, f16>(rb.color.bytes()?).to_vec(),
+                bytemuck::cast_slice::<u8, f32>(rb.depth.bytes()?)
+                    .iter()
+                    .map(|&d| linear(d))
+                    .collect(),
+                bytemuck::cast_slice::<u8, [f32; 2]>(rb.velocity.bytes()?).to_vec(),
+                bytemuck::cast_slice::<u8, [u32; 2]>(rb.ids.bytes()?).to_vec(),
+                None,
+                None,
+            ),
+            Mode::Checkerboard { unpack, .. } => {
+                let px: &[UnpackedPixel] = bytemuck::cast_slice(unpack.out.bytes()?);
+                base(
+                    px.iter().flat_map(|p| p.color.map(f16::from_f32)).collect(),
+                    px.iter()
+                        .map(|p| linear(p.velocity_depth_mask[2]))
+                        .collect(),
+                    px.iter()
+                        .map(|p| [p.velocity_depth_mask[0], p.velocity_depth_mask[1]])
+                        .collect(),
+                    px.iter().map(|p| [p.ids[0], p.ids[1]]).collect(),
+                    Some(
+                        px.iter()
+                            .map(|p| u8::from(p.velocity_depth_mask[3] > 0.5))
+                            .collect(),
+                    ),
+                    Some(parity),
+                )
+            }
         })
     }
 }

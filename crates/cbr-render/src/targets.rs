@@ -16,15 +16,29 @@ pub struct FrameTargets {
 }
 
 impl FrameTargets {
+    /// Single-layer, single-sample targets (the native technique).
     pub fn new(gpu: &Gpu, prefix: &str, width: u32, height: u32) -> Result<FrameTargets> {
+        FrameTargets::layered(gpu, prefix, width, height, 1, 1)
+    }
+
+    /// Targets with `layers` array layers and `samples` samples each (checkerboard layouts).
+    pub fn layered(
+        gpu: &Gpu,
+        prefix: &str,
+        width: u32,
+        height: u32,
+        layers: u32,
+        samples: u32,
+    ) -> Result<FrameTargets> {
         let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT
             | vk::ImageUsageFlags::TRANSFER_SRC
             | vk::ImageUsageFlags::SAMPLED;
         let img = |name: &str, format, usage| {
-            Image::new(
-                gpu,
-                &ImageDesc::new_2d(&format!("{prefix}.{name}"), format, width, height, usage),
-            )
+            let name = format!("{prefix}.{name}");
+            let mut d = ImageDesc::new_2d(&name, format, width, height, usage);
+            d.layers = layers;
+            d.samples = samples;
+            Image::new(gpu, &d)
         };
         Ok(FrameTargets {
             color: img("color", COLOR_FORMAT, usage)?,

@@ -84,11 +84,7 @@ fn key(time: f64, x: f64) -> CameraKey {
 
 fn render(gpu: &Gpu, s: &Scene, frame: u32) -> FrameOutput {
     let shaders = cbr_render::shader_library();
-    let settings = RenderSettings {
-        width: s.settings.width,
-        height: s.settings.height,
-        lod_bias: 0.0,
-    };
+    let settings = RenderSettings::native(s.settings.width, s.settings.height);
     let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
     r.render(s, frame).expect("frame")
 }

@@ -24,17 +24,8 @@ fn render_scene(toml: &str, check: impl Fn(&cbr_scene::Scene, &cbr_render::Frame
     .expect("device");
     let shaders = cbr_render::shader_library();
     let (w, h) = (160, 90);
-    let mut r = Renderer::new(
-        &gpu,
-        &shaders,
-        &scene,
-        RenderSettings {
-            width: w,
-            height: h,
-            lod_bias: 0.0,
-        },
-    )
-    .expect("renderer");
+    let mut r =
+        Renderer::new(&gpu, &shaders, &scene, RenderSettings::native(w, h)).expect("renderer");
     let out = r.render(&scene, 0).expect("frame");
     let covered = out.ids.iter().filter(|i| i[0] != 0).count();
     assert!(

@@ -5,10 +5,11 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use cbr_gpu::Layout;
 use cbr_gpu::{Gpu, GpuOptions};
 use cbr_metrics::DisplayTransform;
 use cbr_metrics::io::{FrameLayers, write_bytes, write_frame_exr, write_png_rgba8};
-use cbr_render::{RenderSettings, Renderer};
+use cbr_render::{LodMode, RenderSettings, Renderer};
 use cbr_scene::{LoadOptions, MissingTextures, check_resolution};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
@@ -20,6 +21,34 @@ use crate::stats::summarize;
 pub enum Technique {
     /// Full resolution, one sample at each pixel centre: the reference.
     Native,
+    /// Half the pixels per frame, alternating parity (`--layout`, `--resolve`).
+    Checkerboard,
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum LayoutArg {
+    /// Quarter-resolution 2x MSAA (needs 2x MSAA: GPUs, not lavapipe).
+    Msaa2x,
+    /// Decima's tangram: an L x L 45-degree lattice.
+    Rotated,
+    /// Two half-resolution layers, one per sample of each 2x2 quad.
+    Split,
+    /// Full resolution, the other parity discarded (the correctness reference).
+    Masked,
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum ResolveArg {
+    /// The raw checkerboard frame at full resolution: missing pixels have alpha 0, and a `mask` layer.
+    None,
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum LodModeArg {
+    /// A mip bias (--lod-bias; default per layout: 0 masked, -1 split and msaa2x, -0.5 rotated).
+    Bias,
+    /// Derivatives scaled to full-resolution pixels (textureGrad).
+    Gradients,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -50,9 +79,21 @@ pub struct RenderArgs {
     /// Enable the validation layer and synchronization validation; messages are counted in run.json.
     #[arg(long)]
     validation: bool,
-    /// Texture LOD bias added to every lookup.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
-    lod_bias: f32,
+    /// Checkerboard layout.
+    #[arg(long, value_enum, default_value = "rotated")]
+    layout: LayoutArg,
+    /// How checkerboard frames are reconstructed (the resolve comes with a later issue).
+    #[arg(long, value_enum, default_value = "none")]
+    resolve: ResolveArg,
+    /// Texture LOD bias added to every lookup (default: the technique's matching bias).
+    #[arg(long, allow_hyphen_values = true)]
+    lod_bias: Option<f32>,
+    /// How texture LOD follows the layout's sample spacing.
+    #[arg(long, value_enum, default_value = "bias")]
+    lod_mode: LodModeArg,
+    /// Count shaded fragments exactly (atomic counter; reported per frame in run.json).
+    #[arg(long)]
+    count_shaded: bool,
     /// Display exposure in stops (PNG only; EXR stays linear). Default: the scene's.
     #[arg(long, allow_hyphen_values = true)]
     exposure: Option<f32>,
@@ -97,16 +138,33 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         validation,
     })?;
     let shaders = cbr_render::shader_library();
+    let technique = match a.technique {
+        Technique::Native => cbr_render::Technique::Native,
+        Technique::Checkerboard => cbr_render::Technique::Checkerboard {
+            layout: match a.layout {
+                LayoutArg::Msaa2x => Layout::Msaa2x,
+                LayoutArg::Rotated => Layout::Rotated,
+                LayoutArg::Split => Layout::Split,
+                LayoutArg::Masked => Layout::Masked,
+            },
+            lod_mode: match a.lod_mode {
+                LodModeArg::Bias => LodMode::Bias,
+                LodModeArg::Gradients => LodMode::Gradients,
+            },
+        },
+    };
     let settings = RenderSettings {
         width: scene.settings.width,
         height: scene.settings.height,
+        technique,
         lod_bias: a.lod_bias,
+        count_shaded: a.count_shaded,
     };
     let mut renderer =
         Renderer::new(&gpu, &shaders, &scene, settings.clone()).with_context(|| {
             format!(
-                "setting up the {:?} technique on {}",
-                a.technique,
+                "setting up the {} technique on {}",
+                settings.technique.name(),
                 gpu.info().name
             )
         })?;
@@ -130,10 +188,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         let png = a.out.join(format!("frame_{f:04}.png"));
         let meta = vec![
             ("cbr.scene".to_string(), scene.source.clone()),
-            (
-                "cbr.technique".to_string(),
-                format!("{:?}", a.technique).to_lowercase(),
-            ),
+            ("cbr.technique".to_string(), settings.technique.name()),
             ("cbr.frame".to_string(), f.to_string()),
             ("cbr.time".to_string(), format!("{}", out.time)),
             ("cbr.device".to_string(), gpu.info().name.clone()),
@@ -147,6 +202,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
                 depth: &out.depth,
                 velocity: &out.velocity,
                 ids: &out.ids,
+                mask: out.mask.as_deref(),
                 metadata: meta,
             },
         )?;
@@ -160,6 +216,8 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             "exr": file_name(&exr),
             "png": file_name(&png),
             "passes": out.timings,
+            "parity": out.parity,
+            "shaded_fragments": out.shaded_fragments,
         }));
         bar.inc(1);
     }
@@ -186,12 +244,16 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             "load": scene.stats,
         },
         "settings": {
-            "technique": a.technique,
+            "technique": settings.technique.name(),
+            "layout_settings": settings.technique,
             "width": settings.width,
             "height": settings.height,
             "frames": frames,
             "fps": scene.settings.fps,
-            "lod_bias": settings.lod_bias,
+            "lod_bias": settings.effective_lod_bias(),
+            "lod_mode": a.lod_mode_name(),
+            "resolve": if matches!(a.technique, Technique::Checkerboard) { "none" } else { "-" },
+            "count_shaded": settings.count_shaded,
             "depth": "reverse-Z D32 with an infinite far plane; the EXR depth layer holds view-space distance along the camera axis (+inf where empty)",
             "velocity": "pixels, current minus previous position, x right, y down",
             "ids": "object ID = object index + 1 (0 = background); primitive ID = triangle index within the object",
@@ -219,6 +281,15 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         a.out.display()
     );
     Ok(())
+}
+
+impl RenderArgs {
+    fn lod_mode_name(&self) -> &'static str {
+        match self.lod_mode {
+            LodModeArg::Bias => "bias",
+            LodModeArg::Gradients => "gradients",
+        }
+    }
 }
 
 fn file_name(p: &Path) -> String {

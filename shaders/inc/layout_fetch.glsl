@@ -1,0 +1,46 @@
+// Layout-independent access to a checkerboard frame's samples (LAYOUT define, values in
+// scene_types.glsl). The CPU reference is crates/cbr-render/src/layouts.rs (LayoutPlan::address).
+//
+//   ivec4 a = cb_address(p, parity, tangram_side);  // (x, y, layer, sample), or -1 if p is missing
+//   vec4 c = cb_fetch(color_tex, a);                 // textures declared as CB_SAMPLER / CB_USAMPLER
+#ifndef LAYOUT_FETCH_GLSL
+#define LAYOUT_FETCH_GLSL
+#include "scene_types.glsl"
+
+#if LAYOUT == LAYOUT_SPLIT
+#define CB_SAMPLER sampler2DArray
+#define CB_USAMPLER usampler2DArray
+#define cb_fetch(t, a) texelFetch(t, ivec3((a).xy, (a).z), 0)
+#elif LAYOUT == LAYOUT_MSAA2X
+#define CB_SAMPLER sampler2DMS
+#define CB_USAMPLER usampler2DMS
+#define cb_fetch(t, a) texelFetch(t, (a).xy, (a).w)
+#else
+#define CB_SAMPLER sampler2D
+#define CB_USAMPLER usampler2D
+#define cb_fetch(t, a) texelFetch(t, (a).xy, 0)
+#endif
+
+// Where the sample of full-resolution pixel p lives in this frame's raster targets.
+ivec4 cb_address(ivec2 p, int parity, int tangram_side) {
+    if (((p.x + p.y) & 1) != parity) return ivec4(-1);
+#if LAYOUT == LAYOUT_SPLIT
+    // Layer k holds the shaded pixel of row k of each 2x2 quad.
+    return ivec4(p / 2, p.y & 1, 0);
+#elif LAYOUT == LAYOUT_MSAA2X
+    // Sample 0 of target pixel (i, j) is (2i + 1 - parity, 2j + 1); sample 1 is (2i - parity, 2j).
+    int odd = p.y & 1;
+    return ivec4((p.x + parity + 1 - odd) / 2, p.y / 2, 0, 1 - odd);
+#elif LAYOUT == LAYOUT_ROTATED
+    // Tangram texel (i, j) = ((x - y - parity) / 2, (x + y - parity) / 2) mod L; both divisions
+    // are exact (the numerators are even).
+    int l = tangram_side;
+    int i = (p.x - p.y - parity) / 2;
+    int j = (p.x + p.y - parity) / 2;
+    return ivec4(((i % l) + l) % l, j % l, 0, 0);
+#else
+    return ivec4(p, 0, 0);
+#endif
+}
+
+#endif
