@@ -18,7 +18,10 @@ layout(location = 2) out vec2 v_uv;
 layout(location = 3) out vec4 v_clip;       // unjittered screen clip position, this frame
 layout(location = 4) out vec4 v_prev_clip;  // previous frame
 
-#if LAYOUT == LAYOUT_ROTATED
+// Layouts whose targets extend past the screen (odd sizes, msaa2x's spare column, the tangram's
+// wrapped pieces) clip exactly to the screen rectangle.
+#if LAYOUT == LAYOUT_SPLIT || LAYOUT == LAYOUT_MSAA2X || LAYOUT == LAYOUT_ROTATED
+#define CLIP_TO_SCREEN 1
 out float gl_ClipDistance[4];
 #endif
 
@@ -33,6 +36,12 @@ void main() {
     v_clip = o.clip_from_local * local;
     v_prev_clip = o.prev_clip_from_local * local;
     vec4 pos = v_clip;
+#ifdef CLIP_TO_SCREEN
+    gl_ClipDistance[0] = pos.x + pos.w;
+    gl_ClipDistance[1] = pos.w - pos.x;
+    gl_ClipDistance[2] = pos.y + pos.w;
+    gl_ClipDistance[3] = pos.w - pos.y;
+#endif
 #if LAYOUT == LAYOUT_SPLIT || LAYOUT == LAYOUT_MSAA2X
     // The target is ceil(W/2) (+1) x ceil(H/2) pixels; scale clip space so that full-res pixel X
     // lands at X / 2 whatever the rounding.
@@ -45,13 +54,9 @@ void main() {
     vec2 jitter = gl_InstanceIndex == 0 ? frame.jitter.xy : frame.jitter.zw;
     pos.xy += jitter * 2.0 * frame.viewport.zw * pos.w;
 #elif LAYOUT == LAYOUT_ROTATED
-    // Clip exactly to the screen rectangle, then map screen pixels (x_s, y_s) to tangram texels
-    // u = (x_s - y_s - p + 1) / 2 + m L, v = (x_s + y_s - p) / 2 + n L (all times w: the map is
-    // linear in homogeneous coordinates), one instance per wrapped piece (m, n).
-    gl_ClipDistance[0] = pos.x + pos.w;
-    gl_ClipDistance[1] = pos.w - pos.x;
-    gl_ClipDistance[2] = pos.y + pos.w;
-    gl_ClipDistance[3] = pos.w - pos.y;
+    // Map screen pixels (x_s, y_s) to tangram texels u = (x_s - y_s - p + 1) / 2 + m L,
+    // v = (x_s + y_s - p) / 2 + n L (all times w: the map is linear in homogeneous coordinates),
+    // one instance per wrapped piece (m, n).
     float p = float(frame.counts.w & FLAG_PARITY);
     float l = float(frame.tangram.x);
     vec2 piece = vec2(frame.pieces[gl_InstanceIndex].xy);

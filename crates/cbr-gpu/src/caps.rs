@@ -82,6 +82,9 @@ impl Caps {
                 if !self.sample_rate_shading {
                     missing.push("sampleRateShading");
                 }
+                if !self.clip_distance {
+                    missing.push("shaderClipDistance");
+                }
             }
             Layout::Rotated => {
                 if !self.clip_distance {
@@ -91,6 +94,9 @@ impl Caps {
             Layout::Split => {
                 if !self.shader_output_layer {
                     missing.push("shaderOutputLayer (gl_Layer from the vertex shader)");
+                }
+                if !self.clip_distance {
+                    missing.push("shaderClipDistance");
                 }
             }
             Layout::Masked => {}

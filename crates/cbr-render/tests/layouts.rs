@@ -154,3 +154,173 @@ fn portable_layouts_equal_native_at_every_shaded_pixel() {
     }
     assert_clean(&gpu);
 }
+
+/// A camera looking into a box of six quads: every sample hits exactly one opaque surface.
+fn closed_box(w: u32, h: u32) -> Scene {
+    let mut s = untextured_demo(w, h);
+    s.objects.retain(|o| o.name == "ground");
+    let g = &mut s.objects[0];
+    // The ground quad, 1200 m wide, seen from 2 m above while looking straight down: it covers
+    // the whole view with a single quad.
+    for v in &mut g.vertices {
+        v.uv = [0.0, 0.0];
+    }
+    s.motions.clear();
+    s.camera = cbr_scene::CameraPath {
+        keys: vec![cbr_scene::CameraKey {
+            time: 0.0,
+            position: [0.3, 2.0, 0.2],
+            target: [0.3, 0.0, 0.25],
+            fov_y_deg: 60.0,
+        }],
+        near: 0.05,
+    };
+    s
+}
+
+#[test]
+fn every_checkerboard_pixel_is_shaded_exactly_once() {
+    let gpu = gpu();
+    for (w, h) in [(64, 48), (65, 33)] {
+        let s = closed_box(w, h);
+        for layout in [Layout::Masked, Layout::Split, Layout::Rotated] {
+            let mut covered = vec![0u8; (w * h) as usize];
+            for frame in [0, 1] {
+                let out = render(&gpu, &s, checkerboard(layout), frame, true);
+                let shaded = out.shaded_fragments.expect("counted");
+                let expected = (0..h)
+                    .flat_map(|y| (0..w).map(move |x| (x + y) % 2))
+                    .filter(|&p| p == frame % 2)
+                    .count() as u64;
+                assert_eq!(
+                    shaded,
+                    expected,
+                    "{} {w}x{h} frame {frame}: fragments shaded",
+                    layout.name()
+                );
+                assert!(
+                    out.ids
+                        .iter()
+                        .zip(out.mask.as_ref().expect("mask"))
+                        .all(|(id, &m)| m == 0 || id[0] == 1),
+                    "the quad covers every sample"
+                );
+                for (c, &m) in covered.iter_mut().zip(out.mask.as_ref().expect("mask")) {
+                    *c += m;
+                }
+                // lavapipe's statistics also count helper invocations, so they only bound the count.
+                let raster = out
+                    .timings
+                    .iter()
+                    .find(|t| t.name.ends_with(".raster"))
+                    .expect("raster scope");
+                if let Some(stats) = raster.stats {
+                    assert!(stats.fragment_invocations >= expected, "{stats:?}");
+                }
+            }
+            assert!(
+                covered.iter().all(|&c| c == 1),
+                "{} {w}x{h}: two frames cover every pixel exactly once",
+                layout.name()
+            );
+        }
+    }
+    assert_clean(&gpu);
+}
+
+#[test]
+fn msaa2x_equals_native_where_2x_msaa_exists() {
+    let gpu = gpu();
+    if let Some(missing) = gpu.caps().layout_unsupported(Layout::Msaa2x) {
+        eprintln!(
+            "SKIPPED msaa2x on {}: it needs {missing} (run on a GPU; see docs/checkerboard-layouts.md)",
+            gpu.info().name
+        );
+        let shaders = cbr_render::shader_library();
+        let s = untextured_demo(32, 18);
+        let err = Renderer::new(
+            &gpu,
+            &shaders,
+            &s,
+            RenderSettings {
+                width: 32,
+                height: 18,
+                technique: checkerboard(Layout::Msaa2x),
+                lod_bias: None,
+                count_shaded: false,
+            },
+        )
+        .err()
+        .expect("msaa2x must be refused here")
+        .to_string();
+        assert!(
+            err.contains("msaa2x") && err.contains("rotated"),
+            "a clear error naming the portable layouts: {err}"
+        );
+        // Its shaders still compile.
+        for stage in ["scene/forward.vert", "scene/forward.frag"] {
+            shaders
+                .compile(
+                    stage,
+                    &cbr_render::native::shader_defines(cbr_render::native::LAYOUT_MSAA2X),
+                )
+                .expect("msaa2x shaders compile");
+        }
+        return;
+    }
+    for (w, h) in [(160, 90), (121, 67)] {
+        let s = untextured_demo(w, h);
+        for frame in [4, 5] {
+            let native = render(&gpu, &s, Technique::Native, frame, false);
+            let cb = render(&gpu, &s, checkerboard(Layout::Msaa2x), frame, false);
+            let frac = compare(&format!("msaa2x {w}x{h} frame {frame}"), &cb, &native);
+            assert!(
+                frac <= 0.005,
+                "msaa2x: {:.3}% of samples see other geometry",
+                100.0 * frac
+            );
+        }
+    }
+    assert_clean(&gpu);
+}
+
+#[test]
+fn sibenik_layouts_equal_native() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/sibenik.toml");
+    if !path.with_file_name("../../shared/scenes/sibenik").is_dir()
+        && !std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../../shared/scenes/sibenik")
+            .is_dir()
+    {
+        eprintln!("SKIPPED: ../shared/scenes/sibenik is absent");
+        return;
+    }
+    let gpu = gpu();
+    let mut s = cbr_scene::load(&path.to_string_lossy(), &Default::default()).expect("sibenik");
+    s.settings.width = 192;
+    s.settings.height = 108;
+    for m in &mut s.materials {
+        m.kd_tex = None;
+        m.alpha = cbr_scene::AlphaSource::Opaque;
+        m.bump_tex = None;
+    }
+    for frame in [0, 1] {
+        let native = render(&gpu, &s, Technique::Native, frame, false);
+        for layout in [Layout::Masked, Layout::Split, Layout::Rotated] {
+            let cb = render(&gpu, &s, checkerboard(layout), frame, false);
+            let frac = compare(
+                &format!("sibenik {} frame {frame}", layout.name()),
+                &cb,
+                &native,
+            );
+            let limit = if layout == Layout::Masked { 0.0 } else { 0.01 };
+            assert!(
+                frac <= limit,
+                "{}: {:.3}% of samples see other geometry",
+                layout.name(),
+                100.0 * frac
+            );
+        }
+    }
+    assert_clean(&gpu);
+}
