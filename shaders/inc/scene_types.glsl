@@ -14,6 +14,7 @@
 #define FLAG_PARITY 1u          // the frame's checkerboard parity (x + y) mod 2
 #define FLAG_COUNT_SHADED 2u    // count shaded (non-helper) fragments in the counter buffer
 #define FLAG_LOD_GRADIENTS 4u   // textureGrad with derivatives scaled to full-res pixels
+#define FLAG_DEBUG_LOD 8u       // write the albedo lookup's level of detail to colour.r
 
 struct FrameConstants {
     vec4 viewport;      // the viewport NDC maps to, in target pixels: width, height, 1/width, 1/height

@@ -42,17 +42,45 @@ vec2 to_pixels(vec4 clip) {
 // Texture lookup at the layout's footprint: a LOD bias, or (FLAG_LOD_GRADIENTS) derivatives turned
 // into full-res screen derivatives. Neighbouring samples are 2 px apart in split/msaa2x; in the
 // tangram a texel step is a diagonal screen step: d/du = d/dx - d/dy, d/dv = d/dx + d/dy.
-vec4 tex(sampler2D t, vec2 uv) {
-    if ((frame.counts.w & FLAG_LOD_GRADIENTS) == 0u) return texture(t, uv, frame.ambient.w);
+bool lod_gradients() {
+    return (frame.counts.w & FLAG_LOD_GRADIENTS) != 0u;
+}
+
+// d(uv)/dx and d(uv)/dy per full-res screen pixel, from the derivatives between this layout's
+// neighbouring samples.
+void screen_gradients(vec2 uv, out vec2 gx, out vec2 gy) {
     vec2 a = dFdx(uv);
     vec2 b = dFdy(uv);
 #if LAYOUT == LAYOUT_SPLIT || LAYOUT == LAYOUT_MSAA2X
-    return textureGrad(t, uv, 0.5 * a, 0.5 * b);
+    gx = 0.5 * a;
+    gy = 0.5 * b;
 #elif LAYOUT == LAYOUT_ROTATED
-    return textureGrad(t, uv, 0.5 * (a + b), 0.5 * (b - a));
+    gx = 0.5 * (a + b);
+    gy = 0.5 * (b - a);
 #else
-    return textureGrad(t, uv, a, b);
+    gx = a;
+    gy = b;
 #endif
+}
+
+vec4 tex(sampler2D t, vec2 uv) {
+    if (!lod_gradients()) return texture(t, uv, frame.ambient.w);
+    vec2 gx, gy;
+    screen_gradients(uv, gx, gy);
+    return textureGrad(t, uv, gx, gy);
+}
+
+// The level of detail `tex` selects (the isotropic formula of the Vulkan spec), for FLAG_DEBUG_LOD.
+float lod_of(sampler2D t, vec2 uv) {
+    vec2 a = dFdx(uv);
+    vec2 b = dFdy(uv);
+    float bias = frame.ambient.w;
+    if (lod_gradients()) {
+        screen_gradients(uv, a, b);
+        bias = 0.0;
+    }
+    vec2 size = vec2(textureSize(t, 0));
+    return log2(max(length(a * size), length(b * size))) + bias;
 }
 
 // Bump mapping from a height map without tangents (Mikkelsen 2010, screen-space derivatives).
@@ -89,6 +117,9 @@ void main() {
         n = bump(n, v_world, h);
     }
     o_color = vec4(shade(v_world, n, albedo, m, frame), 1.0);
+    if ((frame.counts.w & FLAG_DEBUG_LOD) != 0u) {
+        o_color = vec4(m.tex.x >= 0 ? lod_of(albedo_tex, v_uv) : -100.0, 0.0, 0.0, 1.0);
+    }
     o_velocity = to_pixels(v_clip) - to_pixels(v_prev_clip);
     o_ids = uvec2(o.ids.x, uint(gl_PrimitiveID));
     // Helpers (and demoted lanes) do not count: their atomics have no effect.

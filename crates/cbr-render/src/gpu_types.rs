@@ -22,6 +22,7 @@ pub const MAX_PIECES: usize = 8;
 pub const FLAG_PARITY: u32 = 1;
 pub const FLAG_COUNT_SHADED: u32 = 2;
 pub const FLAG_LOD_GRADIENTS: u32 = 4;
+pub const FLAG_DEBUG_LOD: u32 = 8;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]

@@ -9,7 +9,7 @@ use half::f16;
 
 use crate::checkerboard::{UnpackPass, UnpackedPixel};
 use crate::gpu_scene::{FrameView, GpuScene, RasterUniforms};
-use crate::gpu_types::{FLAG_COUNT_SHADED, FLAG_LOD_GRADIENTS, FLAG_PARITY};
+use crate::gpu_types::{FLAG_COUNT_SHADED, FLAG_DEBUG_LOD, FLAG_LOD_GRADIENTS, FLAG_PARITY};
 use crate::layouts::LayoutPlan;
 use crate::native::{RasterConfig, ScenePass};
 use crate::targets::FrameTargets;
@@ -63,6 +63,8 @@ pub struct RenderSettings {
     pub lod_bias: Option<f32>,
     /// Count shaded (non-helper) fragments with an atomic counter (tests, `--count-shaded`).
     pub count_shaded: bool,
+    /// Write each sample's albedo level of detail to colour.r instead of radiance (tests, docs).
+    pub debug_lod: bool,
 }
 
 impl RenderSettings {
@@ -73,6 +75,7 @@ impl RenderSettings {
             technique: Technique::Native,
             lod_bias: None,
             count_shaded: false,
+            debug_lod: false,
         }
     }
 
@@ -244,6 +247,9 @@ impl Renderer {
         let prev_time = time - 1.0 / scene.settings.fps;
         let s = &self.settings;
         let mut flags = if s.count_shaded { FLAG_COUNT_SHADED } else { 0 };
+        if s.debug_lod {
+            flags |= FLAG_DEBUG_LOD;
+        }
         let raster = match (&self.mode, s.technique) {
             (Mode::Checkerboard { plans, .. }, Technique::Checkerboard { lod_mode, .. }) => {
                 let plan = &plans[(frame % 2) as usize];

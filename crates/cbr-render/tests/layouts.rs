@@ -49,6 +49,7 @@ fn render(gpu: &Gpu, s: &Scene, technique: Technique, frame: u32, count: bool) -
         technique,
         lod_bias: None,
         count_shaded: count,
+        debug_lod: false,
     };
     let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
     r.render(s, frame).expect("frame")
@@ -248,6 +249,7 @@ fn msaa2x_equals_native_where_2x_msaa_exists() {
                 technique: checkerboard(Layout::Msaa2x),
                 lod_bias: None,
                 count_shaded: false,
+                debug_lod: false,
             },
         )
         .err()
@@ -321,6 +323,101 @@ fn sibenik_layouts_equal_native() {
                 100.0 * frac
             );
         }
+    }
+    assert_clean(&gpu);
+}
+
+/// Per-sample albedo LOD of the demo's textured surfaces: layout minus native, over the samples
+/// where both see the same textured object. Returns (mean |diff|, 95th percentile |diff|, mean diff).
+fn lod_difference(
+    gpu: &Gpu,
+    s: &Scene,
+    layout: Layout,
+    mode: LodMode,
+    frame: u32,
+) -> (f64, f64, f64) {
+    let shaders = cbr_render::shader_library();
+    let run = |technique| {
+        let settings = RenderSettings {
+            width: s.settings.width,
+            height: s.settings.height,
+            technique,
+            lod_bias: None,
+            count_shaded: false,
+            debug_lod: true,
+        };
+        Renderer::new(gpu, &shaders, s, settings)
+            .expect("renderer")
+            .render(s, frame)
+            .expect("frame")
+    };
+    let (native, cb) = (
+        run(Technique::Native),
+        run(Technique::Checkerboard {
+            layout,
+            lod_mode: mode,
+        }),
+    );
+    let mask = cb.mask.as_ref().expect("mask");
+    let mut d: Vec<f64> = (0..mask.len())
+        // Samples of the ground (object 1, textured) where the LOD matters: inside the mip chain
+        // of its 256-texel checker (levels 0..8), not magnified or past the last level.
+        .filter(|&i| {
+            mask[i] == 1
+                && cb.ids[i] == native.ids[i]
+                && native.ids[i][0] == 1
+                && (0.0..=7.0).contains(&native.color[4 * i].to_f32())
+        })
+        .map(|i| f64::from(cb.color[4 * i].to_f32() - native.color[4 * i].to_f32()))
+        .collect();
+    assert!(d.len() > 1000, "enough textured samples: {}", d.len());
+    let mean = d.iter().sum::<f64>() / d.len() as f64;
+    d.iter_mut().for_each(|v| *v = v.abs());
+    d.sort_by(f64::total_cmp);
+    let abs_mean = d.iter().sum::<f64>() / d.len() as f64;
+    (abs_mean, d[d.len() * 95 / 100], mean)
+}
+
+#[test]
+fn matching_lod_bias_selects_natives_mip_level() {
+    let gpu = gpu();
+    let mut s = cbr_scene::builtin("demo").expect("demo");
+    s.settings.width = 192;
+    s.settings.height = 108;
+    // (layout, mode, allowed range of the mean difference, bound on the mean |difference|, bound
+    // on its 95th percentile), in levels; measured values in docs/checkerboard-layouts.md.
+    // The rotated layout's -0.5 is exact for isotropic footprints only: on the ground plane, seen
+    // at a grazing angle, a diagonal texel step already holds the large y derivative, so -0.5
+    // over-sharpens (by 0.31 levels here); its gradient mode is exact on average.
+    let cases = [
+        (Layout::Masked, LodMode::Bias, (-1e-6, 1e-6), 1e-6, 1e-6),
+        (Layout::Split, LodMode::Bias, (-0.05, 0.05), 0.15, 0.4),
+        (Layout::Split, LodMode::Gradients, (-0.05, 0.05), 0.15, 0.4),
+        (Layout::Rotated, LodMode::Bias, (-0.5, 0.0), 0.5, 0.6),
+        (
+            Layout::Rotated,
+            LodMode::Gradients,
+            (-0.05, 0.05),
+            0.1,
+            0.25,
+        ),
+    ];
+    for (layout, mode, (lo, hi), mean_bound, p95_bound) in cases {
+        let (abs_mean, p95, mean) = lod_difference(&gpu, &s, layout, mode, 6);
+        eprintln!(
+            "{} {mode:?}: mean dLOD {mean:+.4}, mean |dLOD| {abs_mean:.4}, p95 |dLOD| {p95:.4} levels",
+            layout.name()
+        );
+        assert!(
+            (lo..=hi).contains(&mean),
+            "{} {mode:?}: mean dLOD {mean}",
+            layout.name()
+        );
+        assert!(
+            abs_mean <= mean_bound && p95 <= p95_bound,
+            "{} {mode:?}: mean |dLOD| {abs_mean}, p95 {p95}",
+            layout.name()
+        );
     }
     assert_clean(&gpu);
 }

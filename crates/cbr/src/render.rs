@@ -159,6 +159,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         technique,
         lod_bias: a.lod_bias,
         count_shaded: a.count_shaded,
+        debug_lod: false,
     };
     let mut renderer =
         Renderer::new(&gpu, &shaders, &scene, settings.clone()).with_context(|| {
