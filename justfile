@@ -31,6 +31,10 @@ bench-metrics: setup
     cargo bench -p cbr-metrics --bench metrics
     scripts/metrics-memory.sh ./target/release/cbr
 
+# Checkerboard layouts against native: raster time, invocations, memory (docs/checkerboard-layouts.md).
+bench-layouts: setup
+    python3 scripts/bench-layouts.py --cbr ./target/release/cbr -o {{out}}/bench/layouts
+
 # Formatting.
 fmt:
     cargo fmt --all

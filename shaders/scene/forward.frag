@@ -31,9 +31,14 @@ layout(location = 2) INTERP in vec2 v_uv;
 layout(location = 3) INTERP in vec4 v_clip;
 layout(location = 4) INTERP in vec4 v_prev_clip;
 
+#ifdef ID_ONLY
+// The native-resolution depth + ID prepass (--id-prepass): visibility only, no shading.
+layout(location = 0) out uvec2 o_ids;
+#else
 layout(location = 0) out vec4 o_color;     // HDR radiance; alpha 1 = shaded this frame
 layout(location = 1) out vec2 o_velocity;  // full-res pixels moved since the previous frame (current - previous)
 layout(location = 2) out uvec2 o_ids;      // x: object ID, y: primitive ID within the object
+#endif
 
 vec2 to_pixels(vec4 clip) {
     return (clip.xy / clip.w * 0.5 + 0.5) * frame.output_size.xy;
@@ -64,6 +69,10 @@ void screen_gradients(vec2 uv, out vec2 gx, out vec2 gy) {
 }
 
 vec4 tex(sampler2D t, vec2 uv) {
+#ifdef ID_ONLY
+    // The prepass rasterises native's grid: native's footprint, whatever the checkerboard bias.
+    return texture(t, uv);
+#endif
     if (!lod_gradients()) return texture(t, uv, frame.ambient.w);
     vec2 gx, gy;
     screen_gradients(uv, gx, gy);
@@ -103,12 +112,15 @@ void main() {
 #if LAYOUT == LAYOUT_MASKED
     if (((int(gl_FragCoord.x) + int(gl_FragCoord.y)) & 1) != int(frame.counts.w & FLAG_PARITY)) demote;
 #endif
-    vec3 albedo = m.kd.rgb;
-    if (m.tex.x >= 0) albedo *= tex(albedo_tex, v_uv).rgb;
     if (m.tex.y >= 0) {
         float a = tex(mask_tex, v_uv)[m.tex.z];
         if (a < 0.5) demote;
     }
+#ifdef ID_ONLY
+    o_ids = uvec2(o.ids.x, uint(gl_PrimitiveID));
+#else
+    vec3 albedo = m.kd.rgb;
+    if (m.tex.x >= 0) albedo *= tex(albedo_tex, v_uv).rgb;
     vec3 n = normalize(v_normal);
     // Double-sided: OBJ winding is unreliable, so face the normal towards the camera.
     if (dot(n, -v_world) < 0.0) n = -n;
@@ -124,4 +136,5 @@ void main() {
     o_ids = uvec2(o.ids.x, uint(gl_PrimitiveID));
     // Helpers (and demoted lanes) do not count: their atomics have no effect.
     if ((frame.counts.w & FLAG_COUNT_SHADED) != 0u) atomicAdd(shaded_fragments, 1u);
+#endif
 }

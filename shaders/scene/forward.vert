@@ -66,8 +66,9 @@ void main() {
     float v = 0.5 * (xs + ys - p * pos.w) + piece.y * l * pos.w;
     pos.x = 2.0 * u / l - pos.w;
     pos.y = 2.0 * v / l - pos.w;
-#else
-    // A jitter of j pixels moves NDC by 2j / size.
+#elif !defined(ID_ONLY)
+    // A jitter of j pixels moves NDC by 2j / size. (The ID prepass runs at native resolution with
+    // the checkerboard pass's constants: no jitter.)
     pos.xy += frame.jitter.xy * 2.0 * frame.viewport.zw * pos.w;
 #endif
     gl_Position = pos;

@@ -67,6 +67,9 @@ pub struct FrameLayers<'a> {
     pub ids: &'a [[u32; 2]],
     /// Checkerboard frames: 1 where the frame shaded the pixel (written as layer `mask`, `Y`).
     pub mask: Option<&'a [u8]>,
+    /// The native-resolution depth + ID prepass (layers `prepass_depth`, `prepass_object_id`,
+    /// `prepass_primitive_id`).
+    pub prepass: Option<(&'a [f32], &'a [[u32; 2]])>,
     /// Text attributes attached to every part (scene, technique, frame, ...).
     pub metadata: Vec<(String, String)>,
 }
@@ -185,6 +188,29 @@ pub fn write_frame_exr(path: &Path, f: &FrameLayers) -> Result<(), IoError> {
             AnyChannels::sort(smallvec::smallvec![channel("Y", samples)]),
         ));
     }
+    if let Some((depth, ids)) = f.prepass {
+        check("prepass depth", depth.len())?;
+        check("prepass ids", ids.len())?;
+        let one = |name: &str, ch: &str, samples| {
+            Layer::new(
+                size,
+                attrs(name),
+                encoding(),
+                AnyChannels::sort(smallvec::smallvec![channel(ch, samples)]),
+            )
+        };
+        layers.push(one("prepass_depth", "Z", FlatSamples::F32(depth.to_vec())));
+        layers.push(one(
+            "prepass_object_id",
+            "id",
+            FlatSamples::U32(ids.iter().map(|v| v[0]).collect()),
+        ));
+        layers.push(one(
+            "prepass_primitive_id",
+            "id",
+            FlatSamples::U32(ids.iter().map(|v| v[1]).collect()),
+        ));
+    }
     let image = Image::from_layers(
         ImageAttributes::new(IntegerBounds::from_dimensions(size)),
         layers,
@@ -219,6 +245,7 @@ mod tests {
             velocity: &velocity,
             ids: &ids,
             mask: None,
+            prepass: None,
             metadata: vec![("cbr.frame".into(), "7".into())],
         };
         write_frame_exr(&path, &layers).expect("write");

@@ -2,14 +2,14 @@
 //! centre: the reference) and for every checkerboard layout (the LAYOUT define).
 
 use cbr_gpu::{
-    Attachment, BindingDesc, Buffer, Cmd, DescriptorKind, DescriptorSet, Gpu, GraphicsDesc, Layout,
-    PassKind, Pipeline, Profiler, Result, SetLayout, Shaders, Write, vk,
+    Attachment, BindingDesc, Buffer, Cmd, DescriptorKind, DescriptorSet, Gpu, GraphicsDesc, Image,
+    Layout, PassKind, Pipeline, Profiler, Result, SetLayout, Shaders, Write, vk,
 };
 
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::ScenePush;
 use crate::layouts::LayoutPlan;
-use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, FrameTargets, ID_FORMAT, VELOCITY_FORMAT};
+use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT, VELOCITY_FORMAT};
 
 /// `LAYOUT` values of the scene shaders (shaders/inc/scene_types.glsl).
 pub const LAYOUT_NATIVE: u32 = 0;
@@ -122,6 +122,8 @@ pub struct RasterConfig {
     pub instances: u32,
     /// Viewport (x, y, width, height) in target pixels.
     pub viewport: [f32; 4],
+    /// Depth and IDs only, no shading (the `--id-prepass` pass).
+    pub id_only: bool,
 }
 
 impl RasterConfig {
@@ -132,6 +134,7 @@ impl RasterConfig {
             layers: 1,
             instances: 1,
             viewport: [0.0, 0.0, width as f32, height as f32],
+            id_only: false,
         }
     }
 
@@ -153,6 +156,7 @@ impl RasterConfig {
                 _ => 1,
             },
             viewport,
+            id_only: false,
         }
     }
 }
@@ -178,7 +182,10 @@ impl ScenePass {
         let layout = SetLayout::new(gpu, &format!("{name}.set_layout"), &BINDINGS)?;
         let material_layout =
             SetLayout::new(gpu, &format!("{name}.material_layout"), &MATERIAL_BINDINGS)?;
-        let defines = shader_defines(config.layout);
+        let mut defines = shader_defines(config.layout);
+        if config.id_only {
+            defines.push(("ID_ONLY".into(), "1".into()));
+        }
         let vs = shaders.compile("scene/forward.vert", &defines)?;
         let fs = shaders.compile("scene/forward.frag", &defines)?;
         let pipeline = Pipeline::graphics(
@@ -190,7 +197,11 @@ impl ScenePass {
                 fragment: &fs,
                 set_layouts: &[&layout, &material_layout],
                 push_constant_bytes: std::mem::size_of::<ScenePush>() as u32,
-                color_formats: &[COLOR_FORMAT, VELOCITY_FORMAT, ID_FORMAT],
+                color_formats: if config.id_only {
+                    &[ID_FORMAT]
+                } else {
+                    &[COLOR_FORMAT, VELOCITY_FORMAT, ID_FORMAT]
+                },
                 depth_format: Some(DEPTH_FORMAT),
                 // Reverse-Z: nearer is larger.
                 depth_compare: vk::CompareOp::GREATER,
@@ -248,12 +259,17 @@ impl ScenePass {
 
     /// Clears the targets and draws every object. `background` alpha: 1 for native (every pixel
     /// is rendered), 0 for checkerboard layouts (unrendered samples stay marked).
+    /// Clears `colors` (in the pipeline's order: colour, velocity, IDs; IDs only for `id_only`)
+    /// and `depth`, and draws every object. Colour clears to the background radiance with alpha 1
+    /// for native, 0 for checkerboard layouts (the unpack marks rendered samples).
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         cmd: &mut Cmd,
         profiler: &mut Profiler,
         scene: &GpuScene,
-        targets: &FrameTargets,
+        colors: &[&Image],
+        depth: &Image,
         counter: &Buffer,
         config: &RasterConfig,
     ) {
@@ -269,42 +285,39 @@ impl ScenePass {
             cmd.use_buffer(buf, cbr_gpu::Access::GraphicsRead);
         }
         cmd.use_buffer(counter, cbr_gpu::Access::FragmentStorageWrite);
-        let clear_f = |c: [f32; 4]| {
-            Some(vk::ClearValue {
-                color: vk::ClearColorValue { float32: c },
-            })
-        };
         let bg = scene.background;
         let alpha = if config.layout == LAYOUT_NATIVE {
             1.0
         } else {
             0.0
         };
-        cmd.begin_rendering(
-            &[
-                Attachment {
-                    image: &targets.color,
-                    clear: clear_f([bg[0], bg[1], bg[2], alpha]),
-                },
-                Attachment {
-                    image: &targets.velocity,
-                    clear: clear_f([0.0; 4]),
-                },
-                Attachment {
-                    image: &targets.ids,
-                    clear: Some(vk::ClearValue {
-                        color: vk::ClearColorValue { uint32: [0; 4] },
-                    }),
-                },
-            ],
-            Some(Attachment {
-                image: &targets.depth,
-                clear: Some(vk::ClearValue {
-                    depth_stencil: vk::ClearDepthStencilValue {
-                        depth: 0.0,
-                        stencil: 0,
+        let attachments: Vec<Attachment> = colors
+            .iter()
+            .map(|image| {
+                let color = match image.format {
+                    COLOR_FORMAT => vk::ClearColorValue {
+                        float32: [bg[0], bg[1], bg[2], alpha],
                     },
-                }),
+                    ID_FORMAT => vk::ClearColorValue { uint32: [0; 4] },
+                    _ => vk::ClearColorValue { float32: [0.0; 4] },
+                };
+                Attachment {
+                    image,
+                    clear: Some(vk::ClearValue { color }),
+                }
+            })
+            .collect();
+        let depth_clear = vk::ClearValue {
+            depth_stencil: vk::ClearDepthStencilValue {
+                depth: 0.0,
+                stencil: 0,
+            },
+        };
+        cmd.begin_rendering(
+            &attachments,
+            Some(Attachment {
+                image: depth,
+                clear: Some(depth_clear),
             }),
             config.layers,
         );

@@ -65,6 +65,9 @@ pub struct RenderSettings {
     pub count_shaded: bool,
     /// Write each sample's albedo level of detail to colour.r instead of radiance (tests, docs).
     pub debug_lod: bool,
+    /// Checkerboard only: a native-resolution depth + ID pass before the checkerboard raster, no
+    /// shading (what PS4 Pro hardware gives Decima); its outputs go to `FrameOutput::prepass`.
+    pub id_prepass: bool,
 }
 
 impl RenderSettings {
@@ -76,6 +79,7 @@ impl RenderSettings {
             lod_bias: None,
             count_shaded: false,
             debug_lod: false,
+            id_prepass: false,
         }
     }
 
@@ -104,6 +108,8 @@ pub struct FrameOutput {
     pub parity: Option<u32>,
     /// Shaded (non-helper) fragments, when counted.
     pub shaded_fragments: Option<u64>,
+    /// The `id_prepass` outputs at full resolution: view depth (+inf where empty) and IDs.
+    pub prepass: Option<(Vec<f32>, Vec<[u32; 2]>)>,
     pub timings: Vec<PassTiming>,
 }
 
@@ -112,6 +118,46 @@ struct NativeReadbacks {
     depth: Readback,
     velocity: Readback,
     ids: Readback,
+}
+
+/// The native-resolution depth + ID prepass.
+struct Prepass {
+    pass: ScenePass,
+    config: RasterConfig,
+    ids: cbr_gpu::Image,
+    depth: cbr_gpu::Image,
+    ids_rb: Readback,
+    depth_rb: Readback,
+}
+
+impl Prepass {
+    fn new(
+        gpu: &Gpu,
+        shaders: &Shaders,
+        scene: &GpuScene,
+        w: u32,
+        h: u32,
+        counter: &Buffer,
+    ) -> Result<Prepass> {
+        let config = RasterConfig {
+            id_only: true,
+            ..RasterConfig::native(w, h)
+        };
+        let pass = ScenePass::new(gpu, shaders, scene, "id_prepass.raster", &config, counter)?;
+        let t = FrameTargets::new(gpu, "id_prepass", w, h)?;
+        // Only the ID and depth targets are kept; colour and velocity are dropped unused.
+        let FrameTargets { ids, depth, .. } = t;
+        let ids_rb = Readback::for_image(gpu, "readback.prepass_ids", &ids)?;
+        let depth_rb = Readback::for_image(gpu, "readback.prepass_depth", &depth)?;
+        Ok(Prepass {
+            pass,
+            config,
+            ids,
+            depth,
+            ids_rb,
+            depth_rb,
+        })
+    }
 }
 
 enum Mode {
@@ -127,6 +173,7 @@ enum Mode {
 }
 
 pub struct Renderer {
+    prepass: Option<Prepass>,
     gpu: Gpu,
     scene: GpuScene,
     pass: ScenePass,
@@ -215,8 +262,20 @@ impl Renderer {
                 )
             }
         };
+        let prepass = match (settings.id_prepass, settings.technique) {
+            (false, _) => None,
+            (true, Technique::Checkerboard { .. }) => {
+                Some(Prepass::new(gpu, shaders, &gpu_scene, w, h, &counter)?)
+            }
+            (true, Technique::Native) => {
+                return Err(GpuError::Other(
+                    "--id-prepass applies to the checkerboard technique".into(),
+                ));
+            }
+        };
         let profiler = Profiler::new(gpu, "renderer.profiler", 8)?;
         Ok(Renderer {
+            prepass,
             gpu: gpu.clone(),
             scene: gpu_scene,
             pass,
@@ -300,14 +359,31 @@ impl Renderer {
             &mut self.profiler,
             &self.mode,
         );
+        let prepass = &self.prepass;
         let parity = frame % 2;
         self.gpu.submit("frame", |cmd| {
+            if let Some(p) = prepass {
+                // Native resolution: the frame constants' raster fields describe the checkerboard
+                // pass; the ID-only native variant ignores them (no jitter, tangram or layers).
+                p.pass
+                    .record(cmd, profiler, gs, &[&p.ids], &p.depth, counter, &p.config);
+                cmd.read_image(&p.ids, &p.ids_rb);
+                cmd.read_image(&p.depth, &p.depth_rb);
+            }
             match mode {
                 Mode::Native {
                     readbacks: rb,
                     config,
                 } => {
-                    pass.record(cmd, profiler, gs, targets, counter, config);
+                    pass.record(
+                        cmd,
+                        profiler,
+                        gs,
+                        &targets.colors(),
+                        &targets.depth,
+                        counter,
+                        config,
+                    );
                     let scope = profiler.begin(cmd, "readback", PassKind::Transfer);
                     cmd.read_image(&targets.color, &rb.color);
                     cmd.read_image(&targets.depth, &rb.depth);
@@ -324,7 +400,8 @@ impl Renderer {
                         cmd,
                         profiler,
                         gs,
-                        targets,
+                        &targets.colors(),
+                        &targets.depth,
                         counter,
                         &configs[parity as usize],
                     );
@@ -346,6 +423,16 @@ impl Renderer {
                     .map(|b| u64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])))
             })
             .transpose()?;
+        let prepass = match &self.prepass {
+            Some(p) => Some((
+                bytemuck::cast_slice::<u8, f32>(p.depth_rb.bytes()?)
+                    .iter()
+                    .map(|&d| linear(d))
+                    .collect(),
+                bytemuck::cast_slice::<u8, [u32; 2]>(p.ids_rb.bytes()?).to_vec(),
+            )),
+            None => None,
+        };
         let base = |color, depth, velocity, ids, mask, parity| FrameOutput {
             index: frame,
             time: view.time,
@@ -358,6 +445,7 @@ impl Renderer {
             mask,
             parity,
             shaded_fragments: shaded,
+            prepass: prepass.clone(),
             timings: timings.clone(),
         };
         Ok(match &self.mode {

@@ -16,6 +16,11 @@ pub struct FrameTargets {
 }
 
 impl FrameTargets {
+    /// The colour attachments in the scene pipeline's order.
+    pub fn colors(&self) -> [&Image; 3] {
+        [&self.color, &self.velocity, &self.ids]
+    }
+
     /// Single-layer, single-sample targets (the native technique).
     pub fn new(gpu: &Gpu, prefix: &str, width: u32, height: u32) -> Result<FrameTargets> {
         FrameTargets::layered(gpu, prefix, width, height, 1, 1)

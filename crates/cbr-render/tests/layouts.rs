@@ -50,6 +50,7 @@ fn render(gpu: &Gpu, s: &Scene, technique: Technique, frame: u32, count: bool) -
         lod_bias: None,
         count_shaded: count,
         debug_lod: false,
+        id_prepass: false,
     };
     let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
     r.render(s, frame).expect("frame")
@@ -250,6 +251,7 @@ fn msaa2x_equals_native_where_2x_msaa_exists() {
                 lod_bias: None,
                 count_shaded: false,
                 debug_lod: false,
+                id_prepass: false,
             },
         )
         .err()
@@ -345,6 +347,7 @@ fn lod_difference(
             lod_bias: None,
             count_shaded: false,
             debug_lod: true,
+            id_prepass: false,
         };
         Renderer::new(gpu, &shaders, s, settings)
             .expect("renderer")
@@ -419,5 +422,70 @@ fn matching_lod_bias_selects_natives_mip_level() {
             layout.name()
         );
     }
+    assert_clean(&gpu);
+}
+
+#[test]
+fn id_prepass_equals_natives_depth_and_ids() {
+    let gpu = gpu();
+    let s = cbr_scene::builtin("demo")
+        .map(|mut s| {
+            s.settings.width = 96;
+            s.settings.height = 54;
+            s
+        })
+        .expect("demo");
+    let shaders = cbr_render::shader_library();
+    for layout in [Layout::Split, Layout::Rotated] {
+        let settings = RenderSettings {
+            width: 96,
+            height: 54,
+            technique: checkerboard(layout),
+            lod_bias: None,
+            count_shaded: false,
+            debug_lod: false,
+            id_prepass: true,
+        };
+        let mut r = Renderer::new(&gpu, &shaders, &s, settings).expect("renderer");
+        // Native's own LOD: alpha-tested foliage must cover the same pixels in both.
+        let native = render(&gpu, &s, Technique::Native, 3, false);
+        let out = r.render(&s, 3).expect("frame");
+        let (depth, ids) = out.prepass.expect("prepass outputs");
+        let id_diff = ids.iter().zip(&native.ids).filter(|(a, b)| a != b).count();
+        assert_eq!(
+            id_diff,
+            0,
+            "{}: prepass IDs differ from native's at {id_diff} pixels",
+            layout.name()
+        );
+        let depth_diff = depth
+            .iter()
+            .zip(&native.depth)
+            .filter(|(a, b)| a.to_bits() != b.to_bits())
+            .count();
+        assert_eq!(
+            depth_diff,
+            0,
+            "{}: prepass depth differs from native's at {depth_diff} pixels",
+            layout.name()
+        );
+        assert!(
+            out.timings.iter().any(|t| t.name == "id_prepass.raster"),
+            "timed as its own pass"
+        );
+    }
+    let err = Renderer::new(
+        &gpu,
+        &shaders,
+        &s,
+        RenderSettings {
+            id_prepass: true,
+            ..RenderSettings::native(96, 54)
+        },
+    )
+    .err()
+    .expect("native + prepass refused")
+    .to_string();
+    assert!(err.contains("checkerboard"), "{err}");
     assert_clean(&gpu);
 }

@@ -94,6 +94,10 @@ pub struct RenderArgs {
     /// Count shaded fragments exactly (atomic counter; reported per frame in run.json).
     #[arg(long)]
     count_shaded: bool,
+    /// Checkerboard: a native-resolution depth + ID pass first, no shading (EXR layers
+    /// prepass_depth, prepass_object_id, prepass_primitive_id).
+    #[arg(long)]
+    id_prepass: bool,
     /// Display exposure in stops (PNG only; EXR stays linear). Default: the scene's.
     #[arg(long, allow_hyphen_values = true)]
     exposure: Option<f32>,
@@ -160,6 +164,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         lod_bias: a.lod_bias,
         count_shaded: a.count_shaded,
         debug_lod: false,
+        id_prepass: a.id_prepass,
     };
     let mut renderer =
         Renderer::new(&gpu, &shaders, &scene, settings.clone()).with_context(|| {
@@ -204,6 +209,10 @@ pub fn run(a: &RenderArgs) -> Result<()> {
                 velocity: &out.velocity,
                 ids: &out.ids,
                 mask: out.mask.as_deref(),
+                prepass: out
+                    .prepass
+                    .as_ref()
+                    .map(|(d, i)| (d.as_slice(), i.as_slice())),
                 metadata: meta,
             },
         )?;
@@ -246,6 +255,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         },
         "settings": {
             "technique": settings.technique.name(),
+            "target_bytes": renderer.target_bytes(),
             "layout_settings": settings.technique,
             "width": settings.width,
             "height": settings.height,
@@ -255,6 +265,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             "lod_mode": a.lod_mode_name(),
             "resolve": if matches!(a.technique, Technique::Checkerboard) { "none" } else { "-" },
             "count_shaded": settings.count_shaded,
+            "id_prepass": settings.id_prepass,
             "depth": "reverse-Z D32 with an infinite far plane; the EXR depth layer holds view-space distance along the camera axis (+inf where empty)",
             "velocity": "pixels, current minus previous position, x right, y down",
             "ids": "object ID = object index + 1 (0 = background); primitive ID = triangle index within the object",
