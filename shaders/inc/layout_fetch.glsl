@@ -43,4 +43,13 @@ ivec4 cb_address(ivec2 p, int parity, int tangram_side) {
 #endif
 }
 
+// Rotated layout: the texture coordinate of continuous screen position s (pixels, y down) in the
+// tangram, for a sampler with REPEAT addressing (the wrap does the unwrapping of the pieces).
+// Pixel centres land on texel centres, so bilinear filtering interpolates on the diamond lattice:
+// half-way between two horizontally adjacent pixels it averages the two diagonal neighbours.
+vec2 cb_tangram_uv(vec2 s, int parity, int tangram_side) {
+    float p = float(parity);
+    return vec2(s.x - s.y - p + 1.0, s.x + s.y - p) * 0.5 / float(tangram_side);
+}
+
 #endif

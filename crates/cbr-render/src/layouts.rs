@@ -334,6 +334,31 @@ mod tests {
     }
 
     #[test]
+    fn tangram_uv_puts_pixel_centres_on_texel_centres() {
+        // cb_tangram_uv in layout_fetch.glsl is tangram_uv / L; with REPEAT addressing the texel
+        // under pixel (x, y)'s centre must be tangram_texel(x, y).
+        let (w, h) = (37, 21);
+        for p in 0..2u32 {
+            let l = tangram_side(w, h);
+            for y in 0..h {
+                for x in (0..w).filter(|x| (x + y) % 2 == p) {
+                    let (u, v) = tangram_uv(f64::from(x) + 0.5, f64::from(y) + 0.5, f64::from(p));
+                    assert!(
+                        (u.rem_euclid(1.0) - 0.5).abs() < 1e-9
+                            && (v.rem_euclid(1.0) - 0.5).abs() < 1e-9,
+                        "texel centre"
+                    );
+                    let wrap = |c: f64| (c.floor() as i64).rem_euclid(i64::from(l));
+                    assert_eq!(
+                        (wrap(u), wrap(v)),
+                        tangram_texel(i64::from(x), i64::from(y), i64::from(p), i64::from(l))
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
     fn memory_of_common_resolutions() {
         // Printed for docs/checkerboard-layouts.md (`cargo test -p cbr-render memory -- --nocapture`).
         for (w, h) in [(1280u32, 720u32), (1920, 1080), (2560, 1440), (3840, 2160)] {
