@@ -370,20 +370,21 @@ impl Renderer {
                 cmd.read_image(&p.ids, &p.ids_rb);
                 cmd.read_image(&p.depth, &p.depth_rb);
             }
+            let config = match mode {
+                Mode::Native { config, .. } => config,
+                Mode::Checkerboard { configs, .. } => &configs[parity as usize],
+            };
+            pass.record(
+                cmd,
+                profiler,
+                gs,
+                &targets.colors(),
+                &targets.depth,
+                counter,
+                config,
+            );
             match mode {
-                Mode::Native {
-                    readbacks: rb,
-                    config,
-                } => {
-                    pass.record(
-                        cmd,
-                        profiler,
-                        gs,
-                        &targets.colors(),
-                        &targets.depth,
-                        counter,
-                        config,
-                    );
+                Mode::Native { readbacks: rb, .. } => {
                     let scope = profiler.begin(cmd, "readback", PassKind::Transfer);
                     cmd.read_image(&targets.color, &rb.color);
                     cmd.read_image(&targets.depth, &rb.depth);
@@ -391,21 +392,8 @@ impl Renderer {
                     cmd.read_image(&targets.ids, &rb.ids);
                     profiler.end(cmd, scope);
                 }
-                Mode::Checkerboard {
-                    plans,
-                    configs,
-                    unpack,
-                } => {
-                    pass.record(
-                        cmd,
-                        profiler,
-                        gs,
-                        &targets.colors(),
-                        &targets.depth,
-                        counter,
-                        &configs[parity as usize],
-                    );
-                    unpack.record(cmd, profiler, targets, &plans[parity as usize]);
+                Mode::Checkerboard { plans, unpack, .. } => {
+                    unpack.record(cmd, profiler, targets, &plans[parity as usize])
                 }
             }
             cmd.use_buffer(counter, cbr_gpu::Access::HostRead);

@@ -1,30 +1,15 @@
 //! Scenes with known answers, rendered on the test device (lavapipe in CI) with the validation
 //! layer and synchronization validation on; every test also fails on any validation message.
 
-use cbr_gpu::{Gpu, GpuOptions};
+mod common;
+
+use cbr_gpu::Gpu;
 use cbr_render::{FrameOutput, RenderSettings, Renderer};
 use cbr_scene::{
     CameraKey, CameraPath, DirLight, LoadStats, Material, Object, Scene, Settings, Vertex,
 };
+use common::{assert_clean, gpu};
 use glam::{DVec3, DVec4};
-
-fn gpu() -> Gpu {
-    Gpu::new(&GpuOptions {
-        device: std::env::var("CBR_TEST_DEVICE").ok(),
-        validation: true,
-    })
-    .expect("a Vulkan device with validation layers")
-}
-
-fn assert_clean(gpu: &Gpu) {
-    let msgs = gpu.validation().messages();
-    assert!(
-        msgs.is_empty(),
-        "{} validation messages:\n{}",
-        msgs.len(),
-        msgs.join("\n")
-    );
-}
 
 /// A quad in the plane z = `z` spanning [x0,x1] x [y0,y1], facing +z.
 fn quad(name: &str, x0: f32, x1: f32, y0: f32, y1: f32, z: f32, material: u32) -> Object {

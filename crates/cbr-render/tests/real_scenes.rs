@@ -3,9 +3,11 @@
 
 use std::path::Path;
 
-use cbr_gpu::{Gpu, GpuOptions};
+mod common;
+
 use cbr_render::{RenderSettings, Renderer};
 use cbr_scene::LoadOptions;
+use common::{assert_clean, gpu};
 
 fn render_scene(toml: &str, check: impl Fn(&cbr_scene::Scene, &cbr_render::FrameOutput)) {
     let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
@@ -17,11 +19,7 @@ fn render_scene(toml: &str, check: impl Fn(&cbr_scene::Scene, &cbr_render::Frame
     }
     let path = repo.join("scenes").join(toml);
     let scene = cbr_scene::load(&path.to_string_lossy(), &LoadOptions::default()).expect("loads");
-    let gpu = Gpu::new(&GpuOptions {
-        device: std::env::var("CBR_TEST_DEVICE").ok(),
-        validation: true,
-    })
-    .expect("device");
+    let gpu = gpu();
     let shaders = cbr_render::shader_library();
     let (w, h) = (160, 90);
     let mut r =
@@ -46,8 +44,7 @@ fn render_scene(toml: &str, check: impl Fn(&cbr_scene::Scene, &cbr_render::Frame
         "{toml}: mostly black ({lit} lit of {covered})"
     );
     check(&scene, &out);
-    let msgs = gpu.validation().messages();
-    assert!(msgs.is_empty(), "{toml}: {}", msgs.join("\n"));
+    assert_clean(&gpu);
 }
 
 #[test]

@@ -1,0 +1,34 @@
+//! Shared by the GPU test files: the test device (validation + synchronization validation on) and
+//! the check that it reported nothing.
+#![allow(dead_code)]
+
+use cbr_gpu::{Gpu, GpuOptions};
+
+/// The test device: `CBR_TEST_DEVICE` (index or name) or the default pick, validation on.
+pub fn gpu() -> Gpu {
+    Gpu::new(&GpuOptions {
+        device: std::env::var("CBR_TEST_DEVICE").ok(),
+        validation: true,
+    })
+    .expect("a Vulkan device with validation layers")
+}
+
+/// Fails the test on any validation message.
+pub fn assert_clean(gpu: &Gpu) {
+    let msgs = gpu.validation().messages();
+    assert!(
+        msgs.is_empty(),
+        "{} validation messages:\n{}",
+        msgs.len(),
+        msgs.join("\n")
+    );
+}
+
+/// Removes every texture from the scene's materials: LOD-independent shading for exact comparisons.
+pub fn strip_textures(s: &mut cbr_scene::Scene) {
+    for m in &mut s.materials {
+        m.kd_tex = None;
+        m.alpha = cbr_scene::AlphaSource::Opaque;
+        m.bump_tex = None;
+    }
+}
