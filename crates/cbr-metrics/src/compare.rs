@@ -5,6 +5,7 @@
 //! stored). Pixels where either image has a non-finite channel are counted, read as 0 by the
 //! filters, and left out of every average and percentile.
 
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
@@ -341,9 +342,13 @@ fn display_error(reference: &InputImage, test: &InputImage, o: &CompareOptions) 
         Encoding::Linear => zero_nonfinite(p).map(|v| d.apply(v)),
         Encoding::Srgb => zero_nonfinite(p).map(|v| v.clamp(0.0, 1.0)),
     };
-    let (r, t) = match o.crop {
-        Some([x, y, w, h]) => (reference.rgb.crop(x, y, w, h), test.rgb.crop(x, y, w, h)),
-        None => (reference.rgb.clone(), test.rgb.clone()),
+    // Borrow the images unless a crop needs copies.
+    let (r, t): (Cow<Rgb>, Cow<Rgb>) = match o.crop {
+        Some([x, y, w, h]) => (
+            Cow::Owned(reference.rgb.crop(x, y, w, h)),
+            Cow::Owned(test.rgb.crop(x, y, w, h)),
+        ),
+        None => (Cow::Borrowed(&reference.rgb), Cow::Borrowed(&test.rgb)),
     };
     let (re, te) = (reference.encoding, test.encoding);
     let n = r.width * r.height;
