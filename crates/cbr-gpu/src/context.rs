@@ -71,7 +71,6 @@ pub(crate) struct Inner {
     pub(crate) instance: ash::Instance,
     debug_instance: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     pub(crate) debug_device: Option<ash::ext::debug_utils::Device>,
-    pub(crate) physical: vk::PhysicalDevice,
     pub(crate) device: ash::Device,
     pub(crate) queue: Mutex<vk::Queue>,
     #[allow(dead_code)] // kept for queue-family ownership transfers
@@ -79,21 +78,12 @@ pub(crate) struct Inner {
     pub(crate) allocator: Mutex<Option<Allocator>>,
     command_pool: Mutex<vk::CommandPool>,
     pub(crate) validation: Arc<ValidationLog>,
-    /// Boxed pointer handed to the debug callback; freed after the messenger.
-    validation_raw: *const ValidationLog,
     garbage: Mutex<Vec<(u64, Garbage)>>,
     submitted: AtomicU64,
     completed: AtomicU64,
     pub(crate) info: DeviceInfo,
     pub(crate) caps: Caps,
-    pub(crate) limits: vk::PhysicalDeviceLimits,
 }
-
-// SAFETY: the raw pointer is only dereferenced by the debug callback, and points at an
-// `Arc<ValidationLog>` (Sync) kept alive by `validation` until after the messenger is destroyed.
-unsafe impl Send for Inner {}
-// SAFETY: as above; every other field is Sync or behind a Mutex.
-unsafe impl Sync for Inner {}
 
 /// The opened device. Cheap to clone; resources keep it alive.
 #[derive(Clone)]
@@ -532,20 +522,17 @@ impl Gpu {
                 instance,
                 debug_instance,
                 debug_device,
-                physical: pd,
                 device,
                 queue: Mutex::new(queue),
                 queue_family,
                 allocator: Mutex::new(Some(allocator)),
                 command_pool: Mutex::new(command_pool),
                 validation,
-                validation_raw,
                 garbage: Mutex::new(Vec::new()),
                 submitted: AtomicU64::new(0),
                 completed: AtomicU64::new(0),
                 info,
                 caps,
-                limits: p.props.limits,
             }),
         };
         gpu.name_object(command_pool, "cbr.command_pool");
@@ -588,20 +575,6 @@ impl Gpu {
     }
     pub fn device(&self) -> &ash::Device {
         &self.inner.device
-    }
-    pub fn limits(&self) -> &vk::PhysicalDeviceLimits {
-        &self.inner.limits
-    }
-
-    /// Whether `format` supports `features` with optimal tiling.
-    pub fn format_supports(&self, format: vk::Format, features: vk::FormatFeatureFlags) -> bool {
-        // SAFETY: plain query.
-        let p = unsafe {
-            self.inner
-                .instance
-                .get_physical_device_format_properties(self.inner.physical, format)
-        };
-        p.optimal_tiling_features.contains(features)
     }
 
     /// Gives a Vulkan object a debug name (visible in validation messages and capture tools).
@@ -765,7 +738,7 @@ impl Drop for Inner {
             drop(a);
         }
         // SAFETY: all children of the device are gone; the messenger goes before the instance and
-        // before the log it points at (`validation_raw` stays valid through `self.validation`).
+        // before the log it points at (kept alive by `self.validation`).
         unsafe {
             if let Ok(pool) = self.command_pool.lock() {
                 self.device.destroy_command_pool(*pool, None);
@@ -776,6 +749,5 @@ impl Drop for Inner {
             }
             self.instance.destroy_instance(None);
         }
-        let _ = self.validation_raw;
     }
 }

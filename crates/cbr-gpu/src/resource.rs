@@ -419,7 +419,6 @@ pub struct Readback {
     pub(crate) buffer: Buffer,
     pub width: u32,
     pub height: u32,
-    pub texel: usize,
 }
 
 impl Readback {
@@ -436,7 +435,6 @@ impl Readback {
             buffer,
             width: image.width,
             height: image.height,
-            texel: texel_size(image.format).unwrap_or(4),
         })
     }
     /// The image's texels, rows top to bottom, tightly packed (layers one after another).

@@ -5,7 +5,7 @@ use cbr_gpu::{
     Buffer, Gpu, Image, ImageDesc, LevelCopy, Location, Result, Sampler, SamplerDesc, vk,
 };
 use cbr_scene::{AlphaSource, Camera, Scene};
-use glam::{DMat3, DMat4, DVec3, Mat4};
+use glam::{DMat3, DMat4, DVec3};
 
 use crate::gpu_types::{FrameConstants, LightData, MAX_PIECES, MaterialData, ObjectData};
 
@@ -339,10 +339,4 @@ impl GpuScene {
         self.frame.write(0, bytemuck::bytes_of(&constants))?;
         Ok(())
     }
-}
-
-/// The matrix that takes camera-relative world positions to clip space (for tests and tools).
-pub fn clip_from_world(camera: &Camera, aspect: f64) -> Mat4 {
-    (camera.projection(aspect) * camera.rotation() * DMat4::from_translation(-camera.position))
-        .as_mat4()
 }

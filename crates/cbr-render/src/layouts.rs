@@ -207,7 +207,7 @@ impl LayoutPlan {
             * u64::from(self.target.1)
             * u64::from(self.layers)
             * u64::from(self.samples)
-            * (8 + 8 + 8 + 4)
+            * crate::targets::BYTES_PER_SAMPLE
     }
 }
 
@@ -362,7 +362,7 @@ mod tests {
     fn memory_of_common_resolutions() {
         // Printed for docs/checkerboard-layouts.md (`cargo test -p cbr-render memory -- --nocapture`).
         for (w, h) in [(1280u32, 720u32), (1920, 1080), (2560, 1440), (3840, 2160)] {
-            let native = u64::from(w) * u64::from(h) * 28;
+            let native = u64::from(w) * u64::from(h) * crate::targets::BYTES_PER_SAMPLE;
             for l in Layout::ALL {
                 let plan = LayoutPlan::new(l, w, h, 0);
                 let used = (u64::from(w) * u64::from(h)) as f64

@@ -287,10 +287,6 @@ impl Renderer {
         })
     }
 
-    pub fn settings(&self) -> &RenderSettings {
-        &self.settings
-    }
-
     /// Bytes of the raster targets (what a layout costs in memory).
     pub fn target_bytes(&self) -> u64 {
         let t = &self.targets.color;
@@ -298,7 +294,7 @@ impl Renderer {
             * u64::from(t.height)
             * u64::from(t.layers)
             * u64::from(t.samples)
-            * (8 + 8 + 8 + 4)
+            * crate::targets::BYTES_PER_SAMPLE
     }
 
     fn view(&self, scene: &Scene, frame: u32) -> FrameView {

@@ -7,6 +7,9 @@ pub const VELOCITY_FORMAT: vk::Format = vk::Format::R32G32_SFLOAT;
 pub const ID_FORMAT: vk::Format = vk::Format::R32G32_UINT;
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
+/// Bytes of one sample across the four targets: RGBA16F + RG32F + RG32UI + D32.
+pub const BYTES_PER_SAMPLE: u64 = 8 + 8 + 8 + 4;
+
 /// Colour (HDR), velocity (pixels), IDs (object, primitive) and reverse-Z depth.
 pub struct FrameTargets {
     pub color: Image,

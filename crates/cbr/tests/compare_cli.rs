@@ -19,6 +19,24 @@ fn png(path: &Path, w: u32, h: u32, f: impl Fn(u32, u32) -> [u8; 3]) {
     img.save(path).expect("png");
 }
 
+/// Asserts the exit status (showing stderr if it differs) and parses the JSON on stdout.
+fn json(o: &Output, status: i32) -> serde_json::Value {
+    assert_eq!(
+        o.status.code(),
+        Some(status),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    serde_json::from_slice(&o.stdout).expect("json on stdout")
+}
+
+/// Asserts a clean error: exit status 2 and `message` on stderr.
+fn fails(o: &Output, message: &str) {
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains(message), "expected `{message}` in: {err}");
+}
+
 fn s(p: &Path) -> &str {
     p.to_str().expect("utf8")
 }
@@ -69,13 +87,7 @@ fn pairs_thresholds_json_and_maps() {
         "--fail-above",
         "flip=0.0001",
     ]);
-    assert_eq!(
-        o.status.code(),
-        Some(1),
-        "a threshold fails: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    let j = json(&o, 1);
     let mean = j["flip"]["mean"].as_f64().expect("flip mean");
     assert!(mean > 0.0 && mean < 1.0, "{j}");
     assert!(j["psnr"].as_f64().expect("psnr") > 10.0);
@@ -89,21 +101,13 @@ fn pairs_thresholds_json_and_maps() {
     assert_eq!((w, h), (48 + 4 + 24, 32), "map plus the colour bar");
 
     let o = cbr(&["compare", s(&a), s(&c)]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(
-        String::from_utf8_lossy(&o.stderr).contains("size mismatch"),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    fails(&o, "size mismatch");
     let o = cbr(&["compare", s(&a), s(&d.path().join("missing.png"))]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("missing.png: no such file"));
+    fails(&o, "missing.png: no such file");
     let o = cbr(&["compare", s(&a), s(&b), "--fail-above", "sharpness=3"]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown metric `sharpness`"));
+    fails(&o, "unknown metric `sharpness`");
     let o = cbr(&["compare", s(&a), s(&b), "--crop", "40,0,20,10"]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("does not fit"));
+    fails(&o, "does not fit");
 }
 
 #[test]
@@ -138,13 +142,7 @@ fn exr_layers_and_sequences() {
         "mse",
         "--json",
     ]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    let j = json(&o, 0);
     assert_eq!(j["reference"]["layer"], "depth");
     assert_eq!(j["reference"]["channels"][0], "Z");
     assert!(
@@ -160,8 +158,7 @@ fn exr_layers_and_sequences() {
         "--layer",
         "nope",
     ]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("no layer `nope`"));
+    fails(&o, "no layer `nope`");
 
     let o = cbr(&[
         "compare",
@@ -173,13 +170,7 @@ fn exr_layers_and_sequences() {
         "psnr,flip",
         "--json",
     ]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    let j = json(&o, 0);
     assert_eq!(j["frames"].as_array().map(Vec::len), Some(3));
     assert_eq!(j["frames"][0]["warmup"], true);
     assert!(
@@ -191,9 +182,5 @@ fn exr_layers_and_sequences() {
         "flicker from the measured frames"
     );
     let o = cbr(&["compare", s(&r), s(&t), "--warmup", "3"]);
-    assert_eq!(
-        o.status.code(),
-        Some(2),
-        "warm-up that skips every frame is an error"
-    );
+    fails(&o, "--warmup 3 skips all 3 frames");
 }
