@@ -30,6 +30,8 @@ pub struct Caps {
     pub max_framebuffer: [u32; 2],
     pub viewport_sub_pixel_bits: u32,
     pub sub_pixel_precision_bits: u32,
+    /// float16 arithmetic in shaders (the resolve's `--resolve-fp16`).
+    pub shader_float16: bool,
 }
 
 /// The checkerboard raster layouts of DESIGN.md.
@@ -118,6 +120,7 @@ mod tests {
 
     fn lavapipe_like() -> Caps {
         Caps {
+            shader_float16: true,
             sample_rate_shading: true,
             sample_counts: vec![1, 4],
             integer_color_sample_counts: vec![1],

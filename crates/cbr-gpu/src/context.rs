@@ -286,6 +286,7 @@ fn caps_of(instance: &ash::Instance, pd: vk::PhysicalDevice, p: &Probe) -> Caps 
         max_framebuffer: [l.max_framebuffer_width, l.max_framebuffer_height],
         viewport_sub_pixel_bits: l.viewport_sub_pixel_bits,
         sub_pixel_precision_bits: l.sub_pixel_precision_bits,
+        shader_float16: p.f12.shader_float16 != 0,
     }
 }
 

@@ -70,9 +70,14 @@ pub struct FrameLayers<'a> {
     /// The native-resolution depth + ID prepass (layers `prepass_depth`, `prepass_object_id`,
     /// `prepass_primitive_id`).
     pub prepass: Option<(&'a [f32], &'a [[u32; 2]])>,
+    /// Further float layers: (layer name, [(channel name, values)]) (the resolve's debug views).
+    pub extra: Vec<ExtraLayer>,
     /// Text attributes attached to every part (scene, technique, frame, ...).
     pub metadata: Vec<(String, String)>,
 }
+
+/// One extra float layer of a frame EXR: its name and (channel, values) pairs.
+pub type ExtraLayer = (String, Vec<(String, Vec<f32>)>);
 
 /// Part (layer) names of a frame EXR.
 pub const COLOR_LAYER: &str = "color";
@@ -211,6 +216,19 @@ pub fn write_frame_exr(path: &Path, f: &FrameLayers) -> Result<(), IoError> {
             FlatSamples::U32(ids.iter().map(|v| v[1]).collect()),
         ));
     }
+    for (name, channels) in &f.extra {
+        let mut list = smallvec::SmallVec::new();
+        for (ch, values) in channels {
+            check(name, values.len())?;
+            list.push(channel(ch, FlatSamples::F32(values.clone())));
+        }
+        layers.push(Layer::new(
+            size,
+            attrs(name),
+            encoding(),
+            AnyChannels::sort(list),
+        ));
+    }
     let image = Image::from_layers(
         ImageAttributes::new(IntegerBounds::from_dimensions(size)),
         layers,
@@ -246,6 +264,7 @@ mod tests {
             ids: &ids,
             mask: None,
             prepass: None,
+            extra: Vec::new(),
             metadata: vec![("cbr.frame".into(), "7".into())],
         };
         write_frame_exr(&path, &layers).expect("write");

@@ -57,8 +57,11 @@ pub struct FrameView {
     pub prev_camera: Camera,
     pub time: f64,
     pub prev_time: f64,
+    /// The resolution the pass renders at (velocity is in these pixels).
     pub width: u32,
     pub height: u32,
+    /// Projection aspect: the output's W/H (equal to width/height except for `upscale`).
+    pub aspect: f64,
     pub lod_bias: f32,
     pub frame_index: u32,
     pub raster: RasterUniforms,
@@ -260,7 +263,7 @@ impl GpuScene {
     /// Writes this frame's transforms, lights and constants. Callers make sure no submission
     /// reading them is in flight (frames are submitted and waited on one at a time).
     pub fn update(&mut self, scene: &Scene, view: &FrameView) -> Result<()> {
-        let aspect = f64::from(view.width) / f64::from(view.height);
+        let aspect = view.aspect;
         let (cam, prev) = (&view.camera, &view.prev_camera);
         let clip_from_rel = cam.projection(aspect) * cam.rotation();
         let prev_clip_from_rel = prev.projection(aspect) * prev.rotation();

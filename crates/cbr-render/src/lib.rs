@@ -9,9 +9,12 @@ pub mod gpu_types;
 pub mod layouts;
 pub mod native;
 pub mod renderer;
+pub mod resolve;
 pub mod targets;
+pub mod upscale;
 
 pub use renderer::{FrameOutput, LodMode, RenderSettings, Renderer, Technique};
+pub use resolve::{Mapping, ResolveMode, ResolveSettings};
 
 mod embedded {
     include!(concat!(env!("OUT_DIR"), "/shader_sources.rs"));

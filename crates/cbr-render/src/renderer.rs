@@ -12,7 +12,9 @@ use crate::gpu_scene::{FrameView, GpuScene, RasterUniforms};
 use crate::gpu_types::{FLAG_COUNT_SHADED, FLAG_DEBUG_LOD, FLAG_LOD_GRADIENTS, FLAG_PARITY};
 use crate::layouts::LayoutPlan;
 use crate::native::{RasterConfig, ScenePass};
+use crate::resolve::{ResolveFrame, ResolvePass, ResolveReadbacks, ResolveSettings};
 use crate::targets::FrameTargets;
+use crate::upscale::{UpscaleFilter, UpscalePass, low_resolution};
 
 /// How texture LOD follows the sample spacing of a layout.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -28,7 +30,14 @@ pub enum LodMode {
 #[serde(rename_all = "lowercase", tag = "technique")]
 pub enum Technique {
     Native,
-    Checkerboard { layout: Layout, lod_mode: LodMode },
+    Checkerboard {
+        layout: Layout,
+        lod_mode: LodMode,
+    },
+    /// Render at W/sqrt(2) x H/sqrt(2), then upscale (the baseline checkerboard must beat).
+    Upscale {
+        filter: UpscaleFilter,
+    },
 }
 
 impl Technique {
@@ -36,7 +45,7 @@ impl Technique {
     /// sqrt(2) px (rotated) half a level.
     pub fn default_lod_bias(&self) -> f32 {
         match self {
-            Technique::Native => 0.0,
+            Technique::Native | Technique::Upscale { .. } => 0.0,
             Technique::Checkerboard { layout, .. } => match layout {
                 Layout::Masked => 0.0,
                 Layout::Split | Layout::Msaa2x => -1.0,
@@ -49,6 +58,7 @@ impl Technique {
         match self {
             Technique::Native => "native".into(),
             Technique::Checkerboard { layout, .. } => format!("checkerboard:{}", layout.name()),
+            Technique::Upscale { filter } => format!("upscale:{}", filter.name()),
         }
     }
 }
@@ -68,6 +78,8 @@ pub struct RenderSettings {
     /// Checkerboard only: a native-resolution depth + ID pass before the checkerboard raster, no
     /// shading (what PS4 Pro hardware gives Decima); its outputs go to `FrameOutput::prepass`.
     pub id_prepass: bool,
+    /// Checkerboard only: the resolve; `None` writes the raw checkerboard frame.
+    pub resolve: Option<ResolveSettings>,
 }
 
 impl RenderSettings {
@@ -80,6 +92,7 @@ impl RenderSettings {
             count_shaded: false,
             debug_lod: false,
             id_prepass: false,
+            resolve: None,
         }
     }
 
@@ -110,6 +123,9 @@ pub struct FrameOutput {
     pub shaded_fragments: Option<u64>,
     /// The `id_prepass` outputs at full resolution: view depth (+inf where empty) and IDs.
     pub prepass: Option<(Vec<f32>, Vec<[u32; 2]>)>,
+    /// Resolved checkerboard frames: whether history was reset, and with `debug` the debug bits
+    /// (resolve::DEBUG_VIEWS) and the velocity each pixel used.
+    pub resolve: Option<ResolveOutput>,
     pub timings: Vec<PassTiming>,
 }
 
@@ -160,6 +176,20 @@ impl Prepass {
     }
 }
 
+/// What the resolve adds to a frame's output.
+pub struct ResolveOutput {
+    pub reset: bool,
+    /// Per pixel: the resolve::DBG_* bits (with `debug`).
+    pub debug_bits: Option<Vec<u32>>,
+    /// Per pixel: the velocity the resolve used (with `debug`).
+    pub velocity: Option<Vec<[f32; 2]>>,
+}
+
+struct Resolve {
+    pass: ResolvePass,
+    rb: ResolveReadbacks,
+}
+
 enum Mode {
     Native {
         readbacks: NativeReadbacks,
@@ -169,6 +199,13 @@ enum Mode {
         plans: [LayoutPlan; 2],
         configs: [RasterConfig; 2],
         unpack: UnpackPass,
+        resolve: Option<Resolve>,
+    },
+    Upscale {
+        config: RasterConfig,
+        pass: UpscalePass,
+        readbacks: NativeReadbacks,
+        low: (u32, u32),
     },
 }
 
@@ -182,6 +219,8 @@ pub struct Renderer {
     counter: Buffer,
     profiler: Profiler,
     settings: RenderSettings,
+    /// The last frame resolved into the history (frames that do not follow it reset it).
+    last_frame: Option<u32>,
 }
 
 impl Renderer {
@@ -200,19 +239,75 @@ impl Renderer {
             Location::GpuToCpu,
         )?;
         let (w, h) = (settings.width, settings.height);
+        let prepass = match (settings.id_prepass, settings.technique) {
+            (false, _) => None,
+            (true, Technique::Checkerboard { .. }) => {
+                Some(Prepass::new(gpu, shaders, &gpu_scene, w, h, &counter)?)
+            }
+            (true, _) => {
+                return Err(GpuError::Other(
+                    "--id-prepass applies to the checkerboard technique".into(),
+                ));
+            }
+        };
+        if settings.resolve.is_some()
+            && !matches!(settings.technique, Technique::Checkerboard { .. })
+        {
+            return Err(GpuError::Other(
+                "a resolve applies to the checkerboard technique".into(),
+            ));
+        }
+        let native_readbacks = |color: &cbr_gpu::Image,
+                                depth: &cbr_gpu::Image,
+                                velocity: &cbr_gpu::Image,
+                                ids: &cbr_gpu::Image|
+         -> Result<NativeReadbacks> {
+            Ok(NativeReadbacks {
+                color: Readback::for_image(gpu, "readback.color", color)?,
+                depth: Readback::for_image(gpu, "readback.depth", depth)?,
+                velocity: Readback::for_image(gpu, "readback.velocity", velocity)?,
+                ids: Readback::for_image(gpu, "readback.ids", ids)?,
+            })
+        };
         let (pass, targets, mode) = match settings.technique {
             Technique::Native => {
                 let config = RasterConfig::native(w, h);
                 let pass =
                     ScenePass::new(gpu, shaders, &gpu_scene, "native.raster", &config, &counter)?;
                 let targets = FrameTargets::new(gpu, "native", w, h)?;
-                let readbacks = NativeReadbacks {
-                    color: Readback::for_image(gpu, "readback.color", &targets.color)?,
-                    depth: Readback::for_image(gpu, "readback.depth", &targets.depth)?,
-                    velocity: Readback::for_image(gpu, "readback.velocity", &targets.velocity)?,
-                    ids: Readback::for_image(gpu, "readback.ids", &targets.ids)?,
-                };
+                let readbacks = native_readbacks(
+                    &targets.color,
+                    &targets.depth,
+                    &targets.velocity,
+                    &targets.ids,
+                )?;
                 (pass, targets, Mode::Native { readbacks, config })
+            }
+            Technique::Upscale { filter } => {
+                let (lw, lh) = low_resolution(w, h);
+                let config = RasterConfig::native(lw, lh);
+                let pass = ScenePass::new(
+                    gpu,
+                    shaders,
+                    &gpu_scene,
+                    "upscale.raster",
+                    &config,
+                    &counter,
+                )?;
+                let targets = FrameTargets::new(gpu, "upscale.low", lw, lh)?;
+                let up = UpscalePass::new(gpu, shaders, filter, &targets, w, h)?;
+                let o = &up.out;
+                let readbacks = native_readbacks(&o.color, &o.depth, &o.velocity, &o.ids)?;
+                (
+                    pass,
+                    targets,
+                    Mode::Upscale {
+                        config,
+                        pass: up,
+                        readbacks,
+                        low: (lw, lh),
+                    },
+                )
             }
             Technique::Checkerboard { layout, .. } => {
                 if let Some(missing) = gpu.caps().layout_unsupported(layout) {
@@ -251,6 +346,15 @@ impl Renderer {
                     plans[0].samples,
                 )?;
                 let unpack = UnpackPass::new(gpu, shaders, &plans[0], &targets)?;
+                let resolve = match &settings.resolve {
+                    Some(rs) => {
+                        let pre = prepass.as_ref().map(|p| (&p.ids, &p.depth));
+                        let pass = ResolvePass::new(gpu, shaders, rs, &plans[0], &targets, pre)?;
+                        let rb = pass.readbacks(gpu)?;
+                        Some(Resolve { pass, rb })
+                    }
+                    None => None,
+                };
                 (
                     pass,
                     targets,
@@ -258,19 +362,9 @@ impl Renderer {
                         plans,
                         configs,
                         unpack,
+                        resolve,
                     },
                 )
-            }
-        };
-        let prepass = match (settings.id_prepass, settings.technique) {
-            (false, _) => None,
-            (true, Technique::Checkerboard { .. }) => {
-                Some(Prepass::new(gpu, shaders, &gpu_scene, w, h, &counter)?)
-            }
-            (true, Technique::Native) => {
-                return Err(GpuError::Other(
-                    "--id-prepass applies to the checkerboard technique".into(),
-                ));
             }
         };
         let profiler = Profiler::new(gpu, "renderer.profiler", 8)?;
@@ -284,6 +378,7 @@ impl Renderer {
             counter,
             profiler,
             settings,
+            last_frame: None,
         })
     }
 
@@ -297,6 +392,11 @@ impl Renderer {
             * crate::targets::BYTES_PER_SAMPLE
     }
 
+    /// Forgets the resolve's history: the next frame resolves without it (a camera cut).
+    pub fn reset_history(&mut self) {
+        self.last_frame = None;
+    }
+
     fn view(&self, scene: &Scene, frame: u32) -> FrameView {
         let time = scene.time_of_frame(frame);
         let prev_time = time - 1.0 / scene.settings.fps;
@@ -305,6 +405,7 @@ impl Renderer {
         if s.debug_lod {
             flags |= FLAG_DEBUG_LOD;
         }
+        let (mut width, mut height) = (s.width, s.height);
         let raster = match (&self.mode, s.technique) {
             (Mode::Checkerboard { plans, .. }, Technique::Checkerboard { lod_mode, .. }) => {
                 let plan = &plans[(frame % 2) as usize];
@@ -321,6 +422,14 @@ impl Renderer {
                     pieces: plan.pieces.clone(),
                 }
             }
+            (Mode::Upscale { low, .. }, _) => {
+                (width, height) = *low;
+                RasterUniforms {
+                    viewport: (low.0 as f32, low.1 as f32),
+                    flags,
+                    ..Default::default()
+                }
+            }
             _ => RasterUniforms {
                 viewport: (s.width as f32, s.height as f32),
                 flags,
@@ -332,21 +441,44 @@ impl Renderer {
             prev_camera: scene.camera.at(prev_time),
             time,
             prev_time,
-            width: s.width,
-            height: s.height,
+            width,
+            height,
+            aspect: f64::from(s.width) / f64::from(s.height),
             lod_bias: s.effective_lod_bias(),
             frame_index: frame,
             raster,
         }
     }
 
+    /// Previous clip from current clip (NDC x, NDC y, reverse-Z depth, 1), composed in f64 with
+    /// the camera translation, for the `intel` resolve's camera-only reprojection.
+    fn reprojection(&self, view: &FrameView) -> [f32; 16] {
+        let (cam, prev) = (&view.camera, &view.prev_camera);
+        let clip_from_rel = cam.projection(view.aspect) * cam.rotation();
+        let prev_clip_from_rel = prev.projection(view.aspect) * prev.rotation();
+        let m = prev_clip_from_rel
+            * glam::DMat4::from_translation(cam.position - prev.position)
+            * clip_from_rel.inverse();
+        m.as_mat4().to_cols_array()
+    }
+
     /// Renders frame `frame` of `scene` (the scene this renderer was built for) and reads it back.
     /// Checkerboard frames alternate parity: frame f shades the pixels with (x + y) mod 2 = f mod 2.
+    /// The resolve uses the history of frame f - 1 when that was the last frame rendered, and
+    /// resets otherwise.
     pub fn render(&mut self, scene: &Scene, frame: u32) -> Result<FrameOutput> {
         let view = self.view(scene, frame);
         self.scene.update(scene, &view)?;
         self.counter.write(0, &0u32.to_le_bytes())?;
         self.profiler.begin_frame();
+        let parity = frame % 2;
+        let reset = frame == 0 || self.last_frame != Some(frame - 1);
+        let resolve_frame = ResolveFrame {
+            slot: parity as usize,
+            parity,
+            reset,
+            reproj: self.reprojection(&view),
+        };
         let (pass, gs, targets, counter, profiler, mode) = (
             &self.pass,
             &self.scene,
@@ -356,7 +488,6 @@ impl Renderer {
             &self.mode,
         );
         let prepass = &self.prepass;
-        let parity = frame % 2;
         self.gpu.submit("frame", |cmd| {
             if let Some(p) = prepass {
                 // Native resolution: the frame constants' raster fields describe the checkerboard
@@ -367,7 +498,7 @@ impl Renderer {
                 cmd.read_image(&p.depth, &p.depth_rb);
             }
             let config = match mode {
-                Mode::Native { config, .. } => config,
+                Mode::Native { config, .. } | Mode::Upscale { config, .. } => config,
                 Mode::Checkerboard { configs, .. } => &configs[parity as usize],
             };
             pass.record(
@@ -379,22 +510,56 @@ impl Renderer {
                 counter,
                 config,
             );
+            let read_native = |cmd: &mut cbr_gpu::Cmd,
+                               profiler: &mut Profiler,
+                               rb: &NativeReadbacks,
+                               imgs: [&cbr_gpu::Image; 4]| {
+                let scope = profiler.begin(cmd, "readback", PassKind::Transfer);
+                cmd.read_image(imgs[0], &rb.color);
+                cmd.read_image(imgs[1], &rb.depth);
+                cmd.read_image(imgs[2], &rb.velocity);
+                cmd.read_image(imgs[3], &rb.ids);
+                profiler.end(cmd, scope);
+            };
             match mode {
-                Mode::Native { readbacks: rb, .. } => {
-                    let scope = profiler.begin(cmd, "readback", PassKind::Transfer);
-                    cmd.read_image(&targets.color, &rb.color);
-                    cmd.read_image(&targets.depth, &rb.depth);
-                    cmd.read_image(&targets.velocity, &rb.velocity);
-                    cmd.read_image(&targets.ids, &rb.ids);
-                    profiler.end(cmd, scope);
+                Mode::Native { readbacks: rb, .. } => read_native(
+                    cmd,
+                    profiler,
+                    rb,
+                    [
+                        &targets.color,
+                        &targets.depth,
+                        &targets.velocity,
+                        &targets.ids,
+                    ],
+                ),
+                Mode::Upscale {
+                    pass: up,
+                    readbacks: rb,
+                    ..
+                } => {
+                    up.record(cmd, profiler, targets);
+                    let o = &up.out;
+                    read_native(cmd, profiler, rb, [&o.color, &o.depth, &o.velocity, &o.ids]);
                 }
-                Mode::Checkerboard { plans, unpack, .. } => {
+                Mode::Checkerboard {
+                    plans,
+                    unpack,
+                    resolve,
+                    ..
+                } => {
+                    if let Some(r) = resolve {
+                        let pre = prepass.as_ref().map(|p| (&p.ids, &p.depth));
+                        r.pass.record(cmd, profiler, targets, pre, &resolve_frame);
+                        r.pass.read(cmd, resolve_frame.slot, &r.rb);
+                    }
                     unpack.record(cmd, profiler, targets, &plans[parity as usize])
                 }
             }
             cmd.use_buffer(counter, cbr_gpu::Access::HostRead);
             Ok(())
         })?;
+        self.last_frame = Some(frame);
         let timings = self.profiler.results()?;
         let near = view.camera.near as f32;
         let linear = |d: f32| if d > 0.0 { near / d } else { f32::INFINITY };
@@ -430,10 +595,11 @@ impl Renderer {
             parity,
             shaded_fragments: shaded,
             prepass: prepass.clone(),
+            resolve: None,
             timings: timings.clone(),
         };
-        Ok(match &self.mode {
-            Mode::Native { readbacks: rb, .. } => base(
+        let native_output = |rb: &NativeReadbacks| -> Result<FrameOutput> {
+            Ok(base(
                 bytemuck::cast_slice::<u8, f16>(rb.color.bytes()?).to_vec(),
                 bytemuck::cast_slice::<u8, f32>(rb.depth.bytes()?)
                     .iter()
@@ -443,10 +609,17 @@ impl Renderer {
                 bytemuck::cast_slice::<u8, [u32; 2]>(rb.ids.bytes()?).to_vec(),
                 None,
                 None,
-            ),
-            Mode::Checkerboard { unpack, .. } => {
+            ))
+        };
+        Ok(match &self.mode {
+            Mode::Native { readbacks: rb, .. } | Mode::Upscale { readbacks: rb, .. } => {
+                native_output(rb)?
+            }
+            Mode::Checkerboard {
+                unpack, resolve, ..
+            } => {
                 let px: &[UnpackedPixel] = bytemuck::cast_slice(unpack.out.bytes()?);
-                base(
+                let mut out = base(
                     px.iter().flat_map(|p| p.color.map(f16::from_f32)).collect(),
                     px.iter()
                         .map(|p| linear(p.velocity_depth_mask[2]))
@@ -461,7 +634,36 @@ impl Renderer {
                             .collect(),
                     ),
                     Some(parity),
-                )
+                );
+                if let Some(r) = resolve {
+                    // The resolved frame replaces the raw colour; depth, velocity, IDs and the
+                    // mask stay the raw checkerboard samples (what was rendered this frame).
+                    let f32_history = r.pass.settings().f32_history;
+                    out.color =
+                        r.rb.color_rgb(f32_history)?
+                            .iter()
+                            .flat_map(|c| [c[0], c[1], c[2], 1.0].map(f16::from_f32))
+                            .collect();
+                    let debug = r.pass.settings().debug;
+                    out.resolve = Some(ResolveOutput {
+                        reset,
+                        debug_bits: debug
+                            .then(|| {
+                                r.rb.debug_bits
+                                    .bytes()
+                                    .map(|b| bytemuck::cast_slice::<u8, u32>(b).to_vec())
+                            })
+                            .transpose()?,
+                        velocity: debug
+                            .then(|| {
+                                r.rb.debug_velocity
+                                    .bytes()
+                                    .map(|b| bytemuck::cast_slice::<u8, [f32; 2]>(b).to_vec())
+                            })
+                            .transpose()?,
+                    });
+                }
+                out
             }
         })
     }

@@ -38,8 +38,10 @@ impl FrameTargets {
         layers: u32,
         samples: u32,
     ) -> Result<FrameTargets> {
+        // TRANSFER_DST: tests upload synthetic samples (the resolve's CPU-reference test).
         let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT
             | vk::ImageUsageFlags::TRANSFER_SRC
+            | vk::ImageUsageFlags::TRANSFER_DST
             | vk::ImageUsageFlags::SAMPLED;
         let img = |name: &str, format, usage| {
             let name = format!("{prefix}.{name}");
@@ -57,6 +59,7 @@ impl FrameTargets {
                 DEPTH_FORMAT,
                 vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
                     | vk::ImageUsageFlags::TRANSFER_SRC
+                    | vk::ImageUsageFlags::TRANSFER_DST
                     | vk::ImageUsageFlags::SAMPLED,
             )?,
         })

@@ -32,6 +32,7 @@ fn render(gpu: &Gpu, s: &Scene, technique: Technique, frame: u32, count: bool) -
         count_shaded: count,
         debug_lod: false,
         id_prepass: false,
+        resolve: None,
     };
     let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
     r.render(s, frame).expect("frame")
@@ -248,6 +249,7 @@ fn msaa2x_equals_native_where_2x_msaa_exists() {
                 count_shaded: false,
                 debug_lod: false,
                 id_prepass: false,
+                resolve: None,
             },
         )
         .err()
@@ -324,6 +326,7 @@ fn lod_difference(
             count_shaded: false,
             debug_lod: true,
             id_prepass: false,
+            resolve: None,
         };
         Renderer::new(gpu, &shaders, s, settings)
             .expect("renderer")
@@ -421,6 +424,7 @@ fn id_prepass_equals_natives_depth_and_ids() {
             count_shaded: false,
             debug_lod: false,
             id_prepass: true,
+            resolve: None,
         };
         let mut r = Renderer::new(&gpu, &shaders, &s, settings).expect("renderer");
         // Native's own LOD: alpha-tested foliage must cover the same pixels in both.
@@ -456,6 +460,7 @@ fn id_prepass_equals_natives_depth_and_ids() {
         &s,
         RenderSettings {
             id_prepass: true,
+            resolve: None,
             ..RenderSettings::native(96, 54)
         },
     )

@@ -9,7 +9,11 @@ use cbr_gpu::Layout;
 use cbr_gpu::{Gpu, GpuOptions};
 use cbr_metrics::DisplayTransform;
 use cbr_metrics::io::{FrameLayers, write_bytes, write_frame_exr, write_png_rgba8};
-use cbr_render::{LodMode, RenderSettings, Renderer};
+use cbr_render::resolve::{Ablation, DEBUG_VIEWS};
+use cbr_render::upscale::UpscaleFilter;
+use cbr_render::{
+    FrameOutput, LodMode, Mapping, RenderSettings, Renderer, ResolveMode, ResolveSettings,
+};
 use cbr_scene::{LoadOptions, MissingTextures, check_resolution};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
@@ -23,6 +27,33 @@ pub enum Technique {
     Native,
     /// Half the pixels per frame, alternating parity (`--layout`, `--resolve`).
     Checkerboard,
+    /// Render at W/sqrt(2) x H/sqrt(2) (the checkerboard's pixel count), then upscale
+    /// (`--filter`): the baseline checkerboard must beat.
+    Upscale,
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum FilterArg {
+    Bilinear,
+    /// Catmull-Rom.
+    Bicubic,
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum MappingArg {
+    /// One output pixel per invocation.
+    Pixel,
+    /// One 2x2 quad (2 rendered + 2 missing pixels) per invocation.
+    Quad,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, clap::ValueEnum)]
+pub enum AblationArg {
+    Velocity,
+    Depth,
+    Ids,
+    Clamp,
+    Prepass,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -41,6 +72,17 @@ pub enum LayoutArg {
 pub enum ResolveArg {
     /// The raw checkerboard frame at full resolution: missing pixels have alpha 0, and a `mask` layer.
     None,
+    /// History validated by object ID and depth at p - v, YCoCg clamp when moving; else an
+    /// ID-aware differential blend of the neighbour pairs.
+    Ours,
+    /// The Stadia write-up: average of 4; history at p - v clamped and blended when moving.
+    Pq4k,
+    /// Camera-only reprojection from depth, depth occlusion test, Reinhard-weighted average of 4.
+    Intel,
+    /// No history: `ours`' spatial blend.
+    Spatial,
+    /// History at p - v without validation or clamp.
+    Temporal,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -82,9 +124,36 @@ pub struct RenderArgs {
     /// Checkerboard layout.
     #[arg(long, value_enum, default_value = "rotated")]
     layout: LayoutArg,
-    /// How checkerboard frames are reconstructed (the resolve comes with a later issue).
-    #[arg(long, value_enum, default_value = "none")]
+    /// How checkerboard frames are reconstructed (docs/resolve.md).
+    #[arg(long, value_enum, default_value = "ours")]
     resolve: ResolveArg,
+    /// Resolve thread mapping.
+    #[arg(long, value_enum, default_value = "quad")]
+    resolve_mapping: MappingArg,
+    /// Resolve workgroup side (8 or 16).
+    #[arg(long, default_value_t = 8, value_parser = clap::builder::ValueParser::new(parse_group))]
+    resolve_group: u32,
+    /// Resolve colour arithmetic in float16.
+    #[arg(long)]
+    resolve_fp16: bool,
+    /// Store the resolve's history colour as RGBA32F (default RGBA16F).
+    #[arg(long)]
+    resolve_f32_history: bool,
+    /// Write the resolve's debug views: EXR layers resolve_* and PNGs debug/*.png.
+    #[arg(long)]
+    resolve_debug: bool,
+    /// Switch inputs of `ours` off for ablation (comma-separated).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    resolve_without: Vec<AblationArg>,
+    /// Relative linear-depth tolerance of the history validation.
+    #[arg(long, default_value_t = 0.05)]
+    depth_tolerance: f32,
+    /// Also time a copy kernel moving the resolve's minimum bytes (its bandwidth floor).
+    #[arg(long)]
+    bandwidth_floor: bool,
+    /// Upscale filter.
+    #[arg(long, value_enum, default_value = "bilinear")]
+    filter: FilterArg,
     /// Texture LOD bias added to every lookup (default: the technique's matching bias).
     #[arg(long, allow_hyphen_values = true)]
     lod_bias: Option<f32>,
@@ -104,6 +173,14 @@ pub struct RenderArgs {
     /// What to do when a texture named by an MTL cannot be read.
     #[arg(long, value_enum)]
     missing_textures: Option<MissingTexturesArg>,
+}
+
+fn parse_group(s: &str) -> std::result::Result<u32, String> {
+    match s {
+        "8" => Ok(8),
+        "16" => Ok(16),
+        _ => Err(format!("{s} (the resolve group is 8 or 16)")),
+    }
 }
 
 fn env_flag(name: &str) -> bool {
@@ -156,6 +233,16 @@ pub fn run(a: &RenderArgs) -> Result<()> {
                 LodModeArg::Gradients => LodMode::Gradients,
             },
         },
+        Technique::Upscale => cbr_render::Technique::Upscale {
+            filter: match a.filter {
+                FilterArg::Bilinear => UpscaleFilter::Bilinear,
+                FilterArg::Bicubic => UpscaleFilter::Bicubic,
+            },
+        },
+    };
+    let resolve = match (a.technique, a.resolve_settings()) {
+        (Technique::Checkerboard, r) => r,
+        _ => None,
     };
     let settings = RenderSettings {
         width: scene.settings.width,
@@ -165,6 +252,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         count_shaded: a.count_shaded,
         debug_lod: false,
         id_prepass: a.id_prepass,
+        resolve,
     };
     let mut renderer =
         Renderer::new(&gpu, &shaders, &scene, settings.clone()).with_context(|| {
@@ -213,10 +301,12 @@ pub fn run(a: &RenderArgs) -> Result<()> {
                     .prepass
                     .as_ref()
                     .map(|(d, i)| (d.as_slice(), i.as_slice())),
+                extra: debug_layers(&out),
                 metadata: meta,
             },
         )?;
         write_png_rgba8(&png, out.width, out.height, &display.to_rgba8(&out.color))?;
+        write_debug_pngs(&a.out, f, &out)?;
         for t in &out.timings {
             pass_times.entry(t.name.clone()).or_default().push(t.gpu_ms);
         }
@@ -227,6 +317,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             "png": file_name(&png),
             "passes": out.timings,
             "parity": out.parity,
+            "resolve_reset": out.resolve.as_ref().map(|r| r.reset),
             "shaded_fragments": out.shaded_fragments,
         }));
         bar.inc(1);
@@ -263,7 +354,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             "fps": scene.settings.fps,
             "lod_bias": settings.effective_lod_bias(),
             "lod_mode": a.lod_mode_name(),
-            "resolve": if matches!(a.technique, Technique::Checkerboard) { "none" } else { "-" },
+            "resolve": settings.resolve,
             "count_shaded": settings.count_shaded,
             "id_prepass": settings.id_prepass,
             "depth": "reverse-Z D32 with an infinite far plane; the EXR depth layer holds view-space distance along the camera axis (+inf where empty)",
@@ -296,12 +387,122 @@ pub fn run(a: &RenderArgs) -> Result<()> {
 }
 
 impl RenderArgs {
+    fn resolve_settings(&self) -> Option<ResolveSettings> {
+        let mode = match self.resolve {
+            ResolveArg::None => return None,
+            ResolveArg::Ours => ResolveMode::Ours,
+            ResolveArg::Pq4k => ResolveMode::Pq4k,
+            ResolveArg::Intel => ResolveMode::Intel,
+            ResolveArg::Spatial => ResolveMode::Spatial,
+            ResolveArg::Temporal => ResolveMode::Temporal,
+        };
+        let off = |x| self.resolve_without.contains(&x);
+        Some(ResolveSettings {
+            mode,
+            mapping: match self.resolve_mapping {
+                MappingArg::Pixel => Mapping::Pixel,
+                MappingArg::Quad => Mapping::Quad,
+            },
+            group: self.resolve_group,
+            fp16: self.resolve_fp16,
+            f32_history: self.resolve_f32_history,
+            debug: self.resolve_debug,
+            depth_tolerance: self.depth_tolerance,
+            ablation: Ablation {
+                velocity: !off(AblationArg::Velocity),
+                depth: !off(AblationArg::Depth),
+                ids: !off(AblationArg::Ids),
+                clamp: !off(AblationArg::Clamp),
+                prepass: !off(AblationArg::Prepass),
+            },
+            bandwidth_floor: self.bandwidth_floor,
+            ..ResolveSettings::default()
+        })
+    }
+
     fn lod_mode_name(&self) -> &'static str {
         match self.lod_mode {
             LodModeArg::Bias => "bias",
             LodModeArg::Gradients => "gradients",
         }
     }
+}
+
+/// The resolve's debug views as EXR layers: one 0/1 layer per bit (`resolve_parity`,
+/// `resolve_missing`, ...), `resolve_velocity` (X, Y) and `resolve_object_id` is the raw layer.
+fn debug_layers(out: &FrameOutput) -> Vec<cbr_metrics::io::ExtraLayer> {
+    let Some(r) = &out.resolve else {
+        return Vec::new();
+    };
+    let mut layers = Vec::new();
+    if let Some(bits) = &r.debug_bits {
+        for (name, bit) in DEBUG_VIEWS {
+            let v = bits
+                .iter()
+                .map(|b| f32::from(u8::from(b & bit != 0)))
+                .collect();
+            layers.push((format!("resolve_{name}"), vec![("Y".to_string(), v)]));
+        }
+    }
+    if let Some(v) = &r.velocity {
+        layers.push((
+            "resolve_velocity".to_string(),
+            vec![
+                ("X".to_string(), v.iter().map(|v| v[0]).collect()),
+                ("Y".to_string(), v.iter().map(|v| v[1]).collect()),
+            ],
+        ));
+    }
+    layers
+}
+
+/// PNGs of the debug views: debug/frame_NNNN_<view>.png (white where the bit is set), the
+/// velocity (|v| on a log scale, 0..16 px) and the object IDs (hashed colours).
+fn write_debug_pngs(dir: &Path, f: u32, out: &FrameOutput) -> Result<()> {
+    let Some(r) = &out.resolve else {
+        return Ok(());
+    };
+    let Some(bits) = &r.debug_bits else {
+        return Ok(());
+    };
+    let dbg = dir.join("debug");
+    std::fs::create_dir_all(&dbg).with_context(|| format!("cannot create {}", dbg.display()))?;
+    let (w, h) = (out.width, out.height);
+    let png = |name: &str, rgba: Vec<u8>| {
+        write_png_rgba8(&dbg.join(format!("frame_{f:04}_{name}.png")), w, h, &rgba)
+    };
+    for (name, bit) in DEBUG_VIEWS {
+        let rgba = bits
+            .iter()
+            .flat_map(|b| {
+                let v = if b & bit != 0 { 255 } else { 0 };
+                [v, v, v, 255]
+            })
+            .collect();
+        png(name, rgba)?;
+    }
+    if let Some(v) = &r.velocity {
+        let rgba = v
+            .iter()
+            .flat_map(|v| {
+                let len = (v[0] * v[0] + v[1] * v[1]).sqrt();
+                let t = ((1.0 + len).log2() / 17f32.log2()).clamp(0.0, 1.0);
+                let g = (t * 255.0).round() as u8;
+                [g, g, g, 255]
+            })
+            .collect();
+        png("velocity", rgba)?;
+    }
+    let rgba = out
+        .ids
+        .iter()
+        .flat_map(|id| {
+            let hsh = id[0].wrapping_mul(2654435761);
+            [(hsh >> 24) as u8, (hsh >> 16) as u8, (hsh >> 8) as u8, 255]
+        })
+        .collect();
+    png("ids", rgba)?;
+    Ok(())
 }
 
 fn file_name(p: &Path) -> String {

@@ -1,0 +1,704 @@
+//! The checkerboard resolve (shaders/resolve/resolve.comp, docs/resolve.md): reconstructs the full
+//! frame from this frame's checkerboard samples (read through the layout fetch include, so every
+//! layout works) and the previous resolved frame, with history ping-pong of colour, depth and IDs.
+//! `reference` is the CPU implementation the shader is tested against.
+
+pub mod reference;
+
+use cbr_gpu::{
+    Access, BindingDesc, Buffer, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Gpu, GpuError,
+    Image, ImageDesc, LevelCopy, Location, PassKind, Pipeline, Profiler, Readback, Result, Sampler,
+    SamplerDesc, SetLayout, Shaders, Write, vk,
+};
+
+use crate::layouts::LayoutPlan;
+use crate::native::layout_id;
+use crate::targets::FrameTargets;
+
+/// `--resolve`: how missing pixels are reconstructed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ResolveMode {
+    /// ID-, depth- and velocity-validated history with a YCoCg clamp, else an ID-aware
+    /// differential spatial blend.
+    Ours,
+    /// The Stadia write-up's resolve.
+    Pq4k,
+    /// Camera-only depth reprojection with a depth occlusion test, else a Reinhard-weighted
+    /// average of the four neighbours.
+    Intel,
+    /// No history: `ours`' spatial blend everywhere.
+    Spatial,
+    /// History at p - v, no validation, no clamp.
+    Temporal,
+}
+
+impl ResolveMode {
+    pub const ALL: [ResolveMode; 5] = [
+        ResolveMode::Ours,
+        ResolveMode::Pq4k,
+        ResolveMode::Intel,
+        ResolveMode::Spatial,
+        ResolveMode::Temporal,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ResolveMode::Ours => "ours",
+            ResolveMode::Pq4k => "pq4k",
+            ResolveMode::Intel => "intel",
+            ResolveMode::Spatial => "spatial",
+            ResolveMode::Temporal => "temporal",
+        }
+    }
+
+    fn id(self) -> u32 {
+        self as u32
+    }
+}
+
+/// `--resolve-mapping`: what one compute invocation writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Mapping {
+    /// One output pixel.
+    Pixel,
+    /// One 2x2 quad: its 2 rendered and 2 missing pixels.
+    Quad,
+}
+
+/// Inputs of `ours` that can be switched off for ablation (all on by default).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct Ablation {
+    pub velocity: bool,
+    pub depth: bool,
+    pub ids: bool,
+    pub clamp: bool,
+    /// Use the native-resolution depth + ID prepass when the renderer has one.
+    pub prepass: bool,
+}
+
+impl Default for Ablation {
+    fn default() -> Self {
+        Ablation {
+            velocity: true,
+            depth: true,
+            ids: true,
+            clamp: true,
+            prepass: true,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct ResolveSettings {
+    pub mode: ResolveMode,
+    pub mapping: Mapping,
+    /// Workgroup side: 8 or 16.
+    pub group: u32,
+    /// Colour arithmetic in float16.
+    pub fp16: bool,
+    /// History colour stored as RGBA32F instead of RGBA16F.
+    pub f32_history: bool,
+    /// Write the debug bits and the velocity used (extra EXR layers and PNGs).
+    pub debug: bool,
+    /// Relative linear-depth tolerance of the history validation (`ours`, `intel`).
+    pub depth_tolerance: f32,
+    /// Below this motion (pixels) `ours` takes validated history unclamped.
+    pub static_threshold: f32,
+    /// `pq4k`: above this motion (pixels) history is clamped and blended with the average.
+    pub motion_threshold: f32,
+    /// `ours`: the smallest total bilinear weight of valid history taps that counts as history.
+    pub min_history_weight: f32,
+    pub ablation: Ablation,
+    /// Also run a copy kernel that moves the resolve's minimum bytes (its bandwidth floor).
+    pub bandwidth_floor: bool,
+}
+
+impl Default for ResolveSettings {
+    fn default() -> Self {
+        ResolveSettings {
+            mode: ResolveMode::Ours,
+            mapping: Mapping::Quad,
+            group: 8,
+            fp16: false,
+            f32_history: false,
+            debug: false,
+            depth_tolerance: 0.05,
+            static_threshold: 1.0 / 64.0,
+            motion_threshold: 0.25,
+            min_history_weight: 0.25,
+            ablation: Ablation::default(),
+            bandwidth_floor: false,
+        }
+    }
+}
+
+/// Push-constant flags (F_* in resolve.comp).
+pub const F_RESET: u32 = 1;
+pub const F_NO_VELOCITY: u32 = 2;
+pub const F_NO_DEPTH: u32 = 4;
+pub const F_NO_IDS: u32 = 8;
+pub const F_NO_CLAMP: u32 = 16;
+pub const F_PREPASS: u32 = 32;
+
+/// Debug bits (DBG_* in resolve.comp).
+pub const DBG_RENDERED: u32 = 1;
+pub const DBG_MISSING: u32 = 2;
+pub const DBG_REPROJECTED: u32 = 4;
+pub const DBG_REJECT_ID: u32 = 8;
+pub const DBG_REJECT_DEPTH: u32 = 16;
+pub const DBG_CLAMPED: u32 = 32;
+pub const DBG_SPATIAL: u32 = 64;
+
+/// The debug views: (name, bit).
+pub const DEBUG_VIEWS: [(&str, u32); 7] = [
+    ("parity", DBG_RENDERED),
+    ("missing", DBG_MISSING),
+    ("reprojected", DBG_REPROJECTED),
+    ("rejected_id", DBG_REJECT_ID),
+    ("rejected_depth", DBG_REJECT_DEPTH),
+    ("clamped", DBG_CLAMPED),
+    ("spatial", DBG_SPATIAL),
+];
+
+impl ResolveSettings {
+    pub fn flags(&self, reset: bool, prepass: bool) -> u32 {
+        let a = &self.ablation;
+        let mut f = 0;
+        if reset {
+            f |= F_RESET;
+        }
+        if !a.velocity {
+            f |= F_NO_VELOCITY;
+        }
+        if !a.depth {
+            f |= F_NO_DEPTH;
+        }
+        if !a.ids {
+            f |= F_NO_IDS;
+        }
+        if !a.clamp {
+            f |= F_NO_CLAMP;
+        }
+        if prepass && a.prepass {
+            f |= F_PREPASS;
+        }
+        f
+    }
+
+    pub fn params(&self) -> [f32; 4] {
+        [
+            self.depth_tolerance,
+            self.static_threshold,
+            self.motion_threshold,
+            self.min_history_weight,
+        ]
+    }
+
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        if self.group != 8 && self.group != 16 {
+            return Err(format!("resolve group {} (8 or 16)", self.group));
+        }
+        if !(self.depth_tolerance >= 0.0 && self.depth_tolerance.is_finite()) {
+            return Err(format!("depth tolerance {}", self.depth_tolerance));
+        }
+        Ok(())
+    }
+}
+
+pub const BINDINGS: [BindingDesc; 14] = {
+    const fn b(name: &'static str, binding: u32, kind: DescriptorKind) -> BindingDesc {
+        BindingDesc {
+            name,
+            binding,
+            kind,
+            count: 1,
+        }
+    }
+    use DescriptorKind::{CombinedImageSampler as S, StorageImage as I};
+    [
+        b("color", 0, S),
+        b("velocity", 1, S),
+        b("ids", 2, S),
+        b("depth", 3, S),
+        b("hist_color", 4, S),
+        b("hist_depth", 5, S),
+        b("hist_ids", 6, S),
+        b("pre_depth", 7, S),
+        b("pre_ids", 8, S),
+        b("out_color", 9, I),
+        b("out_depth", 10, I),
+        b("out_ids", 11, I),
+        b("debug_bits", 12, I),
+        b("debug_velocity", 13, I),
+    ]
+};
+
+/// The push constants of resolve.comp (112 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ResolvePush {
+    pub size_parity_side: [i32; 4],
+    pub flags: [u32; 4],
+    pub params: [f32; 4],
+    /// Column-major: previous clip from current (NDC x, NDC y, depth, 1).
+    pub reproj: [f32; 16],
+}
+
+/// What one frame's resolve needs besides the samples.
+#[derive(Clone, Copy, Debug)]
+pub struct ResolveFrame {
+    /// Which history slot to write (frame index mod 2); the other is read.
+    pub slot: usize,
+    pub parity: u32,
+    /// No usable history.
+    pub reset: bool,
+    pub reproj: [f32; 16],
+}
+
+/// One history slot: the resolved colour and the depth and object ID it shows.
+pub struct History {
+    pub color: Image,
+    pub depth: Image,
+    pub ids: Image,
+}
+
+pub const HISTORY_DEPTH_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
+pub const HISTORY_IDS_FORMAT: vk::Format = vk::Format::R32_UINT;
+
+pub struct ResolvePass {
+    pipeline: Pipeline,
+    _layout: SetLayout,
+    sets: [DescriptorSet; 2],
+    _sampler: Sampler,
+    pub history: [History; 2],
+    pub debug_bits: Image,
+    pub debug_velocity: Image,
+    floor: Option<CopyFloor>,
+    settings: ResolveSettings,
+    width: u32,
+    height: u32,
+    tangram: u32,
+    has_prepass: bool,
+}
+
+impl ResolvePass {
+    /// `prepass`: the native-resolution ID (RG32UI) and depth images, when the renderer has them.
+    pub fn new(
+        gpu: &Gpu,
+        shaders: &Shaders,
+        settings: &ResolveSettings,
+        plan: &LayoutPlan,
+        targets: &FrameTargets,
+        prepass: Option<(&Image, &Image)>,
+    ) -> Result<ResolvePass> {
+        settings.validate().map_err(GpuError::Other)?;
+        let (w, h) = (plan.width, plan.height);
+        if w < 2 || h < 2 {
+            return Err(GpuError::Other(format!(
+                "the checkerboard resolve needs at least 2x2 pixels, not {w}x{h}"
+            )));
+        }
+        if settings.fp16 && !gpu.caps().shader_float16 {
+            return Err(GpuError::Unsupported {
+                device: gpu.info().name.clone(),
+                feature: "--resolve-fp16 (shaderFloat16)".into(),
+            });
+        }
+        let layout = SetLayout::new(gpu, "resolve.set_layout", &BINDINGS)?;
+        let mut defines: Vec<(String, String)> = BINDINGS.iter().map(BindingDesc::define).collect();
+        let out_format = if settings.f32_history {
+            "rgba32f"
+        } else {
+            "rgba16f"
+        };
+        for (k, v) in [
+            ("LAYOUT", layout_id(plan.layout).to_string()),
+            ("MODE", settings.mode.id().to_string()),
+            (
+                "MAPPING",
+                u32::from(settings.mapping == Mapping::Quad).to_string(),
+            ),
+            ("GROUP", settings.group.to_string()),
+            ("FP16", u32::from(settings.fp16).to_string()),
+            ("OUT_FORMAT", out_format.to_string()),
+            ("DEBUG", u32::from(settings.debug).to_string()),
+        ] {
+            defines.push((k.into(), v));
+        }
+        let cs = shaders.compile("resolve/resolve.comp", &defines)?;
+        let pipeline = Pipeline::compute(
+            gpu,
+            &ComputeDesc {
+                name: "resolve",
+                shader: &cs,
+                set_layouts: &[&layout],
+                push_constant_bytes: std::mem::size_of::<ResolvePush>() as u32,
+            },
+        )?;
+        let sampler = Sampler::new(
+            gpu,
+            "resolve.sampler",
+            SamplerDesc {
+                linear: false,
+                mipmaps: false,
+                repeat: false,
+            },
+        )?;
+        let usage = vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::TRANSFER_SRC
+            | vk::ImageUsageFlags::TRANSFER_DST;
+        let image =
+            |name: &str, format| Image::new(gpu, &ImageDesc::new_2d(name, format, w, h, usage));
+        let color_format = if settings.f32_history {
+            vk::Format::R32G32B32A32_SFLOAT
+        } else {
+            vk::Format::R16G16B16A16_SFLOAT
+        };
+        let slot = |k: usize| -> Result<History> {
+            Ok(History {
+                color: image(&format!("resolve.history[{k}].color"), color_format)?,
+                depth: image(&format!("resolve.history[{k}].depth"), HISTORY_DEPTH_FORMAT)?,
+                ids: image(&format!("resolve.history[{k}].ids"), HISTORY_IDS_FORMAT)?,
+            })
+        };
+        let history = [slot(0)?, slot(1)?];
+        let debug_bits = image("resolve.debug_bits", vk::Format::R32_UINT)?;
+        let debug_velocity = image("resolve.debug_velocity", vk::Format::R32G32_SFLOAT)?;
+        let set = |k: usize| -> Result<DescriptorSet> {
+            let (out, prev) = (&history[k], &history[1 - k]);
+            // Without a prepass its bindings hold the previous depth and IDs, never read.
+            let (pre_ids, pre_depth) = prepass.unwrap_or((&prev.ids, &prev.depth));
+            DescriptorSet::new(
+                gpu,
+                &format!("resolve.set[{k}]"),
+                &layout,
+                &[
+                    Write::Sampled(0, vec![(&targets.color, &sampler)]),
+                    Write::Sampled(1, vec![(&targets.velocity, &sampler)]),
+                    Write::Sampled(2, vec![(&targets.ids, &sampler)]),
+                    Write::Sampled(3, vec![(&targets.depth, &sampler)]),
+                    Write::Sampled(4, vec![(&prev.color, &sampler)]),
+                    Write::Sampled(5, vec![(&prev.depth, &sampler)]),
+                    Write::Sampled(6, vec![(&prev.ids, &sampler)]),
+                    Write::Sampled(7, vec![(pre_depth, &sampler)]),
+                    Write::Sampled(8, vec![(pre_ids, &sampler)]),
+                    Write::Storage(9, &out.color),
+                    Write::Storage(10, &out.depth),
+                    Write::Storage(11, &out.ids),
+                    Write::Storage(12, &debug_bits),
+                    Write::Storage(13, &debug_velocity),
+                ],
+            )
+        };
+        let sets = [set(0)?, set(1)?];
+        let floor = if settings.bandwidth_floor {
+            Some(CopyFloor::new(gpu, shaders, w, h, settings.f32_history)?)
+        } else {
+            None
+        };
+        Ok(ResolvePass {
+            pipeline,
+            _layout: layout,
+            sets,
+            _sampler: sampler,
+            history,
+            debug_bits,
+            debug_velocity,
+            floor,
+            settings: *settings,
+            width: w,
+            height: h,
+            tangram: plan.tangram,
+            has_prepass: prepass.is_some(),
+        })
+    }
+
+    pub fn settings(&self) -> &ResolveSettings {
+        &self.settings
+    }
+
+    /// The resolved colour written by the frame that used `slot`.
+    pub fn output(&self, slot: usize) -> &Image {
+        &self.history[slot].color
+    }
+
+    /// Records the resolve of one frame (the raster targets are complete), then the copy floor.
+    pub fn record(
+        &self,
+        cmd: &mut Cmd,
+        profiler: &mut Profiler,
+        targets: &FrameTargets,
+        prepass: Option<(&Image, &Image)>,
+        frame: &ResolveFrame,
+    ) {
+        let (out, prev) = (&self.history[frame.slot], &self.history[1 - frame.slot]);
+        for img in [
+            &targets.color,
+            &targets.velocity,
+            &targets.ids,
+            &targets.depth,
+            &prev.color,
+            &prev.depth,
+            &prev.ids,
+        ] {
+            cmd.use_image(img, Access::ComputeSampled);
+        }
+        if let Some((ids, depth)) = prepass {
+            cmd.use_image(ids, Access::ComputeSampled);
+            cmd.use_image(depth, Access::ComputeSampled);
+        }
+        for img in [
+            &out.color,
+            &out.depth,
+            &out.ids,
+            &self.debug_bits,
+            &self.debug_velocity,
+        ] {
+            cmd.use_image(img, Access::ComputeStorageWrite);
+        }
+        let push = ResolvePush {
+            size_parity_side: [
+                self.width as i32,
+                self.height as i32,
+                frame.parity as i32,
+                self.tangram as i32,
+            ],
+            flags: [self.settings.flags(frame.reset, self.has_prepass), 0, 0, 0],
+            params: self.settings.params(),
+            reproj: frame.reproj,
+        };
+        let (gx, gy) = self.groups();
+        let scope = profiler.begin(cmd, "resolve", PassKind::Compute);
+        cmd.bind_pipeline(&self.pipeline);
+        cmd.bind_set(&self.pipeline, 0, &self.sets[frame.slot]);
+        cmd.push_constants(&self.pipeline, bytemuck::bytes_of(&push));
+        cmd.dispatch(gx, gy, 1);
+        profiler.end(cmd, scope);
+        if let Some(f) = &self.floor {
+            f.record(cmd, profiler);
+        }
+    }
+
+    /// Workgroups of the dispatch.
+    pub fn groups(&self) -> (u32, u32) {
+        let g = self.settings.group;
+        match self.settings.mapping {
+            Mapping::Pixel => (self.width.div_ceil(g), self.height.div_ceil(g)),
+            Mapping::Quad => (
+                self.width.div_ceil(2).div_ceil(g),
+                self.height.div_ceil(2).div_ceil(g),
+            ),
+        }
+    }
+
+    /// Fills history slot `slot` (read by the next frame that writes the other slot): colour
+    /// (RGB, converted to the history format), reverse-Z depth and object IDs. Tests use it to
+    /// start from a known history; the staging buffer lives until the submission completes.
+    pub fn seed_history(
+        &self,
+        gpu: &Gpu,
+        slot: usize,
+        color: &[[f32; 3]],
+        depth: &[f32],
+        ids: &[u32],
+    ) -> Result<()> {
+        let n = (self.width * self.height) as usize;
+        if color.len() != n || depth.len() != n || ids.len() != n {
+            return Err(GpuError::Other("seed_history: wrong sizes".into()));
+        }
+        let mut bytes: Vec<u8> = Vec::new();
+        if self.settings.f32_history {
+            for c in color {
+                bytes.extend_from_slice(bytemuck::cast_slice(&[c[0], c[1], c[2], 1.0]));
+            }
+        } else {
+            for c in color {
+                let h = [c[0], c[1], c[2], 1.0].map(half::f16::from_f32);
+                bytes.extend_from_slice(bytemuck::cast_slice(&h));
+            }
+        }
+        let depth_at = bytes.len() as u64;
+        bytes.extend_from_slice(bytemuck::cast_slice(depth));
+        let ids_at = bytes.len() as u64;
+        bytes.extend_from_slice(bytemuck::cast_slice(ids));
+        let mut staging = Buffer::new(
+            gpu,
+            "resolve.seed",
+            bytes.len() as u64,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            Location::CpuToGpu,
+        )?;
+        staging.write(0, &bytes)?;
+        let h = &self.history[slot];
+        let level = |offset| {
+            [LevelCopy {
+                buffer_offset: offset,
+                level: 0,
+                width: self.width,
+                height: self.height,
+            }]
+        };
+        gpu.submit("resolve.seed_history", |cmd| {
+            cmd.upload_levels(&staging, &h.color, &level(0), Access::ComputeSampled);
+            cmd.upload_levels(&staging, &h.depth, &level(depth_at), Access::ComputeSampled);
+            cmd.upload_levels(&staging, &h.ids, &level(ids_at), Access::ComputeSampled);
+            Ok(())
+        })
+    }
+
+    /// Readbacks sized for the resolved colour, the debug bits and the debug velocity.
+    pub fn readbacks(&self, gpu: &Gpu) -> Result<ResolveReadbacks> {
+        Ok(ResolveReadbacks {
+            color: Readback::for_image(gpu, "readback.resolved", &self.history[0].color)?,
+            depth: Readback::for_image(gpu, "readback.resolved_depth", &self.history[0].depth)?,
+            ids: Readback::for_image(gpu, "readback.resolved_ids", &self.history[0].ids)?,
+            debug_bits: Readback::for_image(gpu, "readback.resolve_debug", &self.debug_bits)?,
+            debug_velocity: Readback::for_image(
+                gpu,
+                "readback.resolve_velocity",
+                &self.debug_velocity,
+            )?,
+        })
+    }
+
+    /// Records the copies of the frame's outputs (slot `slot`) into `rb`.
+    pub fn read(&self, cmd: &mut Cmd, slot: usize, rb: &ResolveReadbacks) {
+        let h = &self.history[slot];
+        cmd.read_image(&h.color, &rb.color);
+        cmd.read_image(&h.depth, &rb.depth);
+        cmd.read_image(&h.ids, &rb.ids);
+        if self.settings.debug {
+            cmd.read_image(&self.debug_bits, &rb.debug_bits);
+            cmd.read_image(&self.debug_velocity, &rb.debug_velocity);
+        }
+    }
+}
+
+pub struct ResolveReadbacks {
+    pub color: Readback,
+    pub depth: Readback,
+    pub ids: Readback,
+    pub debug_bits: Readback,
+    pub debug_velocity: Readback,
+}
+
+impl ResolveReadbacks {
+    /// The resolved colour as RGB f32, whatever the history format.
+    pub fn color_rgb(&self, f32_history: bool) -> Result<Vec<[f32; 3]>> {
+        let b = self.color.bytes()?;
+        Ok(if f32_history {
+            bytemuck::cast_slice::<u8, [f32; 4]>(b)
+                .iter()
+                .map(|c| [c[0], c[1], c[2]])
+                .collect()
+        } else {
+            bytemuck::cast_slice::<u8, [half::f16; 4]>(b)
+                .iter()
+                .map(|c| [c[0].to_f32(), c[1].to_f32(), c[2].to_f32()])
+                .collect()
+        })
+    }
+}
+
+/// The bandwidth floor of the resolve: a compute copy that reads and writes as many bytes as the
+/// resolve must at least (every rendered sample's colour, velocity, IDs and depth, one history
+/// texel of colour, depth and ID per missing pixel; one colour, depth and ID per output pixel),
+/// as 16-byte words, in the same command buffer.
+pub struct CopyFloor {
+    pipeline: Pipeline,
+    _layout: SetLayout,
+    set: DescriptorSet,
+    _src: Buffer,
+    _dst: Buffer,
+    words_in: u32,
+    words_out: u32,
+}
+
+pub const COPY_BINDINGS: [BindingDesc; 2] = [
+    BindingDesc {
+        name: "src",
+        binding: 0,
+        kind: DescriptorKind::StorageBuffer,
+        count: 1,
+    },
+    BindingDesc {
+        name: "dst",
+        binding: 1,
+        kind: DescriptorKind::StorageBuffer,
+        count: 1,
+    },
+];
+
+impl CopyFloor {
+    /// Bytes the resolve of a W x H frame reads and writes at least.
+    pub fn bytes(width: u32, height: u32, f32_history: bool) -> (u64, u64) {
+        let px = u64::from(width) * u64::from(height);
+        let color = if f32_history { 16 } else { 8 };
+        let sample = crate::targets::BYTES_PER_SAMPLE;
+        let read = px.div_ceil(2) * sample + (px / 2) * (color + 4 + 4);
+        let write = px * (color + 4 + 4);
+        (read, write)
+    }
+
+    fn new(gpu: &Gpu, shaders: &Shaders, w: u32, h: u32, f32_history: bool) -> Result<CopyFloor> {
+        let (read, write) = CopyFloor::bytes(w, h, f32_history);
+        let layout = SetLayout::new(gpu, "copy_floor.set_layout", &COPY_BINDINGS)?;
+        let defines: Vec<(String, String)> =
+            COPY_BINDINGS.iter().map(BindingDesc::define).collect();
+        let cs = shaders.compile("resolve/copy_floor.comp", &defines)?;
+        let pipeline = Pipeline::compute(
+            gpu,
+            &ComputeDesc {
+                name: "resolve.copy_floor",
+                shader: &cs,
+                set_layouts: &[&layout],
+                push_constant_bytes: 8,
+            },
+        )?;
+        let words_in = read.div_ceil(16) as u32;
+        let words_out = write.div_ceil(16) as u32;
+        let buf = |name, words: u32| {
+            Buffer::new(
+                gpu,
+                name,
+                u64::from(words) * 16,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                Location::GpuOnly,
+            )
+        };
+        let src = buf("copy_floor.src", words_in)?;
+        let dst = buf("copy_floor.dst", words_out)?;
+        let set = DescriptorSet::new(
+            gpu,
+            "copy_floor.set",
+            &layout,
+            &[Write::Buffer(0, &src), Write::Buffer(1, &dst)],
+        )?;
+        Ok(CopyFloor {
+            pipeline,
+            _layout: layout,
+            set,
+            _src: src,
+            _dst: dst,
+            words_in,
+            words_out,
+        })
+    }
+
+    fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler) {
+        cmd.use_buffer(&self._src, Access::ComputeSampled);
+        cmd.use_buffer(&self._dst, Access::ComputeStorageWrite);
+        let scope = profiler.begin(cmd, "resolve.copy_floor", PassKind::Compute);
+        cmd.bind_pipeline(&self.pipeline);
+        cmd.bind_set(&self.pipeline, 0, &self.set);
+        cmd.push_constants(
+            &self.pipeline,
+            bytemuck::bytes_of(&[self.words_in, self.words_out]),
+        );
+        cmd.dispatch(self.words_out.div_ceil(256), 1, 1);
+        profiler.end(cmd, scope);
+    }
+}

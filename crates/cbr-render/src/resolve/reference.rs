@@ -1,0 +1,506 @@
+//! The CPU reference of shaders/resolve/resolve.comp, operation for operation in f32 (the
+//! shader's fp32 path matches it within 1e-5; its fp16 path within the tolerance the tests
+//! state). Inputs are full-resolution images; only the pixels of the frame's parity are read
+//! from `current`.
+
+use super::{
+    DBG_CLAMPED, DBG_MISSING, DBG_REJECT_DEPTH, DBG_REJECT_ID, DBG_RENDERED, DBG_REPROJECTED,
+    DBG_SPATIAL, ResolveMode, ResolveSettings,
+};
+
+/// One checkerboard sample as the resolve reads it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Sample {
+    pub c: [f32; 3],
+    pub v: [f32; 2],
+    /// Reverse-Z depth (0 = infinitely far).
+    pub d: f32,
+    /// Object, primitive.
+    pub ids: [u32; 2],
+}
+
+/// The previous resolved frame (colour as stored: already rounded to the history format).
+pub struct HistoryRef<'a> {
+    pub color: &'a [[f32; 3]],
+    pub depth: &'a [f32],
+    pub ids: &'a [u32],
+}
+
+pub struct Inputs<'a> {
+    pub width: u32,
+    pub height: u32,
+    pub parity: u32,
+    pub current: &'a [Sample],
+    /// `None`: reset (first frame, camera cut).
+    pub history: Option<HistoryRef<'a>>,
+    /// The native-resolution prepass: reverse-Z depth and object IDs.
+    pub prepass: Option<(&'a [f32], &'a [u32])>,
+    /// Column-major previous clip from current (NDC x, NDC y, depth, 1) (`intel`).
+    pub reproj: [f32; 16],
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Output {
+    pub color: Vec<[f32; 3]>,
+    pub depth: Vec<f32>,
+    pub ids: Vec<u32>,
+    pub debug: Vec<u32>,
+    pub velocity: Vec<[f32; 2]>,
+}
+
+type V3 = [f32; 3];
+
+fn add(a: V3, b: V3) -> V3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+fn scale(a: V3, s: f32) -> V3 {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+fn div(a: V3, s: f32) -> V3 {
+    [a[0] / s, a[1] / s, a[2] / s]
+}
+fn luma(c: V3) -> f32 {
+    c[0] * 0.2126 + c[1] * 0.7152 + c[2] * 0.0722
+}
+pub fn tonemap(c: V3) -> V3 {
+    div(c, 1.0 + luma(c).max(0.0))
+}
+pub fn untonemap(t: V3) -> V3 {
+    div(t, (1.0 - luma(t)).max(1e-3))
+}
+fn to_ycocg(c: V3) -> V3 {
+    [
+        0.25 * c[0] + 0.5 * c[1] + 0.25 * c[2],
+        0.5 * c[0] - 0.5 * c[2],
+        -0.25 * c[0] + 0.5 * c[1] - 0.25 * c[2],
+    ]
+}
+fn from_ycocg(y: V3) -> V3 {
+    [y[0] + y[1] - y[2], y[0] + y[2], y[0] - y[1] - y[2]]
+}
+fn depth_rel_diff(a: f32, b: f32) -> f32 {
+    let m = a.max(b);
+    if m > 0.0 { (a - b).abs() / m } else { 0.0 }
+}
+fn length(v: [f32; 2]) -> f32 {
+    (v[0] * v[0] + v[1] * v[1]).sqrt()
+}
+
+/// The differential blend's weight offset (BLEND_EPS in resolve.comp).
+pub const BLEND_EPS: f32 = 1.0 / 64.0;
+
+const NEIGHBOUR: [[i32; 2]; 4] = [[-1, 0], [1, 0], [0, -1], [0, 1]];
+const TAP: [[i32; 2]; 4] = [[0, 0], [1, 0], [0, 1], [1, 1]];
+
+struct Ctx<'a> {
+    i: &'a Inputs<'a>,
+    s: &'a ResolveSettings,
+    w: i32,
+    h: i32,
+    reset: bool,
+    own: bool,
+}
+
+struct Res {
+    c: V3,
+    d: f32,
+    id: u32,
+    v: [f32; 2],
+    dbg: u32,
+}
+
+impl Ctx<'_> {
+    fn idx(&self, x: i32, y: i32) -> usize {
+        (y * self.w + x) as usize
+    }
+    fn inside(&self, x: i32, y: i32) -> bool {
+        x >= 0 && y >= 0 && x < self.w && y < self.h
+    }
+    fn load(&self, x: i32, y: i32) -> Sample {
+        let (x, y) = (x.abs(), y.abs());
+        let (x, y) = (x.min(2 * self.w - 2 - x), y.min(2 * self.h - 2 - y));
+        debug_assert_eq!((x + y) as u32 & 1, self.i.parity);
+        self.i.current[self.idx(x, y)]
+    }
+    fn hist(&self) -> &HistoryRef<'_> {
+        self.i.history.as_ref().expect("history when not reset")
+    }
+
+    fn taps(q: [f32; 2]) -> ([i32; 2], [f32; 4]) {
+        let g = [q[0] - 0.5, q[1] - 0.5];
+        let b = [g[0].floor(), g[1].floor()];
+        let f = [g[0] - b[0], g[1] - b[1]];
+        (
+            [b[0] as i32, b[1] as i32],
+            [
+                (1.0 - f[0]) * (1.0 - f[1]),
+                f[0] * (1.0 - f[1]),
+                (1.0 - f[0]) * f[1],
+                f[0] * f[1],
+            ],
+        )
+    }
+
+    fn history_validated(
+        &self,
+        q: [f32; 2],
+        id: u32,
+        d: f32,
+        use_ids: bool,
+        use_depth: bool,
+        why: &mut u32,
+    ) -> Option<V3> {
+        let hist = self.hist();
+        let (base, w) = Self::taps(q);
+        let mut acc = [0.0; 3];
+        let mut ws = 0.0f32;
+        let mut reasons = 0;
+        for k in 0..4 {
+            if w[k] <= 0.0 {
+                continue;
+            }
+            let (tx, ty) = (base[0] + TAP[k][0], base[1] + TAP[k][1]);
+            if !self.inside(tx, ty) {
+                continue;
+            }
+            let t = self.idx(tx, ty);
+            let mut ok = true;
+            if use_ids && hist.ids[t] != id {
+                ok = false;
+                reasons |= DBG_REJECT_ID;
+            }
+            if use_depth && depth_rel_diff(hist.depth[t], d) > self.s.depth_tolerance {
+                ok = false;
+                reasons |= DBG_REJECT_DEPTH;
+            }
+            if ok {
+                acc = add(acc, scale(hist.color[t], w[k]));
+                ws += w[k];
+            }
+        }
+        if ws < self.s.min_history_weight {
+            *why |= reasons;
+            return None;
+        }
+        Some(div(acc, ws))
+    }
+
+    fn history_plain(&self, q: [f32; 2]) -> V3 {
+        let hist = self.hist();
+        let (base, w) = Self::taps(q);
+        let mut acc = [0.0; 3];
+        for k in 0..4 {
+            let tx = (base[0] + TAP[k][0]).clamp(0, self.w - 1);
+            let ty = (base[1] + TAP[k][1]).clamp(0, self.h - 1);
+            acc = add(acc, scale(hist.color[self.idx(tx, ty)], w[k]));
+        }
+        acc
+    }
+
+    fn spatial_fill(&self, n: &[Sample; 4], ref_id: u32, use_ids: bool, own: bool) -> V3 {
+        let t = n.map(|s| tonemap(s.c));
+        let (mut h_ok, mut v_ok) = (true, true);
+        if use_ids {
+            if own {
+                h_ok = n[0].ids[0] == ref_id && n[1].ids[0] == ref_id;
+                v_ok = n[2].ids[0] == ref_id && n[3].ids[0] == ref_id;
+            } else {
+                h_ok = n[0].ids[0] == n[1].ids[0];
+                v_ok = n[2].ids[0] == n[3].ids[0];
+            }
+        }
+        let hm = scale(add(t[0], t[1]), 0.5);
+        let vm = scale(add(t[2], t[3]), 0.5);
+        let r = if h_ok && v_ok {
+            let wh = 1.0 / (BLEND_EPS + (luma(t[0]) - luma(t[1])).abs());
+            let wv = 1.0 / (BLEND_EPS + (luma(t[2]) - luma(t[3])).abs());
+            div(add(scale(hm, wh), scale(vm, wv)), wh + wv)
+        } else if h_ok {
+            hm
+        } else if v_ok {
+            vm
+        } else {
+            let mut acc = [0.0; 3];
+            let mut cnt = 0.0f32;
+            for i in 0..4 {
+                if n[i].ids[0] == ref_id {
+                    acc = add(acc, t[i]);
+                    cnt += 1.0;
+                }
+            }
+            if cnt == 0.0 {
+                acc = add(add(add(t[0], t[1]), t[2]), t[3]);
+                cnt = 4.0;
+            }
+            div(acc, cnt)
+        };
+        untonemap(r)
+    }
+
+    fn clamp_to_box(&self, h: V3, n: &[Sample; 4], dbg: &mut u32) -> V3 {
+        let y = to_ycocg(h);
+        let mut lo = to_ycocg(n[0].c);
+        let mut hi = lo;
+        for s in &n[1..] {
+            let q = to_ycocg(s.c);
+            for k in 0..3 {
+                lo[k] = lo[k].min(q[k]);
+                hi[k] = hi[k].max(q[k]);
+            }
+        }
+        let yc = [0, 1, 2].map(|k| y[k].max(lo[k]).min(hi[k]));
+        if yc != y {
+            *dbg |= DBG_CLAMPED;
+            return from_ycocg(yc);
+        }
+        h
+    }
+
+    fn missing(&self, x: i32, y: i32, n: &[Sample; 4]) -> Res {
+        let q = [x as f32 + 0.5, y as f32 + 0.5];
+        let (own_d, own_id) = match self.i.prepass {
+            Some((d, ids)) if self.own => (d[self.idx(x, y)], ids[self.idx(x, y)]),
+            _ => (0.0, 0),
+        };
+        let own = self.own;
+        let mut o = [0usize, 1, 2, 3];
+        for i in 1..4 {
+            let k = o[i];
+            let mut j = i as i32 - 1;
+            while j >= 0 && n[o[j as usize]].d < n[k].d {
+                o[(j + 1) as usize] = o[j as usize];
+                j -= 1;
+            }
+            o[(j + 1) as usize] = k;
+        }
+        let near = n[o[0]];
+        let ref_id = if own { own_id } else { near.ids[0] };
+        let partner = if x & 1 == 0 { 1 } else { 0 };
+        let mut r = Res {
+            c: [0.0; 3],
+            d: 0.0,
+            id: 0,
+            v: [0.0; 2],
+            dbg: DBG_MISSING,
+        };
+        let a = &self.s.ablation;
+        match self.s.mode {
+            ResolveMode::Pq4k => {
+                let p = n[partner];
+                let avg = scale(add(add(add(n[0].c, n[1].c), n[2].c), n[3].c), 0.25);
+                r.c = avg;
+                r.d = p.d;
+                r.id = p.ids[0];
+                r.v = p.v;
+                if !self.reset {
+                    let tx = (q[0] - p.v[0]).floor() as i32;
+                    let ty = (q[1] - p.v[1]).floor() as i32;
+                    if self.inside(tx, ty) {
+                        let h = self.hist().color[self.idx(tx, ty)];
+                        r.dbg |= DBG_REPROJECTED;
+                        if length(p.v) > self.s.motion_threshold {
+                            let mut hc = h;
+                            for k in 0..3 {
+                                let lo = n[0].c[k].min(n[1].c[k]).min(n[2].c[k].min(n[3].c[k]));
+                                let hi = n[0].c[k].max(n[1].c[k]).max(n[2].c[k].max(n[3].c[k]));
+                                hc[k] = h[k].max(lo).min(hi);
+                            }
+                            if hc != h {
+                                r.dbg |= DBG_CLAMPED;
+                            }
+                            r.c = add(scale(avg, 0.5), scale(hc, 0.5));
+                        } else {
+                            r.c = h;
+                        }
+                    }
+                }
+                if r.dbg & DBG_REPROJECTED == 0 {
+                    r.dbg |= DBG_SPATIAL;
+                }
+            }
+            ResolveMode::Intel => {
+                let d = if own { own_d } else { near.d };
+                r.d = d;
+                r.id = ref_id;
+                let ndc = [
+                    q[0] / self.w as f32 * 2.0 - 1.0,
+                    q[1] / self.h as f32 * 2.0 - 1.0,
+                ];
+                let m = &self.i.reproj;
+                let v4 = [ndc[0], ndc[1], d, 1.0];
+                let prev: [f32; 4] = std::array::from_fn(|row| {
+                    m[row] * v4[0] + m[4 + row] * v4[1] + m[8 + row] * v4[2] + m[12 + row] * v4[3]
+                });
+                let mut ok = !self.reset && prev[3] > 0.0;
+                let mut pq = [0.0f32; 2];
+                if ok {
+                    pq = [
+                        (prev[0] / prev[3] * 0.5 + 0.5) * self.w as f32,
+                        (prev[1] / prev[3] * 0.5 + 0.5) * self.h as f32,
+                    ];
+                    let (tx, ty) = (pq[0].floor() as i32, pq[1].floor() as i32);
+                    ok = self.inside(tx, ty);
+                    if ok
+                        && depth_rel_diff(self.hist().depth[self.idx(tx, ty)], prev[2] / prev[3])
+                            > self.s.depth_tolerance
+                    {
+                        ok = false;
+                        r.dbg |= DBG_REJECT_DEPTH;
+                    }
+                }
+                r.v = [q[0] - pq[0], q[1] - pq[1]];
+                if ok {
+                    r.c = self.history_plain(pq);
+                    r.dbg |= DBG_REPROJECTED;
+                } else {
+                    let mut acc = [0.0; 3];
+                    let mut ws = 0.0f32;
+                    for s in n {
+                        let w = 1.0 / (1.0 + luma(s.c).max(0.0));
+                        acc = add(acc, scale(s.c, w));
+                        ws += w;
+                    }
+                    r.c = div(acc, ws);
+                    r.dbg |= DBG_SPATIAL;
+                }
+            }
+            ResolveMode::Spatial => {
+                r.c = self.spatial_fill(n, ref_id, a.ids, own);
+                r.d = if own { own_d } else { near.d };
+                r.id = ref_id;
+                r.v = near.v;
+                r.dbg |= DBG_SPATIAL;
+            }
+            ResolveMode::Temporal => {
+                r.d = if own { own_d } else { near.d };
+                r.id = ref_id;
+                r.v = near.v;
+                if self.reset {
+                    r.c = self.spatial_fill(n, ref_id, true, own);
+                    r.dbg |= DBG_SPATIAL;
+                } else {
+                    r.c = self.history_plain([q[0] - near.v[0], q[1] - near.v[1]]);
+                    r.dbg |= DBG_REPROJECTED;
+                }
+            }
+            ResolveMode::Ours => {
+                let (use_ids, use_depth, use_v) = (a.ids, a.depth, a.velocity);
+                let mut cand: Vec<usize> = Vec::with_capacity(4);
+                if own {
+                    let mut best: Option<usize> = None;
+                    let mut best_diff = 0.0f32;
+                    for i in 0..4 {
+                        let dd = (n[i].d - own_d).abs();
+                        let same = n[i].ids[0] == own_id;
+                        let replace = match best {
+                            None => true,
+                            Some(b) => {
+                                let best_same = n[b].ids[0] == own_id;
+                                (same && !best_same) || (same == best_same && dd < best_diff)
+                            }
+                        };
+                        if replace {
+                            best = Some(i);
+                            best_diff = dd;
+                        }
+                    }
+                    cand.push(best.unwrap_or(0));
+                } else if !use_ids && !use_depth {
+                    cand.push(partner);
+                } else if !use_ids {
+                    cand.push(o[0]);
+                } else {
+                    for i in 0..4 {
+                        let k = if use_depth { o[i] } else { i };
+                        if !cand.iter().any(|&c| n[c].ids[0] == n[k].ids[0]) {
+                            cand.push(k);
+                        }
+                    }
+                }
+                let first = n[cand[0]];
+                r.d = if own { own_d } else { first.d };
+                r.id = if own { own_id } else { first.ids[0] };
+                r.v = if use_v { first.v } else { [0.0; 2] };
+                let mut found = None;
+                let mut why = 0;
+                if !self.reset {
+                    for &k in &cand {
+                        let s = n[k];
+                        let v = if use_v { s.v } else { [0.0; 2] };
+                        let id = if own { own_id } else { s.ids[0] };
+                        let d = if own { own_d } else { s.d };
+                        let qv = [q[0] - v[0], q[1] - v[1]];
+                        if let Some(h) =
+                            self.history_validated(qv, id, d, use_ids, use_depth, &mut why)
+                        {
+                            found = Some(h);
+                            r.d = d;
+                            r.id = id;
+                            r.v = v;
+                            break;
+                        }
+                    }
+                }
+                match found {
+                    Some(mut h) => {
+                        r.dbg |= DBG_REPROJECTED;
+                        if a.clamp && length(r.v) > self.s.static_threshold {
+                            h = self.clamp_to_box(h, n, &mut r.dbg);
+                        }
+                        r.c = h;
+                    }
+                    None => {
+                        r.dbg |= why | DBG_SPATIAL;
+                        r.c = self.spatial_fill(n, ref_id, use_ids, own);
+                    }
+                }
+            }
+        }
+        r
+    }
+}
+
+/// Resolves one frame on the CPU.
+pub fn resolve(inputs: &Inputs, settings: &ResolveSettings) -> Output {
+    let (w, h) = (inputs.width as i32, inputs.height as i32);
+    let ctx = Ctx {
+        i: inputs,
+        s: settings,
+        w,
+        h,
+        reset: inputs.history.is_none(),
+        own: inputs.prepass.is_some() && settings.ablation.prepass,
+    };
+    let n = (w * h) as usize;
+    let mut out = Output {
+        color: vec![[0.0; 3]; n],
+        depth: vec![0.0; n],
+        ids: vec![0; n],
+        debug: vec![0; n],
+        velocity: vec![[0.0; 2]; n],
+    };
+    for y in 0..h {
+        for x in 0..w {
+            let r = if (x + y) as u32 & 1 == inputs.parity {
+                let s = inputs.current[ctx.idx(x, y)];
+                Res {
+                    c: s.c,
+                    d: s.d,
+                    id: s.ids[0],
+                    v: s.v,
+                    dbg: DBG_RENDERED,
+                }
+            } else {
+                let nb = NEIGHBOUR.map(|o| ctx.load(x + o[0], y + o[1]));
+                ctx.missing(x, y, &nb)
+            };
+            let i = ctx.idx(x, y);
+            out.color[i] = r.c;
+            out.depth[i] = r.d;
+            out.ids[i] = r.id;
+            out.debug[i] = r.dbg;
+            out.velocity[i] = r.v;
+        }
+    }
+    out
+}

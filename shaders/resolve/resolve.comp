@@ -1,0 +1,497 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// The checkerboard resolve (docs/resolve.md). One output pixel per invocation (MAPPING 0) or one
+// 2x2 quad per invocation (MAPPING 1); both call the same per-pixel functions with the same
+// inputs, so they write identical images. The CPU reference is crates/cbr-render/src/resolve/
+// reference.rs: keep the two in step, operation for operation.
+//
+// Defines: LAYOUT (the raster layout, read through layout_fetch.glsl), MODE, MAPPING, GROUP
+// (workgroup side), FP16 (colour arithmetic in float16), OUT_FORMAT (rgba16f or rgba32f), DEBUG
+// (write the debug bits and the velocity used), BINDING_* (crates/cbr-render/src/resolve/mod.rs).
+#if FP16
+#extension GL_EXT_shader_explicit_arithmetic_types_float16 : require
+#define real float16_t
+#define real3 f16vec3
+#else
+#define real float
+#define real3 vec3
+#endif
+#include "../inc/layout_fetch.glsl"
+
+#define MODE_OURS 0
+#define MODE_PQ4K 1
+#define MODE_INTEL 2
+#define MODE_SPATIAL 3
+#define MODE_TEMPORAL 4
+
+// Push-constant flags.
+#define F_RESET 1u        // no usable history (first frame, camera cut)
+#define F_NO_VELOCITY 2u  // ablations of `ours`
+#define F_NO_DEPTH 4u
+#define F_NO_IDS 8u
+#define F_NO_CLAMP 16u
+#define F_PREPASS 32u     // the native-resolution depth + ID prepass is bound and used
+
+// Debug bits (one R32UI per pixel).
+#define DBG_RENDERED 1u
+#define DBG_MISSING 2u
+#define DBG_REPROJECTED 4u
+#define DBG_REJECT_ID 8u
+#define DBG_REJECT_DEPTH 16u
+#define DBG_CLAMPED 32u
+#define DBG_SPATIAL 64u
+
+layout(local_size_x = GROUP, local_size_y = GROUP) in;
+
+layout(set = 0, binding = BINDING_COLOR) uniform CB_SAMPLER cur_color;
+layout(set = 0, binding = BINDING_VELOCITY) uniform CB_SAMPLER cur_velocity;
+layout(set = 0, binding = BINDING_IDS) uniform CB_USAMPLER cur_ids;
+layout(set = 0, binding = BINDING_DEPTH) uniform CB_SAMPLER cur_depth;
+layout(set = 0, binding = BINDING_HIST_COLOR) uniform sampler2D hist_color;
+layout(set = 0, binding = BINDING_HIST_DEPTH) uniform sampler2D hist_depth;
+layout(set = 0, binding = BINDING_HIST_IDS) uniform usampler2D hist_ids;
+layout(set = 0, binding = BINDING_PRE_DEPTH) uniform sampler2D pre_depth;
+layout(set = 0, binding = BINDING_PRE_IDS) uniform usampler2D pre_ids;
+layout(set = 0, binding = BINDING_OUT_COLOR, OUT_FORMAT) uniform writeonly image2D out_color;
+layout(set = 0, binding = BINDING_OUT_DEPTH, r32f) uniform writeonly image2D out_depth;
+layout(set = 0, binding = BINDING_OUT_IDS, r32ui) uniform writeonly uimage2D out_ids;
+#if DEBUG
+layout(set = 0, binding = BINDING_DEBUG_BITS, r32ui) uniform writeonly uimage2D out_debug;
+layout(set = 0, binding = BINDING_DEBUG_VELOCITY, rg32f) uniform writeonly image2D out_velocity;
+#endif
+
+layout(push_constant) uniform Push {
+    ivec4 size_parity_side;  // W, H, parity, tangram side
+    uvec4 flags;             // x: F_* flags
+    vec4 params;             // x: depth tolerance, y: static threshold (px), z: pq4k motion
+                             // threshold (px), w: minimum valid history weight
+    mat4 reproj;             // intel: previous clip from current (NDC x, NDC y, depth, 1)
+} pc;
+
+ivec2 size() { return pc.size_parity_side.xy; }
+bool has(uint f) { return (pc.flags.x & f) != 0u; }
+
+struct Sample {
+    real3 c;
+    vec2 v;
+    float d;     // reverse-Z depth (0 = infinitely far)
+    uvec2 ids;   // object, primitive
+};
+
+// Reflect coordinates at the screen border: keeps (x + y) mod 2, so a missing pixel's
+// neighbours outside the screen are rendered samples inside it. Needs W, H >= 2.
+ivec2 mirror(ivec2 q) {
+    ivec2 s = size();
+    q = abs(q);
+    return min(q, 2 * s - 2 - q);
+}
+
+Sample load_sample(ivec2 q) {
+    ivec4 a = cb_address(mirror(q), pc.size_parity_side.z, pc.size_parity_side.w);
+    Sample s;
+    s.c = real3(cb_fetch(cur_color, a).rgb);
+    s.v = cb_fetch(cur_velocity, a).xy;
+    s.d = cb_fetch(cur_depth, a).x;
+    s.ids = cb_fetch(cur_ids, a).xy;
+    return s;
+}
+
+const vec3 LUMA = vec3(0.2126, 0.7152, 0.0722);
+real luma(real3 c) { return dot(c, real3(LUMA)); }
+// Reinhard on luminance: averages of HDR colours taken here do not let one bright sample win.
+real3 tonemap(real3 c) { return c / (real(1.0) + max(luma(c), real(0.0))); }
+real3 untonemap(real3 t) { return t / max(real(1.0) - luma(t), real(1e-3)); }
+
+real3 to_ycocg(real3 c) {
+    return real3(real(0.25) * c.r + real(0.5) * c.g + real(0.25) * c.b,
+                 real(0.5) * c.r - real(0.5) * c.b,
+                 real(-0.25) * c.r + real(0.5) * c.g - real(0.25) * c.b);
+}
+real3 from_ycocg(real3 y) { return real3(y.x + y.y - y.z, y.x + y.z, y.x - y.y - y.z); }
+
+// |z1 - z2| / max(z1, z2) of the linear depths z = near / d, computed from reverse-Z d.
+float depth_rel_diff(float a, float b) {
+    float m = max(a, b);
+    return m > 0.0 ? abs(a - b) / m : 0.0;
+}
+
+bool inside(ivec2 t) { return all(greaterThanEqual(t, ivec2(0))) && all(lessThan(t, size())); }
+
+// Bilinear taps around continuous pixel position q (pixel centres at integer + 0.5).
+void bilinear_taps(vec2 q, out ivec2 base, out float w[4]) {
+    vec2 g = q - 0.5;
+    vec2 b = floor(g);
+    vec2 f = g - b;
+    base = ivec2(b);
+    w[0] = (1.0 - f.x) * (1.0 - f.y);
+    w[1] = f.x * (1.0 - f.y);
+    w[2] = (1.0 - f.x) * f.y;
+    w[3] = f.x * f.y;
+}
+const ivec2 TAP[4] = ivec2[4](ivec2(0, 0), ivec2(1, 0), ivec2(0, 1), ivec2(1, 1));
+
+// History at q with per-tap validation against object `id` and reverse-Z depth `d`.
+bool history_validated(vec2 q, uint id, float d, bool use_ids, bool use_depth, out real3 h,
+                       inout uint why) {
+    ivec2 base;
+    float w[4];
+    bilinear_taps(q, base, w);
+    real3 acc = real3(0.0);
+    float ws = 0.0;
+    uint reasons = 0u;
+    for (int k = 0; k < 4; k++) {
+        if (w[k] <= 0.0) continue;
+        ivec2 t = base + TAP[k];
+        if (!inside(t)) continue;
+        bool ok = true;
+        if (use_ids && texelFetch(hist_ids, t, 0).x != id) {
+            ok = false;
+            reasons |= DBG_REJECT_ID;
+        }
+        if (use_depth && depth_rel_diff(texelFetch(hist_depth, t, 0).x, d) > pc.params.x) {
+            ok = false;
+            reasons |= DBG_REJECT_DEPTH;
+        }
+        if (ok) {
+            acc += real(w[k]) * real3(texelFetch(hist_color, t, 0).rgb);
+            ws += w[k];
+        }
+    }
+    if (ws < pc.params.w) {
+        why |= reasons;
+        h = real3(0.0);
+        return false;
+    }
+    h = acc / real(ws);
+    return true;
+}
+
+// History at q, bilinear, taps clamped to the screen, no validation.
+real3 history_plain(vec2 q) {
+    ivec2 base;
+    float w[4];
+    bilinear_taps(q, base, w);
+    real3 acc = real3(0.0);
+    for (int k = 0; k < 4; k++) {
+        ivec2 t = clamp(base + TAP[k], ivec2(0), size() - 1);
+        acc += real(w[k]) * real3(texelFetch(hist_color, t, 0).rgb);
+    }
+    return acc;
+}
+
+// Neighbours: 0 left, 1 right, 2 up, 3 down. Order by depth, nearest (largest reverse-Z) first;
+// ties keep the neighbour order.
+void depth_order(Sample n[4], out int o[4]) {
+    for (int i = 0; i < 4; i++) o[i] = i;
+    for (int i = 1; i < 4; i++) {
+        int k = o[i];
+        int j = i - 1;
+        while (j >= 0 && n[o[j]].d < n[k].d) {
+            o[j + 1] = o[j];
+            j--;
+        }
+        o[j + 1] = k;
+    }
+}
+
+// Weights of the differential blend: 1 / (BLEND_EPS + luminance difference of the pair), in
+// tonemapped units (0..1). 1/64 bounds the weight ratio, keeps fp16 stable (exact in f16).
+#define BLEND_EPS 0.015625
+
+// The differential blend of the vertical and horizontal pairs in tonemapped space; pairs that
+// cross an object-ID edge (or do not show `ref_id`, with the prepass) are rejected.
+real3 spatial_fill(Sample n[4], uint ref_id, bool use_ids, bool own) {
+    real3 t[4];
+    for (int i = 0; i < 4; i++) t[i] = tonemap(n[i].c);
+    bool h_ok = true;
+    bool v_ok = true;
+    if (use_ids) {
+        if (own) {
+            h_ok = n[0].ids.x == ref_id && n[1].ids.x == ref_id;
+            v_ok = n[2].ids.x == ref_id && n[3].ids.x == ref_id;
+        } else {
+            h_ok = n[0].ids.x == n[1].ids.x;
+            v_ok = n[2].ids.x == n[3].ids.x;
+        }
+    }
+    real3 hm = (t[0] + t[1]) * real(0.5);
+    real3 vm = (t[2] + t[3]) * real(0.5);
+    real3 r;
+    if (h_ok && v_ok) {
+        real wh = real(1.0) / (real(BLEND_EPS) + abs(luma(t[0]) - luma(t[1])));
+        real wv = real(1.0) / (real(BLEND_EPS) + abs(luma(t[2]) - luma(t[3])));
+        r = (wh * hm + wv * vm) / (wh + wv);
+    } else if (h_ok) {
+        r = hm;
+    } else if (v_ok) {
+        r = vm;
+    } else {
+        real3 acc = real3(0.0);
+        real cnt = real(0.0);
+        for (int i = 0; i < 4; i++) {
+            if (n[i].ids.x == ref_id) {
+                acc += t[i];
+                cnt += real(1.0);
+            }
+        }
+        if (cnt == real(0.0)) {
+            acc = t[0] + t[1] + t[2] + t[3];
+            cnt = real(4.0);
+        }
+        r = acc / cnt;
+    }
+    return untonemap(r);
+}
+
+// The same-quad horizontal neighbour (x xor 1): rendered whenever the pixel is missing.
+int quad_partner(ivec2 p) { return (p.x & 1) == 0 ? 1 : 0; }
+
+struct Result {
+    real3 c;
+    float d;
+    uint id;
+    vec2 v;
+    uint dbg;
+};
+
+real3 clamp_to_box(real3 h, Sample n[4], inout uint dbg) {
+    real3 y = to_ycocg(h);
+    real3 lo = to_ycocg(n[0].c);
+    real3 hi = lo;
+    for (int i = 1; i < 4; i++) {
+        real3 q = to_ycocg(n[i].c);
+        lo = min(lo, q);
+        hi = max(hi, q);
+    }
+    real3 yc = clamp(y, lo, hi);
+    if (any(notEqual(yc, y))) {
+        dbg |= DBG_CLAMPED;
+        return from_ycocg(yc);
+    }
+    return h;
+}
+
+Result resolve_missing(ivec2 p, Sample n[4]) {
+    Result r;
+    r.dbg = DBG_MISSING;
+    vec2 q = vec2(p) + 0.5;
+    bool reset = has(F_RESET);
+    bool own = has(F_PREPASS);
+    float own_d = 0.0;
+    uint own_id = 0u;
+    if (own) {
+        own_d = texelFetch(pre_depth, p, 0).x;
+        own_id = texelFetch(pre_ids, p, 0).x;
+    }
+    int o[4];
+    depth_order(n, o);
+    Sample near = n[o[0]];
+    uint ref_id = own ? own_id : near.ids.x;
+#if MODE == MODE_PQ4K
+    Sample partner = n[quad_partner(p)];
+    real3 avg = (n[0].c + n[1].c + n[2].c + n[3].c) * real(0.25);
+    r.c = avg;
+    r.d = partner.d;
+    r.id = partner.ids.x;
+    r.v = partner.v;
+    if (!reset) {
+        ivec2 t = ivec2(floor(q - partner.v));
+        if (inside(t)) {
+            real3 h = real3(texelFetch(hist_color, t, 0).rgb);
+            r.dbg |= DBG_REPROJECTED;
+            if (length(partner.v) > pc.params.z) {
+                real3 lo = min(min(n[0].c, n[1].c), min(n[2].c, n[3].c));
+                real3 hi = max(max(n[0].c, n[1].c), max(n[2].c, n[3].c));
+                real3 hc = clamp(h, lo, hi);
+                if (any(notEqual(hc, h))) r.dbg |= DBG_CLAMPED;
+                r.c = avg * real(0.5) + hc * real(0.5);
+            } else {
+                r.c = h;
+            }
+        }
+    }
+    if ((r.dbg & DBG_REPROJECTED) == 0u) r.dbg |= DBG_SPATIAL;
+#elif MODE == MODE_INTEL
+    float d = own ? own_d : near.d;
+    r.d = d;
+    r.id = ref_id;
+    vec2 ndc = q / vec2(size()) * 2.0 - 1.0;
+    vec4 prev = pc.reproj * vec4(ndc, d, 1.0);
+    bool ok = !reset && prev.w > 0.0;
+    vec2 pq = vec2(0.0);
+    if (ok) {
+        pq = (prev.xy / prev.w * 0.5 + 0.5) * vec2(size());
+        ivec2 t = ivec2(floor(pq));
+        ok = inside(t);
+        if (ok && depth_rel_diff(texelFetch(hist_depth, t, 0).x, prev.z / prev.w) > pc.params.x) {
+            ok = false;
+            r.dbg |= DBG_REJECT_DEPTH;
+        }
+    }
+    r.v = q - pq;
+    if (ok) {
+        r.c = history_plain(pq);
+        r.dbg |= DBG_REPROJECTED;
+    } else {
+        real3 acc = real3(0.0);
+        real ws = real(0.0);
+        for (int i = 0; i < 4; i++) {
+            real w = real(1.0) / (real(1.0) + max(luma(n[i].c), real(0.0)));
+            acc += w * n[i].c;
+            ws += w;
+        }
+        r.c = acc / ws;
+        r.dbg |= DBG_SPATIAL;
+    }
+#elif MODE == MODE_SPATIAL
+    r.c = spatial_fill(n, ref_id, !has(F_NO_IDS), own);
+    r.d = own ? own_d : near.d;
+    r.id = ref_id;
+    r.v = near.v;
+    r.dbg |= DBG_SPATIAL;
+#elif MODE == MODE_TEMPORAL
+    r.d = own ? own_d : near.d;
+    r.id = ref_id;
+    r.v = near.v;
+    if (reset) {
+        r.c = spatial_fill(n, ref_id, true, own);
+        r.dbg |= DBG_SPATIAL;
+    } else {
+        r.c = history_plain(q - near.v);
+        r.dbg |= DBG_REPROJECTED;
+    }
+#else  // MODE_OURS
+    bool use_ids = !has(F_NO_IDS);
+    bool use_depth = !has(F_NO_DEPTH);
+    bool use_v = !has(F_NO_VELOCITY);
+    // Hypotheses: the surfaces the neighbours show, nearest first, one per object ID (with the
+    // prepass: the pixel's own surface, moving as its nearest-in-depth neighbour of that ID).
+    // Without depth they come in neighbour order; without IDs and depth, only the quad partner.
+    int cand[4];
+    int ncand = 0;
+    if (own) {
+        int best = -1;
+        float best_diff = 0.0;
+        for (int i = 0; i < 4; i++) {
+            float dd = abs(n[i].d - own_d);
+            bool same = n[i].ids.x == own_id;
+            bool best_same = best >= 0 && n[best].ids.x == own_id;
+            if (best < 0 || (same && !best_same) || (same == best_same && dd < best_diff)) {
+                best = i;
+                best_diff = dd;
+            }
+        }
+        cand[0] = best;
+        ncand = 1;
+    } else if (!use_ids && !use_depth) {
+        cand[0] = quad_partner(p);
+        ncand = 1;
+    } else if (!use_ids) {
+        cand[0] = o[0];
+        ncand = 1;
+    } else {
+        for (int i = 0; i < 4; i++) {
+            int k = use_depth ? o[i] : i;
+            bool seen = false;
+            for (int j = 0; j < ncand; j++) seen = seen || n[cand[j]].ids.x == n[k].ids.x;
+            if (!seen) cand[ncand++] = k;
+        }
+    }
+    r.d = own ? own_d : n[cand[0]].d;
+    r.id = own ? own_id : n[cand[0]].ids.x;
+    r.v = use_v ? n[cand[0]].v : vec2(0.0);
+    bool found = false;
+    uint why = 0u;
+    real3 h = real3(0.0);
+    if (!reset) {
+        for (int j = 0; j < ncand && !found; j++) {
+            Sample s = n[cand[j]];
+            vec2 v = use_v ? s.v : vec2(0.0);
+            uint id = own ? own_id : s.ids.x;
+            float d = own ? own_d : s.d;
+            if (history_validated(q - v, id, d, use_ids, use_depth, h, why)) {
+                found = true;
+                r.d = d;
+                r.id = id;
+                r.v = v;
+            }
+        }
+    }
+    if (found) {
+        r.dbg |= DBG_REPROJECTED;
+        if (!has(F_NO_CLAMP) && length(r.v) > pc.params.y) h = clamp_to_box(h, n, r.dbg);
+        r.c = h;
+    } else {
+        r.dbg |= why | DBG_SPATIAL;
+        r.c = spatial_fill(n, ref_id, use_ids, own);
+    }
+#endif
+    return r;
+}
+
+void write_result(ivec2 p, Result r) {
+    imageStore(out_color, p, vec4(vec3(r.c), 1.0));
+    imageStore(out_depth, p, vec4(r.d));
+    imageStore(out_ids, p, uvec4(r.id));
+#if DEBUG
+    imageStore(out_debug, p, uvec4(r.dbg));
+    imageStore(out_velocity, p, vec4(r.v, 0.0, 0.0));
+#endif
+}
+
+Result pass_through(Sample s) {
+    Result r;
+    r.c = s.c;
+    r.d = s.d;
+    r.id = s.ids.x;
+    r.v = s.v;
+    r.dbg = DBG_RENDERED;
+    return r;
+}
+
+const ivec2 NEIGHBOUR[4] = ivec2[4](ivec2(-1, 0), ivec2(1, 0), ivec2(0, -1), ivec2(0, 1));
+
+bool rendered(ivec2 p) { return ((p.x + p.y) & 1) == pc.size_parity_side.z; }
+
+#if MAPPING == 0
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (p.x >= size().x || p.y >= size().y) return;
+    if (rendered(p)) {
+        write_result(p, pass_through(load_sample(p)));
+        return;
+    }
+    Sample n[4];
+    for (int i = 0; i < 4; i++) n[i] = load_sample(p + NEIGHBOUR[i]);
+    write_result(p, resolve_missing(p, n));
+}
+#else
+// One 2x2 quad: its two rendered samples are loaded once and serve as two of the four
+// neighbours of each of its two missing pixels: 6 sample loads instead of 10.
+void main() {
+    ivec2 base = 2 * ivec2(gl_GlobalInvocationID.xy);
+    if (base.x >= size().x || base.y >= size().y) return;
+    int parity = pc.size_parity_side.z;
+    // Rendered: (0,0),(1,1) for parity 0; (1,0),(0,1) for parity 1. Missing: the other two.
+    ivec2 ra = base + (parity == 0 ? ivec2(0, 0) : ivec2(1, 0));
+    ivec2 rb = base + (parity == 0 ? ivec2(1, 1) : ivec2(0, 1));
+    ivec2 ma = base + (parity == 0 ? ivec2(1, 0) : ivec2(0, 0));
+    ivec2 mb = base + (parity == 0 ? ivec2(0, 1) : ivec2(1, 1));
+    // rb may lie outside an odd-sized screen; mirror() makes its load the reflected sample,
+    // which is exactly what a missing pixel's neighbour load would read there.
+    Sample sa = load_sample(ra);
+    Sample sb = load_sample(rb);
+    if (inside(ra)) write_result(ra, pass_through(sa));
+    if (inside(rb)) write_result(rb, pass_through(sb));
+    for (int m = 0; m < 2; m++) {
+        ivec2 p = m == 0 ? ma : mb;
+        if (!inside(p)) continue;
+        Sample n[4];
+        for (int i = 0; i < 4; i++) {
+            ivec2 q = p + NEIGHBOUR[i];
+            n[i] = q == ra ? sa : (q == rb ? sb : load_sample(q));
+        }
+        write_result(p, resolve_missing(p, n));
+    }
+}
+#endif

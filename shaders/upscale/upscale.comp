@@ -1,0 +1,62 @@
+#version 460
+// The `upscale` baseline: a frame rendered at W/sqrt(2) x H/sqrt(2) (the checkerboard's pixel
+// count) brought to W x H. FILTER 0: bilinear; 1: bicubic (Catmull-Rom, 4x4 taps, negative
+// lobes' undershoot clamped at 0). Depth, velocity and IDs take the nearest low-resolution
+// sample; velocity is rescaled to full-resolution pixels. Taps clamp to the image edge.
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 0, binding = BINDING_COLOR) uniform sampler2D low_color;
+layout(set = 0, binding = BINDING_VELOCITY) uniform sampler2D low_velocity;
+layout(set = 0, binding = BINDING_IDS) uniform usampler2D low_ids;
+layout(set = 0, binding = BINDING_DEPTH) uniform sampler2D low_depth;
+layout(set = 0, binding = BINDING_OUT_COLOR, rgba16f) uniform writeonly image2D out_color;
+layout(set = 0, binding = BINDING_OUT_VELOCITY, rg32f) uniform writeonly image2D out_velocity;
+layout(set = 0, binding = BINDING_OUT_IDS, rg32ui) uniform writeonly uimage2D out_ids;
+layout(set = 0, binding = BINDING_OUT_DEPTH, r32f) uniform writeonly image2D out_depth;
+
+layout(push_constant) uniform Push { ivec4 sizes; } pc;  // W, H, w, h
+
+vec3 texel(ivec2 t) {
+    ivec2 lo = pc.sizes.zw;
+    return texelFetch(low_color, clamp(t, ivec2(0), lo - 1), 0).rgb;
+}
+
+// Catmull-Rom weights for fractional position f.
+vec4 catmull_rom(float f) {
+    float f2 = f * f;
+    float f3 = f2 * f;
+    return vec4(-0.5 * f3 + f2 - 0.5 * f,
+                1.5 * f3 - 2.5 * f2 + 1.0,
+                -1.5 * f3 + 2.0 * f2 + 0.5 * f,
+                0.5 * f3 - 0.5 * f2);
+}
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (p.x >= pc.sizes.x || p.y >= pc.sizes.y) return;
+    vec2 scale = vec2(pc.sizes.zw) / vec2(pc.sizes.xy);
+    vec2 q = (vec2(p) + 0.5) * scale;  // in low-resolution pixels
+    vec2 g = q - 0.5;
+    ivec2 b = ivec2(floor(g));
+    vec2 f = g - floor(g);
+    vec3 c;
+#if FILTER == 0
+    c = mix(mix(texel(b), texel(b + ivec2(1, 0)), f.x),
+            mix(texel(b + ivec2(0, 1)), texel(b + ivec2(1, 1)), f.x), f.y);
+#else
+    vec4 wx = catmull_rom(f.x);
+    vec4 wy = catmull_rom(f.y);
+    c = vec3(0.0);
+    for (int j = 0; j < 4; j++) {
+        vec3 row = vec3(0.0);
+        for (int i = 0; i < 4; i++) row += wx[i] * texel(b + ivec2(i - 1, j - 1));
+        c += wy[j] * row;
+    }
+    c = max(c, vec3(0.0));
+#endif
+    ivec2 n = clamp(ivec2(floor(q)), ivec2(0), pc.sizes.zw - 1);
+    imageStore(out_color, p, vec4(c, 1.0));
+    imageStore(out_velocity, p, vec4(texelFetch(low_velocity, n, 0).xy / scale, 0.0, 0.0));
+    imageStore(out_ids, p, texelFetch(low_ids, n, 0));
+    imageStore(out_depth, p, vec4(texelFetch(low_depth, n, 0).x));
+}
