@@ -64,7 +64,7 @@ layout(push_constant) uniform Push {
     ivec4 size_parity_side;  // W, H, parity, tangram side
     uvec4 flags;             // x: F_* flags
     vec4 params;             // x: depth tolerance, y: static threshold (px), z: pq4k motion
-                             // threshold (px), w: minimum valid history weight
+                             // threshold (px), w: 0
     mat4 reproj;             // intel: previous clip from current (NDC x, NDC y, depth, 1)
 } pc;
 
@@ -130,15 +130,26 @@ void bilinear_taps(vec2 q, out ivec2 base, out float w[4]) {
 }
 const ivec2 TAP[4] = ivec2[4](ivec2(0, 0), ivec2(1, 0), ivec2(0, 1), ivec2(1, 1));
 
-// History at q with per-tap validation against object `id` and reverse-Z depth `d`.
-bool history_validated(vec2 q, uint id, float d, bool use_ids, bool use_depth, out real3 h,
-                       inout uint why) {
+// Whether history depth hd shows the surface whose samples around the pixel span reverse-Z
+// depths [lo, hi]: inside the span, or within the relative tolerance of either end.
+bool depth_agrees(float hd, float lo, float hi) {
+    return (hd >= lo && hd <= hi) || depth_rel_diff(hd, lo) <= pc.params.x ||
+           depth_rel_diff(hd, hi) <= pc.params.x;
+}
+
+// History at q with per-tap validation against object `id` and reverse-Z depths [lo, hi]: the
+// texel containing q must be valid (the reprojected point lands on the surface), and the bilinear
+// weights of the invalid taps are dropped.
+bool history_validated(vec2 q, uint id, float lo, float hi, bool use_ids, bool use_depth,
+                       out real3 h, inout uint why) {
     ivec2 base;
     float w[4];
     bilinear_taps(q, base, w);
     real3 acc = real3(0.0);
     float ws = 0.0;
     uint reasons = 0u;
+    ivec2 near = ivec2(floor(q));
+    bool near_ok = false;
     for (int k = 0; k < 4; k++) {
         if (w[k] <= 0.0) continue;
         ivec2 t = base + TAP[k];
@@ -148,16 +159,17 @@ bool history_validated(vec2 q, uint id, float d, bool use_ids, bool use_depth, o
             ok = false;
             reasons |= DBG_REJECT_ID;
         }
-        if (use_depth && depth_rel_diff(texelFetch(hist_depth, t, 0).x, d) > pc.params.x) {
+        if (use_depth && !depth_agrees(texelFetch(hist_depth, t, 0).x, lo, hi)) {
             ok = false;
             reasons |= DBG_REJECT_DEPTH;
         }
         if (ok) {
             acc += real(w[k]) * real3(texelFetch(hist_color, t, 0).rgb);
             ws += w[k];
+            near_ok = near_ok || t == near;
         }
     }
-    if (ws < pc.params.w) {
+    if (!near_ok) {
         why |= reasons;
         h = real3(0.0);
         return false;
@@ -409,7 +421,19 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
             vec2 v = use_v ? s.v : vec2(0.0);
             uint id = own ? own_id : s.ids.x;
             float d = own ? own_d : s.d;
-            if (history_validated(q - v, id, d, use_ids, use_depth, h, why)) {
+            // The depth span of the neighbours showing this object (with the prepass, the
+            // pixel's own depth).
+            float lo = d;
+            float hi = d;
+            if (!own && use_ids) {
+                for (int i = 0; i < 4; i++) {
+                    if (n[i].ids.x == id) {
+                        lo = min(lo, n[i].d);
+                        hi = max(hi, n[i].d);
+                    }
+                }
+            }
+            if (history_validated(q - v, id, lo, hi, use_ids, use_depth, h, why)) {
                 found = true;
                 r.d = d;
                 r.id = id;

@@ -12,7 +12,8 @@ use cbr_gpu::{
 use cbr_render::layouts::LayoutPlan;
 use cbr_render::resolve::reference::{self, HistoryRef, Inputs, Sample};
 use cbr_render::resolve::{
-    Ablation, DBG_RENDERED, Mapping, ResolveFrame, ResolveMode, ResolvePass, ResolveSettings,
+    Ablation, DBG_RENDERED, DBG_REPROJECTED, Mapping, ResolveFrame, ResolveMode, ResolvePass,
+    ResolveSettings,
 };
 use cbr_render::targets::FrameTargets;
 use half::f16;
@@ -471,4 +472,250 @@ fn fp16_arithmetic_and_f16_history_stay_close_to_the_reference() {
         }
     }
     common::assert_clean(&bench.gpu);
+}
+
+// ---- Scenes ----------------------------------------------------------------------------------
+
+use cbr_render::{FrameOutput, LodMode, RenderSettings, Renderer, Technique};
+use cbr_scene::Scene;
+
+/// The demo with a still camera (its first key) and nothing moving.
+fn static_demo(w: u32, h: u32, textured: bool) -> Scene {
+    let mut s = cbr_scene::builtin("demo").expect("demo");
+    s.settings.width = w;
+    s.settings.height = h;
+    if !textured {
+        common::strip_textures(&mut s);
+    }
+    s.motions.clear();
+    s.camera.keys.truncate(1);
+    s
+}
+
+fn frames(
+    gpu: &Gpu,
+    s: &Scene,
+    technique: Technique,
+    resolve: Option<ResolveSettings>,
+    prepass: bool,
+    n: u32,
+) -> Vec<FrameOutput> {
+    let shaders = cbr_render::shader_library();
+    let settings = RenderSettings {
+        resolve,
+        id_prepass: prepass,
+        technique,
+        ..RenderSettings::native(s.settings.width, s.settings.height)
+    };
+    let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
+    (0..n).map(|f| r.render(s, f).expect("frame")).collect()
+}
+
+fn cb(layout: Layout) -> Technique {
+    Technique::Checkerboard {
+        layout,
+        lod_mode: LodMode::Bias,
+    }
+}
+
+/// Whether `ours` without the prepass can validate the history of missing pixel (x, y) in a
+/// static frame: a neighbour shows the pixel's object and the pixel's depth lies in (or within
+/// the tolerance of) the depth span of those neighbours.
+fn validatable(native: &FrameOutput, x: i32, y: i32, tolerance: f32) -> bool {
+    let (w, h) = (native.width as i32, native.height as i32);
+    let at = |x: i32, y: i32| {
+        let (x, y) = (x.abs(), y.abs());
+        ((y.min(2 * h - 2 - y)) * w + x.min(2 * w - 2 - x)) as usize
+    };
+    let p = at(x, y);
+    let id = native.ids[p][0];
+    let z = native.depth[p];
+    let (mut nearest, mut lo, mut hi) = (None::<f32>, f32::INFINITY, 0.0f32);
+    for (dx, dy) in [(-1, 0), (1, 0), (0, -1), (0, 1)] {
+        let q = at(x + dx, y + dy);
+        if native.ids[q][0] == id {
+            let zq = native.depth[q];
+            nearest = Some(nearest.map_or(zq, |b| b.min(zq)));
+            lo = lo.min(zq);
+            hi = hi.max(zq);
+        }
+    }
+    let rel = |a: f32, b: f32| {
+        if a.is_infinite() && b.is_infinite() {
+            0.0
+        } else {
+            (a - b).abs() / a.max(b)
+        }
+    };
+    match nearest {
+        None => false,
+        Some(_) => (z >= lo && z <= hi) || rel(z, lo) <= tolerance || rel(z, hi) <= tolerance,
+    }
+}
+
+#[test]
+fn static_scene_converges_to_native_after_two_frames() {
+    let gpu = common::gpu();
+    let (w, h) = (160, 90);
+    let textured = static_demo(w, h, true);
+    let native = &frames(&gpu, &textured, Technique::Native, None, false, 1)[0];
+    let ours = ResolveSettings::default();
+    // Masked layout, textures on (its LOD bias is 0): bit-exact with the prepass.
+    let with_prepass = frames(&gpu, &textured, cb(Layout::Masked), Some(ours), true, 3);
+    for f in [1, 2] {
+        let out = &with_prepass[f];
+        let differ = (0..native.color.len())
+            .filter(|&i| out.color[i] != native.color[i] && i % 4 != 3)
+            .count();
+        assert_eq!(
+            differ, 0,
+            "frame {f} with the prepass: {differ} values differ"
+        );
+    }
+    // Without the prepass: exact wherever a neighbour shows the pixel's surface; the others
+    // (thin features seen by no neighbour) are filled spatially.
+    let plain = frames(&gpu, &textured, cb(Layout::Masked), Some(ours), false, 2);
+    let out = &plain[1];
+    let (mut differ, mut unvalidatable) = (0, 0);
+    for y in 0..h as i32 {
+        for x in 0..w as i32 {
+            let i = (y * w as i32 + x) as usize;
+            let missing = (x + y) % 2 == 0; // frame 1 renders parity 1
+            let ok = !missing || validatable(native, x, y, ours.depth_tolerance);
+            unvalidatable += usize::from(!ok);
+            if out.color[4 * i..4 * i + 3] != native.color[4 * i..4 * i + 3] {
+                differ += 1;
+                assert!(
+                    !ok,
+                    "({x},{y}) differs from native although its history is valid"
+                );
+            }
+        }
+    }
+    let n = (w * h) as f64;
+    println!(
+        "without prepass: {differ} pixels differ ({:.2}%), {unvalidatable} cannot be validated",
+        100.0 * differ as f64 / n
+    );
+    assert!(differ as f64 <= 0.02 * n, "{differ} pixels differ");
+    // Rotated and split (untextured: their LOD bias changes texture lookups) after two frames
+    // equal native within the layouts' own tolerance (tests/layouts.rs).
+    let flat = static_demo(w, h, false);
+    let flat_native = &frames(&gpu, &flat, Technique::Native, None, false, 1)[0];
+    for layout in [Layout::Rotated, Layout::Split] {
+        let out = &frames(&gpu, &flat, cb(layout), Some(ours), true, 2)[1];
+        let mut far = 0;
+        for i in 0..(w * h) as usize {
+            for k in 0..3 {
+                let (a, b) = (
+                    out.color[4 * i + k].to_f32(),
+                    flat_native.color[4 * i + k].to_f32(),
+                );
+                if (a - b).abs() > 2e-3 * b.abs().max(1e-3) {
+                    far += 1;
+                    break;
+                }
+            }
+        }
+        println!("{layout:?}: {far} pixels beyond 2e-3 of native");
+        assert!(far as f64 <= 0.005 * n, "{layout:?}: {far} pixels off");
+    }
+    common::assert_clean(&gpu);
+}
+
+/// The demo's spinner, no longer spinning, slides right across the still scene.
+fn sliding_demo(w: u32, h: u32) -> Scene {
+    let mut s = static_demo(w, h, true);
+    let spinner = s
+        .objects
+        .iter()
+        .position(|o| o.name == "spinner")
+        .expect("spinner") as u32;
+    s.motions = vec![cbr_scene::Motion {
+        name: "slide".into(),
+        objects: vec![spinner],
+        pivot: [0.0; 3],
+        spin_axis: [0.0, 1.0, 0.0],
+        spin_rad_per_s: 0.0,
+        velocity: [12.0, 0.0, 0.0],
+    }];
+    s
+}
+
+/// Pixels the spinner uncovered this frame, were not rendered this frame and have no spinner
+/// neighbour now (so the spinner's own surface is no candidate there): the resolve must show
+/// the background, not the spinner's history. A ghost is an output taken from history that is
+/// closer to the spinner's old colour than to the background's, and more than 0.05 in luminance
+/// off the background. (Where history is rejected, the spatial fill can still be wrong next to
+/// thin objects: that is the spatial fill's error, not a ghost.)
+fn ghosts(
+    out: &FrameOutput,
+    now: &FrameOutput,
+    before: &FrameOutput,
+    spinner: u32,
+) -> (usize, usize) {
+    let parity = out.parity.expect("parity");
+    let (w, h) = (out.width, out.height);
+    let lum = |c: &[f16]| 0.2126 * c[0].to_f32() + 0.7152 * c[1].to_f32() + 0.0722 * c[2].to_f32();
+    let (mut disoccluded, mut ghost) = (0, 0);
+    for y in 1..h - 1 {
+        for x in 1..w - 1 {
+            let i = (y * w + x) as usize;
+            let near_spinner = [i - 1, i + 1, i - w as usize, i + w as usize]
+                .iter()
+                .any(|&k| now.ids[k][0] == spinner);
+            if (x + y) % 2 == parity
+                || before.ids[i][0] != spinner
+                || now.ids[i][0] == spinner
+                || near_spinner
+            {
+                continue;
+            }
+            disoccluded += 1;
+            let c = &out.color[4 * i..4 * i + 3];
+            let to_now = (lum(c) - lum(&now.color[4 * i..])).abs();
+            let to_before = (lum(c) - lum(&before.color[4 * i..])).abs();
+            let bits = out.resolve.as_ref().and_then(|r| r.debug_bits.as_ref());
+            let from_history = bits.expect("debug bits")[i] & DBG_REPROJECTED != 0;
+            if from_history && to_before < to_now && to_now > 0.05 {
+                ghost += 1;
+            }
+        }
+    }
+    (disoccluded, ghost)
+}
+
+#[test]
+fn disoccluded_history_is_rejected_not_smeared() {
+    let gpu = common::gpu();
+    let s = sliding_demo(192, 108);
+    let spinner = 1 + s
+        .objects
+        .iter()
+        .position(|o| o.name == "spinner")
+        .expect("spinner") as u32;
+    let native = frames(&gpu, &s, Technique::Native, None, false, 5);
+    let count = |mode: ResolveMode| {
+        let st = ResolveSettings {
+            mode,
+            debug: true,
+            ..ResolveSettings::default()
+        };
+        let out = frames(&gpu, &s, cb(Layout::Rotated), Some(st), false, 5);
+        let (mut d, mut g) = (0, 0);
+        for f in 2..5 {
+            let (df, gf) = ghosts(&out[f], &native[f], &native[f - 1], spinner);
+            d += df;
+            g += gf;
+        }
+        (d, g)
+    };
+    let (d, ours) = count(ResolveMode::Ours);
+    let (_, temporal) = count(ResolveMode::Temporal);
+    println!("disoccluded missing pixels {d}: ghosts ours {ours}, temporal {temporal}");
+    assert!(d >= 50, "the spinner must uncover background ({d} pixels)");
+    // The check can fail: unvalidated history leaves the ghost.
+    assert!(temporal * 4 >= d, "temporal shows {temporal} ghosts of {d}");
+    assert_eq!(ours, 0, "ours leaves {ours} ghost pixels of {d}");
+    common::assert_clean(&gpu);
 }

@@ -108,8 +108,6 @@ pub struct ResolveSettings {
     pub static_threshold: f32,
     /// `pq4k`: above this motion (pixels) history is clamped and blended with the average.
     pub motion_threshold: f32,
-    /// `ours`: the smallest total bilinear weight of valid history taps that counts as history.
-    pub min_history_weight: f32,
     pub ablation: Ablation,
     /// Also run a copy kernel that moves the resolve's minimum bytes (its bandwidth floor).
     pub bandwidth_floor: bool,
@@ -127,7 +125,6 @@ impl Default for ResolveSettings {
             depth_tolerance: 0.05,
             static_threshold: 1.0 / 64.0,
             motion_threshold: 0.25,
-            min_history_weight: 0.25,
             ablation: Ablation::default(),
             bandwidth_floor: false,
         }
@@ -192,7 +189,7 @@ impl ResolveSettings {
             self.depth_tolerance,
             self.static_threshold,
             self.motion_threshold,
-            self.min_history_weight,
+            0.0,
         ]
     }
 

@@ -141,11 +141,18 @@ impl Ctx<'_> {
         )
     }
 
+    fn depth_agrees(&self, hd: f32, lo: f32, hi: f32) -> bool {
+        let tol = self.s.depth_tolerance;
+        (hd >= lo && hd <= hi) || depth_rel_diff(hd, lo) <= tol || depth_rel_diff(hd, hi) <= tol
+    }
+
+    #[allow(clippy::too_many_arguments)]
     fn history_validated(
         &self,
         q: [f32; 2],
         id: u32,
-        d: f32,
+        lo: f32,
+        hi: f32,
         use_ids: bool,
         use_depth: bool,
         why: &mut u32,
@@ -155,6 +162,8 @@ impl Ctx<'_> {
         let mut acc = [0.0; 3];
         let mut ws = 0.0f32;
         let mut reasons = 0;
+        let near = [q[0].floor() as i32, q[1].floor() as i32];
+        let mut near_ok = false;
         for k in 0..4 {
             if w[k] <= 0.0 {
                 continue;
@@ -169,16 +178,17 @@ impl Ctx<'_> {
                 ok = false;
                 reasons |= DBG_REJECT_ID;
             }
-            if use_depth && depth_rel_diff(hist.depth[t], d) > self.s.depth_tolerance {
+            if use_depth && !self.depth_agrees(hist.depth[t], lo, hi) {
                 ok = false;
                 reasons |= DBG_REJECT_DEPTH;
             }
             if ok {
                 acc = add(acc, scale(hist.color[t], w[k]));
                 ws += w[k];
+                near_ok = near_ok || [tx, ty] == near;
             }
         }
-        if ws < self.s.min_history_weight {
+        if !near_ok {
             *why |= reasons;
             return None;
         }
@@ -430,8 +440,17 @@ impl Ctx<'_> {
                         let id = if own { own_id } else { s.ids[0] };
                         let d = if own { own_d } else { s.d };
                         let qv = [q[0] - v[0], q[1] - v[1]];
+                        let (mut lo, mut hi) = (d, d);
+                        if !own && use_ids {
+                            for s in n {
+                                if s.ids[0] == id {
+                                    lo = lo.min(s.d);
+                                    hi = hi.max(s.d);
+                                }
+                            }
+                        }
                         if let Some(h) =
-                            self.history_validated(qv, id, d, use_ids, use_depth, &mut why)
+                            self.history_validated(qv, id, lo, hi, use_ids, use_depth, &mut why)
                         {
                             found = Some(h);
                             r.d = d;
