@@ -35,6 +35,12 @@ bench-metrics: setup
 bench-layouts: setup
     python3 scripts/bench-layouts.py --cbr ./target/release/cbr -o {{out}}/bench/layouts
 
+# The resolve: quality against native over camera paths (every mode, layouts, upscale) and cost at
+# 1080p per thread mapping and group size next to a copy-kernel floor (docs/resolve.md).
+bench-resolve: setup
+    python3 scripts/bench-resolve.py cost --cbr ./target/release/cbr -o {{out}}/bench/resolve
+    python3 scripts/bench-resolve.py quality --cbr ./target/release/cbr -o {{out}}/bench/resolve
+
 # Formatting.
 fmt:
     cargo fmt --all

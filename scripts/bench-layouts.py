@@ -21,7 +21,7 @@ LAYOUTS = ["masked", "split", "rotated", "msaa2x"]
 def run(cbr, scene, w, h, frames, technique, layout, out):
     args = [cbr, "render", scene, "--width", str(w), "--height", str(h), "--frames", str(frames), "-o", out, "--technique", technique]
     if technique == "checkerboard":
-        args += ["--layout", layout]
+        args += ["--layout", layout, "--resolve", "none"]
     p = subprocess.run(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     if p.returncode != 0:
         return None, p.stderr.strip().splitlines()[-1] if p.stderr.strip() else "failed"

@@ -190,6 +190,8 @@ struct Resolve {
     rb: ResolveReadbacks,
 }
 
+// One per renderer, built once: variant sizes do not matter.
+#[allow(clippy::large_enum_variant)]
 enum Mode {
     Native {
         readbacks: NativeReadbacks,

@@ -420,8 +420,8 @@ impl Ctx<'_> {
                 } else if !use_ids {
                     cand.push(o[0]);
                 } else {
-                    for i in 0..4 {
-                        let k = if use_depth { o[i] } else { i };
+                    for (i, &by_depth) in o.iter().enumerate() {
+                        let k = if use_depth { by_depth } else { i };
                         if !cand.iter().any(|&c| n[c].ids[0] == n[k].ids[0]) {
                             cand.push(k);
                         }
