@@ -137,42 +137,39 @@ bool depth_agrees(float hd, float lo, float hi) {
            depth_rel_diff(hd, hi) <= pc.params.x;
 }
 
-// History at q with per-tap validation against object `id` and reverse-Z depths [lo, hi]: the
-// texel containing q must be valid (the reprojected point lands on the surface), and the bilinear
-// weights of the invalid taps are dropped.
+// Why history texel t does not show object `id` at reverse-Z depths [lo, hi] (0: it does).
+uint tap_reasons(ivec2 t, uint id, float lo, float hi, bool use_ids, bool use_depth) {
+    uint r = 0u;
+    if (use_ids && texelFetch(hist_ids, t, 0).x != id) r |= DBG_REJECT_ID;
+    if (use_depth && !depth_agrees(texelFetch(hist_depth, t, 0).x, lo, hi)) r |= DBG_REJECT_DEPTH;
+    return r;
+}
+
+// History at q validated against object `id` and reverse-Z depths [lo, hi]: the texel
+// containing q must be valid (the reprojected point lands on the surface; checked first, so a
+// rejection costs one texel), then bilinear over the valid taps, renormalised.
 bool history_validated(vec2 q, uint id, float lo, float hi, bool use_ids, bool use_depth,
                        out real3 h, inout uint why) {
+    h = real3(0.0);
+    ivec2 near = ivec2(floor(q));
+    if (!inside(near)) return false;
+    uint rn = tap_reasons(near, id, lo, hi, use_ids, use_depth);
+    if (rn != 0u) {
+        why |= rn;
+        return false;
+    }
     ivec2 base;
     float w[4];
     bilinear_taps(q, base, w);
     real3 acc = real3(0.0);
     float ws = 0.0;
-    uint reasons = 0u;
-    ivec2 near = ivec2(floor(q));
-    bool near_ok = false;
     for (int k = 0; k < 4; k++) {
-        if (w[k] <= 0.0) continue;
         ivec2 t = base + TAP[k];
-        if (!inside(t)) continue;
-        bool ok = true;
-        if (use_ids && texelFetch(hist_ids, t, 0).x != id) {
-            ok = false;
-            reasons |= DBG_REJECT_ID;
-        }
-        if (use_depth && !depth_agrees(texelFetch(hist_depth, t, 0).x, lo, hi)) {
-            ok = false;
-            reasons |= DBG_REJECT_DEPTH;
-        }
-        if (ok) {
+        if (w[k] <= 0.0 || !inside(t)) continue;
+        if (t == near || tap_reasons(t, id, lo, hi, use_ids, use_depth) == 0u) {
             acc += real(w[k]) * real3(texelFetch(hist_color, t, 0).rgb);
             ws += w[k];
-            near_ok = near_ok || t == near;
         }
-    }
-    if (!near_ok) {
-        why |= reasons;
-        h = real3(0.0);
-        return false;
     }
     h = acc / real(ws);
     return true;
@@ -191,19 +188,27 @@ real3 history_plain(vec2 q) {
     return acc;
 }
 
-// Neighbours: 0 left, 1 right, 2 up, 3 down. Order by depth, nearest (largest reverse-Z) first;
-// ties keep the neighbour order.
-void depth_order(Sample n[4], out int o[4]) {
-    for (int i = 0; i < 4; i++) o[i] = i;
-    for (int i = 1; i < 4; i++) {
-        int k = o[i];
-        int j = i - 1;
-        while (j >= 0 && n[o[j]].d < n[k].d) {
-            o[j + 1] = o[j];
-            j--;
-        }
-        o[j + 1] = k;
+// Neighbours: 0 left, 1 right, 2 up, 3 down. Sorted by depth, nearest (largest reverse-Z)
+// first, ties in neighbour order: a five-comparator network on a total order (so it equals a
+// stable sort) with constant indices, which keeps the samples in registers.
+void cswap(inout Sample a, inout int ia, inout Sample b, inout int ib) {
+    if (a.d < b.d || (a.d == b.d && ia > ib)) {
+        Sample t = a;
+        a = b;
+        b = t;
+        int ti = ia;
+        ia = ib;
+        ib = ti;
     }
+}
+void depth_sorted(Sample n[4], out Sample s[4]) {
+    s = n;
+    int o[4] = int[4](0, 1, 2, 3);
+    cswap(s[0], o[0], s[1], o[1]);
+    cswap(s[2], o[2], s[3], o[3]);
+    cswap(s[0], o[0], s[2], o[2]);
+    cswap(s[1], o[1], s[3], o[3]);
+    cswap(s[1], o[1], s[2], o[2]);
 }
 
 // Weights of the differential blend: 1 / (BLEND_EPS + luminance difference of the pair), in
@@ -295,9 +300,9 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
         own_d = texelFetch(pre_depth, p, 0).x;
         own_id = texelFetch(pre_ids, p, 0).x;
     }
-    int o[4];
-    depth_order(n, o);
-    Sample near = n[o[0]];
+    Sample sorted[4];
+    depth_sorted(n, sorted);
+    Sample near = sorted[0];
     uint ref_id = own ? own_id : near.ids.x;
 #if MODE == MODE_PQ4K
     Sample partner = n[quad_partner(p)];
@@ -379,66 +384,57 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
     // Hypotheses: the surfaces the neighbours show, nearest first, one per object ID (with the
     // prepass: the pixel's own surface, moving as its nearest-in-depth neighbour of that ID).
     // Without depth they come in neighbour order; without IDs and depth, only the quad partner.
-    int cand[4];
-    int ncand = 0;
+    // c: the candidates in order; with IDs and without the prepass every distinct object
+    // among them is tried, else only c[0].
+    Sample c[4] = use_depth ? sorted : n;
+    bool multi = use_ids && !own;
     if (own) {
-        int best = -1;
-        float best_diff = 0.0;
-        for (int i = 0; i < 4; i++) {
+        Sample best = n[0];
+        float best_diff = abs(n[0].d - own_d);
+        for (int i = 1; i < 4; i++) {
             float dd = abs(n[i].d - own_d);
             bool same = n[i].ids.x == own_id;
-            bool best_same = best >= 0 && n[best].ids.x == own_id;
-            if (best < 0 || (same && !best_same) || (same == best_same && dd < best_diff)) {
-                best = i;
+            bool best_same = best.ids.x == own_id;
+            if ((same && !best_same) || (same == best_same && dd < best_diff)) {
+                best = n[i];
                 best_diff = dd;
             }
         }
-        cand[0] = best;
-        ncand = 1;
+        c[0] = best;
     } else if (!use_ids && !use_depth) {
-        cand[0] = quad_partner(p);
-        ncand = 1;
-    } else if (!use_ids) {
-        cand[0] = o[0];
-        ncand = 1;
-    } else {
-        for (int i = 0; i < 4; i++) {
-            int k = use_depth ? o[i] : i;
-            bool seen = false;
-            for (int j = 0; j < ncand; j++) seen = seen || n[cand[j]].ids.x == n[k].ids.x;
-            if (!seen) cand[ncand++] = k;
-        }
+        c[0] = quad_partner(p) == 1 ? n[1] : n[0];
     }
-    r.d = own ? own_d : n[cand[0]].d;
-    r.id = own ? own_id : n[cand[0]].ids.x;
-    r.v = use_v ? n[cand[0]].v : vec2(0.0);
+    r.d = own ? own_d : c[0].d;
+    r.id = own ? own_id : c[0].ids.x;
+    r.v = use_v ? c[0].v : vec2(0.0);
     bool found = false;
     uint why = 0u;
     real3 h = real3(0.0);
-    if (!reset) {
-        for (int j = 0; j < ncand && !found; j++) {
-            Sample s = n[cand[j]];
-            vec2 v = use_v ? s.v : vec2(0.0);
-            uint id = own ? own_id : s.ids.x;
-            float d = own ? own_d : s.d;
-            // The depth span of the neighbours showing this object (with the prepass, the
-            // pixel's own depth).
-            float lo = d;
-            float hi = d;
-            if (!own && use_ids) {
-                for (int i = 0; i < 4; i++) {
-                    if (n[i].ids.x == id) {
-                        lo = min(lo, n[i].d);
-                        hi = max(hi, n[i].d);
-                    }
+    for (int k = 0; k < 4; k++) {
+        if (reset || found || (k > 0 && !multi)) break;
+        bool dup = false;
+        for (int j = 0; j < k; j++) dup = dup || c[j].ids.x == c[k].ids.x;
+        if (dup) continue;
+        vec2 v = use_v ? c[k].v : vec2(0.0);
+        uint id = own ? own_id : c[k].ids.x;
+        float d = own ? own_d : c[k].d;
+        // The depth span of the neighbours showing this object (with the prepass, the pixel's
+        // own depth).
+        float lo = d;
+        float hi = d;
+        if (multi) {
+            for (int i = 0; i < 4; i++) {
+                if (n[i].ids.x == id) {
+                    lo = min(lo, n[i].d);
+                    hi = max(hi, n[i].d);
                 }
             }
-            if (history_validated(q - v, id, lo, hi, use_ids, use_depth, h, why)) {
-                found = true;
-                r.d = d;
-                r.id = id;
-                r.v = v;
-            }
+        }
+        if (history_validated(q - v, id, lo, hi, use_ids, use_depth, h, why)) {
+            found = true;
+            r.d = d;
+            r.id = id;
+            r.v = v;
         }
     }
     if (found) {

@@ -146,6 +146,18 @@ impl Ctx<'_> {
         (hd >= lo && hd <= hi) || depth_rel_diff(hd, lo) <= tol || depth_rel_diff(hd, hi) <= tol
     }
 
+    fn tap_reasons(&self, t: usize, id: u32, lo: f32, hi: f32, ids: bool, depth: bool) -> u32 {
+        let hist = self.hist();
+        let mut r = 0;
+        if ids && hist.ids[t] != id {
+            r |= DBG_REJECT_ID;
+        }
+        if depth && !self.depth_agrees(hist.depth[t], lo, hi) {
+            r |= DBG_REJECT_DEPTH;
+        }
+        r
+    }
+
     #[allow(clippy::too_many_arguments)]
     fn history_validated(
         &self,
@@ -157,40 +169,29 @@ impl Ctx<'_> {
         use_depth: bool,
         why: &mut u32,
     ) -> Option<V3> {
+        let near = [q[0].floor() as i32, q[1].floor() as i32];
+        if !self.inside(near[0], near[1]) {
+            return None;
+        }
+        let rn = self.tap_reasons(self.idx(near[0], near[1]), id, lo, hi, use_ids, use_depth);
+        if rn != 0 {
+            *why |= rn;
+            return None;
+        }
         let hist = self.hist();
         let (base, w) = Self::taps(q);
         let mut acc = [0.0; 3];
         let mut ws = 0.0f32;
-        let mut reasons = 0;
-        let near = [q[0].floor() as i32, q[1].floor() as i32];
-        let mut near_ok = false;
         for k in 0..4 {
-            if w[k] <= 0.0 {
-                continue;
-            }
             let (tx, ty) = (base[0] + TAP[k][0], base[1] + TAP[k][1]);
-            if !self.inside(tx, ty) {
+            if w[k] <= 0.0 || !self.inside(tx, ty) {
                 continue;
             }
             let t = self.idx(tx, ty);
-            let mut ok = true;
-            if use_ids && hist.ids[t] != id {
-                ok = false;
-                reasons |= DBG_REJECT_ID;
-            }
-            if use_depth && !self.depth_agrees(hist.depth[t], lo, hi) {
-                ok = false;
-                reasons |= DBG_REJECT_DEPTH;
-            }
-            if ok {
+            if [tx, ty] == near || self.tap_reasons(t, id, lo, hi, use_ids, use_depth) == 0 {
                 acc = add(acc, scale(hist.color[t], w[k]));
                 ws += w[k];
-                near_ok = near_ok || [tx, ty] == near;
             }
-        }
-        if !near_ok {
-            *why |= reasons;
-            return None;
         }
         Some(div(acc, ws))
     }
