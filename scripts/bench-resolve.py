@@ -92,6 +92,14 @@ def quality(a):
                      width=a.width, height=a.height, frames=a.frames, warmup=a.warmup)
             rows.append(m)
     json.dump(rows, open(os.path.join(a.out, "quality.json"), "w"), indent=1)
+    quality_md(rows, a)
+
+
+def num(x, fmt):
+    return format(x, fmt) if isinstance(x, (int, float)) and x not in (float("inf"),) else str(x)
+
+
+def quality_md(rows, a):
     md = [f"Quality against native, {a.width}x{a.height}, {a.frames} frames, first {a.warmup} "
           f"skipped; device {rows[0]['device'] if rows else '?'}.", "",
           "| scene | configuration | FLIP mean | PSNR dB | flicker | FLIP / upscale:bilinear | FLIP / rotated:pq4k |",
@@ -104,8 +112,8 @@ def quality(a):
         up = by["upscale:bilinear"]["flip_mean"]
         pq = by["rotated:pq4k"]["flip_mean"]
         for r in srows:
-            md.append(f"| {sname} | {r['config']} | {r['flip_mean']:.4f} | {r['psnr_mean']:.2f} | "
-                      f"{r['flicker']:.4f} | {r['flip_mean'] / up:.2f} | {r['flip_mean'] / pq:.2f} |")
+            md.append(f"| {sname} | {r['config']} | {r['flip_mean']:.4f} | {num(r['psnr_mean'], '.2f')} | "
+                      f"{num(r['flicker'], '.4f')} | {r['flip_mean'] / up:.2f} | {r['flip_mean'] / pq:.2f} |")
     open(os.path.join(a.out, "quality.md"), "w").write("\n".join(md) + "\n")
     print("\n".join(md))
 
@@ -147,7 +155,7 @@ def cost(a):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("what", choices=["quality", "cost"])
+    ap.add_argument("what", choices=["quality", "cost", "quality-md"])
     ap.add_argument("--cbr", default="./target/release/cbr")
     ap.add_argument("--frames", type=int)
     ap.add_argument("--warmup", type=int)
@@ -161,7 +169,12 @@ def main():
     a.width = a.width or (480 if q else 1920)
     a.height = a.height or (270 if q else 1080)
     os.makedirs(a.out, exist_ok=True)
-    quality(a) if q else cost(a)
+    if a.what == "quality-md":  # the tables again from quality.json
+        rows = json.load(open(os.path.join(a.out, "quality.json")))
+        a.width, a.height, a.frames, a.warmup = (rows[0][k] for k in ("width", "height", "frames", "warmup"))
+        quality_md(rows, a)
+    else:
+        quality(a) if q else cost(a)
 
 
 if __name__ == "__main__":

@@ -38,6 +38,16 @@ pub struct BindingDesc {
 }
 
 impl BindingDesc {
+    /// A single-descriptor binding.
+    pub const fn one(name: &'static str, binding: u32, kind: DescriptorKind) -> BindingDesc {
+        BindingDesc {
+            name,
+            binding,
+            kind,
+            count: 1,
+        }
+    }
+
     /// `("BINDING_<NAME>", "<n>")`, for shader defines.
     pub fn define(&self) -> (String, String) {
         (

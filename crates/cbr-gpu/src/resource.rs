@@ -365,6 +365,15 @@ pub struct SamplerDesc {
     pub repeat: bool,
 }
 
+impl SamplerDesc {
+    /// Nearest, no mips, clamp to edge: for texelFetch-style reads of render targets.
+    pub const NEAREST: SamplerDesc = SamplerDesc {
+        linear: false,
+        mipmaps: false,
+        repeat: false,
+    };
+}
+
 pub struct Sampler {
     gpu: Arc<Inner>,
     raw: vk::Sampler,

@@ -86,15 +86,7 @@ impl UnpackPass {
                 push_constant_bytes: 16,
             },
         )?;
-        let sampler = Sampler::new(
-            gpu,
-            "unpack.sampler",
-            SamplerDesc {
-                linear: false,
-                mipmaps: false,
-                repeat: false,
-            },
-        )?;
+        let sampler = Sampler::new(gpu, "unpack.sampler", SamplerDesc::NEAREST)?;
         let bytes = u64::from(plan.width)
             * u64::from(plan.height)
             * std::mem::size_of::<UnpackedPixel>() as u64;

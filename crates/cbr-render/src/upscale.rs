@@ -33,12 +33,7 @@ pub fn low_resolution(width: u32, height: u32) -> (u32, u32) {
 
 pub const BINDINGS: [BindingDesc; 8] = {
     const fn b(name: &'static str, binding: u32, kind: DescriptorKind) -> BindingDesc {
-        BindingDesc {
-            name,
-            binding,
-            kind,
-            count: 1,
-        }
+        BindingDesc::one(name, binding, kind)
     }
     use DescriptorKind::{CombinedImageSampler as S, StorageImage as I};
     [
@@ -95,15 +90,7 @@ impl UpscalePass {
                 push_constant_bytes: 16,
             },
         )?;
-        let sampler = Sampler::new(
-            gpu,
-            "upscale.sampler",
-            SamplerDesc {
-                linear: false,
-                mipmaps: false,
-                repeat: false,
-            },
-        )?;
+        let sampler = Sampler::new(gpu, "upscale.sampler", SamplerDesc::NEAREST)?;
         let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
         let img = |name: &str, format| {
             Image::new(gpu, &ImageDesc::new_2d(name, format, width, height, usage))

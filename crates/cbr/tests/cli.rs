@@ -372,3 +372,88 @@ fn demo_renders_readable_outputs_with_zero_validation_messages() {
         ),
     }
 }
+
+#[test]
+fn resolve_and_upscale_write_their_layers_and_debug_views() {
+    let d = tempfile::tempdir().expect("tempdir");
+    let out = d.path().join("cb");
+    let o = cbr(
+        &[
+            "render",
+            "builtin:demo",
+            "-o",
+            out.to_str().expect("utf8"),
+            "--width",
+            "64",
+            "--height",
+            "36",
+            "--frames",
+            "2",
+            "--validation",
+            "--technique",
+            "checkerboard",
+            "--layout",
+            "split",
+            "--resolve",
+            "pq4k",
+            "--resolve-mapping",
+            "pixel",
+            "--resolve-group",
+            "16",
+            "--resolve-debug",
+            "--resolve-without",
+            "clamp,prepass",
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json"))
+            .expect("json");
+    assert_eq!(run["validation"]["messages"], 0, "{}", run["validation"]);
+    assert_eq!(run["settings"]["resolve"]["mode"], "pq4k");
+    assert_eq!(run["settings"]["resolve"]["ablation"]["clamp"], false);
+    assert_eq!(run["frames"][0]["resolve_reset"], true);
+    assert_eq!(run["frames"][1]["resolve_reset"], false);
+    // The resolved frame has no holes; the debug layers say which pixels were missing.
+    let color = cbr_metrics::input::load(&out.join("frame_0001.exr"), None, None).expect("color");
+    assert!(color.rgb.c[1].data.iter().all(|&v| v > 0.0));
+    let missing = cbr_metrics::input::load(
+        &out.join("frame_0001.exr"),
+        Some("resolve_missing"),
+        Some(&["Y".to_string()]),
+    )
+    .expect("resolve_missing layer");
+    let n = missing.rgb.c[0].data.iter().filter(|&&v| v > 0.5).count();
+    assert_eq!(n, 64 * 36 / 2, "half the pixels are missing each frame");
+    for view in ["parity", "reprojected", "spatial", "velocity", "ids"] {
+        let f = out.join(format!("debug/frame_0001_{view}.png"));
+        assert!(f.is_file(), "{}", f.display());
+    }
+    // The upscale baseline, and a bad group size.
+    let up = d.path().join("up");
+    let o = cbr(
+        &[
+            "render",
+            "builtin:demo",
+            "-o",
+            up.to_str().expect("utf8"),
+            "--width",
+            "64",
+            "--height",
+            "36",
+            "--frames",
+            "1",
+            "--technique",
+            "upscale",
+            "--filter",
+            "bicubic",
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(up.join("frame_0000.exr").is_file());
+    let o = cbr(&["render", "builtin:demo", "--resolve-group", "12"], &[]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("8 or 16"), "{}", stderr(&o));
+}

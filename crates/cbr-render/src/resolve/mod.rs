@@ -206,12 +206,7 @@ impl ResolveSettings {
 
 pub const BINDINGS: [BindingDesc; 14] = {
     const fn b(name: &'static str, binding: u32, kind: DescriptorKind) -> BindingDesc {
-        BindingDesc {
-            name,
-            binding,
-            kind,
-            count: 1,
-        }
+        BindingDesc::one(name, binding, kind)
     }
     use DescriptorKind::{CombinedImageSampler as S, StorageImage as I};
     [
@@ -334,15 +329,7 @@ impl ResolvePass {
                 push_constant_bytes: std::mem::size_of::<ResolvePush>() as u32,
             },
         )?;
-        let sampler = Sampler::new(
-            gpu,
-            "resolve.sampler",
-            SamplerDesc {
-                linear: false,
-                mipmaps: false,
-                repeat: false,
-            },
-        )?;
+        let sampler = Sampler::new(gpu, "resolve.sampler", SamplerDesc::NEAREST)?;
         let usage = vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::SAMPLED
             | vk::ImageUsageFlags::TRANSFER_SRC
