@@ -40,6 +40,11 @@
 #define DBG_REJECT_DEPTH 16u
 #define DBG_CLAMPED 32u
 #define DBG_SPATIAL 64u
+#define DBG_STILL 128u  // `ours`: still neighbourhood, history at p taken as it is
+
+// History IDs carry this bit when the pixel moved (|v| above the static threshold).
+#define ID_MOVED 0x80000000u
+#define ID_MASK 0x7fffffffu
 
 layout(local_size_x = GROUP, local_size_y = GROUP) in;
 
@@ -137,10 +142,18 @@ bool depth_agrees(float hd, float lo, float hi) {
            depth_rel_diff(hd, hi) <= pc.params.x;
 }
 
+// Catmull-Rom weights of the taps at -1, 0, 1, 2 for fractional position f.
+vec4 catmull_rom(float f) {
+    float f2 = f * f;
+    float f3 = f2 * f;
+    return vec4(-0.5 * f3 + f2 - 0.5 * f, 1.5 * f3 - 2.5 * f2 + 1.0,
+                -1.5 * f3 + 2.0 * f2 + 0.5 * f, 0.5 * f3 - 0.5 * f2);
+}
+
 // Why history texel t does not show object `id` at reverse-Z depths [lo, hi] (0: it does).
 uint tap_reasons(ivec2 t, uint id, float lo, float hi, bool use_ids, bool use_depth) {
     uint r = 0u;
-    if (use_ids && texelFetch(hist_ids, t, 0).x != id) r |= DBG_REJECT_ID;
+    if (use_ids && (texelFetch(hist_ids, t, 0).x & ID_MASK) != id) r |= DBG_REJECT_ID;
     if (use_depth && !depth_agrees(texelFetch(hist_depth, t, 0).x, lo, hi)) r |= DBG_REJECT_DEPTH;
     return r;
 }
@@ -163,15 +176,36 @@ bool history_validated(vec2 q, uint id, float lo, float hi, bool use_ids, bool u
     bilinear_taps(q, base, w);
     real3 acc = real3(0.0);
     float ws = 0.0;
+    bool all_ok = true;
     for (int k = 0; k < 4; k++) {
         ivec2 t = base + TAP[k];
-        if (w[k] <= 0.0 || !inside(t)) continue;
-        if (t == near || tap_reasons(t, id, lo, hi, use_ids, use_depth) == 0u) {
+        if (w[k] <= 0.0) continue;
+        if (inside(t) && (t == near || tap_reasons(t, id, lo, hi, use_ids, use_depth) == 0u)) {
             acc += real(w[k]) * real3(texelFetch(hist_color, t, 0).rgb);
             ws += w[k];
+        } else {
+            all_ok = false;
         }
     }
     h = acc / real(ws);
+    if (all_ok) {
+        // All four taps valid: Catmull-Rom over the 4 x 4 texels around q (outer taps clamped to
+        // the screen, not validated; the neighbourhood clamp bounds any overshoot), which keeps
+        // the history sharp where bilinear would soften it at every reprojection.
+        vec2 f = (q - 0.5) - vec2(base);
+        vec4 wx = catmull_rom(f.x);
+        vec4 wy = catmull_rom(f.y);
+        real3 c = real3(0.0);
+        for (int j = 0; j < 4; j++) {
+            real3 row = real3(0.0);
+            for (int i = 0; i < 4; i++) {
+                ivec2 t = clamp(base + ivec2(i - 1, j - 1), ivec2(0), size() - 1);
+                row += real(wx[i]) * real3(texelFetch(hist_color, t, 0).rgb);
+            }
+            c += real(wy[j]) * row;
+        }
+        h = max(c, real3(0.0));
+    }
     return true;
 }
 
@@ -410,6 +444,25 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
     bool found = false;
     uint why = 0u;
     real3 h = real3(0.0);
+    // A still neighbourhood (every neighbour below the static threshold) and a history pixel
+    // that did not move either: nothing can have covered or uncovered p, so its history stands
+    // as it is (with the prepass: if it shows the pixel's own object). This keeps thin features
+    // that no neighbour shows; a disoccluded pixel's history moved, so it is not taken.
+    if (!reset && use_v) {
+        bool still = true;
+        for (int i = 0; i < 4; i++) still = still && length(n[i].v) <= pc.params.y;
+        if (still) {
+            uint hid = texelFetch(hist_ids, p, 0).x;
+            if ((hid & ID_MOVED) == 0u && (!own || hid == own_id)) {
+                found = true;
+                h = real3(texelFetch(hist_color, p, 0).rgb);
+                r.d = texelFetch(hist_depth, p, 0).x;
+                r.id = hid;
+                r.v = vec2(0.0);
+                r.dbg |= DBG_STILL;
+            }
+        }
+    }
     for (int k = 0; k < 4; k++) {
         if (reset || found || (k > 0 && !multi)) break;
         bool dup = false;
@@ -439,7 +492,13 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
     }
     if (found) {
         r.dbg |= DBG_REPROJECTED;
-        if (!has(F_NO_CLAMP) && length(r.v) > pc.params.y) h = clamp_to_box(h, n, r.dbg);
+        if (!has(F_NO_CLAMP) && length(r.v) > pc.params.y) {
+            // Moving: clamp to the neighbourhood, then average with the spatial estimate (half
+            // and half, as pq4k does with its 4-neighbour mean): resampled history alone is
+            // softer and noisier than fresh neighbours.
+            h = clamp_to_box(h, n, r.dbg);
+            h = (spatial_fill(n, r.id, use_ids, own) + h) * real(0.5);
+        }
         r.c = h;
     } else {
         r.dbg |= why | DBG_SPATIAL;
@@ -452,7 +511,7 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
 void write_result(ivec2 p, Result r) {
     imageStore(out_color, p, vec4(vec3(r.c), 1.0));
     imageStore(out_depth, p, vec4(r.d));
-    imageStore(out_ids, p, uvec4(r.id));
+    imageStore(out_ids, p, uvec4(r.id | (length(r.v) > pc.params.y ? ID_MOVED : 0u)));
 #if DEBUG
     imageStore(out_debug, p, uvec4(r.dbg));
     imageStore(out_velocity, p, vec4(r.v, 0.0, 0.0));

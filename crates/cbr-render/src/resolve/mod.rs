@@ -147,9 +147,14 @@ pub const DBG_REJECT_ID: u32 = 8;
 pub const DBG_REJECT_DEPTH: u32 = 16;
 pub const DBG_CLAMPED: u32 = 32;
 pub const DBG_SPATIAL: u32 = 64;
+pub const DBG_STILL: u32 = 128;
+
+/// History IDs carry `ID_MOVED` where the pixel moved more than the static threshold.
+pub const ID_MOVED: u32 = 0x8000_0000;
+pub const ID_MASK: u32 = 0x7fff_ffff;
 
 /// The debug views: (name, bit).
-pub const DEBUG_VIEWS: [(&str, u32); 7] = [
+pub const DEBUG_VIEWS: [(&str, u32); 8] = [
     ("parity", DBG_RENDERED),
     ("missing", DBG_MISSING),
     ("reprojected", DBG_REPROJECTED),
@@ -157,6 +162,7 @@ pub const DEBUG_VIEWS: [(&str, u32); 7] = [
     ("rejected_depth", DBG_REJECT_DEPTH),
     ("clamped", DBG_CLAMPED),
     ("spatial", DBG_SPATIAL),
+    ("still", DBG_STILL),
 ];
 
 impl ResolveSettings {

@@ -5,7 +5,7 @@
 
 use super::{
     DBG_CLAMPED, DBG_MISSING, DBG_REJECT_DEPTH, DBG_REJECT_ID, DBG_RENDERED, DBG_REPROJECTED,
-    DBG_SPATIAL, ResolveMode, ResolveSettings,
+    DBG_SPATIAL, DBG_STILL, ID_MASK, ID_MOVED, ResolveMode, ResolveSettings,
 };
 
 /// One checkerboard sample as the resolve reads it.
@@ -86,6 +86,18 @@ fn length(v: [f32; 2]) -> f32 {
     (v[0] * v[0] + v[1] * v[1]).sqrt()
 }
 
+/// Catmull-Rom weights of the taps at -1, 0, 1, 2 for fractional position f.
+fn catmull_rom(f: f32) -> [f32; 4] {
+    let f2 = f * f;
+    let f3 = f2 * f;
+    [
+        -0.5 * f3 + f2 - 0.5 * f,
+        1.5 * f3 - 2.5 * f2 + 1.0,
+        -1.5 * f3 + 2.0 * f2 + 0.5 * f,
+        0.5 * f3 - 0.5 * f2,
+    ]
+}
+
 /// The differential blend's weight offset (BLEND_EPS in resolve.comp).
 pub const BLEND_EPS: f32 = 1.0 / 64.0;
 
@@ -149,7 +161,7 @@ impl Ctx<'_> {
     fn tap_reasons(&self, t: usize, id: u32, lo: f32, hi: f32, ids: bool, depth: bool) -> u32 {
         let hist = self.hist();
         let mut r = 0;
-        if ids && hist.ids[t] != id {
+        if ids && hist.ids[t] & ID_MASK != id {
             r |= DBG_REJECT_ID;
         }
         if depth && !self.depth_agrees(hist.depth[t], lo, hi) {
@@ -182,18 +194,40 @@ impl Ctx<'_> {
         let (base, w) = Self::taps(q);
         let mut acc = [0.0; 3];
         let mut ws = 0.0f32;
+        let mut all_ok = true;
         for k in 0..4 {
             let (tx, ty) = (base[0] + TAP[k][0], base[1] + TAP[k][1]);
-            if w[k] <= 0.0 || !self.inside(tx, ty) {
+            if w[k] <= 0.0 {
                 continue;
             }
-            let t = self.idx(tx, ty);
-            if [tx, ty] == near || self.tap_reasons(t, id, lo, hi, use_ids, use_depth) == 0 {
-                acc = add(acc, scale(hist.color[t], w[k]));
+            if self.inside(tx, ty)
+                && ([tx, ty] == near
+                    || self.tap_reasons(self.idx(tx, ty), id, lo, hi, use_ids, use_depth) == 0)
+            {
+                acc = add(acc, scale(hist.color[self.idx(tx, ty)], w[k]));
                 ws += w[k];
+            } else {
+                all_ok = false;
             }
         }
-        Some(div(acc, ws))
+        let mut h = div(acc, ws);
+        if all_ok {
+            let g = [q[0] - 0.5, q[1] - 0.5];
+            let f = [g[0] - base[0] as f32, g[1] - base[1] as f32];
+            let (wx, wy) = (catmull_rom(f[0]), catmull_rom(f[1]));
+            let mut c = [0.0; 3];
+            for j in 0..4 {
+                let mut row = [0.0; 3];
+                for i in 0..4 {
+                    let tx = (base[0] + i as i32 - 1).clamp(0, self.w - 1);
+                    let ty = (base[1] + j as i32 - 1).clamp(0, self.h - 1);
+                    row = add(row, scale(hist.color[self.idx(tx, ty)], wx[i]));
+                }
+                c = add(c, scale(row, wy[j]));
+            }
+            h = c.map(|v| v.max(0.0));
+        }
+        Some(h)
     }
 
     fn history_plain(&self, q: [f32; 2]) -> V3 {
@@ -434,7 +468,19 @@ impl Ctx<'_> {
                 r.v = if use_v { first.v } else { [0.0; 2] };
                 let mut found = None;
                 let mut why = 0;
-                if !self.reset {
+                if !self.reset && use_v && n.iter().all(|s| length(s.v) <= self.s.static_threshold)
+                {
+                    let i = self.idx(x, y);
+                    let hid = self.hist().ids[i];
+                    if hid & ID_MOVED == 0 && (!own || hid == own_id) {
+                        found = Some(self.hist().color[i]);
+                        r.d = self.hist().depth[i];
+                        r.id = hid;
+                        r.v = [0.0; 2];
+                        r.dbg |= DBG_STILL;
+                    }
+                }
+                if !self.reset && found.is_none() {
                     for &k in &cand {
                         let s = n[k];
                         let v = if use_v { s.v } else { [0.0; 2] };
@@ -466,6 +512,8 @@ impl Ctx<'_> {
                         r.dbg |= DBG_REPROJECTED;
                         if a.clamp && length(r.v) > self.s.static_threshold {
                             h = self.clamp_to_box(h, n, &mut r.dbg);
+                            let sp = self.spatial_fill(n, r.id, use_ids, own);
+                            h = scale(add(sp, h), 0.5);
                         }
                         r.c = h;
                     }
@@ -517,7 +565,8 @@ pub fn resolve(inputs: &Inputs, settings: &ResolveSettings) -> Output {
             let i = ctx.idx(x, y);
             out.color[i] = r.c;
             out.depth[i] = r.d;
-            out.ids[i] = r.id;
+            let moved = length(r.v) > settings.static_threshold;
+            out.ids[i] = r.id | if moved { ID_MOVED } else { 0 };
             out.debug[i] = r.dbg;
             out.velocity[i] = r.v;
         }
