@@ -216,14 +216,14 @@ impl Ctx<'_> {
             let f = [g[0] - base[0] as f32, g[1] - base[1] as f32];
             let (wx, wy) = (catmull_rom(f[0]), catmull_rom(f[1]));
             let mut c = [0.0; 3];
-            for j in 0..4 {
+            for (j, &wj) in wy.iter().enumerate() {
                 let mut row = [0.0; 3];
-                for i in 0..4 {
+                for (i, &wi) in wx.iter().enumerate() {
                     let tx = (base[0] + i as i32 - 1).clamp(0, self.w - 1);
                     let ty = (base[1] + j as i32 - 1).clamp(0, self.h - 1);
-                    row = add(row, scale(hist.color[self.idx(tx, ty)], wx[i]));
+                    row = add(row, scale(hist.color[self.idx(tx, ty)], wi));
                 }
-                c = add(c, scale(row, wy[j]));
+                c = add(c, scale(row, wj));
             }
             h = c.map(|v| v.max(0.0));
         }
