@@ -20,3 +20,4 @@ pub use compare::{
 pub use display::DisplayTransform;
 pub use error::MetricsError;
 pub use input::{Encoding, InputImage};
+pub use planes::Rgb;

@@ -2,6 +2,7 @@
 #![forbid(unsafe_code)]
 #![cfg_attr(not(test), deny(clippy::unwrap_used))]
 
+mod bench;
 mod compare;
 mod info;
 mod render;
@@ -39,6 +40,10 @@ enum Command {
     /// Compare two images or two folders of frames: PSNR, SSIM, FLIP, HDR-FLIP, MSE, relMSE.
     /// Exit 0 when every --fail-above holds, 1 when one fails, 2 on errors.
     Compare(compare::CompareArgs),
+    /// Benchmark configurations over the scene's camera path against native: GPU time per pass
+    /// (median, p5, p95), pipeline statistics, copy-kernel floor, per-frame error; bench.json +
+    /// bench.csv.
+    Bench(bench::BenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -57,6 +62,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(a) => render::run(&a),
         Command::Info(a) => info::run(&a),
+        Command::Bench(a) => bench::run(&a),
         Command::Compare(a) => {
             return match compare::run(&a) {
                 Ok(true) => ExitCode::SUCCESS,

@@ -457,3 +457,132 @@ fn resolve_and_upscale_write_their_layers_and_debug_views() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("8 or 16"), "{}", stderr(&o));
 }
+
+/// bench.json's schema: the keys and types every consumer (the report, scripts) relies on.
+fn check_bench_schema(b: &serde_json::Value) {
+    assert_eq!(b["schema"], "cbr.bench/1");
+    for k in [
+        "cbr_version",
+        "git_commit",
+        "command",
+        "device",
+        "scene",
+        "protocol",
+        "rows",
+    ] {
+        assert!(!b[k].is_null(), "bench.json lacks `{k}`");
+    }
+    assert!(b["device"]["name"].is_string() && b["device"]["driver_info"].is_string());
+    let rows = b["rows"].as_array().expect("rows");
+    assert!(!rows.is_empty());
+    for r in rows {
+        for k in ["scene", "config", "technique", "device", "driver"] {
+            assert!(r[k].is_string(), "row lacks string `{k}`: {r}");
+        }
+        for k in ["width", "height", "warmup", "frames"] {
+            assert!(r[k].is_u64(), "row lacks integer `{k}`: {r}");
+        }
+        assert!(r["lod_bias"].is_f64() && r["pareto"].is_boolean() && r["id_prepass"].is_boolean());
+        for k in ["median", "p5", "p95"] {
+            assert!(r["frame_ms"][k].is_f64(), "frame_ms.{k}: {r}");
+        }
+        assert!(r["frame_ms"]["p5"].as_f64() <= r["frame_ms"]["median"].as_f64());
+        assert!(r["frame_ms"]["median"].as_f64() <= r["frame_ms"]["p95"].as_f64());
+        assert!(r["passes"].as_object().is_some_and(|p| !p.is_empty()));
+        if r["config"] == "native" {
+            assert!(r["error"].is_null());
+        } else {
+            let e = &r["error"];
+            for k in ["ssim_mean", "flip_mean", "relmse_mean"] {
+                assert!(e[k].is_f64(), "error.{k}: {r}");
+            }
+            let frames = r["frames"].as_u64().expect("frames") as usize;
+            assert_eq!(e["per_frame"].as_array().map(Vec::len), Some(frames));
+        }
+        if r["resolve"].is_string() {
+            assert!(r["copy_floor_ms"]["median"].is_f64(), "copy floor: {r}");
+            assert!(r["passes"]["resolve"]["median"].is_f64());
+        }
+    }
+}
+
+#[test]
+fn bench_writes_json_and_csv_with_the_protocol_and_sweeps() {
+    let d = tempfile::tempdir().expect("tempdir");
+    let out = d.path().join("bench");
+    let sweep = write(
+        d.path(),
+        "sweep.toml",
+        b"techniques = [\"checkerboard:rotated:ours\", \"upscale:bilinear\"]\nmappings = [\"pixel\", \"quad\"]\nresolutions = [\"64x36\"]\nwarmup = 1\nframes = 2\n",
+    );
+    let o = cbr(
+        &[
+            "bench",
+            "builtin:demo",
+            "--sweep",
+            sweep.to_str().expect("utf8"),
+            "--validation",
+            "-o",
+            out.to_str().expect("utf8"),
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let b: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("bench.json")).expect("bench.json"))
+            .expect("json");
+    check_bench_schema(&b);
+    assert_eq!(b["validation"]["messages"], 0);
+    let configs: Vec<&str> = b["rows"]
+        .as_array()
+        .expect("rows")
+        .iter()
+        .map(|r| r["config"].as_str().unwrap_or(""))
+        .collect();
+    assert_eq!(
+        configs,
+        [
+            "native",
+            "checkerboard:rotated:ours:pixel",
+            "checkerboard:rotated:ours:quad",
+            "upscale:bilinear"
+        ]
+    );
+    let csv = std::fs::read_to_string(out.join("bench.csv")).expect("csv");
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines.len(), 5, "{csv}");
+    assert!(lines[0].starts_with("scene,config,technique,"));
+    assert!(lines[1..].iter().all(|l| l.contains(",64,36,")), "{csv}");
+    // Bad input: an unknown key in the sweep, an unknown configuration.
+    let bad = write(
+        d.path(),
+        "bad.toml",
+        b"frames = 2\nresolution = [\"64x36\"]\n",
+    );
+    let o = cbr(
+        &[
+            "bench",
+            "builtin:demo",
+            "--sweep",
+            bad.to_str().expect("utf8"),
+        ],
+        &[],
+    );
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("bad.toml") && stderr(&o).contains("resolution"),
+        "{}",
+        stderr(&o)
+    );
+    let o = cbr(
+        &[
+            "bench",
+            "builtin:demo",
+            "--techniques",
+            "checkerboard:hexagon",
+        ],
+        &[],
+    );
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("hexagon"), "{}", stderr(&o));
+}

@@ -1,0 +1,756 @@
+//! `cbr bench`: every configuration over the scene's camera path, GPU timestamps per pass (median,
+//! p5, p95 after warm-up), pipeline statistics, the resolve's copy-kernel floor, and the error of
+//! every frame against native at the same resolution (cbr-metrics). Writes bench.json and
+//! bench.csv (device, driver, resolution and settings on every row). DESIGN.md "Benchmark
+//! protocol".
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use cbr_gpu::{Gpu, GpuOptions, Layout};
+use cbr_metrics::io::write_bytes;
+use cbr_metrics::{CompareOptions, DisplayTransform, Metric, compare_images};
+use cbr_render::upscale::UpscaleFilter;
+use cbr_render::{
+    FrameOutput, LodMode, Mapping, RenderSettings, Renderer, ResolveMode, ResolveSettings,
+    Technique,
+};
+use cbr_scene::{LoadOptions, Scene, check_resolution};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::{Deserialize, Serialize};
+use serde_json::json;
+
+use crate::stats::{Summary, summarize};
+
+#[derive(clap::Args)]
+pub struct BenchArgs {
+    /// Scene: a .toml description, an .obj file, or builtin:demo.
+    scene: String,
+    /// Configurations, comma-separated: native, upscale:bilinear|bicubic,
+    /// checkerboard:LAYOUT[:MODE][:pixel|quad][:8|16][:fp16][:prepass] (MODE: ours, pq4k, intel,
+    /// spatial, temporal; default ours, quad, 8). Native at each resolution is always run: it is
+    /// the reference.
+    #[arg(long, value_delimiter = ',', default_value = "native")]
+    techniques: Vec<String>,
+    #[arg(long)]
+    width: Option<u32>,
+    #[arg(long)]
+    height: Option<u32>,
+    /// Frames rendered before measuring.
+    #[arg(long)]
+    warmup: Option<u32>,
+    /// Measured frames (the protocol asks for at least 50; fewer is allowed for quick looks).
+    #[arg(long)]
+    frames: Option<u32>,
+    /// Sweep: resolutions WxH (replace --width/--height).
+    #[arg(long, value_delimiter = ',')]
+    resolutions: Vec<String>,
+    /// Sweep: resolve mappings for every checkerboard configuration that does not name one.
+    #[arg(long, value_delimiter = ',')]
+    mappings: Vec<String>,
+    /// Sweep: resolve group sizes for every checkerboard configuration that does not name one.
+    #[arg(long, value_delimiter = ',')]
+    groups: Vec<u32>,
+    /// Sweep: texture LOD biases for checkerboard configurations (default: each layout's own).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    lod_biases: Vec<f32>,
+    /// A TOML file with any of: techniques, resolutions, mappings, groups, lod_biases, warmup,
+    /// frames (command-line values win).
+    #[arg(long)]
+    sweep: Option<PathBuf>,
+    /// Device index or name substring.
+    #[arg(long)]
+    device: Option<String>,
+    /// Validation layers on (slower; messages counted in bench.json).
+    #[arg(long)]
+    validation: bool,
+    #[arg(short, long, default_value = "out/bench")]
+    out: PathBuf,
+}
+
+/// The sweep file.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepFile {
+    techniques: Option<Vec<String>>,
+    resolutions: Option<Vec<String>>,
+    mappings: Option<Vec<String>>,
+    groups: Option<Vec<u32>>,
+    lod_biases: Option<Vec<f32>>,
+    warmup: Option<u32>,
+    frames: Option<u32>,
+}
+
+/// One configuration to measure.
+#[derive(Clone, Debug, Serialize)]
+pub struct Config {
+    /// The spec as written, with sweep values appended (e.g. `checkerboard:rotated:ours:pixel:16`).
+    pub name: String,
+    #[serde(skip)]
+    pub settings: RenderSettings,
+}
+
+fn parse_resolution(s: &str) -> Result<(u32, u32)> {
+    let (w, h) = s
+        .split_once('x')
+        .with_context(|| format!("resolution `{s}`: expected WxH, e.g. 1920x1080"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .with_context(|| format!("resolution `{s}`"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .with_context(|| format!("resolution `{s}`"))?;
+    check_resolution(w, h).map_err(anyhow::Error::msg)?;
+    Ok((w, h))
+}
+
+fn parse_layout(s: &str) -> Result<Layout> {
+    Layout::ALL
+        .into_iter()
+        .find(|l| l.name() == s)
+        .with_context(|| format!("layout `{s}` (masked, split, rotated or msaa2x)"))
+}
+
+fn parse_mode(s: &str) -> Option<ResolveMode> {
+    ResolveMode::ALL.into_iter().find(|m| m.name() == s)
+}
+
+/// Parses one configuration spec for a resolution. Returns the settings and whether the spec
+/// named a mapping and a group (sweeps fill the others).
+pub fn parse_spec(spec: &str, w: u32, h: u32) -> Result<(RenderSettings, bool, bool)> {
+    let mut parts = spec.split(':');
+    let head = parts.next().unwrap_or_default();
+    let mut s = RenderSettings::native(w, h);
+    let (mut named_mapping, mut named_group) = (false, false);
+    match head {
+        "native" => {}
+        "upscale" => {
+            let filter = match parts.next() {
+                Some("bilinear") | None => UpscaleFilter::Bilinear,
+                Some("bicubic") => UpscaleFilter::Bicubic,
+                Some(f) => bail!("`{spec}`: upscale filter `{f}` (bilinear or bicubic)"),
+            };
+            s.technique = Technique::Upscale { filter };
+        }
+        "checkerboard" => {
+            let layout = parse_layout(parts.next().unwrap_or("rotated"))
+                .with_context(|| format!("configuration `{spec}`"))?;
+            s.technique = Technique::Checkerboard {
+                layout,
+                lod_mode: LodMode::Bias,
+            };
+            let mut r = ResolveSettings {
+                bandwidth_floor: true,
+                ..ResolveSettings::default()
+            };
+            let mut none = false;
+            for p in parts.by_ref() {
+                match p {
+                    "pixel" => (r.mapping, named_mapping) = (Mapping::Pixel, true),
+                    "quad" => (r.mapping, named_mapping) = (Mapping::Quad, true),
+                    "8" | "16" => (r.group, named_group) = (p.parse()?, true),
+                    "fp16" => r.fp16 = true,
+                    "prepass" => s.id_prepass = true,
+                    "none" => none = true,
+                    m => {
+                        r.mode = parse_mode(m).with_context(|| {
+                            format!(
+                                "`{spec}`: `{m}` is no resolve mode (ours, pq4k, intel, spatial, \
+                                 temporal, none) or option (pixel, quad, 8, 16, fp16, prepass)"
+                            )
+                        })?
+                    }
+                }
+            }
+            s.resolve = (!none).then_some(r);
+        }
+        other => bail!("configuration `{other}`: native, upscale:FILTER or checkerboard:LAYOUT..."),
+    }
+    Ok((s, named_mapping, named_group))
+}
+
+/// The cross product of specs and sweeps at one resolution.
+pub fn expand(
+    specs: &[String],
+    w: u32,
+    h: u32,
+    mappings: &[Mapping],
+    groups: &[u32],
+    lod_biases: &[f32],
+) -> Result<Vec<Config>> {
+    let mut out = Vec::new();
+    for spec in specs {
+        let (base, named_mapping, named_group) = parse_spec(spec, w, h)?;
+        let is_resolved = base.resolve.is_some();
+        let maps: Vec<Option<Mapping>> = if is_resolved && !named_mapping && !mappings.is_empty() {
+            mappings.iter().copied().map(Some).collect()
+        } else {
+            vec![None]
+        };
+        let grps: Vec<Option<u32>> = if is_resolved && !named_group && !groups.is_empty() {
+            groups.iter().copied().map(Some).collect()
+        } else {
+            vec![None]
+        };
+        let is_cb = matches!(base.technique, Technique::Checkerboard { .. });
+        let biases: Vec<Option<f32>> = if is_cb && !lod_biases.is_empty() {
+            lod_biases.iter().copied().map(Some).collect()
+        } else {
+            vec![None]
+        };
+        for m in &maps {
+            for g in &grps {
+                for b in &biases {
+                    let mut s = base.clone();
+                    let mut name = spec.clone();
+                    if let (Some(r), Some(m)) = (s.resolve.as_mut(), m) {
+                        r.mapping = *m;
+                        name += if *m == Mapping::Pixel {
+                            ":pixel"
+                        } else {
+                            ":quad"
+                        };
+                    }
+                    if let (Some(r), Some(g)) = (s.resolve.as_mut(), g) {
+                        r.group = *g;
+                        name += &format!(":{g}");
+                    }
+                    if let Some(b) = b {
+                        s.lod_bias = Some(*b);
+                        name += &format!(":lod{b}");
+                    }
+                    out.push(Config { name, settings: s });
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Passes that instrument the run rather than belong to the technique.
+const NOT_TECHNIQUE: [&str; 3] = ["readback", "checkerboard.unpack", "resolve.copy_floor"];
+
+/// Indices of the rows on the speed-vs-error Pareto front (lower time and lower error are
+/// better): no other row is at least as good in both and better in one.
+pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
+    (0..points.len())
+        .filter(|&i| {
+            let (ti, ei) = points[i];
+            ti.is_finite()
+                && ei.is_finite()
+                && !points
+                    .iter()
+                    .enumerate()
+                    .any(|(j, &(tj, ej))| j != i && tj <= ti && ej <= ei && (tj < ti || ej < ei))
+        })
+        .collect()
+}
+
+fn to_input(out: &FrameOutput, name: &str) -> cbr_metrics::InputImage {
+    let n = (out.width * out.height) as usize;
+    let rgb: Vec<f32> = (0..n)
+        .flat_map(|i| {
+            let c = &out.color[4 * i..4 * i + 3];
+            [c[0].to_f32(), c[1].to_f32(), c[2].to_f32()]
+        })
+        .collect();
+    cbr_metrics::InputImage {
+        path: PathBuf::from(name),
+        layer: "color".into(),
+        channels: vec!["R".into(), "G".into(), "B".into()],
+        rgb: cbr_metrics::Rgb::from_interleaved(out.width as usize, out.height as usize, &rgb),
+        encoding: cbr_metrics::Encoding::Linear,
+    }
+}
+
+#[derive(Default)]
+struct Measured {
+    passes: BTreeMap<String, Vec<f64>>,
+    frame_ms: Vec<f64>,
+    fragments: BTreeMap<String, Vec<f64>>,
+    errors: Vec<serde_json::Value>,
+    psnr: Vec<f64>,
+    ssim: Vec<f64>,
+    flip: Vec<f64>,
+    flip_median: Vec<f64>,
+    relmse: Vec<f64>,
+}
+
+fn mean(v: &[f64]) -> Option<f64> {
+    let f: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    (!f.is_empty()).then(|| f.iter().sum::<f64>() / f.len() as f64)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn measure(
+    gpu: &Gpu,
+    scene: &Scene,
+    config: &Config,
+    warmup: u32,
+    frames: u32,
+    reference: Option<&[FrameOutput]>,
+    keep: bool,
+    bar: &ProgressBar,
+) -> Result<(Measured, Vec<FrameOutput>)> {
+    let shaders = cbr_render::shader_library();
+    let mut r = Renderer::new(gpu, &shaders, scene, config.settings.clone())
+        .with_context(|| format!("setting up {} on {}", config.name, gpu.info().name))?;
+    let options = CompareOptions {
+        metrics: vec![Metric::Psnr, Metric::Ssim, Metric::Flip, Metric::RelMse],
+        display: DisplayTransform {
+            exposure_stops: scene.settings.exposure,
+        },
+        ..CompareOptions::default()
+    };
+    let mut m = Measured::default();
+    let mut kept = Vec::new();
+    for f in 0..warmup + frames {
+        let out = r.render(scene, f)?;
+        bar.inc(1);
+        if f < warmup {
+            continue;
+        }
+        let mut total = 0.0;
+        for t in &out.timings {
+            m.passes.entry(t.name.clone()).or_default().push(t.gpu_ms);
+            if !NOT_TECHNIQUE.contains(&t.name.as_str()) {
+                total += t.gpu_ms;
+            }
+            if let Some(s) = &t.stats {
+                m.fragments
+                    .entry(t.name.clone())
+                    .or_default()
+                    .push(s.fragment_invocations as f64);
+            }
+        }
+        m.frame_ms.push(total);
+        if let Some(refs) = reference {
+            let rf = &refs[(f - warmup) as usize];
+            let p = compare_images(
+                &to_input(rf, "native"),
+                &to_input(&out, &config.name),
+                &options,
+            )?;
+            let v = |k| p.value(k).unwrap_or(f64::NAN);
+            let flip_median = p.flip.map(|x| x.weighted_median).unwrap_or(f64::NAN);
+            m.psnr.push(v(Metric::Psnr));
+            m.ssim.push(v(Metric::Ssim));
+            m.flip.push(v(Metric::Flip));
+            m.flip_median.push(flip_median);
+            m.relmse.push(v(Metric::RelMse));
+            m.errors.push(json!({
+                "frame": f,
+                "psnr": finite_or_null(v(Metric::Psnr)),
+                "ssim": v(Metric::Ssim),
+                "flip_mean": v(Metric::Flip),
+                "flip_median": flip_median,
+                "relmse": v(Metric::RelMse),
+            }));
+        }
+        if keep {
+            kept.push(out);
+        }
+    }
+    Ok((m, kept))
+}
+
+fn finite_or_null(x: f64) -> serde_json::Value {
+    if x.is_finite() { json!(x) } else { json!(null) }
+}
+
+fn summary_json(s: Option<Summary>) -> serde_json::Value {
+    s.map(|s| json!(s)).unwrap_or(json!(null))
+}
+
+fn git_commit() -> String {
+    std::process::Command::new("git")
+        .args(["rev-parse", "--short=12", "HEAD"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_else(|| "unknown".into())
+}
+
+pub fn run(a: &BenchArgs) -> Result<()> {
+    let started = Instant::now();
+    let sweep: SweepFile = match &a.sweep {
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .with_context(|| format!("cannot read {}", p.display()))?;
+            let de = toml::Deserializer::parse(&text)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
+            serde_path_to_error::deserialize(de)
+                .map_err(|e| anyhow::anyhow!("{}: {}: {}", p.display(), e.path(), e.inner()))?
+        }
+        None => SweepFile::default(),
+    };
+    let mut scene = cbr_scene::load(&a.scene, &LoadOptions::default())?;
+    let techniques = if a.techniques != ["native"] || sweep.techniques.is_none() {
+        a.techniques.clone()
+    } else {
+        sweep.techniques.clone().unwrap_or_default()
+    };
+    let pick = |cli: &Vec<String>, file: &Option<Vec<String>>| {
+        if cli.is_empty() {
+            file.clone().unwrap_or_default()
+        } else {
+            cli.clone()
+        }
+    };
+    let mut resolutions: Vec<(u32, u32)> = pick(&a.resolutions, &sweep.resolutions)
+        .iter()
+        .map(|s| parse_resolution(s))
+        .collect::<Result<_>>()?;
+    if resolutions.is_empty() {
+        let (w, h) = (
+            a.width.unwrap_or(scene.settings.width),
+            a.height.unwrap_or(scene.settings.height),
+        );
+        check_resolution(w, h).map_err(anyhow::Error::msg)?;
+        resolutions.push((w, h));
+    }
+    let mappings: Vec<Mapping> = pick(&a.mappings, &sweep.mappings)
+        .iter()
+        .map(|m| match m.as_str() {
+            "pixel" => Ok(Mapping::Pixel),
+            "quad" => Ok(Mapping::Quad),
+            o => bail!("mapping `{o}` (pixel or quad)"),
+        })
+        .collect::<Result<_>>()?;
+    let groups = if a.groups.is_empty() {
+        sweep.groups.clone().unwrap_or_default()
+    } else {
+        a.groups.clone()
+    };
+    if let Some(g) = groups.iter().find(|g| **g != 8 && **g != 16) {
+        bail!("resolve group {g} (8 or 16)");
+    }
+    let lod_biases = if a.lod_biases.is_empty() {
+        sweep.lod_biases.clone().unwrap_or_default()
+    } else {
+        a.lod_biases.clone()
+    };
+    let warmup = a.warmup.or(sweep.warmup).unwrap_or(4);
+    let frames = a.frames.or(sweep.frames).unwrap_or(50);
+    if frames == 0 {
+        bail!("--frames must be at least 1");
+    }
+    let mut plan = Vec::new();
+    for &(w, h) in &resolutions {
+        let configs: Vec<Config> = expand(&techniques, w, h, &mappings, &groups, &lod_biases)?
+            .into_iter()
+            .filter(|c| c.name != "native")
+            .collect();
+        plan.push(((w, h), configs));
+    }
+    let gpu = Gpu::new(&GpuOptions {
+        device: a.device.clone(),
+        validation: a.validation,
+    })?;
+    std::fs::create_dir_all(&a.out)
+        .with_context(|| format!("cannot create the output folder {}", a.out.display()))?;
+    let total_frames: u64 = plan
+        .iter()
+        .map(|(_, c)| (c.len() as u64 + 1) * u64::from(warmup + frames))
+        .sum();
+    let bar = ProgressBar::new(total_frames).with_style(
+        ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} frames {elapsed} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar.set_prefix(format!("bench {}", scene.name));
+    let info = gpu.info().clone();
+    let mut rows = Vec::new();
+    for ((w, h), configs) in &plan {
+        scene.settings.width = *w;
+        scene.settings.height = *h;
+        let native = Config {
+            name: "native".into(),
+            settings: RenderSettings::native(*w, *h),
+        };
+        bar.set_message(format!("native {w}x{h}"));
+        let (nm, reference) = measure(&gpu, &scene, &native, warmup, frames, None, true, &bar)?;
+        let mut all = vec![(native, nm)];
+        for c in configs {
+            bar.set_message(format!("{} {w}x{h}", c.name));
+            let (m, _) = measure(
+                &gpu,
+                &scene,
+                c,
+                warmup,
+                frames,
+                Some(&reference),
+                false,
+                &bar,
+            )?;
+            all.push((c.clone(), m));
+        }
+        for (c, m) in all {
+            let s = &c.settings;
+            let resolve = s.resolve.as_ref();
+            let passes: serde_json::Map<String, serde_json::Value> = m
+                .passes
+                .iter()
+                .map(|(k, v)| (k.clone(), summary_json(summarize(v))))
+                .collect();
+            let fragments: serde_json::Map<String, serde_json::Value> = m
+                .fragments
+                .iter()
+                .map(|(k, v)| (k.clone(), json!(crate::stats::percentile(v, 50.0))))
+                .collect();
+            let is_native = c.name == "native";
+            let opt = |v: Option<f64>| v.map(finite_or_null).unwrap_or(json!(null));
+            rows.push(json!({
+                "scene": scene.name,
+                "config": c.name,
+                "technique": s.technique.name(),
+                "resolve": resolve.map(|r| r.mode.name()),
+                "mapping": resolve.map(|r| if r.mapping == Mapping::Pixel { "pixel" } else { "quad" }),
+                "group": resolve.map(|r| r.group),
+                "fp16": resolve.map(|r| r.fp16),
+                "id_prepass": s.id_prepass,
+                "lod_bias": s.effective_lod_bias(),
+                "width": w,
+                "height": h,
+                "device": info.name,
+                "driver": info.driver_info,
+                "warmup": warmup,
+                "frames": frames,
+                "frame_ms": summary_json(summarize(&m.frame_ms)),
+                "passes": passes,
+                "fragment_invocations_median": fragments,
+                "copy_floor_ms": summary_json(summarize(m.passes.get("resolve.copy_floor").map(Vec::as_slice).unwrap_or(&[]))),
+                "error": if is_native { json!(null) } else { json!({
+                    "psnr_mean": opt(mean(&m.psnr)),
+                    "ssim_mean": opt(mean(&m.ssim)),
+                    "flip_mean": opt(mean(&m.flip)),
+                    "flip_median_mean": opt(mean(&m.flip_median)),
+                    "relmse_mean": opt(mean(&m.relmse)),
+                    "per_frame": m.errors,
+                })},
+            }));
+        }
+    }
+    bar.finish_and_clear();
+    // The Pareto front per scene and resolution: frame time median against FLIP mean.
+    let key = |r: &serde_json::Value| (r["width"].as_u64(), r["height"].as_u64());
+    let mut on_front = vec![false; rows.len()];
+    let mut groups_seen: Vec<(Option<u64>, Option<u64>)> = Vec::new();
+    for r in &rows {
+        if !groups_seen.contains(&key(r)) {
+            groups_seen.push(key(r));
+        }
+    }
+    for g in groups_seen {
+        let idx: Vec<usize> = (0..rows.len())
+            .filter(|&i| key(&rows[i]) == g && rows[i]["config"] != "native")
+            .collect();
+        let pts: Vec<(f64, f64)> = idx
+            .iter()
+            .map(|&i| {
+                (
+                    rows[i]["frame_ms"]["median"].as_f64().unwrap_or(f64::NAN),
+                    rows[i]["error"]["flip_mean"].as_f64().unwrap_or(f64::NAN),
+                )
+            })
+            .collect();
+        for k in pareto_front(&pts) {
+            on_front[idx[k]] = true;
+        }
+    }
+    for (r, f) in rows.iter_mut().zip(&on_front) {
+        r["pareto"] = json!(f);
+    }
+    let messages = gpu.validation().messages();
+    let bench = json!({
+        "schema": "cbr.bench/1",
+        "cbr_version": env!("CARGO_PKG_VERSION"),
+        "git_commit": git_commit(),
+        "created_unix_s": std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs()).unwrap_or(0),
+        "command": std::env::args().collect::<Vec<_>>(),
+        "device": info,
+        "scene": {"name": scene.name, "source": scene.source, "triangles": scene.triangle_count()},
+        "protocol": {
+            "warmup_frames": warmup,
+            "measured_frames": frames,
+            "timing": "GPU timestamps per pass; compute passes bracketed by barriers (lavapipe); median, p5, p95 over the measured frames",
+            "frame_ms": format!("sum of the technique's passes per frame (not {})", NOT_TECHNIQUE.join(", ")),
+            "reference": "native at the same resolution and frame",
+            "display": DisplayTransform { exposure_stops: scene.settings.exposure }.describe(),
+            "metrics": "PSNR and SSIM on display values, LDR-FLIP (67.02 ppd), relMSE on linear HDR (eps 0.01)",
+        },
+        "rows": rows,
+        "validation": {"enabled": a.validation, "messages": messages.len()},
+        "wall_s": started.elapsed().as_secs_f64(),
+    });
+    write_bytes(
+        &a.out.join("bench.json"),
+        serde_json::to_string_pretty(&bench)?.as_bytes(),
+    )?;
+    write_bytes(&a.out.join("bench.csv"), csv(&bench).as_bytes())?;
+    println!(
+        "{} configuration(s) x {} resolution(s) of {}: {}",
+        plan.first().map(|p| p.1.len() + 1).unwrap_or(0),
+        plan.len(),
+        scene.name,
+        a.out.join("bench.json").display()
+    );
+    Ok(())
+}
+
+/// Columns of bench.csv: every row carries device, driver, resolution and settings.
+pub const CSV_COLUMNS: [&str; 24] = [
+    "scene",
+    "config",
+    "technique",
+    "resolve",
+    "mapping",
+    "group",
+    "fp16",
+    "id_prepass",
+    "lod_bias",
+    "width",
+    "height",
+    "device",
+    "driver",
+    "warmup",
+    "frames",
+    "frame_ms_median",
+    "frame_ms_p5",
+    "frame_ms_p95",
+    "copy_floor_ms_median",
+    "psnr_mean",
+    "ssim_mean",
+    "flip_mean",
+    "relmse_mean",
+    "pareto",
+];
+
+fn csv(bench: &serde_json::Value) -> String {
+    let mut out = CSV_COLUMNS.join(",") + "\n";
+    let empty = vec![];
+    for r in bench["rows"].as_array().unwrap_or(&empty) {
+        let cell = |v: &serde_json::Value| match v {
+            serde_json::Value::Null => String::new(),
+            serde_json::Value::String(s) => {
+                if s.contains([',', '"']) {
+                    format!("\"{}\"", s.replace('"', "\"\""))
+                } else {
+                    s.clone()
+                }
+            }
+            other => other.to_string(),
+        };
+        let vals = [
+            &r["scene"],
+            &r["config"],
+            &r["technique"],
+            &r["resolve"],
+            &r["mapping"],
+            &r["group"],
+            &r["fp16"],
+            &r["id_prepass"],
+            &r["lod_bias"],
+            &r["width"],
+            &r["height"],
+            &r["device"],
+            &r["driver"],
+            &r["warmup"],
+            &r["frames"],
+            &r["frame_ms"]["median"],
+            &r["frame_ms"]["p5"],
+            &r["frame_ms"]["p95"],
+            &r["copy_floor_ms"]["median"],
+            &r["error"]["psnr_mean"],
+            &r["error"]["ssim_mean"],
+            &r["error"]["flip_mean"],
+            &r["error"]["relmse_mean"],
+            &r["pareto"],
+        ];
+        out += &vals.map(cell).join(",");
+        out.push('\n');
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pareto_front_keeps_the_undominated() {
+        // (time, error)
+        let pts = [
+            (1.0, 0.5),      // fastest: front
+            (2.0, 0.2),      // front
+            (2.5, 0.3),      // dominated by (2.0, 0.2)
+            (4.0, 0.1),      // front
+            (4.0, 0.1),      // a tie: neither dominates the other, both on the front
+            (5.0, 0.1),      // dominated (slower, same error)
+            (f64::NAN, 0.0), // unmeasured: never on the front
+        ];
+        assert_eq!(pareto_front(&pts), vec![0, 1, 3, 4]);
+        assert_eq!(pareto_front(&[]), Vec::<usize>::new());
+        assert_eq!(pareto_front(&[(3.0, 3.0)]), vec![0]);
+    }
+
+    #[test]
+    fn specs_and_sweeps_expand_to_the_cross_product() {
+        let specs = [
+            "native".to_string(),
+            "checkerboard:rotated:pq4k".to_string(),
+            "checkerboard:split:ours:pixel".to_string(),
+            "upscale:bicubic".to_string(),
+        ];
+        let c = expand(
+            &specs,
+            64,
+            36,
+            &[Mapping::Pixel, Mapping::Quad],
+            &[8, 16],
+            &[],
+        )
+        .unwrap();
+        let names: Vec<&str> = c.iter().map(|c| c.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "native",
+                "checkerboard:rotated:pq4k:pixel:8",
+                "checkerboard:rotated:pq4k:pixel:16",
+                "checkerboard:rotated:pq4k:quad:8",
+                "checkerboard:rotated:pq4k:quad:16",
+                "checkerboard:split:ours:pixel:8",
+                "checkerboard:split:ours:pixel:16",
+                "upscale:bicubic",
+            ]
+        );
+        let r = c[2].settings.resolve.expect("resolve");
+        assert_eq!(
+            (r.mode, r.mapping, r.group),
+            (ResolveMode::Pq4k, Mapping::Pixel, 16)
+        );
+        assert!(r.bandwidth_floor);
+        let (s, _, _) = parse_spec("checkerboard:masked:none", 8, 8).unwrap();
+        assert!(s.resolve.is_none());
+        let (s, _, _) =
+            parse_spec("checkerboard:rotated:intel:quad:16:fp16:prepass", 8, 8).unwrap();
+        let r = s.resolve.expect("resolve");
+        assert!(r.fp16 && s.id_prepass && r.mode == ResolveMode::Intel && r.group == 16);
+        for bad in [
+            "checkerboard:hexagon",
+            "checkerboard:rotated:magic",
+            "taa",
+            "upscale:lanczos",
+        ] {
+            assert!(parse_spec(bad, 8, 8).is_err(), "{bad}");
+        }
+        assert!(parse_resolution("1920x1080").is_ok());
+        assert!(parse_resolution("1920").is_err());
+        assert!(parse_resolution("0x10").is_err());
+    }
+}
