@@ -103,6 +103,7 @@ impl RenderSettings {
 }
 
 /// One rendered frame, read back to the host.
+#[derive(Clone)]
 pub struct FrameOutput {
     pub index: u32,
     pub time: f64,
@@ -177,6 +178,7 @@ impl Prepass {
 }
 
 /// What the resolve adds to a frame's output.
+#[derive(Clone)]
 pub struct ResolveOutput {
     pub reset: bool,
     /// Per pixel: the resolve::DBG_* bits (with `debug`).

@@ -267,8 +267,15 @@ fn to_input(out: &FrameOutput, name: &str) -> cbr_metrics::InputImage {
     }
 }
 
+/// The last measured frame of a configuration, kept for the report.
+struct Snapshot {
+    out: FrameOutput,
+    flip_map: Option<cbr_metrics::planes::Plane>,
+}
+
 #[derive(Default)]
 struct Measured {
+    snapshot: Option<Snapshot>,
     passes: BTreeMap<String, Vec<f64>>,
     frame_ms: Vec<f64>,
     fragments: BTreeMap<String, Vec<f64>>,
@@ -328,13 +335,16 @@ fn measure(
             }
         }
         m.frame_ms.push(total);
+        let last = f + 1 == warmup + frames;
+        let mut flip_map = None;
         if let Some(refs) = reference {
             let rf = &refs[(f - warmup) as usize];
-            let p = compare_images(
-                &to_input(rf, "native"),
-                &to_input(&out, &config.name),
-                &options,
-            )?;
+            let o = CompareOptions {
+                keep_maps: last,
+                ..options.clone()
+            };
+            let mut p = compare_images(&to_input(rf, "native"), &to_input(&out, &config.name), &o)?;
+            flip_map = p.flip_map.take();
             let v = |k| p.value(k).unwrap_or(f64::NAN);
             let flip_median = p.flip.map(|x| x.weighted_median).unwrap_or(f64::NAN);
             m.psnr.push(v(Metric::Psnr));
@@ -351,11 +361,133 @@ fn measure(
                 "relmse": v(Metric::RelMse),
             }));
         }
+        if last {
+            m.snapshot = Some(Snapshot {
+                out: out.clone(),
+                flip_map,
+            });
+        }
         if keep {
             kept.push(out);
         }
     }
     Ok((m, kept))
+}
+
+fn slug(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '.' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// Writes the last measured frame of a configuration for the report: the display PNG, the FLIP
+/// map as a magma PNG (same size; the report draws the colour bar) and the EXR with all layers.
+/// Returns the paths relative to the bench folder.
+fn save_snapshot(
+    dir: &std::path::Path,
+    res: (u32, u32),
+    name: &str,
+    snap: &Snapshot,
+    display: &DisplayTransform,
+) -> Result<serde_json::Value> {
+    let sub = format!("{}x{}", res.0, res.1);
+    let base = slug(name);
+    let img = format!("images/{sub}/{base}.png");
+    let exr = format!("frames/{sub}/{base}.exr");
+    std::fs::create_dir_all(dir.join("images").join(&sub))?;
+    std::fs::create_dir_all(dir.join("frames").join(&sub))?;
+    let o = &snap.out;
+    cbr_metrics::io::write_png_rgba8(
+        &dir.join(&img),
+        o.width,
+        o.height,
+        &display.to_rgba8(&o.color),
+    )?;
+    cbr_metrics::io::write_frame_exr(
+        &dir.join(&exr),
+        &cbr_metrics::io::FrameLayers {
+            width: o.width,
+            height: o.height,
+            color: &o.color,
+            depth: &o.depth,
+            velocity: &o.velocity,
+            ids: &o.ids,
+            mask: o.mask.as_deref(),
+            prepass: None,
+            extra: Vec::new(),
+            metadata: vec![
+                ("cbr.config".to_string(), name.to_string()),
+                ("cbr.frame".to_string(), o.index.to_string()),
+            ],
+        },
+    )?;
+    let flip = match &snap.flip_map {
+        Some(map) => {
+            let path = format!("images/{sub}/{base}.flip.png");
+            let rgba: Vec<u8> = map
+                .data
+                .iter()
+                .flat_map(|&v| {
+                    let c = cbr_metrics::heatmap::magma(v);
+                    [c[0], c[1], c[2], 255]
+                })
+                .collect();
+            cbr_metrics::io::write_png_rgba8(&dir.join(&path), o.width, o.height, &rgba)?;
+            json!(path)
+        }
+        None => json!(null),
+    };
+    Ok(json!({"frame": o.index, "image": img, "flip": flip, "exr": exr}))
+}
+
+/// Up to `count` non-overlapping square windows (side ~ 1/6 of the short side) with the highest
+/// mean of the given FLIP maps: where the techniques err most. [x, y, w, h] each.
+pub fn worst_windows(maps: &[&cbr_metrics::planes::Plane], count: usize) -> Vec<[usize; 4]> {
+    let Some(first) = maps.first() else {
+        return Vec::new();
+    };
+    let (w, h) = (first.width, first.height);
+    let side = (w.min(h) / 6).max(8).min(w).min(h);
+    let stride = (side / 2).max(1);
+    let mut scored = Vec::new();
+    let mut y = 0;
+    while y + side <= h {
+        let mut x = 0;
+        while x + side <= w {
+            let mut sum = 0.0f64;
+            for m in maps {
+                for yy in y..y + side {
+                    sum += m.data[yy * w + x..yy * w + x + side]
+                        .iter()
+                        .map(|&v| f64::from(v))
+                        .sum::<f64>();
+                }
+            }
+            scored.push((sum, x, y));
+            x += stride;
+        }
+        y += stride;
+    }
+    scored.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut picked: Vec<[usize; 4]> = Vec::new();
+    for (_, x, y) in scored {
+        let overlaps = picked
+            .iter()
+            .any(|p| x < p[0] + p[2] && p[0] < x + side && y < p[1] + p[3] && p[1] < y + side);
+        if !overlaps {
+            picked.push([x, y, side, side]);
+            if picked.len() == count {
+                break;
+            }
+        }
+    }
+    picked
 }
 
 fn finite_or_null(x: f64) -> serde_json::Value {
@@ -489,7 +621,19 @@ pub fn run(a: &BenchArgs) -> Result<()> {
             )?;
             all.push((c.clone(), m));
         }
+        let display = DisplayTransform {
+            exposure_stops: scene.settings.exposure,
+        };
+        let maps: Vec<&cbr_metrics::planes::Plane> = all
+            .iter()
+            .filter_map(|(_, m)| m.snapshot.as_ref().and_then(|s| s.flip_map.as_ref()))
+            .collect();
+        let crops = worst_windows(&maps, 3);
         for (c, m) in all {
+            let images = match &m.snapshot {
+                Some(snap) => save_snapshot(&a.out, (*w, *h), &c.name, snap, &display)?,
+                None => json!(null),
+            };
             let s = &c.settings;
             let resolve = s.resolve.as_ref();
             let passes: serde_json::Map<String, serde_json::Value> = m
@@ -523,6 +667,8 @@ pub fn run(a: &BenchArgs) -> Result<()> {
                 "frame_ms": summary_json(summarize(&m.frame_ms)),
                 "passes": passes,
                 "fragment_invocations_median": fragments,
+                "images": images,
+                "crops": crops,
                 "copy_floor_ms": summary_json(summarize(m.passes.get("resolve.copy_floor").map(Vec::as_slice).unwrap_or(&[]))),
                 "error": if is_native { json!(null) } else { json!({
                     "psnr_mean": opt(mean(&m.psnr)),
@@ -696,6 +842,44 @@ mod tests {
         assert_eq!(pareto_front(&pts), vec![0, 1, 3, 4]);
         assert_eq!(pareto_front(&[]), Vec::<usize>::new());
         assert_eq!(pareto_front(&[(3.0, 3.0)]), vec![0]);
+    }
+
+    #[test]
+    fn crop_windows_find_the_worst_regions_without_overlap() {
+        let (w, h) = (96, 60);
+        let mut m = cbr_metrics::planes::Plane::new(w, h);
+        // Two hot spots; the brighter one first.
+        for y in 40..50 {
+            for x in 70..80 {
+                m.data[y * w + x] = 1.0;
+            }
+        }
+        for y in 5..12 {
+            for x in 5..12 {
+                m.data[y * w + x] = 0.5;
+            }
+        }
+        let c = worst_windows(&[&m], 3);
+        assert_eq!(c.len(), 3);
+        let side = 10; // min(96, 60) / 6
+        assert!(c.iter().all(|r| r[2] == side && r[3] == side));
+        let covers = |r: &[usize; 4], x: usize, y: usize| {
+            x >= r[0] && x < r[0] + r[2] && y >= r[1] && y < r[1] + r[3]
+        };
+        assert!(covers(&c[0], 75, 45), "{c:?}");
+        assert!(covers(&c[1], 8, 8), "{c:?}");
+        for i in 0..3 {
+            for j in i + 1..3 {
+                let (a, b) = (c[i], c[j]);
+                assert!(
+                    a[0] + a[2] <= b[0]
+                        || b[0] + b[2] <= a[0]
+                        || a[1] + a[3] <= b[1]
+                        || b[1] + b[3] <= a[1]
+                );
+            }
+        }
+        assert!(worst_windows(&[], 3).is_empty());
     }
 
     #[test]
