@@ -6,6 +6,7 @@ mod bench;
 mod compare;
 mod info;
 mod render;
+mod report;
 mod stats;
 
 use std::process::ExitCode;
@@ -44,6 +45,8 @@ enum Command {
     /// (median, p5, p95), pipeline statistics, copy-kernel floor, per-frame error; bench.json +
     /// bench.csv.
     Bench(bench::BenchArgs),
+    /// One self-contained HTML report from `cbr bench` folders.
+    Report(report::ReportArgs),
 }
 
 fn main() -> ExitCode {
@@ -63,6 +66,7 @@ fn main() -> ExitCode {
         Command::Render(a) => render::run(&a),
         Command::Info(a) => info::run(&a),
         Command::Bench(a) => bench::run(&a),
+        Command::Report(a) => report::run(&a),
         Command::Compare(a) => {
             return match compare::run(&a) {
                 Ok(true) => ExitCode::SUCCESS,
