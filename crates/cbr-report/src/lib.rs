@@ -173,9 +173,12 @@ fn fmt(v: Option<f64>, digits: usize) -> String {
         .unwrap_or_else(|| "–".into())
 }
 
+/// (scene, width, height).
+type GroupKey = (String, u64, u64);
+
 /// Rows of one bench folder grouped by (scene, width, height), in order of appearance.
-fn groups(rows: &[Value]) -> Vec<((String, u64, u64), Vec<&Value>)> {
-    let mut out: Vec<((String, u64, u64), Vec<&Value>)> = Vec::new();
+fn groups(rows: &[Value]) -> Vec<(GroupKey, Vec<&Value>)> {
+    let mut out: Vec<(GroupKey, Vec<&Value>)> = Vec::new();
     for r in rows {
         let k = (
             r["scene"].as_str().unwrap_or("").to_string(),
@@ -627,7 +630,7 @@ fn scene_section(
     html: &mut String,
     bench: usize,
     b: &BenchDir,
-    key: &(String, u64, u64),
+    key: &GroupKey,
     g: &[&Value],
     viewer_id: usize,
 ) -> Result<()> {
