@@ -14,11 +14,30 @@ default:
 setup:
     cargo build --release -p cbr
 
-# Render the built-in demo's camera path: EXR + PNG per frame and run.json under out/demo/native.
+# The demo: the built-in scene's camera path (960x540) with native, checkerboard (rotated and
+# split with `ours`, rotated with `pq4k`) and bilinear upscale: bench (timings + error of every
+# frame against native), then the HTML report. Also the native frames as EXR + PNG.
 demo: setup
-    @echo "[demo] rendering builtin:demo (16 frames, 960x540) with the native technique"
+    @echo "[demo] native frames of builtin:demo (16 frames, 960x540) -> {{out}}/demo/native"
     ./target/release/cbr render builtin:demo --technique native -o {{out}}/demo/native
-    @echo "[demo] done: {{out}}/demo/native (frame_*.exr, frame_*.png, run.json)"
+    @echo "[demo] bench: 5 configurations over the camera path (frames 4-15 measured)"
+    ./target/release/cbr bench builtin:demo --width 960 --height 540 --warmup 4 --frames 12 --techniques native,checkerboard:rotated:ours,checkerboard:split:ours,checkerboard:rotated:pq4k,upscale:bilinear -o {{out}}/demo/bench
+    ./target/release/cbr report {{out}}/demo/bench -o {{out}}/demo/report.html
+    @echo "[demo] report: $(realpath {{out}}/demo/report.html)"
+
+# The standard benchmark set (DESIGN.md protocol: 4 warm-up + 50 measured frames, 1280x720):
+# three scenes, eight configurations; bench.json/csv under {{out}}/bench/standard, the report
+# next to them, and the tables in docs/results.md.
+bench: setup
+    for s in builtin:demo scenes/sibenik.toml scenes/foliage.toml; do \
+        n=$(basename "$s" .toml | sed 's/builtin://'); \
+        ./target/release/cbr bench "$s" --width 1280 --height 720 --warmup 4 --frames 50 \
+            --techniques native,checkerboard:rotated:ours,checkerboard:split:ours,checkerboard:rotated:ours:prepass,checkerboard:rotated:pq4k,checkerboard:split:pq4k,upscale:bilinear,upscale:bicubic \
+            -o {{out}}/bench/standard/$n || exit 1; \
+    done
+    ./target/release/cbr report {{out}}/bench/standard/* -o {{out}}/bench/standard/report.html
+    python3 scripts/results-md.py {{out}}/bench/standard/*/bench.json > docs/results.md
+    @echo "[bench] docs/results.md, $(realpath {{out}}/bench/standard/report.html)"
 
 # Format check, clippy, then the whole test suite on lavapipe with validation on.
 test: lint
