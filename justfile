@@ -35,7 +35,7 @@ bench: setup
             --techniques native,checkerboard:rotated:ours,checkerboard:split:ours,checkerboard:rotated:ours:prepass,checkerboard:rotated:pq4k,checkerboard:split:pq4k,upscale:bilinear,upscale:bicubic \
             -o {{out}}/bench/standard/$n || exit 1; \
     done
-    ./target/release/cbr report {{out}}/bench/standard/* -o {{out}}/bench/standard/report.html
+    ./target/release/cbr report {{out}}/bench/standard/*/ -o {{out}}/bench/standard/report.html
     python3 scripts/results-md.py {{out}}/bench/standard/*/bench.json > docs/results.md
     @echo "[bench] docs/results.md, $(realpath {{out}}/bench/standard/report.html)"
 

@@ -117,14 +117,15 @@ fn url(p: &Path) -> String {
 struct Ctx<'a> {
     opts: &'a Options,
     out_dir: PathBuf,
-    /// CSS rules for crop backgrounds: one per image.
-    css: String,
-    images: BTreeMap<PathBuf, (String, String)>, // path -> (src, css class)
+    /// Every image once: (id, src); the page's script puts them into `img` and crop elements
+    /// carrying `data-im="id"`, so a data URI is never repeated.
+    store: Vec<(String, String)>,
+    images: BTreeMap<PathBuf, String>, // path -> id
 }
 
 impl Ctx<'_> {
-    /// The `src` of an image file and a CSS class whose background is the image.
-    fn image(&mut self, bench: usize, dir: &Path, rel: &str) -> Result<(String, String)> {
+    /// The id under which an image file's `src` is stored.
+    fn image(&mut self, bench: usize, dir: &Path, rel: &str) -> Result<String> {
         let path = dir.join(rel);
         if let Some(v) = self.images.get(&path) {
             return Ok(v.clone());
@@ -153,10 +154,10 @@ impl Ctx<'_> {
                 url(&relative(&self.out_dir, &dst))
             }
         };
-        let class = format!("im{}", self.images.len());
-        let _ = writeln!(self.css, ".{class} {{ background-image: url(\"{src}\"); }}");
-        self.images.insert(path, (src.clone(), class.clone()));
-        Ok((src, class))
+        let id = format!("im{}", self.store.len());
+        self.store.push((id.clone(), src));
+        self.images.insert(path, id.clone());
+        Ok(id)
     }
 
     fn link(&self, dir: &Path, rel: &str) -> String {
@@ -642,36 +643,32 @@ fn scene_section(
     );
     chart(html, g);
     // The viewer: reference, each technique, each FLIP map.
-    let mut panels: Vec<(String, String, String)> = Vec::new(); // (name, src, class)
-    let mut techs: Vec<(String, String, String)> = Vec::new();
-    let mut reference: Option<(String, String)> = None;
+    let mut panels: Vec<(String, String)> = Vec::new(); // (name, image id)
+    let mut techs: Vec<(String, String)> = Vec::new();
+    let mut reference: Option<String> = None;
     let mut frame = None;
     for r in g {
         let name = r["config"].as_str().unwrap_or("").to_string();
         let Some(img) = r["images"]["image"].as_str() else {
             continue;
         };
-        let (src, class) = ctx.image(bench, &b.dir, img)?;
+        let id = ctx.image(bench, &b.dir, img)?;
         frame = frame.or(r["images"]["frame"].as_u64());
         if name == "native" {
-            reference = Some((src.clone(), class.clone()));
-            panels.insert(0, ("native (reference)".into(), src, class));
+            reference = Some(id.clone());
+            panels.insert(0, ("native (reference)".into(), id));
         } else {
-            techs.push((name.clone(), src.clone(), class.clone()));
-            panels.push((name, src, class));
+            techs.push((name.clone(), id.clone()));
+            panels.push((name, id));
         }
     }
     for r in g {
         if let Some(flip) = r["images"]["flip"].as_str() {
-            let (src, class) = ctx.image(bench, &b.dir, flip)?;
-            panels.push((
-                format!("FLIP {}", r["config"].as_str().unwrap_or("")),
-                src,
-                class,
-            ));
+            let id = ctx.image(bench, &b.dir, flip)?;
+            panels.push((format!("FLIP {}", r["config"].as_str().unwrap_or("")), id));
         }
     }
-    let Some((ref_src, _)) = reference else {
+    let Some(ref_id) = reference else {
         html.push_str("<p class=\"muted\">No images in this bench folder.</p>");
         return Ok(());
     };
@@ -690,7 +687,7 @@ fn scene_section(
     let techs_json = Value::Array(
         techs
             .iter()
-            .map(|t| serde_json::json!({"name": t.0, "src": t.1}))
+            .map(|t| serde_json::json!({"name": t.0, "im": t.1}))
             .collect(),
     );
     let _ = writeln!(
@@ -703,18 +700,15 @@ fn scene_section(
         "<div class=\"viewer\" data-w=\"{w}\" data-h=\"{h}\" data-techs=\"{}\">",
         esc(&techs_json.to_string())
     );
-    let first = techs
-        .first()
-        .map(|t| t.1.clone())
-        .unwrap_or(ref_src.clone());
+    let first = techs.first().map(|t| t.1.clone()).unwrap_or(ref_id.clone());
     let _ = writeln!(
         html,
-        "<div class=\"compare\"><div class=\"vp\"><div class=\"layer\"><img alt=\"reference\" src=\"{ref_src}\" width=\"{w}\" height=\"{h}\"></div><div class=\"top\"><div class=\"layer\"><img alt=\"technique\" src=\"{first}\" data-src=\"{first}\" width=\"{w}\" height=\"{h}\"></div></div></div><div class=\"cap\"><span class=\"cmpname\"></span> <input class=\"slider\" type=\"range\" min=\"0\" max=\"100\" value=\"50\" aria-label=\"wipe\"></div></div>"
+        "<div class=\"compare\"><div class=\"vp\"><div class=\"layer\"><img alt=\"reference\" data-im=\"{ref_id}\" width=\"{w}\" height=\"{h}\"></div><div class=\"top\"><div class=\"layer\"><img alt=\"technique\" data-im=\"{first}\" width=\"{w}\" height=\"{h}\"></div></div></div><div class=\"cap\"><span class=\"cmpname\"></span> <input class=\"slider\" type=\"range\" min=\"0\" max=\"100\" value=\"50\" aria-label=\"wipe\"></div></div>"
     );
     html.push_str(
         "<div class=\"readout\">move the cursor over an image</div>\n<div class=\"grid\">\n",
     );
-    for (i, (name, src, _)) in panels.iter().enumerate() {
+    for (i, (name, id)) in panels.iter().enumerate() {
         let outlines: String = if i == 0 {
             crops
                 .iter()
@@ -730,7 +724,7 @@ fn scene_section(
         };
         let _ = writeln!(
             html,
-            "<div class=\"panel\" data-name=\"{}\"><div class=\"vp\"><div class=\"layer\"><img alt=\"{}\" src=\"{src}\" width=\"{w}\" height=\"{h}\">{outlines}</div></div><div class=\"cap\">{}{}</div></div>",
+            "<div class=\"panel\" data-name=\"{}\"><div class=\"vp\"><div class=\"layer\"><img alt=\"{}\" data-im=\"{id}\" width=\"{w}\" height=\"{h}\">{outlines}</div></div><div class=\"cap\">{}{}</div></div>",
             esc(name),
             esc(name),
             if i > 0 && i <= techs.len() {
@@ -754,10 +748,10 @@ fn scene_section(
                 "<p class=\"muted\">x {} y {}, {}x{} pixels, x{mag}</p><div class=\"crops\">",
                 c[0], c[1], c[2], c[3]
             );
-            for (name, _, class) in &panels {
+            for (name, id) in &panels {
                 let _ = writeln!(
                     html,
-                    "<div class=\"cropcell\"><div class=\"crop {class}\" style=\"width:{}px;height:{}px;background-size:{}px {}px;background-position:-{}px -{}px\"></div>{}</div>",
+                    "<div class=\"cropcell\"><div class=\"crop\" data-im=\"{id}\" style=\"width:{}px;height:{}px;background-size:{}px {}px;background-position:-{}px -{}px\"></div>{}</div>",
                     c[2] * mag,
                     c[3] * mag,
                     w * mag,
@@ -871,7 +865,7 @@ pub fn render(benches: &[BenchDir], opts: &Options) -> Result<String> {
     let mut ctx = Ctx {
         opts,
         out_dir,
-        css: String::new(),
+        store: Vec::new(),
         images: BTreeMap::new(),
     };
     let mut body = String::new();
@@ -891,10 +885,15 @@ pub fn render(benches: &[BenchDir], opts: &Options) -> Result<String> {
         .collect::<Vec<_>>()
         .join(", ");
     Ok(format!(
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>cbr report: {t}</title>\n<style>\n{css}\n{crops}</style></head>\n<body>\n<h1>cbr report: {t}</h1>\n<p class=\"muted\">Speed against error of checkerboard rendering techniques, each against native at the same resolution. <a href=\"#summary\">Summary</a> · <a href=\"#provenance\">Provenance</a></p>\n{body}\n<script>\n{js}\n</script>\n</body></html>\n",
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>cbr report: {t}</title>\n<style>\n{css}</style></head>\n<body>\n<h1>cbr report: {t}</h1>\n<p class=\"muted\">Speed against error of checkerboard rendering techniques, each against native at the same resolution. <a href=\"#summary\">Summary</a> · <a href=\"#provenance\">Provenance</a></p>\n{body}\n<script>\nconst IMAGES = {images};\n{js}\n</script>\n</body></html>\n",
         t = esc(&title),
         css = include_str!("assets/report.css"),
-        crops = ctx.css,
+        images = serde_json::Value::Object(
+            ctx.store
+                .into_iter()
+                .map(|(k, v)| (k, serde_json::Value::String(v)))
+                .collect()
+        ),
         js = include_str!("assets/report.js"),
     ))
 }

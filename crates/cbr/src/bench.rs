@@ -60,6 +60,10 @@ pub struct BenchArgs {
     /// frames (command-line values win).
     #[arg(long)]
     sweep: Option<PathBuf>,
+    /// Crop windows for the report, x,y,w,h (repeatable, at most 4); default: the three windows
+    /// with the highest FLIP.
+    #[arg(long = "crop", value_name = "X,Y,W,H")]
+    crops: Vec<String>,
     /// Device index or name substring.
     #[arg(long)]
     device: Option<String>,
@@ -567,6 +571,24 @@ pub fn run(a: &BenchArgs) -> Result<()> {
     } else {
         a.lod_biases.clone()
     };
+    let fixed_crops: Vec<[usize; 4]> = a
+        .crops
+        .iter()
+        .map(|c| {
+            let v: Vec<usize> = c
+                .split(',')
+                .map(|x| x.trim().parse::<usize>())
+                .collect::<std::result::Result<_, _>>()
+                .with_context(|| format!("--crop {c}: expected X,Y,W,H"))?;
+            match v[..] {
+                [x, y, w, h] if w > 0 && h > 0 => Ok([x, y, w, h]),
+                _ => bail!("--crop {c}: expected X,Y,W,H with W, H > 0"),
+            }
+        })
+        .collect::<Result<_>>()?;
+    if fixed_crops.len() > 4 {
+        bail!("at most 4 --crop windows");
+    }
     let warmup = a.warmup.or(sweep.warmup).unwrap_or(4);
     let frames = a.frames.or(sweep.frames).unwrap_or(50);
     if frames == 0 {
@@ -628,7 +650,15 @@ pub fn run(a: &BenchArgs) -> Result<()> {
             .iter()
             .filter_map(|(_, m)| m.snapshot.as_ref().and_then(|s| s.flip_map.as_ref()))
             .collect();
-        let crops = worst_windows(&maps, 3);
+        let crops = if fixed_crops.is_empty() {
+            worst_windows(&maps, 3)
+        } else {
+            let fits = |c: &[usize; 4]| c[0] + c[2] <= *w as usize && c[1] + c[3] <= *h as usize;
+            if let Some(c) = fixed_crops.iter().find(|c| !fits(c)) {
+                bail!("--crop {c:?} does not fit in {w}x{h}");
+            }
+            fixed_crops.clone()
+        };
         for (c, m) in all {
             let images = match &m.snapshot {
                 Some(snap) => save_snapshot(&a.out, (*w, *h), &c.name, snap, &display)?,

@@ -7,6 +7,14 @@ window.addEventListener("error", (e) => errors.push(String(e.message)));
 const origError = console.error;
 console.error = (...a) => { errors.push(a.map(String).join(" ")); origError.apply(console, a); };
 
+// ---- images: each stored once in IMAGES (data URIs or relative paths) --------------------------
+/* global IMAGES */
+document.querySelectorAll("[data-im]").forEach((el) => {
+  const src = IMAGES[el.dataset.im];
+  if (el.tagName === "IMG") el.src = src;
+  else el.style.backgroundImage = `url("${src}")`;
+});
+
 // ---- sortable tables -------------------------------------------------------------------------
 function sortTable(th) {
   const table = th.closest("table");
@@ -92,7 +100,7 @@ Viewer.prototype.applyCompare = function () {
   const t = this.techs[this.tech];
   const top = this.compare.querySelector(".top");
   const img = top.querySelector("img");
-  if (img.dataset.src !== t.src) { img.src = t.src; img.dataset.src = t.src; }
+  if (img.dataset.im !== t.im) { img.dataset.im = t.im; img.src = IMAGES[t.im]; }
   top.style.display = this.flip ? "none" : "";
   top.style.width = (this.slider ? this.slider.value : 50) + "%";
   this.compare.querySelector(".cmpname").textContent = (this.flip ? "reference (held)" : t.name) + " | reference";
@@ -101,13 +109,14 @@ Viewer.prototype.selectTech = function (i) {
   if (i >= 0 && i < this.techs.length) { this.tech = i; this.applyCompare(); }
 };
 Viewer.prototype.pixel = function (img, x, y) {
-  let c = this.canvases.get(img.src);
+  const key = img.dataset.im;
+  let c = this.canvases.get(key);
   try {
     if (!c) {
       c = document.createElement("canvas");
       c.width = img.naturalWidth; c.height = img.naturalHeight;
       c.getContext("2d").drawImage(img, 0, 0);
-      this.canvases.set(img.src, c);
+      this.canvases.set(key, c);
     }
     const d = c.getContext("2d").getImageData(x, y, 1, 1).data;
     return `${d[0]},${d[1]},${d[2]}`;
@@ -146,7 +155,7 @@ function selftest() {
   const r = { errors, checks: {} };
   const imgs = Array.from(document.images);
   r.checks.images = imgs.length;
-  r.checks.images_broken = imgs.filter((i) => !i.complete || i.naturalWidth === 0).map((i) => i.alt || i.src.slice(0, 60));
+  r.checks.images_broken = imgs.filter((i) => !i.complete || i.naturalWidth === 0).map((i) => i.alt || i.dataset.im);
   const table = document.querySelector("table.sortable");
   if (table) {
     const ths = Array.from(table.querySelectorAll("th"));
