@@ -53,13 +53,12 @@ layout(set = 0, binding = BINDING_VELOCITY) uniform CB_SAMPLER cur_velocity;
 layout(set = 0, binding = BINDING_IDS) uniform CB_USAMPLER cur_ids;
 layout(set = 0, binding = BINDING_DEPTH) uniform CB_SAMPLER cur_depth;
 layout(set = 0, binding = BINDING_HIST_COLOR) uniform sampler2D hist_color;
-layout(set = 0, binding = BINDING_HIST_DEPTH) uniform sampler2D hist_depth;
-layout(set = 0, binding = BINDING_HIST_IDS) uniform usampler2D hist_ids;
+// History geometry, one texel per pixel: x = object ID (| ID_MOVED), y = reverse-Z depth bits.
+layout(set = 0, binding = BINDING_HIST_GEOM) uniform usampler2D hist_geom;
 layout(set = 0, binding = BINDING_PRE_DEPTH) uniform sampler2D pre_depth;
 layout(set = 0, binding = BINDING_PRE_IDS) uniform usampler2D pre_ids;
 layout(set = 0, binding = BINDING_OUT_COLOR, OUT_FORMAT) uniform writeonly image2D out_color;
-layout(set = 0, binding = BINDING_OUT_DEPTH, r32f) uniform writeonly image2D out_depth;
-layout(set = 0, binding = BINDING_OUT_IDS, r32ui) uniform writeonly uimage2D out_ids;
+layout(set = 0, binding = BINDING_OUT_GEOM, rg32ui) uniform writeonly uimage2D out_geom;
 #if DEBUG
 layout(set = 0, binding = BINDING_DEBUG_BITS, r32ui) uniform writeonly uimage2D out_debug;
 layout(set = 0, binding = BINDING_DEBUG_VELOCITY, rg32f) uniform writeonly image2D out_velocity;
@@ -153,8 +152,9 @@ vec4 catmull_rom(float f) {
 // Why history texel t does not show object `id` at reverse-Z depths [lo, hi] (0: it does).
 uint tap_reasons(ivec2 t, uint id, float lo, float hi, bool use_ids, bool use_depth) {
     uint r = 0u;
-    if (use_ids && (texelFetch(hist_ids, t, 0).x & ID_MASK) != id) r |= DBG_REJECT_ID;
-    if (use_depth && !depth_agrees(texelFetch(hist_depth, t, 0).x, lo, hi)) r |= DBG_REJECT_DEPTH;
+    uvec2 g = texelFetch(hist_geom, t, 0).xy;
+    if (use_ids && (g.x & ID_MASK) != id) r |= DBG_REJECT_ID;
+    if (use_depth && !depth_agrees(uintBitsToFloat(g.y), lo, hi)) r |= DBG_REJECT_DEPTH;
     return r;
 }
 
@@ -374,7 +374,7 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
         pq = (prev.xy / prev.w * 0.5 + 0.5) * vec2(size());
         ivec2 t = ivec2(floor(pq));
         ok = inside(t);
-        if (ok && depth_rel_diff(texelFetch(hist_depth, t, 0).x, prev.z / prev.w) > pc.params.x) {
+        if (ok && depth_rel_diff(uintBitsToFloat(texelFetch(hist_geom, t, 0).y), prev.z / prev.w) > pc.params.x) {
             ok = false;
             r.dbg |= DBG_REJECT_DEPTH;
         }
@@ -452,11 +452,12 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
         bool still = true;
         for (int i = 0; i < 4; i++) still = still && length(n[i].v) <= pc.params.y;
         if (still) {
-            uint hid = texelFetch(hist_ids, p, 0).x;
+            uvec2 g = texelFetch(hist_geom, p, 0).xy;
+            uint hid = g.x;
             if ((hid & ID_MOVED) == 0u && (!own || hid == own_id)) {
                 found = true;
                 h = real3(texelFetch(hist_color, p, 0).rgb);
-                r.d = texelFetch(hist_depth, p, 0).x;
+                r.d = uintBitsToFloat(g.y);
                 r.id = hid;
                 r.v = vec2(0.0);
                 r.dbg |= DBG_STILL;
@@ -510,8 +511,8 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
 
 void write_result(ivec2 p, Result r) {
     imageStore(out_color, p, vec4(vec3(r.c), 1.0));
-    imageStore(out_depth, p, vec4(r.d));
-    imageStore(out_ids, p, uvec4(r.id | (length(r.v) > pc.params.y ? ID_MOVED : 0u)));
+    uint id = r.id | (length(r.v) > pc.params.y ? ID_MOVED : 0u);
+    imageStore(out_geom, p, uvec4(id, floatBitsToUint(r.d), 0u, 0u));
 #if DEBUG
     imageStore(out_debug, p, uvec4(r.dbg));
     imageStore(out_velocity, p, vec4(r.v, 0.0, 0.0));

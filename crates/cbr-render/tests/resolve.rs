@@ -264,10 +264,11 @@ impl Bench {
                 Ok(())
             })
             .expect("submit");
+        let (depth, ids) = rb.depth_ids().expect("depth and ids");
         GpuResult {
             color: rb.color_rgb(settings.f32_history).expect("colour"),
-            depth: bytemuck::cast_slice(rb.depth.bytes().expect("depth")).to_vec(),
-            ids: bytemuck::cast_slice(rb.ids.bytes().expect("ids")).to_vec(),
+            depth,
+            ids,
             debug: bytemuck::cast_slice(rb.debug_bits.bytes().expect("debug")).to_vec(),
             velocity: bytemuck::cast_slice(rb.debug_velocity.bytes().expect("velocity")).to_vec(),
         }

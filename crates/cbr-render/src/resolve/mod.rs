@@ -210,7 +210,7 @@ impl ResolveSettings {
     }
 }
 
-pub const BINDINGS: [BindingDesc; 14] = {
+pub const BINDINGS: [BindingDesc; 12] = {
     const fn b(name: &'static str, binding: u32, kind: DescriptorKind) -> BindingDesc {
         BindingDesc::one(name, binding, kind)
     }
@@ -221,15 +221,13 @@ pub const BINDINGS: [BindingDesc; 14] = {
         b("ids", 2, S),
         b("depth", 3, S),
         b("hist_color", 4, S),
-        b("hist_depth", 5, S),
-        b("hist_ids", 6, S),
-        b("pre_depth", 7, S),
-        b("pre_ids", 8, S),
-        b("out_color", 9, I),
-        b("out_depth", 10, I),
-        b("out_ids", 11, I),
-        b("debug_bits", 12, I),
-        b("debug_velocity", 13, I),
+        b("hist_geom", 5, S),
+        b("pre_depth", 6, S),
+        b("pre_ids", 7, S),
+        b("out_color", 8, I),
+        b("out_geom", 9, I),
+        b("debug_bits", 10, I),
+        b("debug_velocity", 11, I),
     ]
 };
 
@@ -255,15 +253,14 @@ pub struct ResolveFrame {
     pub reproj: [f32; 16],
 }
 
-/// One history slot: the resolved colour and the depth and object ID it shows.
+/// One history slot: the resolved colour, and in one texel the object ID (with `ID_MOVED`) and
+/// the reverse-Z depth bits it shows (one fetch per validation).
 pub struct History {
     pub color: Image,
-    pub depth: Image,
-    pub ids: Image,
+    pub geom: Image,
 }
 
-pub const HISTORY_DEPTH_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
-pub const HISTORY_IDS_FORMAT: vk::Format = vk::Format::R32_UINT;
+pub const HISTORY_GEOM_FORMAT: vk::Format = vk::Format::R32G32_UINT;
 
 pub struct ResolvePass {
     pipeline: Pipeline,
@@ -350,8 +347,7 @@ impl ResolvePass {
         let slot = |k: usize| -> Result<History> {
             Ok(History {
                 color: image(&format!("resolve.history[{k}].color"), color_format)?,
-                depth: image(&format!("resolve.history[{k}].depth"), HISTORY_DEPTH_FORMAT)?,
-                ids: image(&format!("resolve.history[{k}].ids"), HISTORY_IDS_FORMAT)?,
+                geom: image(&format!("resolve.history[{k}].geom"), HISTORY_GEOM_FORMAT)?,
             })
         };
         let history = [slot(0)?, slot(1)?];
@@ -359,8 +355,8 @@ impl ResolvePass {
         let debug_velocity = image("resolve.debug_velocity", vk::Format::R32G32_SFLOAT)?;
         let set = |k: usize| -> Result<DescriptorSet> {
             let (out, prev) = (&history[k], &history[1 - k]);
-            // Without a prepass its bindings hold the previous depth and IDs, never read.
-            let (pre_ids, pre_depth) = prepass.unwrap_or((&prev.ids, &prev.depth));
+            // Without a prepass its bindings hold previous history images, never read.
+            let (pre_ids, pre_depth) = prepass.unwrap_or((&prev.geom, &prev.color));
             DescriptorSet::new(
                 gpu,
                 &format!("resolve.set[{k}]"),
@@ -371,15 +367,13 @@ impl ResolvePass {
                     Write::Sampled(2, vec![(&targets.ids, &sampler)]),
                     Write::Sampled(3, vec![(&targets.depth, &sampler)]),
                     Write::Sampled(4, vec![(&prev.color, &sampler)]),
-                    Write::Sampled(5, vec![(&prev.depth, &sampler)]),
-                    Write::Sampled(6, vec![(&prev.ids, &sampler)]),
-                    Write::Sampled(7, vec![(pre_depth, &sampler)]),
-                    Write::Sampled(8, vec![(pre_ids, &sampler)]),
-                    Write::Storage(9, &out.color),
-                    Write::Storage(10, &out.depth),
-                    Write::Storage(11, &out.ids),
-                    Write::Storage(12, &debug_bits),
-                    Write::Storage(13, &debug_velocity),
+                    Write::Sampled(5, vec![(&prev.geom, &sampler)]),
+                    Write::Sampled(6, vec![(pre_depth, &sampler)]),
+                    Write::Sampled(7, vec![(pre_ids, &sampler)]),
+                    Write::Storage(8, &out.color),
+                    Write::Storage(9, &out.geom),
+                    Write::Storage(10, &debug_bits),
+                    Write::Storage(11, &debug_velocity),
                 ],
             )
         };
@@ -431,8 +425,7 @@ impl ResolvePass {
             &targets.ids,
             &targets.depth,
             &prev.color,
-            &prev.depth,
-            &prev.ids,
+            &prev.geom,
         ] {
             cmd.use_image(img, Access::ComputeSampled);
         }
@@ -442,8 +435,7 @@ impl ResolvePass {
         }
         for img in [
             &out.color,
-            &out.depth,
-            &out.ids,
+            &out.geom,
             &self.debug_bits,
             &self.debug_velocity,
         ] {
@@ -510,10 +502,10 @@ impl ResolvePass {
                 bytes.extend_from_slice(bytemuck::cast_slice(&h));
             }
         }
-        let depth_at = bytes.len() as u64;
-        bytes.extend_from_slice(bytemuck::cast_slice(depth));
-        let ids_at = bytes.len() as u64;
-        bytes.extend_from_slice(bytemuck::cast_slice(ids));
+        let geom_at = bytes.len() as u64;
+        for (&d, &id) in depth.iter().zip(ids) {
+            bytes.extend_from_slice(bytemuck::cast_slice(&[id, d.to_bits()]));
+        }
         let mut staging = Buffer::new(
             gpu,
             "resolve.seed",
@@ -533,8 +525,7 @@ impl ResolvePass {
         };
         gpu.submit("resolve.seed_history", |cmd| {
             cmd.upload_levels(&staging, &h.color, &level(0), Access::ComputeSampled);
-            cmd.upload_levels(&staging, &h.depth, &level(depth_at), Access::ComputeSampled);
-            cmd.upload_levels(&staging, &h.ids, &level(ids_at), Access::ComputeSampled);
+            cmd.upload_levels(&staging, &h.geom, &level(geom_at), Access::ComputeSampled);
             Ok(())
         })
     }
@@ -543,8 +534,7 @@ impl ResolvePass {
     pub fn readbacks(&self, gpu: &Gpu) -> Result<ResolveReadbacks> {
         Ok(ResolveReadbacks {
             color: Readback::for_image(gpu, "readback.resolved", &self.history[0].color)?,
-            depth: Readback::for_image(gpu, "readback.resolved_depth", &self.history[0].depth)?,
-            ids: Readback::for_image(gpu, "readback.resolved_ids", &self.history[0].ids)?,
+            geom: Readback::for_image(gpu, "readback.resolved_geom", &self.history[0].geom)?,
             debug_bits: Readback::for_image(gpu, "readback.resolve_debug", &self.debug_bits)?,
             debug_velocity: Readback::for_image(
                 gpu,
@@ -558,8 +548,7 @@ impl ResolvePass {
     pub fn read(&self, cmd: &mut Cmd, slot: usize, rb: &ResolveReadbacks) {
         let h = &self.history[slot];
         cmd.read_image(&h.color, &rb.color);
-        cmd.read_image(&h.depth, &rb.depth);
-        cmd.read_image(&h.ids, &rb.ids);
+        cmd.read_image(&h.geom, &rb.geom);
         if self.settings.debug {
             cmd.read_image(&self.debug_bits, &rb.debug_bits);
             cmd.read_image(&self.debug_velocity, &rb.debug_velocity);
@@ -569,13 +558,22 @@ impl ResolvePass {
 
 pub struct ResolveReadbacks {
     pub color: Readback,
-    pub depth: Readback,
-    pub ids: Readback,
+    /// Object ID (with `ID_MOVED`) and reverse-Z depth bits per pixel.
+    pub geom: Readback,
     pub debug_bits: Readback,
     pub debug_velocity: Readback,
 }
 
 impl ResolveReadbacks {
+    /// The resolved reverse-Z depths and object IDs (with `ID_MOVED`).
+    pub fn depth_ids(&self) -> Result<(Vec<f32>, Vec<u32>)> {
+        let g: &[[u32; 2]] = bytemuck::cast_slice(self.geom.bytes()?);
+        Ok((
+            g.iter().map(|v| f32::from_bits(v[1])).collect(),
+            g.iter().map(|v| v[0]).collect(),
+        ))
+    }
+
     /// The resolved colour as RGB f32, whatever the history format.
     pub fn color_rgb(&self, f32_history: bool) -> Result<Vec<[f32; 3]>> {
         let b = self.color.bytes()?;
