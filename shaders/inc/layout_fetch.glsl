@@ -29,7 +29,11 @@ ivec4 cb_address(ivec2 p, int parity, int tangram_side) {
     return ivec4(p / 2, p.y & 1, 0);
 #elif LAYOUT == LAYOUT_MSAA2X
     // Sample 0 of target pixel (i, j) is (2i + 1 - parity, 2j + 1); sample 1 is (2i - parity, 2j).
+    // MSAA_LOCATIONS (VK_EXT_sample_locations): odd frames' samples are (2i, 2j + 1), (2i + 1, 2j).
     int odd = p.y & 1;
+#if defined(MSAA_LOCATIONS) && MSAA_LOCATIONS
+    if (parity == 1) return ivec4(p.x / 2, p.y / 2, 0, 1 - odd);
+#endif
     return ivec4((p.x + parity + 1 - odd) / 2, p.y / 2, 0, 1 - odd);
 #elif LAYOUT == LAYOUT_ROTATED
     // Tangram texel (i, j) = ((x - y - parity) / 2, (x + y - parity) / 2) mod L; both divisions

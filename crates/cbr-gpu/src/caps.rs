@@ -12,6 +12,9 @@ pub struct Caps {
     pub sample_counts: Vec<u32>,
     pub integer_color_sample_counts: Vec<u32>,
     pub sample_locations: bool,
+    /// VK_EXT_sample_locations usable for the msaa2x alternative: 2-sample locations settable,
+    /// at least 2 sub-pixel bits (0.25 steps), covering [0, 1).
+    pub sample_locations_2x: bool,
     pub maintenance4: bool,
     pub dynamic_rendering: bool,
     pub pipeline_statistics: bool,
@@ -70,6 +73,22 @@ pub(crate) fn sample_count_list(flags: vk::SampleCountFlags) -> Vec<u32> {
 }
 
 impl Caps {
+    /// Why the msaa2x layout cannot toggle sample locations instead of shifting the viewport.
+    pub fn sample_locations_unsupported(&self) -> Option<String> {
+        if let Some(m) = self.layout_unsupported(Layout::Msaa2x) {
+            return Some(m);
+        }
+        if !self.sample_locations {
+            return Some("VK_EXT_sample_locations".into());
+        }
+        if !self.sample_locations_2x {
+            return Some(
+                "VK_EXT_sample_locations for 2 samples with 2 sub-pixel bits over [0, 1)".into(),
+            );
+        }
+        None
+    }
+
     /// Why `layout` cannot run on this device, or `None` when it can.
     pub fn layout_unsupported(&self, layout: Layout) -> Option<String> {
         let mut missing = Vec::new();
@@ -125,6 +144,7 @@ mod tests {
             sample_counts: vec![1, 4],
             integer_color_sample_counts: vec![1],
             sample_locations: false,
+            sample_locations_2x: false,
             maintenance4: true,
             dynamic_rendering: true,
             pipeline_statistics: true,

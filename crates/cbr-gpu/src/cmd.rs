@@ -44,12 +44,53 @@ impl Cmd {
     pub fn use_image(&mut self, image: &Image, access: Access) {
         let from = image.last.get();
         if let Some(b) = image_barrier(image.raw(), image.aspect(), from, access) {
+            // A depth image rendered with custom sample locations is transitioned with them
+            // (VK_EXT_sample_locations), so its contents are interpreted as they were written.
+            let locations = image
+                .sample_locations
+                .get()
+                .map(|l| l.map(|[x, y]| vk::SampleLocationEXT { x, y }));
+            let mut info = locations.as_ref().map(|l| {
+                vk::SampleLocationsInfoEXT::default()
+                    .sample_locations_per_pixel(vk::SampleCountFlags::TYPE_2)
+                    .sample_location_grid_size(vk::Extent2D {
+                        width: 1,
+                        height: 1,
+                    })
+                    .sample_locations(l)
+            });
+            let b = match info.as_mut() {
+                Some(i) => b.push_next(i),
+                None => b,
+            };
             let bs = [b];
             let dep = vk::DependencyInfo::default().image_memory_barriers(&bs);
-            // SAFETY: recording state; the image belongs to this device.
+            // SAFETY: recording state; the image belongs to this device; the chained sample
+            // locations outlive the call.
             unsafe { self.dev().cmd_pipeline_barrier2(self.cb, &dep) };
         }
         image.last.set(access);
+    }
+
+    /// Sets the 2-sample locations for the following draws (dynamic state of pipelines built
+    /// with `GraphicsDesc::sample_locations`) and records them on `depth`, whose later layout
+    /// transitions carry them. Does nothing without VK_EXT_sample_locations (callers check
+    /// `Caps::sample_locations_2x` first).
+    pub fn set_sample_locations(&mut self, depth: &Image, locations: [[f32; 2]; 2]) {
+        let Some(ext) = self.gpu.inner.sample_locations.as_ref() else {
+            return;
+        };
+        let l = locations.map(|[x, y]| vk::SampleLocationEXT { x, y });
+        let info = vk::SampleLocationsInfoEXT::default()
+            .sample_locations_per_pixel(vk::SampleCountFlags::TYPE_2)
+            .sample_location_grid_size(vk::Extent2D {
+                width: 1,
+                height: 1,
+            })
+            .sample_locations(&l);
+        // SAFETY: recording state; the bound pipeline has SAMPLE_LOCATIONS_EXT dynamic.
+        unsafe { ext.cmd_set_sample_locations(self.cb, &info) };
+        depth.sample_locations.set(Some(locations));
     }
 
     /// Declares the next use of `buffer`; records a memory barrier if one is needed.

@@ -83,6 +83,8 @@ pub(crate) struct Inner {
     completed: AtomicU64,
     pub(crate) info: DeviceInfo,
     pub(crate) caps: Caps,
+    /// VK_EXT_sample_locations entry points, when the device has the extension.
+    pub(crate) sample_locations: Option<ash::ext::sample_locations::Device>,
 }
 
 /// The opened device. Cheap to clone; resources keep it alive.
@@ -268,6 +270,7 @@ fn caps_of(instance: &ash::Instance, pd: vk::PhysicalDevice, p: &Probe) -> Caps 
         sample_counts: sample_count_list(both),
         integer_color_sample_counts: Vec::new(), // Vulkan 1.2 property, filled in `Gpu::new`
         sample_locations: has_ext(ash::ext::sample_locations::NAME),
+        sample_locations_2x: false, // properties read in `Gpu::new`
         maintenance4: p.f13.maintenance4 != 0,
         dynamic_rendering: p.f13.dynamic_rendering != 0,
         pipeline_statistics: p.f10.pipeline_statistics_query != 0,
@@ -417,9 +420,21 @@ impl Gpu {
         let mut caps = caps_of(&instance, pd, p);
         {
             let mut p12 = vk::PhysicalDeviceVulkan12Properties::default();
+            let mut psl = vk::PhysicalDeviceSampleLocationsPropertiesEXT::default();
             let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut p12);
-            // SAFETY: `pd` belongs to `instance`.
+            if caps.sample_locations {
+                p2 = p2.push_next(&mut psl);
+            }
+            // SAFETY: `pd` belongs to `instance`; the extension struct is chained only when the
+            // device exposes the extension.
             unsafe { instance.get_physical_device_properties2(pd, &mut p2) };
+            caps.sample_locations_2x = caps.sample_locations
+                && psl
+                    .sample_location_sample_counts
+                    .contains(vk::SampleCountFlags::TYPE_2)
+                && psl.sample_location_sub_pixel_bits >= 2
+                && psl.sample_location_coordinate_range[0] <= 0.0
+                && psl.sample_location_coordinate_range[1] >= 0.75;
             let both = p.props.limits.framebuffer_color_sample_counts
                 & p.props.limits.framebuffer_depth_sample_counts;
             caps.integer_color_sample_counts =
@@ -517,8 +532,12 @@ impl Gpu {
             info.driver_name,
             info.driver_info
         );
+        let sample_locations = caps
+            .sample_locations
+            .then(|| ash::ext::sample_locations::Device::new(&instance, &device));
         let gpu = Gpu {
             inner: Arc::new(Inner {
+                sample_locations,
                 _entry: entry,
                 instance,
                 debug_instance,

@@ -256,6 +256,8 @@ pub struct GraphicsDesc<'a> {
     /// `Some(1.0)` enables per-sample shading.
     pub min_sample_shading: Option<f32>,
     pub cull_back_faces: bool,
+    /// Custom sample locations, set per frame (VK_EXT_sample_locations dynamic state).
+    pub sample_locations: bool,
 }
 
 pub struct ComputeDesc<'a> {
@@ -368,6 +370,12 @@ impl Pipeline {
         if let Some(m) = d.min_sample_shading {
             ms = ms.sample_shading_enable(true).min_sample_shading(m);
         }
+        // The locations themselves are dynamic state (`Cmd::set_sample_locations`).
+        let mut sl =
+            vk::PipelineSampleLocationsStateCreateInfoEXT::default().sample_locations_enable(true);
+        if d.sample_locations {
+            ms = ms.push_next(&mut sl);
+        }
         let ds = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(d.depth_format.is_some())
             .depth_write_enable(d.depth_write)
@@ -381,7 +389,10 @@ impl Pipeline {
             })
             .collect();
         let cb = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
-        let dyn_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let mut dyn_states = vec![vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        if d.sample_locations {
+            dyn_states.push(vk::DynamicState::SAMPLE_LOCATIONS_EXT);
+        }
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dyn_states);
         let mut rendering = vk::PipelineRenderingCreateInfo::default()
             .color_attachment_formats(d.color_formats)

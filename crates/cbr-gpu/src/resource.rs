@@ -175,6 +175,8 @@ pub struct ImageDesc<'a> {
     pub layers: u32,
     pub samples: u32,
     pub usage: vk::ImageUsageFlags,
+    /// Creation flags (e.g. SAMPLE_LOCATIONS_COMPATIBLE_DEPTH_EXT for msaa2x's alternative).
+    pub flags: vk::ImageCreateFlags,
 }
 
 impl<'a> ImageDesc<'a> {
@@ -195,6 +197,7 @@ impl<'a> ImageDesc<'a> {
             layers: 1,
             samples: 1,
             usage,
+            flags: vk::ImageCreateFlags::empty(),
         }
     }
 }
@@ -212,6 +215,9 @@ pub struct Image {
     pub layers: u32,
     pub samples: u32,
     pub(crate) last: Cell<Access>,
+    /// The custom sample locations last rendered with (depth images created sample-locations
+    /// compatible): chained into this image's layout transitions.
+    pub(crate) sample_locations: Cell<Option<[[f32; 2]; 2]>>,
 }
 
 pub fn is_depth_format(f: vk::Format) -> bool {
@@ -254,6 +260,7 @@ impl Image {
             });
         }
         let info = vk::ImageCreateInfo::default()
+            .flags(d.flags)
             .image_type(vk::ImageType::TYPE_2D)
             .format(d.format)
             .extent(vk::Extent3D {
@@ -315,6 +322,7 @@ impl Image {
             layers: d.layers,
             samples: d.samples,
             last: Cell::new(Access::Undefined),
+            sample_locations: Cell::new(None),
         })
     }
 

@@ -76,6 +76,10 @@ impl UnpackPass {
         let mut defines: Vec<(String, String)> =
             UNPACK_BINDINGS.iter().map(BindingDesc::define).collect();
         defines.push(("LAYOUT".into(), layout_id(plan.layout).to_string()));
+        defines.push((
+            "MSAA_LOCATIONS".into(),
+            u32::from(plan.sample_locations.is_some()).to_string(),
+        ));
         let cs = shaders.compile("checkerboard/unpack.comp", &defines)?;
         let pipeline = Pipeline::compute(
             gpu,

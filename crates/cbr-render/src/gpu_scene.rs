@@ -130,6 +130,7 @@ fn upload_textures(gpu: &Gpu, scene: &Scene) -> Result<Vec<Image>> {
                 layers: 1,
                 samples: 1,
                 usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+                flags: vk::ImageCreateFlags::empty(),
             },
         )?);
         let mut levels = Vec::new();

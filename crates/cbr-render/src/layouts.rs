@@ -9,6 +9,9 @@
 //! - `msaa2x`: a ceil(W/2)+1 x ceil(H/2) target with 2 samples at the standard positions
 //!   (0.75, 0.75) and (0.25, 0.25): sample 0 of pixel (i, j) is full-res pixel (2i + 1 - p, 2j + 1),
 //!   sample 1 is (2i - p, 2j); odd frames shift the viewport right by half a target pixel.
+//!   With VK_EXT_sample_locations (`with_sample_locations`) odd frames instead move the samples to
+//!   (0.25, 0.75) and (0.75, 0.25): sample 0 of pixel (i, j) is (2i, 2j + 1), sample 1 is
+//!   (2i + 1, 2j); no viewport shift, no spare column.
 //! - `rotated` (Decima's tangram): an L x L target whose texel (i, j) is the full-res pixel with
 //!   i = (x - y - p) / 2 and j = (x + y - p) / 2, both mod L. The screen maps to a 45-degree diamond
 //!   in texel space, drawn as several wrapped pieces (translations by multiples of L), each clipped
@@ -57,7 +60,13 @@ pub struct LayoutPlan {
     /// Tangram side (rotated) and the (m, n) translations of its pieces, in units of L.
     pub tangram: u32,
     pub pieces: Vec<[i32; 2]>,
+    /// msaa2x with VK_EXT_sample_locations: this frame's two sample locations in [0, 1)^2.
+    pub sample_locations: Option<[[f32; 2]; 2]>,
 }
+
+/// The standard 2x MSAA positions (samples 0 and 1), and the odd frames' alternative.
+pub const STANDARD_2X: [[f32; 2]; 2] = [[0.75, 0.75], [0.25, 0.25]];
+pub const ODD_2X: [[f32; 2]; 2] = [[0.25, 0.75], [0.75, 0.25]];
 
 /// Texel-space (u, v) of screen point (xs, ys) in the tangram before wrapping: pixel centres map to
 /// texel centres.
@@ -124,6 +133,7 @@ impl LayoutPlan {
             viewport_x: 0.0,
             tangram: 0,
             pieces: Vec::new(),
+            sample_locations: None,
         };
         match layout {
             Layout::Masked => {}
@@ -154,6 +164,20 @@ impl LayoutPlan {
         plan
     }
 
+    /// msaa2x toggling sample locations instead of shifting the viewport (other layouts unchanged).
+    pub fn with_sample_locations(mut self) -> LayoutPlan {
+        if self.layout == Layout::Msaa2x {
+            self.target = (self.width.div_ceil(2), self.height.div_ceil(2));
+            self.viewport_x = 0.0;
+            self.sample_locations = Some(if self.parity == 1 {
+                ODD_2X
+            } else {
+                STANDARD_2X
+            });
+        }
+        self
+    }
+
     /// Where the sample of full-res pixel (x, y) lives, or `None` when the frame does not shade it.
     pub fn address(&self, x: u32, y: u32) -> Option<SampleAddr> {
         let p = self.parity;
@@ -174,9 +198,14 @@ impl LayoutPlan {
                 sample: 0,
             },
             Layout::Msaa2x => {
-                // Sample 0 holds (2i + 1 - p, 2j + 1), sample 1 holds (2i - p, 2j).
+                // Sample 0 holds (2i + 1 - p, 2j + 1), sample 1 holds (2i - p, 2j); with the odd
+                // frames' sample locations, (2i, 2j + 1) and (2i + 1, 2j).
                 let odd_row = y % 2;
-                let i = (x + p + 1 - odd_row) / 2;
+                let i = if self.sample_locations.is_some() && p == 1 {
+                    x / 2
+                } else {
+                    (x + p + 1 - odd_row) / 2
+                };
                 SampleAddr {
                     x: i,
                     y: y / 2,
@@ -271,6 +300,37 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn msaa2x_sample_locations_hit_the_pixel_centres_once() {
+        for (w, h) in [(1920, 1080), (101, 77), (64, 64), (3, 5), (7, 2), (33, 100)] {
+            for p in 0..2 {
+                let plan = LayoutPlan::new(Layout::Msaa2x, w, h, p).with_sample_locations();
+                assert_eq!(
+                    plan.target,
+                    (w.div_ceil(2), h.div_ceil(2)),
+                    "no spare column"
+                );
+                assert_eq!(plan.viewport_x, 0.0);
+                covers_each_sample_once(&plan);
+                let locs = plan.sample_locations.expect("locations");
+                for y in 0..h {
+                    for x in 0..w {
+                        if let Some(a) = plan.address(x, y) {
+                            // The sample position in full-res pixels is the pixel's centre.
+                            let l = locs[a.sample as usize];
+                            let sx = 2.0 * (a.x as f32 + l[0]);
+                            let sy = 2.0 * (a.y as f32 + l[1]);
+                            assert_eq!((sx, sy), (x as f32 + 0.5, y as f32 + 0.5), "{w}x{h} p{p}");
+                        }
+                    }
+                }
+            }
+        }
+        // Other layouts are left alone.
+        let split = LayoutPlan::new(Layout::Split, 8, 8, 1);
+        assert_eq!(split.clone().with_sample_locations(), split);
     }
 
     #[test]

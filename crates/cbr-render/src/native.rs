@@ -124,6 +124,8 @@ pub struct RasterConfig {
     pub viewport: [f32; 4],
     /// Depth and IDs only, no shading (the `--id-prepass` pass).
     pub id_only: bool,
+    /// msaa2x with VK_EXT_sample_locations: the frame's two sample locations.
+    pub sample_locations: Option<[[f32; 2]; 2]>,
 }
 
 impl RasterConfig {
@@ -135,6 +137,7 @@ impl RasterConfig {
             instances: 1,
             viewport: [0.0, 0.0, width as f32, height as f32],
             id_only: false,
+            sample_locations: None,
         }
     }
 
@@ -157,6 +160,7 @@ impl RasterConfig {
             },
             viewport,
             id_only: false,
+            sample_locations: plan.sample_locations,
         }
     }
 }
@@ -209,6 +213,7 @@ impl ScenePass {
                 samples: config.samples,
                 min_sample_shading: (config.samples > 1).then_some(1.0),
                 cull_back_faces: false,
+                sample_locations: config.sample_locations.is_some(),
             },
         )?;
         let set = DescriptorSet::new(
@@ -324,6 +329,9 @@ impl ScenePass {
         let [x, y, w, h] = config.viewport;
         cmd.set_viewport(x, y, w, h);
         cmd.bind_pipeline(&self.pipeline);
+        if let Some(l) = config.sample_locations {
+            cmd.set_sample_locations(depth, l);
+        }
         cmd.bind_set(&self.pipeline, 0, &self.set);
         cmd.bind_index_buffer(&scene.indices);
         for d in &scene.draws {

@@ -80,6 +80,9 @@ pub struct RenderSettings {
     pub id_prepass: bool,
     /// Checkerboard only: the resolve; `None` writes the raw checkerboard frame.
     pub resolve: Option<ResolveSettings>,
+    /// msaa2x only: odd frames move the samples (VK_EXT_sample_locations) instead of shifting the
+    /// viewport.
+    pub msaa2x_sample_locations: bool,
 }
 
 impl RenderSettings {
@@ -93,6 +96,7 @@ impl RenderSettings {
             debug_lod: false,
             id_prepass: false,
             resolve: None,
+            msaa2x_sample_locations: false,
         }
     }
 
@@ -330,10 +334,26 @@ impl Renderer {
                         ),
                     });
                 }
-                let plans = [
+                let mut plans = [
                     LayoutPlan::new(layout, w, h, 0),
                     LayoutPlan::new(layout, w, h, 1),
                 ];
+                if settings.msaa2x_sample_locations {
+                    if layout != Layout::Msaa2x {
+                        return Err(GpuError::Other(
+                            "--msaa2x-sample-locations applies to the msaa2x layout".into(),
+                        ));
+                    }
+                    if let Some(missing) = gpu.caps().sample_locations_unsupported() {
+                        return Err(GpuError::Unsupported {
+                            device: gpu.info().name.clone(),
+                            feature: format!(
+                                "msaa2x with toggled sample locations (it needs {missing})"
+                            ),
+                        });
+                    }
+                    plans = plans.map(LayoutPlan::with_sample_locations);
+                }
                 let configs = [
                     RasterConfig::for_plan(&plans[0]),
                     RasterConfig::for_plan(&plans[1]),
@@ -348,6 +368,7 @@ impl Renderer {
                     th,
                     plans[0].layers,
                     plans[0].samples,
+                    plans[0].sample_locations.is_some(),
                 )?;
                 let unpack = UnpackPass::new(gpu, shaders, &plans[0], &targets)?;
                 let resolve = match &settings.resolve {

@@ -26,10 +26,12 @@ impl FrameTargets {
 
     /// Single-layer, single-sample targets (the native technique).
     pub fn new(gpu: &Gpu, prefix: &str, width: u32, height: u32) -> Result<FrameTargets> {
-        FrameTargets::layered(gpu, prefix, width, height, 1, 1)
+        FrameTargets::layered(gpu, prefix, width, height, 1, 1, false)
     }
 
-    /// Targets with `layers` array layers and `samples` samples each (checkerboard layouts).
+    /// Targets with `layers` array layers and `samples` samples each (checkerboard layouts);
+    /// `sample_locations`: a depth target compatible with custom sample locations (msaa2x with
+    /// VK_EXT_sample_locations).
     pub fn layered(
         gpu: &Gpu,
         prefix: &str,
@@ -37,6 +39,7 @@ impl FrameTargets {
         height: u32,
         layers: u32,
         samples: u32,
+        sample_locations: bool,
     ) -> Result<FrameTargets> {
         // TRANSFER_DST: tests upload synthetic samples (the resolve's CPU-reference test).
         let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT
@@ -48,6 +51,9 @@ impl FrameTargets {
             let mut d = ImageDesc::new_2d(&name, format, width, height, usage);
             d.layers = layers;
             d.samples = samples;
+            if sample_locations && format == DEPTH_FORMAT {
+                d.flags = vk::ImageCreateFlags::SAMPLE_LOCATIONS_COMPATIBLE_DEPTH_EXT;
+            }
             Image::new(gpu, &d)
         };
         Ok(FrameTargets {

@@ -33,6 +33,7 @@ fn render(gpu: &Gpu, s: &Scene, technique: Technique, frame: u32, count: bool) -
         debug_lod: false,
         id_prepass: false,
         resolve: None,
+        msaa2x_sample_locations: false,
     };
     let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
     r.render(s, frame).expect("frame")
@@ -250,6 +251,7 @@ fn msaa2x_equals_native_where_2x_msaa_exists() {
                 debug_lod: false,
                 id_prepass: false,
                 resolve: None,
+                msaa2x_sample_locations: false,
             },
         )
         .err()
@@ -259,7 +261,7 @@ fn msaa2x_equals_native_where_2x_msaa_exists() {
             err.contains("msaa2x") && err.contains("rotated"),
             "a clear error naming the portable layouts: {err}"
         );
-        // Its shaders still compile.
+        // Its shaders still compile, the fetch include's sample-locations variant too.
         for stage in ["scene/forward.vert", "scene/forward.frag"] {
             shaders
                 .compile(
@@ -268,19 +270,61 @@ fn msaa2x_equals_native_where_2x_msaa_exists() {
                 )
                 .expect("msaa2x shaders compile");
         }
+        let mut defines: Vec<(String, String)> = cbr_render::checkerboard::UNPACK_BINDINGS
+            .iter()
+            .map(cbr_gpu::BindingDesc::define)
+            .collect();
+        defines.push((
+            "LAYOUT".into(),
+            cbr_render::native::LAYOUT_MSAA2X.to_string(),
+        ));
+        defines.push(("MSAA_LOCATIONS".into(), "1".into()));
+        shaders
+            .compile("checkerboard/unpack.comp", &defines)
+            .expect("the sample-locations fetch compiles");
+        eprintln!(
+            "SKIPPED msaa2x --msaa2x-sample-locations on {}: {}",
+            gpu.info().name,
+            gpu.caps()
+                .sample_locations_unsupported()
+                .unwrap_or_default()
+        );
         return;
     }
-    for (w, h) in [(160, 90), (121, 67)] {
-        let s = untextured_demo(w, h);
-        for frame in [4, 5] {
-            let native = render(&gpu, &s, Technique::Native, frame, false);
-            let cb = render(&gpu, &s, checkerboard(Layout::Msaa2x), frame, false);
-            let frac = compare(&format!("msaa2x {w}x{h} frame {frame}"), &cb, &native);
-            assert!(
-                frac <= 0.005,
-                "msaa2x: {:.3}% of samples see other geometry",
-                100.0 * frac
+    // Viewport shift, and (where VK_EXT_sample_locations allows) toggled sample locations.
+    let variants: Vec<bool> = match gpu.caps().sample_locations_unsupported() {
+        None => vec![false, true],
+        Some(why) => {
+            eprintln!(
+                "SKIPPED msaa2x --msaa2x-sample-locations on {}: it needs {why}",
+                gpu.info().name
             );
+            vec![false]
+        }
+    };
+    for locations in variants {
+        for (w, h) in [(160, 90), (121, 67)] {
+            let s = untextured_demo(w, h);
+            for frame in [4, 5] {
+                let native = render(&gpu, &s, Technique::Native, frame, false);
+                let shaders = cbr_render::shader_library();
+                let settings = RenderSettings {
+                    technique: checkerboard(Layout::Msaa2x),
+                    msaa2x_sample_locations: locations,
+                    ..RenderSettings::native(w, h)
+                };
+                let cb = Renderer::new(&gpu, &shaders, &s, settings)
+                    .expect("renderer")
+                    .render(&s, frame)
+                    .expect("frame");
+                let name = format!("msaa2x (sample locations {locations}) {w}x{h} frame {frame}");
+                let frac = compare(&name, &cb, &native);
+                assert!(
+                    frac <= 0.005,
+                    "{name}: {:.3}% of samples see other geometry",
+                    100.0 * frac
+                );
+            }
         }
     }
     assert_clean(&gpu);
@@ -327,6 +371,7 @@ fn lod_difference(
             debug_lod: true,
             id_prepass: false,
             resolve: None,
+            msaa2x_sample_locations: false,
         };
         Renderer::new(gpu, &shaders, s, settings)
             .expect("renderer")
@@ -425,6 +470,7 @@ fn id_prepass_equals_natives_depth_and_ids() {
             debug_lod: false,
             id_prepass: true,
             resolve: None,
+            msaa2x_sample_locations: false,
         };
         let mut r = Renderer::new(&gpu, &shaders, &s, settings).expect("renderer");
         // Native's own LOD: alpha-tested foliage must cover the same pixels in both.
@@ -461,6 +507,7 @@ fn id_prepass_equals_natives_depth_and_ids() {
         RenderSettings {
             id_prepass: true,
             resolve: None,
+            msaa2x_sample_locations: false,
             ..RenderSettings::native(96, 54)
         },
     )

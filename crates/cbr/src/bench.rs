@@ -29,7 +29,7 @@ pub struct BenchArgs {
     /// Scene: a .toml description, an .obj file, or builtin:demo.
     scene: String,
     /// Configurations, comma-separated: native, upscale:bilinear|bicubic,
-    /// checkerboard:LAYOUT[:MODE][:pixel|quad][:8|16][:fp16][:prepass] (MODE: ours, pq4k, intel,
+    /// checkerboard:LAYOUT[:MODE][:pixel|quad][:8|16][:fp16][:prepass][:locations] (MODE: ours, pq4k, intel,
     /// spatial, temporal; default ours, quad, 8). Native at each resolution is always run: it is
     /// the reference.
     #[arg(long, value_delimiter = ',', default_value = "native")]
@@ -159,12 +159,13 @@ pub fn parse_spec(spec: &str, w: u32, h: u32) -> Result<(RenderSettings, bool, b
                     "8" | "16" => (r.group, named_group) = (p.parse()?, true),
                     "fp16" => r.fp16 = true,
                     "prepass" => s.id_prepass = true,
+                    "locations" => s.msaa2x_sample_locations = true,
                     "none" => none = true,
                     m => {
                         r.mode = parse_mode(m).with_context(|| {
                             format!(
                                 "`{spec}`: `{m}` is no resolve mode (ours, pq4k, intel, spatial, \
-                                 temporal, none) or option (pixel, quad, 8, 16, fp16, prepass)"
+                                 temporal, none) or option (pixel, quad, 8, 16, fp16, prepass, locations)"
                             )
                         })?
                     }

@@ -97,6 +97,10 @@ pub fn run(a: &InfoArgs) -> Result<()> {
             Some(why) => println!("  {:8} no: needs {why}", l.name()),
         }
     }
+    match caps.sample_locations_unsupported() {
+        None => println!("  msaa2x --msaa2x-sample-locations yes"),
+        Some(why) => println!("  msaa2x --msaa2x-sample-locations no: needs {why}"),
+    }
     if caps.layout_unsupported(Layout::Msaa2x).is_some() {
         let portable: Vec<&str> = caps.supported_layouts().iter().map(|l| l.name()).collect();
         println!(

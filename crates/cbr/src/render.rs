@@ -124,6 +124,10 @@ pub struct RenderArgs {
     /// Checkerboard layout.
     #[arg(long, value_enum, default_value = "rotated")]
     layout: LayoutArg,
+    /// msaa2x: odd frames move the two samples with VK_EXT_sample_locations instead of shifting
+    /// the viewport by half a pixel (needs the extension; `cbr info` says).
+    #[arg(long)]
+    msaa2x_sample_locations: bool,
     /// How checkerboard frames are reconstructed (docs/resolve.md).
     #[arg(long, value_enum, default_value = "ours")]
     resolve: ResolveArg,
@@ -253,6 +257,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         debug_lod: false,
         id_prepass: a.id_prepass,
         resolve,
+        msaa2x_sample_locations: a.msaa2x_sample_locations,
     };
     let mut renderer =
         Renderer::new(&gpu, &shaders, &scene, settings.clone()).with_context(|| {

@@ -310,6 +310,10 @@ impl ResolvePass {
         };
         for (k, v) in [
             ("LAYOUT", layout_id(plan.layout).to_string()),
+            (
+                "MSAA_LOCATIONS",
+                u32::from(plan.sample_locations.is_some()).to_string(),
+            ),
             ("MODE", settings.mode.id().to_string()),
             (
                 "MAPPING",
