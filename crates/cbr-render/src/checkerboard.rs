@@ -12,36 +12,11 @@ use crate::native::layout_id;
 use crate::targets::FrameTargets;
 
 pub const UNPACK_BINDINGS: [BindingDesc; 5] = [
-    BindingDesc {
-        name: "color",
-        binding: 0,
-        kind: DescriptorKind::CombinedImageSampler,
-        count: 1,
-    },
-    BindingDesc {
-        name: "velocity",
-        binding: 1,
-        kind: DescriptorKind::CombinedImageSampler,
-        count: 1,
-    },
-    BindingDesc {
-        name: "ids",
-        binding: 2,
-        kind: DescriptorKind::CombinedImageSampler,
-        count: 1,
-    },
-    BindingDesc {
-        name: "depth",
-        binding: 3,
-        kind: DescriptorKind::CombinedImageSampler,
-        count: 1,
-    },
-    BindingDesc {
-        name: "out",
-        binding: 4,
-        kind: DescriptorKind::StorageBuffer,
-        count: 1,
-    },
+    BindingDesc::one("color", 0, DescriptorKind::CombinedImageSampler),
+    BindingDesc::one("velocity", 1, DescriptorKind::CombinedImageSampler),
+    BindingDesc::one("ids", 2, DescriptorKind::CombinedImageSampler),
+    BindingDesc::one("depth", 3, DescriptorKind::CombinedImageSampler),
+    BindingDesc::one("out", 4, DescriptorKind::StorageBuffer),
 ];
 
 /// One unpacked pixel, as `Pixel` in shaders/checkerboard/unpack.comp (std430: 48 bytes).

@@ -30,65 +30,20 @@ pub fn layout_id(l: Layout) -> u32 {
 /// The scene pass's descriptor set: the one definition the pipeline layout, the descriptor writes
 /// and (through `shader_defines`) the GLSL binding numbers all come from.
 pub const BINDINGS: [BindingDesc; 6] = [
-    BindingDesc {
-        name: "frame",
-        binding: 0,
-        kind: DescriptorKind::UniformBuffer,
-        count: 1,
-    },
-    BindingDesc {
-        name: "objects",
-        binding: 1,
-        kind: DescriptorKind::StorageBuffer,
-        count: 1,
-    },
-    BindingDesc {
-        name: "vertices",
-        binding: 2,
-        kind: DescriptorKind::StorageBuffer,
-        count: 1,
-    },
-    BindingDesc {
-        name: "materials",
-        binding: 3,
-        kind: DescriptorKind::StorageBuffer,
-        count: 1,
-    },
-    BindingDesc {
-        name: "lights",
-        binding: 4,
-        kind: DescriptorKind::StorageBuffer,
-        count: 1,
-    },
-    BindingDesc {
-        name: "counter",
-        binding: 5,
-        kind: DescriptorKind::StorageBuffer,
-        count: 1,
-    },
+    BindingDesc::one("frame", 0, DescriptorKind::UniformBuffer),
+    BindingDesc::one("objects", 1, DescriptorKind::StorageBuffer),
+    BindingDesc::one("vertices", 2, DescriptorKind::StorageBuffer),
+    BindingDesc::one("materials", 3, DescriptorKind::StorageBuffer),
+    BindingDesc::one("lights", 4, DescriptorKind::StorageBuffer),
+    BindingDesc::one("counter", 5, DescriptorKind::StorageBuffer),
 ];
 
 /// Set 1, one per material. Separate samplers rather than an indexed array: lavapipe has no
 /// `shaderSampledImageArrayDynamicIndexing`.
 pub const MATERIAL_BINDINGS: [BindingDesc; 3] = [
-    BindingDesc {
-        name: "albedo",
-        binding: 0,
-        kind: DescriptorKind::CombinedImageSampler,
-        count: 1,
-    },
-    BindingDesc {
-        name: "mask",
-        binding: 1,
-        kind: DescriptorKind::CombinedImageSampler,
-        count: 1,
-    },
-    BindingDesc {
-        name: "bump",
-        binding: 2,
-        kind: DescriptorKind::CombinedImageSampler,
-        count: 1,
-    },
+    BindingDesc::one("albedo", 0, DescriptorKind::CombinedImageSampler),
+    BindingDesc::one("mask", 1, DescriptorKind::CombinedImageSampler),
+    BindingDesc::one("bump", 2, DescriptorKind::CombinedImageSampler),
 ];
 
 fn binding(name: &str) -> u32 {

@@ -576,7 +576,7 @@ impl Renderer {
                     if let Some(r) = resolve {
                         let pre = prepass.as_ref().map(|p| (&p.ids, &p.depth));
                         r.pass.record(cmd, profiler, targets, pre, &resolve_frame);
-                        r.pass.read(cmd, resolve_frame.slot, &r.rb);
+                        r.pass.read(cmd, resolve_frame.slot, &r.rb, false);
                     }
                     unpack.record(cmd, profiler, targets, &plans[parity as usize])
                 }

@@ -32,19 +32,16 @@ pub fn low_resolution(width: u32, height: u32) -> (u32, u32) {
 }
 
 pub const BINDINGS: [BindingDesc; 8] = {
-    const fn b(name: &'static str, binding: u32, kind: DescriptorKind) -> BindingDesc {
-        BindingDesc::one(name, binding, kind)
-    }
     use DescriptorKind::{CombinedImageSampler as S, StorageImage as I};
     [
-        b("color", 0, S),
-        b("velocity", 1, S),
-        b("ids", 2, S),
-        b("depth", 3, S),
-        b("out_color", 4, I),
-        b("out_velocity", 5, I),
-        b("out_ids", 6, I),
-        b("out_depth", 7, I),
+        BindingDesc::one("color", 0, S),
+        BindingDesc::one("velocity", 1, S),
+        BindingDesc::one("ids", 2, S),
+        BindingDesc::one("depth", 3, S),
+        BindingDesc::one("out_color", 4, I),
+        BindingDesc::one("out_velocity", 5, I),
+        BindingDesc::one("out_ids", 6, I),
+        BindingDesc::one("out_depth", 7, I),
     ]
 };
 

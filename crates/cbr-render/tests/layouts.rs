@@ -25,15 +25,9 @@ fn untextured_demo(w: u32, h: u32) -> Scene {
 fn render(gpu: &Gpu, s: &Scene, technique: Technique, frame: u32, count: bool) -> FrameOutput {
     let shaders = cbr_render::shader_library();
     let settings = RenderSettings {
-        width: s.settings.width,
-        height: s.settings.height,
         technique,
-        lod_bias: None,
         count_shaded: count,
-        debug_lod: false,
-        id_prepass: false,
-        resolve: None,
-        msaa2x_sample_locations: false,
+        ..RenderSettings::native(s.settings.width, s.settings.height)
     };
     let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
     r.render(s, frame).expect("frame")
@@ -243,15 +237,8 @@ fn msaa2x_equals_native_where_2x_msaa_exists() {
             &shaders,
             &s,
             RenderSettings {
-                width: 32,
-                height: 18,
                 technique: checkerboard(Layout::Msaa2x),
-                lod_bias: None,
-                count_shaded: false,
-                debug_lod: false,
-                id_prepass: false,
-                resolve: None,
-                msaa2x_sample_locations: false,
+                ..RenderSettings::native(32, 18)
             },
         )
         .err()
@@ -363,15 +350,9 @@ fn lod_difference(
     let shaders = cbr_render::shader_library();
     let run = |technique| {
         let settings = RenderSettings {
-            width: s.settings.width,
-            height: s.settings.height,
             technique,
-            lod_bias: None,
-            count_shaded: false,
             debug_lod: true,
-            id_prepass: false,
-            resolve: None,
-            msaa2x_sample_locations: false,
+            ..RenderSettings::native(s.settings.width, s.settings.height)
         };
         Renderer::new(gpu, &shaders, s, settings)
             .expect("renderer")
@@ -462,15 +443,9 @@ fn id_prepass_equals_natives_depth_and_ids() {
     let shaders = cbr_render::shader_library();
     for layout in [Layout::Split, Layout::Rotated] {
         let settings = RenderSettings {
-            width: 96,
-            height: 54,
             technique: checkerboard(layout),
-            lod_bias: None,
-            count_shaded: false,
-            debug_lod: false,
             id_prepass: true,
-            resolve: None,
-            msaa2x_sample_locations: false,
+            ..RenderSettings::native(96, 54)
         };
         let mut r = Renderer::new(&gpu, &shaders, &s, settings).expect("renderer");
         // Native's own LOD: alpha-tested foliage must cover the same pixels in both.
@@ -506,8 +481,6 @@ fn id_prepass_equals_natives_depth_and_ids() {
         &s,
         RenderSettings {
             id_prepass: true,
-            resolve: None,
-            msaa2x_sample_locations: false,
             ..RenderSettings::native(96, 54)
         },
     )

@@ -260,7 +260,7 @@ impl Bench {
         self.gpu
             .submit("test.resolve", |cmd| {
                 pass.record(cmd, &mut profiler, &self.targets, pre, &frame);
-                pass.read(cmd, 0, &rb);
+                pass.read(cmd, 0, &rb, true);
                 Ok(())
             })
             .expect("submit");

@@ -255,11 +255,12 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
         .collect()
 }
 
-fn to_input(out: &FrameOutput, name: &str) -> cbr_metrics::InputImage {
-    let n = (out.width * out.height) as usize;
+/// A frame's RGBA16F colour as an image to compare.
+fn to_input(width: u32, height: u32, color: &[half::f16], name: &str) -> cbr_metrics::InputImage {
+    let n = (width * height) as usize;
     let rgb: Vec<f32> = (0..n)
         .flat_map(|i| {
-            let c = &out.color[4 * i..4 * i + 3];
+            let c = &color[4 * i..4 * i + 3];
             [c[0].to_f32(), c[1].to_f32(), c[2].to_f32()]
         })
         .collect();
@@ -267,7 +268,7 @@ fn to_input(out: &FrameOutput, name: &str) -> cbr_metrics::InputImage {
         path: PathBuf::from(name),
         layer: "color".into(),
         channels: vec!["R".into(), "G".into(), "B".into()],
-        rgb: cbr_metrics::Rgb::from_interleaved(out.width as usize, out.height as usize, &rgb),
+        rgb: cbr_metrics::Rgb::from_interleaved(width as usize, height as usize, &rgb),
         encoding: cbr_metrics::Encoding::Linear,
     }
 }
@@ -304,10 +305,10 @@ fn measure(
     config: &Config,
     warmup: u32,
     frames: u32,
-    reference: Option<&[FrameOutput]>,
+    reference: Option<&[Vec<half::f16>]>,
     keep: bool,
     bar: &ProgressBar,
-) -> Result<(Measured, Vec<FrameOutput>)> {
+) -> Result<(Measured, Vec<Vec<half::f16>>)> {
     let shaders = cbr_render::shader_library();
     let mut r = Renderer::new(gpu, &shaders, scene, config.settings.clone())
         .with_context(|| format!("setting up {} on {}", config.name, gpu.info().name))?;
@@ -348,7 +349,12 @@ fn measure(
                 keep_maps: last,
                 ..options.clone()
             };
-            let mut p = compare_images(&to_input(rf, "native"), &to_input(&out, &config.name), &o)?;
+            let (w, h) = (out.width, out.height);
+            let mut p = compare_images(
+                &to_input(w, h, rf, "native"),
+                &to_input(w, h, &out.color, &config.name),
+                &o,
+            )?;
             flip_map = p.flip_map.take();
             let v = |k| p.value(k).unwrap_or(f64::NAN);
             let flip_median = p.flip.map(|x| x.weighted_median).unwrap_or(f64::NAN);
@@ -366,14 +372,12 @@ fn measure(
                 "relmse": v(Metric::RelMse),
             }));
         }
-        if last {
-            m.snapshot = Some(Snapshot {
-                out: out.clone(),
-                flip_map,
-            });
-        }
+        // The reference keeps only colour (what the comparison reads), not every layer.
         if keep {
-            kept.push(out);
+            kept.push(out.color.clone());
+        }
+        if last {
+            m.snapshot = Some(Snapshot { out, flip_map });
         }
     }
     Ok((m, kept))

@@ -211,23 +211,20 @@ impl ResolveSettings {
 }
 
 pub const BINDINGS: [BindingDesc; 12] = {
-    const fn b(name: &'static str, binding: u32, kind: DescriptorKind) -> BindingDesc {
-        BindingDesc::one(name, binding, kind)
-    }
     use DescriptorKind::{CombinedImageSampler as S, StorageImage as I};
     [
-        b("color", 0, S),
-        b("velocity", 1, S),
-        b("ids", 2, S),
-        b("depth", 3, S),
-        b("hist_color", 4, S),
-        b("hist_geom", 5, S),
-        b("pre_depth", 6, S),
-        b("pre_ids", 7, S),
-        b("out_color", 8, I),
-        b("out_geom", 9, I),
-        b("debug_bits", 10, I),
-        b("debug_velocity", 11, I),
+        BindingDesc::one("color", 0, S),
+        BindingDesc::one("velocity", 1, S),
+        BindingDesc::one("ids", 2, S),
+        BindingDesc::one("depth", 3, S),
+        BindingDesc::one("hist_color", 4, S),
+        BindingDesc::one("hist_geom", 5, S),
+        BindingDesc::one("pre_depth", 6, S),
+        BindingDesc::one("pre_ids", 7, S),
+        BindingDesc::one("out_color", 8, I),
+        BindingDesc::one("out_geom", 9, I),
+        BindingDesc::one("debug_bits", 10, I),
+        BindingDesc::one("debug_velocity", 11, I),
     ]
 };
 
@@ -548,11 +545,14 @@ impl ResolvePass {
         })
     }
 
-    /// Records the copies of the frame's outputs (slot `slot`) into `rb`.
-    pub fn read(&self, cmd: &mut Cmd, slot: usize, rb: &ResolveReadbacks) {
+    /// Records the copies of the frame's outputs (slot `slot`) into `rb`: the resolved colour,
+    /// the debug views when enabled, and with `geometry` the history IDs and depths (tests).
+    pub fn read(&self, cmd: &mut Cmd, slot: usize, rb: &ResolveReadbacks, geometry: bool) {
         let h = &self.history[slot];
         cmd.read_image(&h.color, &rb.color);
-        cmd.read_image(&h.geom, &rb.geom);
+        if geometry {
+            cmd.read_image(&h.geom, &rb.geom);
+        }
         if self.settings.debug {
             cmd.read_image(&self.debug_bits, &rb.debug_bits);
             cmd.read_image(&self.debug_velocity, &rb.debug_velocity);
@@ -610,18 +610,8 @@ pub struct CopyFloor {
 }
 
 pub const COPY_BINDINGS: [BindingDesc; 2] = [
-    BindingDesc {
-        name: "src",
-        binding: 0,
-        kind: DescriptorKind::StorageBuffer,
-        count: 1,
-    },
-    BindingDesc {
-        name: "dst",
-        binding: 1,
-        kind: DescriptorKind::StorageBuffer,
-        count: 1,
-    },
+    BindingDesc::one("src", 0, DescriptorKind::StorageBuffer),
+    BindingDesc::one("dst", 1, DescriptorKind::StorageBuffer),
 ];
 
 impl CopyFloor {
