@@ -1,0 +1,141 @@
+//! The speed-vs-error chart: GPU time against FLIP mean, log-log, labelled points, the Pareto
+//! front dashed, and the data behind it as CSV.
+
+use std::fmt::Write as _;
+
+use base64::Engine as _;
+use serde_json::Value;
+
+use crate::util::{esc, num};
+
+/// log10 axis ticks covering [lo, hi]: 1, 2, 5 x powers of ten.
+fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let mut t = Vec::new();
+    let mut e = lo.log10().floor() as i32;
+    while 10f64.powi(e) <= hi * 1.0001 {
+        for m in [1.0, 2.0, 5.0] {
+            let v = m * 10f64.powi(e);
+            if v >= lo * 0.9999 && v <= hi * 1.0001 {
+                t.push(v);
+            }
+        }
+        e += 1;
+    }
+    t
+}
+
+/// Speed (x, log) against FLIP mean (y, log), labelled points, the Pareto front dashed.
+pub(crate) fn chart(html: &mut String, g: &[&Value]) {
+    let pts: Vec<(f64, f64, &str, bool)> = g
+        .iter()
+        .filter_map(|r| {
+            Some((
+                num(&r["frame_ms"]["median"])?,
+                num(&r["error"]["flip_mean"])?,
+                r["config"].as_str().unwrap_or(""),
+                r["pareto"].as_bool().unwrap_or(false),
+            ))
+        })
+        .filter(|p| p.0 > 0.0 && p.1 > 0.0)
+        .collect();
+    if pts.is_empty() {
+        html.push_str("<p class=\"muted\">No configuration with both a time and an error.</p>");
+        return;
+    }
+    let (w, h, ml, mr, mt, mb) = (720.0, 420.0, 60.0, 200.0, 14.0, 40.0);
+    let lo_x = pts.iter().map(|p| p.0).fold(f64::INFINITY, f64::min) / 1.3;
+    let hi_x = pts.iter().map(|p| p.0).fold(0.0, f64::max) * 1.3;
+    let lo_y = pts.iter().map(|p| p.1).fold(f64::INFINITY, f64::min) / 1.3;
+    let hi_y = pts.iter().map(|p| p.1).fold(0.0, f64::max) * 1.3;
+    let sx =
+        |x: f64| ml + (x.log10() - lo_x.log10()) / (hi_x.log10() - lo_x.log10()) * (w - ml - mr);
+    let sy = |y: f64| {
+        h - mb - (y.log10() - lo_y.log10()) / (hi_y.log10() - lo_y.log10()) * (h - mt - mb)
+    };
+    let _ = writeln!(
+        html,
+        "<svg class=\"chart\" width=\"{w}\" height=\"{h}\" role=\"img\" aria-label=\"speed against error\">"
+    );
+    for t in log_ticks(lo_x, hi_x) {
+        let x = sx(t);
+        let _ = writeln!(
+            html,
+            "<line class=\"gridline\" x1=\"{x:.1}\" x2=\"{x:.1}\" y1=\"{mt}\" y2=\"{:.1}\"/><text x=\"{x:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{}</text>",
+            h - mb,
+            h - mb + 14.0,
+            t
+        );
+    }
+    for t in log_ticks(lo_y, hi_y) {
+        let y = sy(t);
+        let _ = writeln!(
+            html,
+            "<line class=\"gridline\" x1=\"{ml}\" x2=\"{:.1}\" y1=\"{y:.1}\" y2=\"{y:.1}\"/><text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">{}</text>",
+            w - mr,
+            ml - 4.0,
+            y + 4.0,
+            t
+        );
+    }
+    let _ = writeln!(
+        html,
+        "<line class=\"axis\" x1=\"{ml}\" x2=\"{:.1}\" y1=\"{:.1}\" y2=\"{:.1}\"/><line class=\"axis\" x1=\"{ml}\" x2=\"{ml}\" y1=\"{mt}\" y2=\"{:.1}\"/>",
+        w - mr,
+        h - mb,
+        h - mb,
+        h - mb
+    );
+    let _ = writeln!(
+        html,
+        "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">GPU ms per frame (median, log)</text><text x=\"14\" y=\"{:.1}\" transform=\"rotate(-90 14 {:.1})\" text-anchor=\"middle\">FLIP mean (log)</text>",
+        (ml + w - mr) / 2.0,
+        h - 4.0,
+        (mt + h - mb) / 2.0,
+        (mt + h - mb) / 2.0
+    );
+    let mut front: Vec<&(f64, f64, &str, bool)> = pts.iter().filter(|p| p.3).collect();
+    front.sort_by(|a, b| a.0.total_cmp(&b.0));
+    if front.len() > 1 {
+        let d: Vec<String> = front
+            .iter()
+            .map(|p| format!("{:.1},{:.1}", sx(p.0), sy(p.1)))
+            .collect();
+        let _ = writeln!(
+            html,
+            "<polyline class=\"front\" points=\"{}\"/>",
+            d.join(" ")
+        );
+    }
+    for p in &pts {
+        let (x, y) = (sx(p.0), sy(p.1));
+        let _ = writeln!(
+            html,
+            "<circle class=\"pt{}\" cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"4\"><title>{}: {:.3} ms, FLIP {:.4}</title></circle><text x=\"{:.1}\" y=\"{:.1}\">{}</text>",
+            if p.3 { " onfront" } else { "" },
+            esc(p.2),
+            p.0,
+            p.1,
+            x + 6.0,
+            y - 5.0,
+            esc(p.2)
+        );
+    }
+    html.push_str("</svg>\n");
+    let mut csv = String::from("config,frame_ms_median,flip_mean,pareto\n");
+    for p in &pts {
+        let _ = writeln!(csv, "{},{},{},{}", p.2, p.0, p.1, p.3);
+    }
+    let _ = writeln!(
+        html,
+        "<p><a download=\"chart.csv\" href=\"data:text/csv;base64,{}\">the data behind this chart (CSV)</a>; red: the Pareto front (no configuration is both faster and more accurate).</p>",
+        base64::engine::general_purpose::STANDARD.encode(csv)
+    );
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn ticks() {
+        assert_eq!(super::log_ticks(0.8, 30.0), vec![1.0, 2.0, 5.0, 10.0, 20.0]);
+    }
+}
