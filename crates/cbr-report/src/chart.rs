@@ -6,23 +6,8 @@ use std::fmt::Write as _;
 use base64::Engine as _;
 use serde_json::Value;
 
+use crate::ticks;
 use crate::util::{esc, num};
-
-/// log10 axis ticks covering [lo, hi]: 1, 2, 5 x powers of ten.
-fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
-    let mut t = Vec::new();
-    let mut e = lo.log10().floor() as i32;
-    while 10f64.powi(e) <= hi * 1.0001 {
-        for m in [1.0, 2.0, 5.0] {
-            let v = m * 10f64.powi(e);
-            if v >= lo * 0.9999 && v <= hi * 1.0001 {
-                t.push(v);
-            }
-        }
-        e += 1;
-    }
-    t
-}
 
 /// Speed (x, log) against FLIP mean (y, log), labelled points, the Pareto front dashed.
 pub(crate) fn chart(html: &mut String, g: &[&Value]) {
@@ -56,25 +41,29 @@ pub(crate) fn chart(html: &mut String, g: &[&Value]) {
         html,
         "<svg class=\"chart\" width=\"{w}\" height=\"{h}\" role=\"img\" aria-label=\"speed against error\">"
     );
-    for t in log_ticks(lo_x, hi_x) {
+    // Grid lines, tick marks and labels: at least three per axis (crate::ticks).
+    for t in ticks::log_ticks(lo_x, hi_x) {
         let x = sx(t);
         let _ = writeln!(
             html,
-            "<line class=\"gridline\" x1=\"{x:.1}\" x2=\"{x:.1}\" y1=\"{mt}\" y2=\"{:.1}\"/><text x=\"{x:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{}</text>",
+            "<line class=\"gridline\" x1=\"{x:.1}\" x2=\"{x:.1}\" y1=\"{mt}\" y2=\"{:.1}\"/><line class=\"axis\" x1=\"{x:.1}\" x2=\"{x:.1}\" y1=\"{:.1}\" y2=\"{:.1}\"/><text class=\"xtick\" x=\"{x:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{}</text>",
             h - mb,
-            h - mb + 14.0,
-            t
+            h - mb,
+            h - mb + 4.0,
+            h - mb + 15.0,
+            ticks::label(t)
         );
     }
-    for t in log_ticks(lo_y, hi_y) {
+    for t in ticks::log_ticks(lo_y, hi_y) {
         let y = sy(t);
         let _ = writeln!(
             html,
-            "<line class=\"gridline\" x1=\"{ml}\" x2=\"{:.1}\" y1=\"{y:.1}\" y2=\"{y:.1}\"/><text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">{}</text>",
+            "<line class=\"gridline\" x1=\"{ml}\" x2=\"{:.1}\" y1=\"{y:.1}\" y2=\"{y:.1}\"/><line class=\"axis\" x1=\"{:.1}\" x2=\"{ml}\" y1=\"{y:.1}\" y2=\"{y:.1}\"/><text class=\"ytick\" x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">{}</text>",
             w - mr,
             ml - 4.0,
+            ml - 6.0,
             y + 4.0,
-            t
+            ticks::label(t)
         );
     }
     let _ = writeln!(
@@ -87,7 +76,7 @@ pub(crate) fn chart(html: &mut String, g: &[&Value]) {
     );
     let _ = writeln!(
         html,
-        "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">GPU ms per frame (median, log)</text><text x=\"14\" y=\"{:.1}\" transform=\"rotate(-90 14 {:.1})\" text-anchor=\"middle\">FLIP mean (log)</text>",
+        "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">GPU ms per frame (median, log scale)</text><text x=\"14\" y=\"{:.1}\" transform=\"rotate(-90 14 {:.1})\" text-anchor=\"middle\">FLIP mean (log scale)</text>",
         (ml + w - mr) / 2.0,
         h - 4.0,
         (mt + h - mb) / 2.0,
@@ -130,12 +119,4 @@ pub(crate) fn chart(html: &mut String, g: &[&Value]) {
         "<p><a download=\"chart.csv\" href=\"data:text/csv;base64,{}\">the data behind this chart (CSV)</a>; red: the Pareto front (no configuration is both faster and more accurate).</p>",
         base64::engine::general_purpose::STANDARD.encode(csv)
     );
-}
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn ticks() {
-        assert_eq!(super::log_ticks(0.8, 30.0), vec![1.0, 2.0, 5.0, 10.0, 20.0]);
-    }
 }

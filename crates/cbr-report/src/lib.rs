@@ -1,14 +1,14 @@
-//! `cbr report`: one self-contained HTML file from `cbr bench` folders (docs/bench-and-report.md):
-//! provenance, a sortable summary with the best values marked, speed-vs-error charts with the
-//! Pareto front, per scene a synchronised zoom/pan viewer (reference, techniques, FLIP maps;
-//! slider, hold-to-flip, keys 1-9 and R, pixel readout), worst-FLIP crops, timing bars and
-//! per-frame error curves, and links to the raw files. Images are embedded as data URIs, or
-//! copied next to the report with `assets_dir`.
+//! `cbr report`: one self-contained HTML file from `cbr bench` folders
+//! (docs/bench-and-report.md): provenance, a sortable summary with the best values marked,
+//! speed-vs-error charts with the Pareto front, per scene a synchronised zoom/pan viewer
+//! (reference, techniques, FLIP maps; slider, hold-to-flip, keys 1-9 and R, pixel readout),
+//! worst-FLIP crops, timing bars and per-frame error curves, and links to the raw files. Images
+//! are embedded as data URIs, or copied next to the report with `assets_dir`.
 //!
-//! Modules by what they draw: `provenance`, `summary` (the sortable table), `chart`
-//! (speed against error), `viewer` (panels, wipe, colour bar), `crops`, `timing` (per-pass
-//! bars), `curves` (per-frame error); `bench` reads bench.json, `files` embeds images and
-//! links raw files, `util` holds the shared helpers.
+//! Modules by what they draw: `provenance`, `summary` (the sortable table), `chart` (speed
+//! against error; axis ticks in `ticks`), `viewer` (panels, wipe, colour bar), `crops`,
+//! `timing` (per-pass bars), `curves` (per-frame error); `bench` reads bench.json, `files`
+//! embeds images and links raw files, `util` holds the shared helpers.
 #![forbid(unsafe_code)]
 
 use std::fmt::Write as _;
@@ -25,6 +25,7 @@ mod provenance;
 mod summary;
 #[cfg(test)]
 mod tests;
+mod ticks;
 mod timing;
 mod util;
 mod viewer;

@@ -163,3 +163,36 @@ fn assets_are_copied_and_linked() {
     assert!(html.contains("\"assets/b0/images/8x6/native.png\""));
     assert!(html.contains("href=\"../bench/bench.json\""));
 }
+
+/// The speed-vs-error chart SVGs of a report.
+fn charts(html: &str) -> Vec<&str> {
+    html.split("<svg class=\"chart\"")
+        .skip(1)
+        .map(|s| &s[..s.find("</svg>").unwrap()])
+        .collect()
+}
+
+#[test]
+fn chart_axes_have_three_labelled_ticks() {
+    // Times 2.2 and 2.9 ms, FLIP 0.041 and 0.052: under a decade on both axes.
+    let d = tempfile::tempdir().unwrap();
+    let b = write_fixture(d.path(), &fixture_json(false, "native"));
+    let html = render(&[b], &options(&d.path().join("report.html"), None)).unwrap();
+    let c = charts(&html);
+    assert_eq!(c.len(), 2);
+    for svg in c {
+        let x: Vec<&str> = svg
+            .split("<text class=\"xtick\"")
+            .skip(1)
+            .map(|s| &s[s.find('>').unwrap() + 1..s.find("</text>").unwrap()])
+            .collect();
+        let y: Vec<&str> = svg
+            .split("<text class=\"ytick\"")
+            .skip(1)
+            .map(|s| &s[s.find('>').unwrap() + 1..s.find("</text>").unwrap()])
+            .collect();
+        assert_eq!(x, ["2", "2.5", "3", "3.5"]);
+        assert_eq!(y, ["0.04", "0.05", "0.06"]);
+        assert!(svg.contains(">GPU ms per frame (median, log scale)</text>"));
+    }
+}
