@@ -12,6 +12,8 @@ use crate::error::{GpuError, Result};
 pub trait SourceTree: Send + Sync {
     /// The text of `path` (relative to the shader root, `/`-separated), if it exists.
     fn read(&self, path: &str) -> Option<String>;
+    /// Every source path in the tree, sorted (cache keys hash them all).
+    fn list(&self) -> Vec<String>;
 }
 
 /// Sources read from a folder on disk (e.g. `CBR_SHADER_DIR` while editing shaders).
@@ -20,6 +22,26 @@ pub struct DirTree(pub PathBuf);
 impl SourceTree for DirTree {
     fn read(&self, path: &str) -> Option<String> {
         std::fs::read_to_string(self.0.join(path)).ok()
+    }
+
+    fn list(&self) -> Vec<String> {
+        fn walk(root: &Path, dir: &Path, out: &mut Vec<String>) {
+            let Ok(entries) = std::fs::read_dir(dir) else {
+                return;
+            };
+            for e in entries.flatten() {
+                let p = e.path();
+                if p.is_dir() {
+                    walk(root, &p, out);
+                } else if let Ok(rel) = p.strip_prefix(root) {
+                    out.push(normalise(rel));
+                }
+            }
+        }
+        let mut out = Vec::new();
+        walk(&self.0, &self.0, &mut out);
+        out.sort();
+        out
     }
 }
 
@@ -32,6 +54,12 @@ impl SourceTree for StaticTree {
             .iter()
             .find(|(p, _)| *p == path)
             .map(|(_, s)| s.to_string())
+    }
+
+    fn list(&self) -> Vec<String> {
+        let mut v: Vec<String> = self.0.iter().map(|(p, _)| p.to_string()).collect();
+        v.sort();
+        v
     }
 }
 
@@ -62,6 +90,15 @@ impl Shaders {
             sources,
             cache: Mutex::new(HashMap::new()),
         }
+    }
+
+    /// Every (path, text) of the source tree, sorted by path.
+    pub fn sources(&self) -> Vec<(String, String)> {
+        self.sources
+            .list()
+            .into_iter()
+            .filter_map(|p| self.sources.read(&p).map(|t| (p, t)))
+            .collect()
     }
 
     /// Compiles `path` (stage from its extension: .vert .geom .frag .comp) with `defines`.

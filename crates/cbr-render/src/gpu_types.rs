@@ -94,7 +94,7 @@ pub(crate) mod tests {
     fn host_structs_match_the_shader_layout() {
         use std::mem::offset_of;
         let shaders = crate::shader_library();
-        let defs = crate::native::shader_defines(crate::native::LAYOUT_ROTATED);
+        let defs = crate::scene_pass::shader_defines(crate::scene_pass::LAYOUT_ROTATED);
         let words = shaders
             .compile("scene/forward.frag", &defs)
             .expect("compiles");

@@ -1,20 +1,28 @@
-//! cbr's passes and the frame sequencer. Each pass is a struct: `new()` builds its pipelines once,
-//! `record()` records commands only.
+//! cbr's passes, techniques and the frame sequencer. A technique is a chain of passes registered
+//! in [`technique::TECHNIQUES`]; post passes in [`post::POST_PASSES`]; the sequencer
+//! ([`Renderer`]) runs a [`Spec`] of them. Each pass is a struct: `new()` builds its pipelines
+//! once, `record()` records commands only.
 #![forbid(unsafe_code)]
 #![cfg_attr(not(test), deny(clippy::unwrap_used))]
 
-pub mod checkerboard;
+pub mod cache;
 pub mod gpu_scene;
 pub mod gpu_types;
 pub mod layouts;
-pub mod native;
+pub mod post;
 pub mod renderer;
 pub mod resolve;
+pub mod scene_pass;
+pub mod spec;
 pub mod targets;
-pub mod upscale;
+pub mod technique;
+pub mod techniques;
 
-pub use renderer::{FrameOutput, LodMode, RenderSettings, Renderer, Technique};
+pub use renderer::{Coverage, FrameOutput, RenderSettings, Renderer, ResolveOutput};
 pub use resolve::{Mapping, ResolveMode, ResolveSettings};
+pub use spec::Spec;
+pub use techniques::checkerboard::{self, CheckerboardConfig, LodMode};
+pub use techniques::upscale;
 
 mod embedded {
     include!(concat!(env!("OUT_DIR"), "/shader_sources.rs"));

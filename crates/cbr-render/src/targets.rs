@@ -24,6 +24,21 @@ impl FrameTargets {
         [&self.color, &self.velocity, &self.ids]
     }
 
+    /// Colour, depth, velocity and IDs: the order of the common layers (techniques::LayerReadbacks).
+    pub fn layers(&self) -> [&Image; 4] {
+        [&self.color, &self.depth, &self.velocity, &self.ids]
+    }
+
+    /// Bytes of the four targets (every layer and sample).
+    pub fn bytes(&self) -> u64 {
+        let t = &self.color;
+        u64::from(t.width)
+            * u64::from(t.height)
+            * u64::from(t.layers)
+            * u64::from(t.samples)
+            * BYTES_PER_SAMPLE
+    }
+
     /// Single-layer, single-sample targets (the native technique).
     pub fn new(gpu: &Gpu, prefix: &str, width: u32, height: u32) -> Result<FrameTargets> {
         FrameTargets::layered(gpu, prefix, width, height, 1, 1, false)

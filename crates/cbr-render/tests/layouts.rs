@@ -9,7 +9,7 @@
 mod common;
 
 use cbr_gpu::{Gpu, Layout};
-use cbr_render::{FrameOutput, LodMode, RenderSettings, Renderer, Technique};
+use cbr_render::{CheckerboardConfig, FrameOutput, LodMode, RenderSettings, Renderer, Spec};
 use cbr_scene::Scene;
 use common::{assert_clean, gpu, strip_textures};
 
@@ -22,22 +22,23 @@ fn untextured_demo(w: u32, h: u32) -> Scene {
     s
 }
 
-fn render(gpu: &Gpu, s: &Scene, technique: Technique, frame: u32, count: bool) -> FrameOutput {
+fn render(gpu: &Gpu, s: &Scene, technique: Spec, frame: u32, count: bool) -> FrameOutput {
     let shaders = cbr_render::shader_library();
     let settings = RenderSettings {
-        technique,
         count_shaded: count,
-        ..RenderSettings::native(s.settings.width, s.settings.height)
+        ..RenderSettings::new(s.settings.width, s.settings.height, technique)
     };
     let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
     r.render(s, frame).expect("frame")
 }
 
-fn checkerboard(layout: Layout) -> Technique {
-    Technique::Checkerboard {
-        layout,
-        lod_mode: LodMode::Bias,
-    }
+/// The raw checkerboard frame of `layout` (no resolve).
+fn checkerboard(layout: Layout) -> Spec {
+    CheckerboardConfig::new(layout, None).spec()
+}
+
+fn native() -> Spec {
+    Spec::of("native")
 }
 
 /// Compares a checkerboard frame with native at its shaded pixels; returns the fraction of shaded
@@ -109,7 +110,7 @@ fn compare(name: &str, cb: &FrameOutput, native: &FrameOutput) -> f64 {
 /// most `edge_limit` of their samples on other geometry.
 fn layouts_equal_native(gpu: &Gpu, s: &Scene, label: &str, frames: &[u32], edge_limit: f64) {
     for &frame in frames {
-        let native = render(gpu, s, Technique::Native, frame, false);
+        let native = render(gpu, s, native(), frame, false);
         for layout in [Layout::Masked, Layout::Split, Layout::Rotated] {
             let cb = render(gpu, s, checkerboard(layout), frame, false);
             let frac = compare(
@@ -236,10 +237,7 @@ fn msaa2x_equals_native_where_2x_msaa_exists() {
             &gpu,
             &shaders,
             &s,
-            RenderSettings {
-                technique: checkerboard(Layout::Msaa2x),
-                ..RenderSettings::native(32, 18)
-            },
+            RenderSettings::new(32, 18, checkerboard(Layout::Msaa2x)),
         )
         .err()
         .expect("msaa2x must be refused here")
@@ -253,17 +251,17 @@ fn msaa2x_equals_native_where_2x_msaa_exists() {
             shaders
                 .compile(
                     stage,
-                    &cbr_render::native::shader_defines(cbr_render::native::LAYOUT_MSAA2X),
+                    &cbr_render::scene_pass::shader_defines(cbr_render::scene_pass::LAYOUT_MSAA2X),
                 )
                 .expect("msaa2x shaders compile");
         }
-        let mut defines: Vec<(String, String)> = cbr_render::checkerboard::UNPACK_BINDINGS
+        let mut defines: Vec<(String, String)> = cbr_render::checkerboard::unpack::UNPACK_BINDINGS
             .iter()
             .map(cbr_gpu::BindingDesc::define)
             .collect();
         defines.push((
             "LAYOUT".into(),
-            cbr_render::native::LAYOUT_MSAA2X.to_string(),
+            cbr_render::scene_pass::LAYOUT_MSAA2X.to_string(),
         ));
         defines.push(("MSAA_LOCATIONS".into(), "1".into()));
         shaders
@@ -293,13 +291,11 @@ fn msaa2x_equals_native_where_2x_msaa_exists() {
         for (w, h) in [(160, 90), (121, 67)] {
             let s = untextured_demo(w, h);
             for frame in [4, 5] {
-                let native = render(&gpu, &s, Technique::Native, frame, false);
+                let native = render(&gpu, &s, native(), frame, false);
                 let shaders = cbr_render::shader_library();
-                let settings = RenderSettings {
-                    technique: checkerboard(Layout::Msaa2x),
-                    msaa2x_sample_locations: locations,
-                    ..RenderSettings::native(w, h)
-                };
+                let mut c = CheckerboardConfig::new(Layout::Msaa2x, None);
+                c.locations = locations;
+                let settings = RenderSettings::new(w, h, c.spec());
                 let cb = Renderer::new(&gpu, &shaders, &s, settings)
                     .expect("renderer")
                     .render(&s, frame)
@@ -350,9 +346,8 @@ fn lod_difference(
     let shaders = cbr_render::shader_library();
     let run = |technique| {
         let settings = RenderSettings {
-            technique,
             debug_lod: true,
-            ..RenderSettings::native(s.settings.width, s.settings.height)
+            ..RenderSettings::new(s.settings.width, s.settings.height, technique)
         };
         Renderer::new(gpu, &shaders, s, settings)
             .expect("renderer")
@@ -360,10 +355,11 @@ fn lod_difference(
             .expect("frame")
     };
     let (native, cb) = (
-        run(Technique::Native),
-        run(Technique::Checkerboard {
-            layout,
-            lod_mode: mode,
+        run(native()),
+        run({
+            let mut c = CheckerboardConfig::new(layout, None);
+            c.lod_mode = mode;
+            c.spec()
         }),
     );
     let mask = cb.mask.as_ref().expect("mask");
@@ -442,14 +438,12 @@ fn id_prepass_equals_natives_depth_and_ids() {
         .expect("demo");
     let shaders = cbr_render::shader_library();
     for layout in [Layout::Split, Layout::Rotated] {
-        let settings = RenderSettings {
-            technique: checkerboard(layout),
-            id_prepass: true,
-            ..RenderSettings::native(96, 54)
-        };
+        let mut c = CheckerboardConfig::new(layout, None);
+        c.prepass = true;
+        let settings = RenderSettings::new(96, 54, c.spec());
         let mut r = Renderer::new(&gpu, &shaders, &s, settings).expect("renderer");
         // Native's own LOD: alpha-tested foliage must cover the same pixels in both.
-        let native = render(&gpu, &s, Technique::Native, 3, false);
+        let native = render(&gpu, &s, native(), 3, false);
         let out = r.render(&s, 3).expect("frame");
         let (depth, ids) = out.prepass.expect("prepass outputs");
         let id_diff = ids.iter().zip(&native.ids).filter(|(a, b)| a != b).count();
@@ -479,14 +473,14 @@ fn id_prepass_equals_natives_depth_and_ids() {
         &gpu,
         &shaders,
         &s,
-        RenderSettings {
-            id_prepass: true,
-            ..RenderSettings::native(96, 54)
-        },
+        RenderSettings::new(96, 54, Spec::of("native:prepass")),
     )
     .err()
     .expect("native + prepass refused")
     .to_string();
-    assert!(err.contains("checkerboard"), "{err}");
+    assert!(
+        err.contains("`prepass` is not a parameter of native"),
+        "{err}"
+    );
     assert_clean(&gpu);
 }

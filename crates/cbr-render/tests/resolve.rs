@@ -479,7 +479,7 @@ fn fp16_arithmetic_and_f16_history_stay_close_to_the_reference() {
 
 // ---- Scenes ----------------------------------------------------------------------------------
 
-use cbr_render::{FrameOutput, LodMode, RenderSettings, Renderer, Technique};
+use cbr_render::{CheckerboardConfig, FrameOutput, RenderSettings, Renderer};
 use cbr_scene::Scene;
 
 /// The demo with a still camera (its first key) and nothing moving.
@@ -498,27 +498,28 @@ fn static_demo(w: u32, h: u32, textured: bool) -> Scene {
 fn frames(
     gpu: &Gpu,
     s: &Scene,
-    technique: Technique,
+    layout: Option<Layout>,
     resolve: Option<ResolveSettings>,
     prepass: bool,
     n: u32,
 ) -> Vec<FrameOutput> {
     let shaders = cbr_render::shader_library();
-    let settings = RenderSettings {
-        resolve,
-        id_prepass: prepass,
-        technique,
-        ..RenderSettings::native(s.settings.width, s.settings.height)
+    let (w, h) = (s.settings.width, s.settings.height);
+    let settings = match layout {
+        None => RenderSettings::native(w, h),
+        Some(layout) => {
+            let mut c = CheckerboardConfig::new(layout, resolve);
+            c.prepass = prepass;
+            RenderSettings::new(w, h, c.spec())
+        }
     };
     let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
     (0..n).map(|f| r.render(s, f).expect("frame")).collect()
 }
 
-fn cb(layout: Layout) -> Technique {
-    Technique::Checkerboard {
-        layout,
-        lod_mode: LodMode::Bias,
-    }
+/// A checkerboard technique of `layout` (native: `None`).
+fn cb(layout: Layout) -> Option<Layout> {
+    Some(layout)
 }
 
 #[test]
@@ -526,7 +527,7 @@ fn static_scene_converges_to_native_after_two_frames() {
     let gpu = common::gpu();
     let (w, h) = (160, 90);
     let textured = static_demo(w, h, true);
-    let native = &frames(&gpu, &textured, Technique::Native, None, false, 1)[0];
+    let native = &frames(&gpu, &textured, None, None, false, 1)[0];
     let ours = ResolveSettings::default();
     // Masked layout, textures on (its LOD bias is 0): bit-exact with the prepass, and without
     // it through the still rule (history of a pixel whose neighbourhood and history did not move
@@ -547,7 +548,7 @@ fn static_scene_converges_to_native_after_two_frames() {
     // Rotated and split (untextured: their LOD bias changes texture lookups) after two frames
     // equal native within the layouts' own tolerance (tests/layouts.rs).
     let flat = static_demo(w, h, false);
-    let flat_native = &frames(&gpu, &flat, Technique::Native, None, false, 1)[0];
+    let flat_native = &frames(&gpu, &flat, None, None, false, 1)[0];
     for layout in [Layout::Rotated, Layout::Split] {
         let out = &frames(&gpu, &flat, cb(layout), Some(ours), true, 2)[1];
         let mut far = 0;
@@ -640,7 +641,7 @@ fn disoccluded_history_is_rejected_not_smeared() {
         .iter()
         .position(|o| o.name == "spinner")
         .expect("spinner") as u32;
-    let native = frames(&gpu, &s, Technique::Native, None, false, 5);
+    let native = frames(&gpu, &s, None, None, false, 5);
     let count = |mode: ResolveMode| {
         let st = ResolveSettings {
             mode,

@@ -8,7 +8,7 @@ pub mod desc;
 pub mod error;
 pub mod obj;
 pub mod procedural;
-mod rng;
+pub mod rng;
 pub mod scene;
 pub mod texture;
 

@@ -9,14 +9,10 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use cbr_gpu::{Gpu, GpuOptions, Layout};
+use cbr_gpu::{Gpu, GpuOptions};
 use cbr_metrics::io::write_bytes;
 use cbr_metrics::{CompareOptions, DisplayTransform, Metric, compare_images};
-use cbr_render::upscale::UpscaleFilter;
-use cbr_render::{
-    FrameOutput, LodMode, Mapping, RenderSettings, Renderer, ResolveMode, ResolveSettings,
-    Technique,
-};
+use cbr_render::{CheckerboardConfig, FrameOutput, Mapping, RenderSettings, Renderer};
 use cbr_scene::{LoadOptions, Scene, check_resolution};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
@@ -112,70 +108,33 @@ fn parse_resolution(s: &str) -> Result<(u32, u32)> {
     Ok((w, h))
 }
 
-fn parse_layout(s: &str) -> Result<Layout> {
-    Layout::ALL
-        .into_iter()
-        .find(|l| l.name() == s)
-        .with_context(|| format!("layout `{s}` (masked, split, rotated or msaa2x)"))
-}
-
-fn parse_mode(s: &str) -> Option<ResolveMode> {
-    ResolveMode::ALL.into_iter().find(|m| m.name() == s)
-}
-
-/// Parses one configuration spec for a resolution. Returns the settings and whether the spec
-/// named a mapping and a group (sweeps fill the others).
+/// Parses one configuration spec for a resolution (any registered technique and post chain).
+/// Returns the settings and whether a checkerboard spec named a mapping and a group (sweeps
+/// fill the others).
 pub fn parse_spec(spec: &str, w: u32, h: u32) -> Result<(RenderSettings, bool, bool)> {
-    let mut parts = spec.split(':');
-    let head = parts.next().unwrap_or_default();
-    let mut s = RenderSettings::native(w, h);
-    let (mut named_mapping, mut named_group) = (false, false);
-    match head {
-        "native" => {}
-        "upscale" => {
-            let filter = match parts.next() {
-                Some("bilinear") | None => UpscaleFilter::Bilinear,
-                Some("bicubic") => UpscaleFilter::Bicubic,
-                Some(f) => bail!("`{spec}`: upscale filter `{f}` (bilinear or bicubic)"),
-            };
-            s.technique = Technique::Upscale { filter };
-        }
-        "checkerboard" => {
-            let layout = parse_layout(parts.next().unwrap_or("rotated"))
-                .with_context(|| format!("configuration `{spec}`"))?;
-            s.technique = Technique::Checkerboard {
-                layout,
-                lod_mode: LodMode::Bias,
-            };
-            let mut r = ResolveSettings {
-                bandwidth_floor: true,
-                ..ResolveSettings::default()
-            };
-            let mut none = false;
-            for p in parts.by_ref() {
-                match p {
-                    "pixel" => (r.mapping, named_mapping) = (Mapping::Pixel, true),
-                    "quad" => (r.mapping, named_mapping) = (Mapping::Quad, true),
-                    "8" | "16" => (r.group, named_group) = (p.parse()?, true),
-                    "fp16" => r.fp16 = true,
-                    "prepass" => s.id_prepass = true,
-                    "locations" => s.msaa2x_sample_locations = true,
-                    "none" => none = true,
-                    m => {
-                        r.mode = parse_mode(m).with_context(|| {
-                            format!(
-                                "`{spec}`: `{m}` is no resolve mode (ours, pq4k, intel, spatial, \
-                                 temporal, none) or option (pixel, quad, 8, 16, fp16, prepass, locations)"
-                            )
-                        })?
-                    }
-                }
-            }
-            s.resolve = (!none).then_some(r);
-        }
-        other => bail!("configuration `{other}`: native, upscale:FILTER or checkerboard:LAYOUT..."),
-    }
-    Ok((s, named_mapping, named_group))
+    let mut s = RenderSettings::parse(w, h, spec).map_err(anyhow::Error::msg)?;
+    // Benchmarks also time the resolve's copy-kernel floor.
+    s.instrument = true;
+    let named = |p: &[&str]| {
+        s.spec
+            .technique
+            .params
+            .iter()
+            .any(|x| p.contains(&x.as_str()))
+    };
+    let is_cb = s.spec.technique.name == "checkerboard";
+    Ok((
+        s.clone(),
+        is_cb && named(&["pixel", "quad"]),
+        is_cb && named(&["8", "16"]),
+    ))
+}
+
+/// The checkerboard configuration of settings, if they are a checkerboard spec.
+fn checkerboard(s: &RenderSettings) -> Option<CheckerboardConfig> {
+    (s.spec.technique.name == "checkerboard")
+        .then(|| CheckerboardConfig::parse(&s.spec.technique.params()).ok())
+        .flatten()
 }
 
 /// The cross product of specs and sweeps at one resolution.
@@ -190,7 +149,8 @@ pub fn expand(
     let mut out = Vec::new();
     for spec in specs {
         let (base, named_mapping, named_group) = parse_spec(spec, w, h)?;
-        let is_resolved = base.resolve.is_some();
+        let cb = checkerboard(&base);
+        let is_resolved = cb.is_some_and(|c| c.resolve.is_some());
         let maps: Vec<Option<Mapping>> = if is_resolved && !named_mapping && !mappings.is_empty() {
             mappings.iter().copied().map(Some).collect()
         } else {
@@ -201,8 +161,7 @@ pub fn expand(
         } else {
             vec![None]
         };
-        let is_cb = matches!(base.technique, Technique::Checkerboard { .. });
-        let biases: Vec<Option<f32>> = if is_cb && !lod_biases.is_empty() {
+        let biases: Vec<Option<f32>> = if cb.is_some() && !lod_biases.is_empty() {
             lod_biases.iter().copied().map(Some).collect()
         } else {
             vec![None]
@@ -212,17 +171,20 @@ pub fn expand(
                 for b in &biases {
                     let mut s = base.clone();
                     let mut name = spec.clone();
-                    if let (Some(r), Some(m)) = (s.resolve.as_mut(), m) {
-                        r.mapping = *m;
-                        name += if *m == Mapping::Pixel {
-                            ":pixel"
-                        } else {
-                            ":quad"
-                        };
-                    }
-                    if let (Some(r), Some(g)) = (s.resolve.as_mut(), g) {
-                        r.group = *g;
-                        name += &format!(":{g}");
+                    if let Some(mut c) = cb {
+                        if let (Some(r), Some(m)) = (c.resolve.as_mut(), m) {
+                            r.mapping = *m;
+                            name += if *m == Mapping::Pixel {
+                                ":pixel"
+                            } else {
+                                ":quad"
+                            };
+                        }
+                        if let (Some(r), Some(g)) = (c.resolve.as_mut(), g) {
+                            r.group = *g;
+                            name += &format!(":{g}");
+                        }
+                        s.spec.technique.params = c.params();
                     }
                     if let Some(b) = b {
                         s.lod_bias = Some(*b);
@@ -281,6 +243,7 @@ struct Snapshot {
 
 #[derive(Default)]
 struct Measured {
+    lod_bias: f32,
     snapshot: Option<Snapshot>,
     passes: BTreeMap<String, Vec<f64>>,
     frame_ms: Vec<f64>,
@@ -319,7 +282,10 @@ fn measure(
         },
         ..CompareOptions::default()
     };
-    let mut m = Measured::default();
+    let mut m = Measured {
+        lod_bias: r.lod_bias(),
+        ..Measured::default()
+    };
     let mut kept = Vec::new();
     for f in 0..warmup + frames {
         let out = r.render(scene, f)?;
@@ -670,7 +636,9 @@ pub fn run(a: &BenchArgs) -> Result<()> {
                 None => json!(null),
             };
             let s = &c.settings;
-            let resolve = s.resolve.as_ref();
+            let cb = checkerboard(s);
+            let resolve = cb.and_then(|c| c.resolve);
+            let resolve = resolve.as_ref();
             let passes: serde_json::Map<String, serde_json::Value> = m
                 .passes
                 .iter()
@@ -686,13 +654,14 @@ pub fn run(a: &BenchArgs) -> Result<()> {
             rows.push(json!({
                 "scene": scene.name,
                 "config": c.name,
-                "technique": s.technique.name(),
+                "technique": s.spec.technique.name,
+                "spec": s.spec,
                 "resolve": resolve.map(|r| r.mode.name()),
                 "mapping": resolve.map(|r| if r.mapping == Mapping::Pixel { "pixel" } else { "quad" }),
                 "group": resolve.map(|r| r.group),
                 "fp16": resolve.map(|r| r.fp16),
-                "id_prepass": s.id_prepass,
-                "lod_bias": s.effective_lod_bias(),
+                "id_prepass": cb.is_some_and(|c| c.prepass),
+                "lod_bias": m.lod_bias,
                 "width": w,
                 "height": h,
                 "device": info.name,
@@ -861,6 +830,7 @@ fn csv(bench: &serde_json::Value) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use cbr_render::ResolveMode;
 
     #[test]
     fn pareto_front_keeps_the_undominated() {
@@ -948,18 +918,21 @@ mod tests {
                 "upscale:bicubic",
             ]
         );
-        let r = c[2].settings.resolve.expect("resolve");
+        let r = checkerboard(&c[2].settings)
+            .and_then(|c| c.resolve)
+            .expect("resolve");
         assert_eq!(
             (r.mode, r.mapping, r.group),
             (ResolveMode::Pq4k, Mapping::Pixel, 16)
         );
-        assert!(r.bandwidth_floor);
+        assert!(c[2].settings.instrument);
         let (s, _, _) = parse_spec("checkerboard:masked:none", 8, 8).unwrap();
-        assert!(s.resolve.is_none());
+        assert!(checkerboard(&s).expect("checkerboard").resolve.is_none());
         let (s, _, _) =
             parse_spec("checkerboard:rotated:intel:quad:16:fp16:prepass", 8, 8).unwrap();
-        let r = s.resolve.expect("resolve");
-        assert!(r.fp16 && s.id_prepass && r.mode == ResolveMode::Intel && r.group == 16);
+        let c = checkerboard(&s).expect("checkerboard");
+        let r = c.resolve.expect("resolve");
+        assert!(r.fp16 && c.prepass && r.mode == ResolveMode::Intel && r.group == 16);
         for bad in [
             "checkerboard:hexagon",
             "checkerboard:rotated:magic",

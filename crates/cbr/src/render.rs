@@ -9,28 +9,17 @@ use cbr_gpu::Layout;
 use cbr_gpu::{Gpu, GpuOptions};
 use cbr_metrics::DisplayTransform;
 use cbr_metrics::io::{FrameLayers, write_bytes, write_frame_exr, write_png_rgba8};
-use cbr_render::resolve::{Ablation, DEBUG_VIEWS};
-use cbr_render::upscale::UpscaleFilter;
+use cbr_render::cache::default_dir as default_cache_dir;
+use cbr_render::resolve::DEBUG_VIEWS;
 use cbr_render::{
-    FrameOutput, LodMode, Mapping, RenderSettings, Renderer, ResolveMode, ResolveSettings,
+    CheckerboardConfig, FrameOutput, LodMode, Mapping, RenderSettings, Renderer, ResolveMode,
+    ResolveSettings, Spec,
 };
 use cbr_scene::{LoadOptions, MissingTextures, check_resolution};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 
 use crate::stats::summarize;
-
-#[derive(Clone, Copy, Debug, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Technique {
-    /// Full resolution, one sample at each pixel centre: the reference.
-    Native,
-    /// Half the pixels per frame, alternating parity (`--layout`, `--resolve`).
-    Checkerboard,
-    /// Render at W/sqrt(2) x H/sqrt(2) (the checkerboard's pixel count), then upscale
-    /// (`--filter`): the baseline checkerboard must beat.
-    Upscale,
-}
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum FilterArg {
@@ -113,30 +102,33 @@ pub struct RenderArgs {
     /// Number of frames of the scene's camera path to render (default: the scene's).
     #[arg(long)]
     frames: Option<u32>,
-    #[arg(long, value_enum, default_value = "native")]
-    technique: Technique,
+    /// Technique spec: native, ssaa:N, msaa:N, checkerboard[:LAYOUT[:MODE...]],
+    /// upscale[:FILTER], then post passes (+sharpen); `cbr info` lists them all. The flags
+    /// below are shorthand that edits the spec; run.json records the result.
+    #[arg(long, default_value = "native")]
+    technique: String,
     /// Device index or name substring (see `cbr info`).
     #[arg(long)]
     device: Option<String>,
     /// Enable the validation layer and synchronization validation; messages are counted in run.json.
     #[arg(long)]
     validation: bool,
-    /// Checkerboard layout.
-    #[arg(long, value_enum, default_value = "rotated")]
-    layout: LayoutArg,
+    /// Checkerboard layout (default rotated).
+    #[arg(long, value_enum)]
+    layout: Option<LayoutArg>,
     /// msaa2x: odd frames move the two samples with VK_EXT_sample_locations instead of shifting
     /// the viewport by half a pixel (needs the extension; `cbr info` says).
     #[arg(long)]
     msaa2x_sample_locations: bool,
-    /// How checkerboard frames are reconstructed (docs/resolve.md).
-    #[arg(long, value_enum, default_value = "ours")]
-    resolve: ResolveArg,
-    /// Resolve thread mapping.
-    #[arg(long, value_enum, default_value = "quad")]
-    resolve_mapping: MappingArg,
-    /// Resolve workgroup side (8 or 16).
-    #[arg(long, default_value_t = 8, value_parser = clap::builder::ValueParser::new(parse_group))]
-    resolve_group: u32,
+    /// How checkerboard frames are reconstructed (docs/resolve.md; default ours).
+    #[arg(long, value_enum)]
+    resolve: Option<ResolveArg>,
+    /// Resolve thread mapping (default quad).
+    #[arg(long, value_enum)]
+    resolve_mapping: Option<MappingArg>,
+    /// Resolve workgroup side, 8 (default) or 16.
+    #[arg(long, value_parser = clap::builder::ValueParser::new(parse_group))]
+    resolve_group: Option<u32>,
     /// Resolve colour arithmetic in float16.
     #[arg(long)]
     resolve_fp16: bool,
@@ -149,21 +141,21 @@ pub struct RenderArgs {
     /// Switch inputs of `ours` off for ablation (comma-separated).
     #[arg(long, value_enum, value_delimiter = ',')]
     resolve_without: Vec<AblationArg>,
-    /// Relative linear-depth tolerance of the history validation.
-    #[arg(long, default_value_t = 0.05)]
-    depth_tolerance: f32,
+    /// Relative linear-depth tolerance of the history validation (default 0.05).
+    #[arg(long)]
+    depth_tolerance: Option<f32>,
     /// Also time a copy kernel moving the resolve's minimum bytes (its bandwidth floor).
     #[arg(long)]
     bandwidth_floor: bool,
-    /// Upscale filter.
-    #[arg(long, value_enum, default_value = "bilinear")]
-    filter: FilterArg,
+    /// Upscale filter (default bilinear).
+    #[arg(long, value_enum)]
+    filter: Option<FilterArg>,
     /// Texture LOD bias added to every lookup (default: the technique's matching bias).
     #[arg(long, allow_hyphen_values = true)]
     lod_bias: Option<f32>,
-    /// How texture LOD follows the layout's sample spacing.
-    #[arg(long, value_enum, default_value = "bias")]
-    lod_mode: LodModeArg,
+    /// How texture LOD follows the checkerboard layout's sample spacing (default bias).
+    #[arg(long, value_enum)]
+    lod_mode: Option<LodModeArg>,
     /// Count shaded fragments exactly (atomic counter; reported per frame in run.json).
     #[arg(long)]
     count_shaded: bool,
@@ -174,6 +166,13 @@ pub struct RenderArgs {
     /// Display exposure in stops (PNG only; EXR stays linear). Default: the scene's.
     #[arg(long, allow_hyphen_values = true)]
     exposure: Option<f32>,
+    /// Render cacheable techniques (ssaa) afresh instead of reading the frame cache.
+    #[arg(long)]
+    no_cache: bool,
+    /// The frame cache folder (default $CBR_CACHE_DIR, else $XDG_CACHE_HOME/cbr, else
+    /// ~/.cache/cbr).
+    #[arg(long)]
+    cache_dir: Option<PathBuf>,
     /// What to do when a texture named by an MTL cannot be read.
     #[arg(long, value_enum)]
     missing_textures: Option<MissingTexturesArg>,
@@ -223,51 +222,19 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         validation,
     })?;
     let shaders = cbr_render::shader_library();
-    let technique = match a.technique {
-        Technique::Native => cbr_render::Technique::Native,
-        Technique::Checkerboard => cbr_render::Technique::Checkerboard {
-            layout: match a.layout {
-                LayoutArg::Msaa2x => Layout::Msaa2x,
-                LayoutArg::Rotated => Layout::Rotated,
-                LayoutArg::Split => Layout::Split,
-                LayoutArg::Masked => Layout::Masked,
-            },
-            lod_mode: match a.lod_mode {
-                LodModeArg::Bias => LodMode::Bias,
-                LodModeArg::Gradients => LodMode::Gradients,
-            },
-        },
-        Technique::Upscale => cbr_render::Technique::Upscale {
-            filter: match a.filter {
-                FilterArg::Bilinear => UpscaleFilter::Bilinear,
-                FilterArg::Bicubic => UpscaleFilter::Bicubic,
-            },
-        },
-    };
-    let resolve = match (a.technique, a.resolve_settings()) {
-        (Technique::Checkerboard, r) => r,
-        _ => None,
-    };
-    let settings = RenderSettings {
-        width: scene.settings.width,
-        height: scene.settings.height,
-        technique,
-        lod_bias: a.lod_bias,
-        count_shaded: a.count_shaded,
-        debug_lod: false,
-        id_prepass: a.id_prepass,
-        resolve,
-        msaa2x_sample_locations: a.msaa2x_sample_locations,
-    };
-    let mut renderer =
-        Renderer::new(&gpu, &shaders, &scene, settings.clone()).with_context(|| {
-            format!(
-                "setting up the {} technique on {}",
-                settings.technique.name(),
-                gpu.info().name
-            )
-        })?;
+    let spec = a.spec()?;
+    let mut settings = RenderSettings::new(scene.settings.width, scene.settings.height, spec);
+    settings.lod_bias = a.lod_bias;
+    settings.count_shaded = a.count_shaded;
+    settings.instrument = a.bandwidth_floor;
+    settings.cache = (!a.no_cache).then(|| a.cache_dir.clone().unwrap_or_else(default_cache_dir));
+    let mut renderer = Renderer::new(&gpu, &shaders, &scene, settings.clone())
+        .with_context(|| format!("setting up `{}` on {}", settings.spec, gpu.info().name))?;
 
+    if let Some(dir) = renderer.cache_dir() {
+        eprintln!("frame cache: {} (--no-cache renders afresh)", dir.display());
+    }
+    renderer.set_progress(sample_progress(format!("{} samples", settings.spec)));
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("cannot create the output folder {}", a.out.display()))?;
     let display = DisplayTransform {
@@ -287,7 +254,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         let png = a.out.join(format!("frame_{f:04}.png"));
         let meta = vec![
             ("cbr.scene".to_string(), scene.source.clone()),
-            ("cbr.technique".to_string(), settings.technique.name()),
+            ("cbr.technique".to_string(), settings.spec.to_string()),
             ("cbr.frame".to_string(), f.to_string()),
             ("cbr.time".to_string(), format!("{}", out.time)),
             ("cbr.device".to_string(), gpu.info().name.clone()),
@@ -323,6 +290,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             "passes": out.timings,
             "parity": out.parity,
             "resolve_reset": out.resolve.as_ref().map(|r| r.reset),
+            "cached": out.cached,
             "shaded_fragments": out.shaded_fragments,
         }));
         bar.inc(1);
@@ -350,18 +318,16 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             "load": scene.stats,
         },
         "settings": {
-            "technique": settings.technique.name(),
+            "technique": settings.spec,
             "target_bytes": renderer.target_bytes(),
-            "layout_settings": settings.technique,
             "width": settings.width,
             "height": settings.height,
             "frames": frames,
             "fps": scene.settings.fps,
-            "lod_bias": settings.effective_lod_bias(),
-            "lod_mode": a.lod_mode_name(),
-            "resolve": settings.resolve,
+            "lod_bias": renderer.lod_bias(),
+            "checkerboard": checkerboard_json(&settings.spec),
             "count_shaded": settings.count_shaded,
-            "id_prepass": settings.id_prepass,
+            "cache": renderer.cache_dir(),
             "depth": "reverse-Z D32 with an infinite far plane; the EXR depth layer holds view-space distance along the camera axis (+inf where empty)",
             "velocity": "pixels, current minus previous position, x right, y down",
             "ids": "object ID = object index + 1 (0 = background); primitive ID = triangle index within the object",
@@ -391,55 +357,162 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
+/// The checkerboard configuration of a spec, for run.json (layout, LOD mode, resolve settings).
+fn checkerboard_json(spec: &Spec) -> serde_json::Value {
+    if spec.technique.name != "checkerboard" {
+        return json!(null);
+    }
+    match CheckerboardConfig::parse(&spec.technique.params()) {
+        Ok(c) => json!({
+            "layout": c.layout.name(),
+            "lod_mode": c.lod_mode,
+            "resolve": c.resolve,
+            "id_prepass": c.prepass,
+            "sample_locations": c.locations,
+        }),
+        Err(_) => json!(null),
+    }
+}
+
 impl RenderArgs {
-    fn resolve_settings(&self) -> Option<ResolveSettings> {
-        let mode = match self.resolve {
-            ResolveArg::None => return None,
-            ResolveArg::Ours => ResolveMode::Ours,
-            ResolveArg::Pq4k => ResolveMode::Pq4k,
-            ResolveArg::Intel => ResolveMode::Intel,
-            ResolveArg::Spatial => ResolveMode::Spatial,
-            ResolveArg::Temporal => ResolveMode::Temporal,
+    /// The spec `--technique` names, edited by the shorthand flags (`--layout`, `--resolve`,
+    /// `--filter`, ...). A flag that contradicts a parameter the spec names, or that does not
+    /// apply to the technique, is an error.
+    pub fn spec(&self) -> Result<Spec> {
+        let mut spec = Spec::parse(&self.technique).map_err(anyhow::Error::msg)?;
+        let name = spec.technique.name.clone();
+        let given = |flag: &str, set: bool| -> Result<()> {
+            if set && name != "checkerboard" {
+                bail!("{flag} applies to the checkerboard technique, not `{name}`");
+            }
+            Ok(())
         };
-        let off = |x| self.resolve_without.contains(&x);
-        Some(ResolveSettings {
-            mode,
-            mapping: match self.resolve_mapping {
-                MappingArg::Pixel => Mapping::Pixel,
-                MappingArg::Quad => Mapping::Quad,
-            },
-            group: self.resolve_group,
-            fp16: self.resolve_fp16,
-            f32_history: self.resolve_f32_history,
-            debug: self.resolve_debug,
-            depth_tolerance: self.depth_tolerance,
-            ablation: Ablation {
-                velocity: !off(AblationArg::Velocity),
-                depth: !off(AblationArg::Depth),
-                ids: !off(AblationArg::Ids),
-                clamp: !off(AblationArg::Clamp),
-                prepass: !off(AblationArg::Prepass),
-            },
-            bandwidth_floor: self.bandwidth_floor,
-            ..ResolveSettings::default()
-        })
+        given("--layout", self.layout.is_some())?;
+        given("--resolve", self.resolve.is_some())?;
+        given("--resolve-mapping", self.resolve_mapping.is_some())?;
+        given("--resolve-group", self.resolve_group.is_some())?;
+        given("--resolve-fp16", self.resolve_fp16)?;
+        given("--resolve-f32-history", self.resolve_f32_history)?;
+        given("--resolve-debug", self.resolve_debug)?;
+        given("--resolve-without", !self.resolve_without.is_empty())?;
+        given("--depth-tolerance", self.depth_tolerance.is_some())?;
+        given("--id-prepass", self.id_prepass)?;
+        given("--msaa2x-sample-locations", self.msaa2x_sample_locations)?;
+        given(
+            "--lod-mode gradients",
+            matches!(self.lod_mode, Some(LodModeArg::Gradients)),
+        )?;
+        if self.filter.is_some() && name != "upscale" {
+            bail!("--filter applies to the upscale technique, not `{name}`");
+        }
+        match name.as_str() {
+            "checkerboard" => spec.technique.params = self.edit_checkerboard(&spec)?.params(),
+            "upscale" => {
+                if let Some(f) = self.filter {
+                    let f = match f {
+                        FilterArg::Bilinear => "bilinear",
+                        FilterArg::Bicubic => "bicubic",
+                    };
+                    match spec.technique.params.first() {
+                        Some(p) if p != f => bail!("--filter {f} contradicts `{spec}`"),
+                        _ => spec.technique.params = vec![f.to_string()],
+                    }
+                }
+                if spec.technique.params.is_empty() {
+                    spec.technique.params = vec!["bilinear".into()];
+                }
+            }
+            _ => {}
+        }
+        Ok(spec)
     }
 
-    fn lod_mode_name(&self) -> &'static str {
-        match self.lod_mode {
-            LodModeArg::Bias => "bias",
-            LodModeArg::Gradients => "gradients",
+    fn edit_checkerboard(&self, spec: &Spec) -> Result<CheckerboardConfig> {
+        let params = spec.technique.params();
+        let mut c = CheckerboardConfig::parse(&params).map_err(anyhow::Error::msg)?;
+        if let Some(l) = self.layout {
+            let layout = match l {
+                LayoutArg::Msaa2x => Layout::Msaa2x,
+                LayoutArg::Rotated => Layout::Rotated,
+                LayoutArg::Split => Layout::Split,
+                LayoutArg::Masked => Layout::Masked,
+            };
+            if !params.is_empty() && c.layout != layout {
+                bail!("--layout {} contradicts `{spec}`", layout.name());
+            }
+            c.layout = layout;
         }
+        if let Some(r) = self.resolve {
+            let mode = match r {
+                ResolveArg::None => None,
+                ResolveArg::Ours => Some(ResolveMode::Ours),
+                ResolveArg::Pq4k => Some(ResolveMode::Pq4k),
+                ResolveArg::Intel => Some(ResolveMode::Intel),
+                ResolveArg::Spatial => Some(ResolveMode::Spatial),
+                ResolveArg::Temporal => Some(ResolveMode::Temporal),
+            };
+            if params.len() > 1 && c.resolve.map(|r| r.mode) != mode {
+                bail!("--resolve contradicts `{spec}`");
+            }
+            c.resolve = mode.map(|mode| ResolveSettings {
+                mode,
+                ..c.resolve.unwrap_or_default()
+            });
+        }
+        if let Some(r) = c.resolve.as_mut() {
+            if let Some(m) = self.resolve_mapping {
+                r.mapping = match m {
+                    MappingArg::Pixel => Mapping::Pixel,
+                    MappingArg::Quad => Mapping::Quad,
+                };
+            }
+            r.group = self.resolve_group.unwrap_or(r.group);
+            r.fp16 |= self.resolve_fp16;
+            r.f32_history |= self.resolve_f32_history;
+            r.debug |= self.resolve_debug;
+            r.depth_tolerance = self.depth_tolerance.unwrap_or(r.depth_tolerance);
+            let off = |x| self.resolve_without.contains(&x);
+            let ab = &mut r.ablation;
+            ab.velocity &= !off(AblationArg::Velocity);
+            ab.depth &= !off(AblationArg::Depth);
+            ab.ids &= !off(AblationArg::Ids);
+            ab.clamp &= !off(AblationArg::Clamp);
+            ab.prepass &= !off(AblationArg::Prepass);
+            r.validate().map_err(anyhow::Error::msg)?;
+        }
+        c.prepass |= self.id_prepass;
+        c.locations |= self.msaa2x_sample_locations;
+        if matches!(self.lod_mode, Some(LodModeArg::Gradients)) {
+            c.lod_mode = LodMode::Gradients;
+        }
+        // The edited configuration must still read back (e.g. locations on msaa2x only).
+        CheckerboardConfig::parse(&c.params().iter().map(String::as_str).collect::<Vec<_>>())
+            .map_err(anyhow::Error::msg)?;
+        Ok(c)
     }
 }
 
 /// The resolve's debug views as EXR layers: one 0/1 layer per bit (`resolve_parity`,
 /// `resolve_missing`, ...), `resolve_velocity` (X, Y) and `resolve_object_id` is the raw layer.
 fn debug_layers(out: &FrameOutput) -> Vec<cbr_metrics::io::ExtraLayer> {
-    let Some(r) = &out.resolve else {
-        return Vec::new();
-    };
     let mut layers = Vec::new();
+    if let Some(c) = &out.coverage {
+        // `coverage`: edge (1 where the pixel's samples saw several object IDs) and fraction (of
+        // the samples on geometry).
+        layers.push((
+            "coverage".to_string(),
+            vec![
+                (
+                    "edge".to_string(),
+                    c.edge.iter().map(|&e| f32::from(e)).collect(),
+                ),
+                ("fraction".to_string(), c.fraction.clone()),
+            ],
+        ));
+    }
+    let Some(r) = &out.resolve else {
+        return layers;
+    };
     if let Some(bits) = &r.debug_bits {
         for (name, bit) in DEBUG_VIEWS {
             let v = bits
@@ -508,6 +581,33 @@ fn write_debug_pngs(dir: &Path, f: u32, out: &FrameOutput) -> Result<()> {
         .collect();
     png("ids", rgba)?;
     Ok(())
+}
+
+/// A progress callback for many-pass frames (ssaa): a bar of the frame's samples, shown once
+/// the frame has taken more than a second.
+pub fn sample_progress(label: String) -> impl FnMut(u32, u32) + 'static {
+    let mut started = Instant::now();
+    let mut bar: Option<ProgressBar> = None;
+    move |done, total| {
+        if done <= 1 {
+            started = Instant::now();
+        }
+        if bar.is_none() && started.elapsed().as_secs_f64() > 1.0 && done < total {
+            let b = ProgressBar::new(u64::from(total)).with_style(
+                ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} {elapsed}/{eta}")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+            b.set_prefix(label.clone());
+            bar = Some(b);
+        }
+        if let Some(b) = &bar {
+            b.set_position(u64::from(done));
+            if done >= total {
+                b.finish_and_clear();
+                bar = None;
+            }
+        }
+    }
 }
 
 fn file_name(p: &Path) -> String {

@@ -411,8 +411,14 @@ fn resolve_and_upscale_write_their_layers_and_debug_views() {
         serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json"))
             .expect("json");
     assert_eq!(run["validation"]["messages"], 0, "{}", run["validation"]);
-    assert_eq!(run["settings"]["resolve"]["mode"], "pq4k");
-    assert_eq!(run["settings"]["resolve"]["ablation"]["clamp"], false);
+    // The shorthand flags become one spec, recorded whole.
+    assert_eq!(
+        run["settings"]["technique"],
+        "checkerboard:split:pq4k:pixel:16:debug:without-clamp:without-prepass"
+    );
+    let cb = &run["settings"]["checkerboard"];
+    assert_eq!(cb["resolve"]["mode"], "pq4k");
+    assert_eq!(cb["resolve"]["ablation"]["clamp"], false);
     assert_eq!(run["frames"][0]["resolve_reset"], true);
     assert_eq!(run["frames"][1]["resolve_reset"], false);
     // The resolved frame has no holes; the debug layers say which pixels were missing.

@@ -85,7 +85,10 @@ fn diff(name: &str, how: &str, dir: &Path) -> Vec<String> {
     let mut bad = Vec::new();
     for f in 0..3 {
         let file = format!("frame_{f:04}.exr");
-        let (want, got) = (layers(&root().join(name).join(&file)), layers(&dir.join(&file)));
+        let (want, got) = (
+            layers(&root().join(name).join(&file)),
+            layers(&dir.join(&file)),
+        );
         let names = |v: &[(String, String, Vec<u32>)]| -> Vec<String> {
             v.iter().map(|(l, c, _)| format!("{l}.{c}")).collect()
         };
@@ -110,7 +113,10 @@ fn diff(name: &str, how: &str, dir: &Path) -> Vec<String> {
 #[test]
 fn every_technique_reproduces_its_golden_exrs_bit_for_bit() {
     let configs = configs();
-    assert!(configs.len() >= 20, "configs.txt lists every technique and mode");
+    assert!(
+        configs.len() >= 20,
+        "configs.txt lists every technique and mode"
+    );
     let tmp = tempfile::tempdir().expect("tempdir");
     // Two workers: the machine has two cores, each render is single-threaded setup + lavapipe.
     let jobs: Vec<(usize, bool)> = (0..configs.len())
@@ -123,7 +129,9 @@ fn every_technique_reproduces_its_golden_exrs_bit_for_bit() {
             s.spawn(|| {
                 loop {
                     let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    let Some(&(i, by_spec)) = jobs.get(k) else { break };
+                    let Some(&(i, by_spec)) = jobs.get(k) else {
+                        break;
+                    };
                     let c = &configs[i];
                     let (how, args) = if by_spec {
                         // The spec carries the technique; flags that are not part of the spec

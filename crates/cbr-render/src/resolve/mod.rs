@@ -12,7 +12,7 @@ use cbr_gpu::{
 };
 
 use crate::layouts::LayoutPlan;
-use crate::native::layout_id;
+use crate::scene_pass::layout_id;
 use crate::targets::FrameTargets;
 
 /// `--resolve`: how missing pixels are reconstructed.

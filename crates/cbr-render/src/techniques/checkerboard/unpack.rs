@@ -8,7 +8,7 @@ use cbr_gpu::{
 };
 
 use crate::layouts::LayoutPlan;
-use crate::native::layout_id;
+use crate::scene_pass::layout_id;
 use crate::targets::FrameTargets;
 
 pub const UNPACK_BINDINGS: [BindingDesc; 5] = [

@@ -3,11 +3,38 @@
 
 use cbr_gpu::{
     Access, BindingDesc, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Gpu, Image, ImageDesc,
-    PassKind, Pipeline, Profiler, Readback, Result, Sampler, SamplerDesc, SetLayout, Shaders,
-    Write, vk,
+    PassKind, Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout, Shaders, Write, vk,
 };
 
+use super::LayerReadbacks;
+use crate::gpu_scene::RasterUniforms;
+use crate::renderer::FrameOutput;
+use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::{COLOR_FORMAT, FrameTargets, ID_FORMAT, VELOCITY_FORMAT};
+use crate::technique::{BuildCtx, FrameCtx, Registration, Technique, unknown_param};
+
+pub const REGISTRATION: Registration = Registration {
+    name: "upscale",
+    grammar: "upscale[:bilinear|bicubic]",
+    about: "render W/sqrt(2) x H/sqrt(2) (the checkerboard's pixel count), then upscale: the \
+            baseline checkerboard must beat",
+    layers: &[],
+    check: |p| parse(p).map(|_| ()),
+    needs: |_, _| None,
+    build: |ctx, p| {
+        let filter = parse(p).map_err(cbr_gpu::GpuError::Other)?;
+        Ok(Box::new(Upscale::new(ctx, filter)?))
+    },
+};
+
+fn parse(params: &[&str]) -> std::result::Result<UpscaleFilter, String> {
+    match params {
+        [] | ["bilinear"] => Ok(UpscaleFilter::Bilinear),
+        ["bicubic"] => Ok(UpscaleFilter::Bicubic),
+        [_, extra, ..] => Err(unknown_param("upscale", extra, "one filter")),
+        [f] => Err(unknown_param("upscale", f, "a filter: bilinear or bicubic")),
+    }
+}
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -88,7 +115,10 @@ impl UpscalePass {
             },
         )?;
         let sampler = Sampler::new(gpu, "upscale.sampler", SamplerDesc::NEAREST)?;
-        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+        // SAMPLED: post passes read the upscaled colour.
+        let usage = vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::TRANSFER_SRC
+            | vk::ImageUsageFlags::SAMPLED;
         let img = |name: &str, format| {
             Image::new(gpu, &ImageDesc::new_2d(name, format, width, height, usage))
         };
@@ -147,15 +177,94 @@ impl UpscalePass {
         );
         profiler.end(cmd, scope);
     }
+}
 
-    /// Readbacks for colour, depth, velocity and IDs (the native readback order).
-    pub fn readbacks(&self, gpu: &Gpu) -> Result<[Readback; 4]> {
-        let o = &self.out;
-        Ok([
-            Readback::for_image(gpu, "readback.upscale.color", &o.color)?,
-            Readback::for_image(gpu, "readback.upscale.depth", &o.depth)?,
-            Readback::for_image(gpu, "readback.upscale.velocity", &o.velocity)?,
-            Readback::for_image(gpu, "readback.upscale.ids", &o.ids)?,
-        ])
+/// The technique: the scene pass at the low resolution, the upscale, the readbacks.
+pub struct Upscale {
+    config: RasterConfig,
+    pass: ScenePass,
+    targets: FrameTargets,
+    up: UpscalePass,
+    readbacks: LayerReadbacks,
+    low: (u32, u32),
+}
+
+impl Upscale {
+    pub fn new(ctx: &BuildCtx, filter: UpscaleFilter) -> Result<Upscale> {
+        let (lw, lh) = low_resolution(ctx.width, ctx.height);
+        let config = RasterConfig::native(lw, lh);
+        let pass = ScenePass::new(
+            ctx.gpu,
+            ctx.shaders,
+            ctx.scene,
+            "upscale.raster",
+            &config,
+            ctx.counter,
+        )?;
+        let targets = FrameTargets::new(ctx.gpu, "upscale.low", lw, lh)?;
+        let up = UpscalePass::new(
+            ctx.gpu,
+            ctx.shaders,
+            filter,
+            &targets,
+            ctx.width,
+            ctx.height,
+        )?;
+        let o = &up.out;
+        let readbacks = LayerReadbacks::new(ctx.gpu, [&o.color, &o.depth, &o.velocity, &o.ids])?;
+        Ok(Upscale {
+            config,
+            pass,
+            targets,
+            up,
+            readbacks,
+            low: (lw, lh),
+        })
+    }
+}
+
+impl Technique for Upscale {
+    fn render(&mut self, ctx: &mut FrameCtx) -> Result<()> {
+        let mut view = ctx.view.clone();
+        (view.width, view.height) = self.low;
+        view.raster = RasterUniforms {
+            viewport: (self.low.0 as f32, self.low.1 as f32),
+            flags: view.raster.flags,
+            ..Default::default()
+        };
+        ctx.upload(&view)?;
+        let counter = ctx.counter;
+        let this = &*self;
+        ctx.submit("frame", |cmd, profiler, gs| {
+            let t = &this.targets;
+            this.pass.record(
+                cmd,
+                profiler,
+                gs,
+                &t.colors(),
+                &t.depth,
+                counter,
+                &this.config,
+            );
+            this.up.record(cmd, profiler, t);
+            let o = &this.up.out;
+            this.readbacks
+                .record(cmd, profiler, [&o.color, &o.depth, &o.velocity, &o.ids]);
+            cmd.use_buffer(counter, Access::HostRead);
+            Ok(())
+        })
+    }
+
+    fn color(&self, _frame: u32) -> Option<&Image> {
+        Some(&self.up.out.color)
+    }
+
+    fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput> {
+        self.readbacks
+            .output(ctx.view.width, ctx.view.height, ctx.view.camera.near)
+    }
+
+    fn target_bytes(&self) -> u64 {
+        self.targets.bytes()
     }
 }

@@ -1,0 +1,44 @@
+//! Post passes: a full-resolution HDR frame in, one out, chained after any technique that gives
+//! a full frame (`SPEC+sharpen+...`). One module and shader folder each, one line in
+//! [`POST_PASSES`]. A post pass built for the first link of the chain gets one input per frame
+//! parity (techniques with ping-pong histories alternate their output image).
+
+pub mod sharpen;
+
+use cbr_gpu::{Cmd, Gpu, Image, Profiler, Result, Shaders};
+
+/// What a post pass's constructor gets.
+pub struct PostBuildCtx<'a> {
+    pub gpu: &'a Gpu,
+    pub shaders: &'a Shaders,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// The frame a post pass records for.
+pub struct PostFrame {
+    pub frame: u32,
+    /// No usable history (post passes with histories start over).
+    pub reset: bool,
+}
+
+pub trait PostPass {
+    /// Records the pass over `input`: input `frame % n` of the n it was built with.
+    fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler, frame: &PostFrame, input: &Image);
+    /// Its full-resolution RGBA16F output (sampled by the next link, read back after the last).
+    fn output(&self) -> &Image;
+}
+
+pub struct PostRegistration {
+    pub name: &'static str,
+    pub grammar: &'static str,
+    pub about: &'static str,
+    pub check: fn(&[&str]) -> std::result::Result<(), String>,
+    pub build: fn(&PostBuildCtx, &[&str], &[&Image]) -> Result<Box<dyn PostPass>>,
+}
+
+pub const POST_PASSES: &[PostRegistration] = &[sharpen::REGISTRATION];
+
+pub fn find(name: &str) -> Option<&'static PostRegistration> {
+    POST_PASSES.iter().find(|p| p.name == name)
+}

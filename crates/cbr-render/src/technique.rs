@@ -1,0 +1,142 @@
+//! What a technique is to the frame sequencer: a registration (name, parameters, device needs,
+//! the layers it writes, a constructor) and a [`Technique`] that renders one full-resolution
+//! frame per call through its own chain of passes. The sequencer (crate::renderer) knows no
+//! technique by name; adding one is a module under `techniques/`, a shader folder and one line in
+//! [`TECHNIQUES`] (docs/OVERVIEW.md walks through `upscale` as the example).
+
+use cbr_gpu::{Buffer, Caps, Cmd, Gpu, Image, PassTiming, Profiler, Result, Shaders};
+use cbr_scene::Scene;
+
+use crate::gpu_scene::{FrameView, GpuScene};
+use crate::renderer::FrameOutput;
+use crate::techniques;
+
+/// What a technique's constructor gets: the device, the shader library, the uploaded scene, the
+/// shaded-fragment counter the scene shaders write, and the output resolution.
+pub struct BuildCtx<'a> {
+    pub gpu: &'a Gpu,
+    pub shaders: &'a Shaders,
+    pub scene: &'a GpuScene,
+    pub counter: &'a Buffer,
+    pub width: u32,
+    pub height: u32,
+    /// Also build instrumentation passes (the resolve's copy-kernel floor) for benchmarks.
+    pub instrument: bool,
+}
+
+/// What a technique gets for one frame. `view` is the frame's camera at the output resolution
+/// with no jitter and the generic flags (count shaded, debug LOD); a technique adjusts a copy
+/// (resolution, raster uniforms, jitter) and uploads it before each raster.
+pub struct FrameCtx<'a> {
+    pub gpu: &'a Gpu,
+    pub scene: &'a Scene,
+    pub gpu_scene: &'a mut GpuScene,
+    pub profiler: &'a mut Profiler,
+    pub counter: &'a Buffer,
+    pub frame: u32,
+    /// No usable history: the first frame, or one that does not follow the last frame rendered.
+    pub reset: bool,
+    pub view: FrameView,
+    /// GPU time of every pass so far this frame; passes of the same name add up (a technique that
+    /// submits several times, like `ssaa`, reports one total per pass).
+    pub timings: Vec<PassTiming>,
+    /// Called with (done, total) by techniques whose frame takes many submissions.
+    pub progress: Option<&'a mut dyn FnMut(u32, u32)>,
+}
+
+impl FrameCtx<'_> {
+    /// Uploads the frame constants and object transforms for `view`.
+    pub fn upload(&mut self, view: &FrameView) -> Result<()> {
+        self.gpu_scene.update(self.scene, view)
+    }
+
+    /// Records and submits one command buffer (waiting for it), adding its pass timings.
+    pub fn submit(
+        &mut self,
+        name: &str,
+        record: impl FnOnce(&mut Cmd, &mut Profiler, &GpuScene) -> Result<()>,
+    ) -> Result<()> {
+        self.profiler.begin_frame();
+        let (profiler, scene) = (&mut *self.profiler, &*self.gpu_scene);
+        self.gpu.submit(name, |cmd| record(cmd, profiler, scene))?;
+        add_timings(&mut self.timings, self.profiler.results()?);
+        Ok(())
+    }
+
+    pub fn report_progress(&mut self, done: u32, total: u32) {
+        if let Some(p) = self.progress.as_mut() {
+            p(done, total);
+        }
+    }
+}
+
+/// Adds `new` to `all`: same-named passes sum their GPU time and statistics.
+pub fn add_timings(all: &mut Vec<PassTiming>, new: Vec<PassTiming>) {
+    for t in new {
+        match all.iter_mut().find(|a| a.name == t.name) {
+            Some(a) => {
+                a.gpu_ms += t.gpu_ms;
+                if let (Some(s), Some(n)) = (a.stats.as_mut(), t.stats) {
+                    s.fragment_invocations += n.fragment_invocations;
+                    s.compute_invocations += n.compute_invocations;
+                }
+            }
+            None => all.push(t),
+        }
+    }
+}
+
+/// A technique built for one scene and resolution.
+pub trait Technique {
+    /// Renders frame `ctx.frame` and records the readbacks of its layers (may submit several
+    /// times).
+    fn render(&mut self, ctx: &mut FrameCtx) -> Result<()>;
+    /// The frame's full-resolution HDR colour on the GPU (sampled), input of the post chain;
+    /// `None` where the technique has no full frame (the raw checkerboard, `:none`).
+    fn color(&self, frame: u32) -> Option<&Image>;
+    /// The frame's layers read back to the host. The sequencer fills index, time, timings and
+    /// the shaded-fragment count.
+    fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput>;
+    /// The texture LOD bias that matches the technique's sample spacing.
+    fn default_lod_bias(&self) -> f32 {
+        0.0
+    }
+    /// Bytes of the technique's raster targets (what it costs in memory).
+    fn target_bytes(&self) -> u64;
+    /// Frames of this technique are worth caching on disk (expensive references).
+    fn cacheable(&self) -> bool {
+        false
+    }
+}
+
+/// One registered technique.
+pub struct Registration {
+    pub name: &'static str,
+    /// The grammar of its spec, e.g. `ssaa:N[:jittered]`.
+    pub grammar: &'static str,
+    pub about: &'static str,
+    /// EXR layers it writes beyond colour, depth, velocity and IDs.
+    pub layers: &'static [&'static str],
+    /// Reads the parameters (after the name); the error names the one it could not read.
+    pub check: fn(&[&str]) -> std::result::Result<(), String>,
+    /// The device feature the parameters need and `caps` lacks, if any.
+    pub needs: fn(&[&str], &Caps) -> Option<String>,
+    pub build: fn(&BuildCtx, &[&str]) -> Result<Box<dyn Technique>>,
+}
+
+/// Every technique, in the order `cbr render --help` and errors list them.
+pub const TECHNIQUES: &[Registration] = &[
+    techniques::native::REGISTRATION,
+    techniques::ssaa::REGISTRATION,
+    techniques::checkerboard::REGISTRATION,
+    techniques::upscale::REGISTRATION,
+];
+
+pub fn find(name: &str) -> Option<&'static Registration> {
+    TECHNIQUES.iter().find(|t| t.name == name)
+}
+
+/// The error for a parameter no registration reads.
+pub fn unknown_param(technique: &str, p: &str, expected: &str) -> String {
+    format!("`{p}` is not a parameter of {technique} (expected {expected})")
+}

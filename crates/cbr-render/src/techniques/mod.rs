@@ -1,0 +1,72 @@
+//! The registered techniques (crate::technique::TECHNIQUES), one module each, and what several
+//! of them share: reading the four common layers back.
+
+pub mod checkerboard;
+
+pub mod native;
+pub mod ssaa;
+pub mod upscale;
+
+use cbr_gpu::{Cmd, Gpu, Image, PassKind, Profiler, Readback, Result};
+use half::f16;
+
+use crate::renderer::FrameOutput;
+
+/// Readbacks of full-resolution colour (RGBA16F), reverse-Z depth (D32 or R32F), velocity and
+/// IDs: the common layers of every technique that ends in four images.
+pub struct LayerReadbacks {
+    color: Readback,
+    depth: Readback,
+    velocity: Readback,
+    ids: Readback,
+}
+
+impl LayerReadbacks {
+    pub fn new(gpu: &Gpu, [color, depth, velocity, ids]: [&Image; 4]) -> Result<LayerReadbacks> {
+        Ok(LayerReadbacks {
+            color: Readback::for_image(gpu, "readback.color", color)?,
+            depth: Readback::for_image(gpu, "readback.depth", depth)?,
+            velocity: Readback::for_image(gpu, "readback.velocity", velocity)?,
+            ids: Readback::for_image(gpu, "readback.ids", ids)?,
+        })
+    }
+
+    /// Records the copies (timed as `readback`).
+    pub fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler, images: [&Image; 4]) {
+        let scope = profiler.begin(cmd, "readback", PassKind::Transfer);
+        cmd.read_image(images[0], &self.color);
+        cmd.read_image(images[1], &self.depth);
+        cmd.read_image(images[2], &self.velocity);
+        cmd.read_image(images[3], &self.ids);
+        profiler.end(cmd, scope);
+    }
+
+    /// The frame from the copies; reverse-Z depth becomes view distance (`near / d`).
+    pub fn output(&self, width: u32, height: u32, near: f64) -> Result<FrameOutput> {
+        Ok(FrameOutput::new(
+            width,
+            height,
+            bytemuck::cast_slice::<u8, f16>(self.color.bytes()?).to_vec(),
+            linear_depths(bytemuck::cast_slice(self.depth.bytes()?), near),
+            bytemuck::cast_slice::<u8, [f32; 2]>(self.velocity.bytes()?).to_vec(),
+            bytemuck::cast_slice::<u8, [u32; 2]>(self.ids.bytes()?).to_vec(),
+        ))
+    }
+}
+
+/// Reverse-Z depths (infinite far plane) as view distances; +inf where nothing was drawn.
+pub fn linear_depths(reverse_z: &[f32], near: f64) -> Vec<f32> {
+    let near = near as f32;
+    reverse_z
+        .iter()
+        .map(|&d| if d > 0.0 { near / d } else { f32::INFINITY })
+        .collect()
+}
+
+/// Parameters of a technique that takes none.
+pub fn no_params(name: &str, params: &[&str]) -> std::result::Result<(), String> {
+    match params.first() {
+        None => Ok(()),
+        Some(p) => Err(crate::technique::unknown_param(name, p, "no parameters")),
+    }
+}
