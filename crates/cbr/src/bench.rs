@@ -12,7 +12,7 @@ use anyhow::{Context, Result, bail};
 use cbr_gpu::{Gpu, GpuOptions};
 use cbr_metrics::io::write_bytes;
 use cbr_metrics::{CompareOptions, DisplayTransform, Metric, compare_images};
-use cbr_render::{CheckerboardConfig, FrameOutput, Mapping, RenderSettings, Renderer};
+use cbr_render::{CheckerboardConfig, FrameOutput, Mapping, RenderSettings, Renderer, Spec};
 use cbr_scene::{LoadOptions, Scene, check_resolution};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
@@ -60,6 +60,14 @@ pub struct BenchArgs {
     /// with the highest FLIP.
     #[arg(long = "crop", value_name = "X,Y,W,H")]
     crops: Vec<String>,
+    /// The reference every error is measured against: `native` (reconstruction error) or a
+    /// supersampled ground truth such as `ssaa:16` (then native gets an error row too). Its frames
+    /// are cached on disk (see --no-cache).
+    #[arg(long, default_value = "native")]
+    reference: String,
+    /// Render cacheable references afresh instead of reading the frame cache.
+    #[arg(long)]
+    no_cache: bool,
     /// Device index or name substring.
     #[arg(long)]
     device: Option<String>,
@@ -81,6 +89,7 @@ pub struct SweepFile {
     lod_biases: Option<Vec<f32>>,
     warmup: Option<u32>,
     frames: Option<u32>,
+    reference: Option<String>,
 }
 
 /// One configuration to measure.
@@ -235,6 +244,44 @@ fn to_input(width: u32, height: u32, color: &[half::f16], name: &str) -> cbr_met
     }
 }
 
+/// A reference frame: its colour and its edge mask (pixels with more than one object ID among the
+/// reference's samples: `coverage.edge` of a supersampled reference; for a one-sample reference,
+/// pixels whose object ID differs from a 4-neighbour's).
+pub struct RefFrame {
+    color: Vec<half::f16>,
+    edge: Vec<bool>,
+}
+
+pub fn edge_mask(out: &FrameOutput) -> Vec<bool> {
+    if let Some(c) = &out.coverage {
+        return c.edge.iter().map(|&e| e != 0).collect();
+    }
+    let (w, h) = (out.width as usize, out.height as usize);
+    let id = |x: usize, y: usize| out.ids[y * w + x][0];
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let me = id(x, y);
+            (x > 0 && id(x - 1, y) != me)
+                || (x + 1 < w && id(x + 1, y) != me)
+                || (y > 0 && id(x, y - 1) != me)
+                || (y + 1 < h && id(x, y + 1) != me)
+        })
+        .collect()
+}
+
+/// Mean of a FLIP map over the pixels of a mask (NaN when the mask is empty).
+pub fn masked_mean(map: &cbr_metrics::planes::Plane, mask: &[bool]) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for (v, m) in map.data.iter().zip(mask) {
+        if *m {
+            sum += f64::from(*v);
+            n += 1;
+        }
+    }
+    if n == 0 { f64::NAN } else { sum / n as f64 }
+}
+
 /// The last measured frame of a configuration, kept for the report.
 struct Snapshot {
     out: FrameOutput,
@@ -253,6 +300,7 @@ struct Measured {
     ssim: Vec<f64>,
     flip: Vec<f64>,
     flip_median: Vec<f64>,
+    flip_edge: Vec<f64>,
     relmse: Vec<f64>,
 }
 
@@ -268,13 +316,17 @@ fn measure(
     config: &Config,
     warmup: u32,
     frames: u32,
-    reference: Option<&[Vec<half::f16>]>,
+    reference: Option<(&str, &[RefFrame])>,
     keep: bool,
     bar: &ProgressBar,
-) -> Result<(Measured, Vec<Vec<half::f16>>)> {
+) -> Result<(Measured, Vec<RefFrame>)> {
     let shaders = cbr_render::shader_library();
     let mut r = Renderer::new(gpu, &shaders, scene, config.settings.clone())
         .with_context(|| format!("setting up {} on {}", config.name, gpu.info().name))?;
+    if keep && config.settings.spec.technique.name != "native" {
+        let label = format!("reference {}", config.name);
+        r.set_progress(crate::render::sample_progress(label));
+    }
     let options = CompareOptions {
         metrics: vec![Metric::Psnr, Metric::Ssim, Metric::Flip, Metric::RelMse],
         display: DisplayTransform {
@@ -287,7 +339,15 @@ fn measure(
         ..Measured::default()
     };
     let mut kept = Vec::new();
-    for f in 0..warmup + frames {
+    // A cacheable reference (ssaa) has no history: its warm-up frames would cost N^2 rasters
+    // each for nothing.
+    let first = if keep && r.cache_dir().is_some() {
+        warmup
+    } else {
+        0
+    };
+    bar.inc(u64::from(first));
+    for f in first..warmup + frames {
         let out = r.render(scene, f)?;
         bar.inc(1);
         if f < warmup {
@@ -309,19 +369,28 @@ fn measure(
         m.frame_ms.push(total);
         let last = f + 1 == warmup + frames;
         let mut flip_map = None;
-        if let Some(refs) = reference {
+        if let Some((ref_name, refs)) = reference {
             let rf = &refs[(f - warmup) as usize];
+            // The FLIP map of every frame: the edge-pixel mean needs it.
             let o = CompareOptions {
-                keep_maps: last,
+                keep_maps: true,
                 ..options.clone()
             };
             let (w, h) = (out.width, out.height);
             let mut p = compare_images(
-                &to_input(w, h, rf, "native"),
+                &to_input(w, h, &rf.color, ref_name),
                 &to_input(w, h, &out.color, &config.name),
                 &o,
             )?;
-            flip_map = p.flip_map.take();
+            let map = p.flip_map.take();
+            let flip_edge = map
+                .as_ref()
+                .map(|m| masked_mean(m, &rf.edge))
+                .unwrap_or(f64::NAN);
+            m.flip_edge.push(flip_edge);
+            if last {
+                flip_map = map;
+            }
             let v = |k| p.value(k).unwrap_or(f64::NAN);
             let flip_median = p.flip.map(|x| x.weighted_median).unwrap_or(f64::NAN);
             m.psnr.push(v(Metric::Psnr));
@@ -335,12 +404,16 @@ fn measure(
                 "ssim": v(Metric::Ssim),
                 "flip_mean": v(Metric::Flip),
                 "flip_median": flip_median,
+                "flip_edge": finite_or_null(flip_edge),
                 "relmse": v(Metric::RelMse),
             }));
         }
-        // The reference keeps only colour (what the comparison reads), not every layer.
+        // The reference keeps only colour and its edge mask (what the comparison reads).
         if keep {
-            kept.push(out.color.clone());
+            kept.push(RefFrame {
+                color: out.color.clone(),
+                edge: edge_mask(&out),
+            });
         }
         if last {
             m.snapshot = Some(Snapshot { out, flip_map });
@@ -565,12 +638,24 @@ pub fn run(a: &BenchArgs) -> Result<()> {
     if frames == 0 {
         bail!("--frames must be at least 1");
     }
+    let reference = match (&sweep.reference, a.reference.as_str()) {
+        (Some(r), "native") => r.clone(),
+        _ => a.reference.clone(),
+    };
+    Spec::parse(&reference).map_err(|e| anyhow::anyhow!("--reference: {e}"))?;
     let mut plan = Vec::new();
     for &(w, h) in &resolutions {
-        let configs: Vec<Config> = expand(&techniques, w, h, &mappings, &groups, &lod_biases)?
+        let mut configs: Vec<Config> = expand(&techniques, w, h, &mappings, &groups, &lod_biases)?
             .into_iter()
-            .filter(|c| c.name != "native")
+            .filter(|c| c.name != reference)
             .collect();
+        // Native is always measured: as the reference, or against it.
+        if reference != "native" && !configs.iter().any(|c| c.name == "native") {
+            configs.insert(
+                0,
+                expand(&["native".into()], w, h, &[], &[], &[])?.remove(0),
+            );
+        }
         plan.push(((w, h), configs));
     }
     let gpu = Gpu::new(&GpuOptions {
@@ -593,13 +678,21 @@ pub fn run(a: &BenchArgs) -> Result<()> {
     for ((w, h), configs) in &plan {
         scene.settings.width = *w;
         scene.settings.height = *h;
-        let native = Config {
-            name: "native".into(),
-            settings: RenderSettings::native(*w, *h),
-        };
-        bar.set_message(format!("native {w}x{h}"));
-        let (nm, reference) = measure(&gpu, &scene, &native, warmup, frames, None, true, &bar)?;
-        let mut all = vec![(native, nm)];
+        let mut ref_config =
+            expand(std::slice::from_ref(&reference), *w, *h, &[], &[], &[])?.remove(0);
+        ref_config.settings.cache = (!a.no_cache).then(cbr_render::cache::default_dir);
+        if let Some(dir) = &ref_config.settings.cache
+            && reference != "native"
+        {
+            eprintln!(
+                "reference frame cache: {} (--no-cache renders afresh)",
+                dir.display()
+            );
+        }
+        bar.set_message(format!("reference {reference} {w}x{h}"));
+        let (rm, ref_frames) =
+            measure(&gpu, &scene, &ref_config, warmup, frames, None, true, &bar)?;
+        let mut all = vec![(ref_config, rm)];
         for c in configs {
             bar.set_message(format!("{} {w}x{h}", c.name));
             let (m, _) = measure(
@@ -608,7 +701,7 @@ pub fn run(a: &BenchArgs) -> Result<()> {
                 c,
                 warmup,
                 frames,
-                Some(&reference),
+                Some((&reference, &ref_frames)),
                 false,
                 &bar,
             )?;
@@ -649,7 +742,7 @@ pub fn run(a: &BenchArgs) -> Result<()> {
                 .iter()
                 .map(|(k, v)| (k.clone(), json!(crate::stats::percentile(v, 50.0))))
                 .collect();
-            let is_native = c.name == "native";
+            let is_reference = c.name == reference;
             let opt = |v: Option<f64>| v.map(finite_or_null).unwrap_or(json!(null));
             rows.push(json!({
                 "scene": scene.name,
@@ -674,11 +767,13 @@ pub fn run(a: &BenchArgs) -> Result<()> {
                 "images": images,
                 "crops": crops,
                 "copy_floor_ms": summary_json(summarize(m.passes.get("resolve.copy_floor").map(Vec::as_slice).unwrap_or(&[]))),
-                "error": if is_native { json!(null) } else { json!({
+                "reference": reference,
+                "error": if is_reference { json!(null) } else { json!({
                     "psnr_mean": opt(mean(&m.psnr)),
                     "ssim_mean": opt(mean(&m.ssim)),
                     "flip_mean": opt(mean(&m.flip)),
                     "flip_median_mean": opt(mean(&m.flip_median)),
+                    "flip_edge_mean": opt(mean(&m.flip_edge)),
                     "relmse_mean": opt(mean(&m.relmse)),
                     "per_frame": m.errors,
                 })},
@@ -686,6 +781,16 @@ pub fn run(a: &BenchArgs) -> Result<()> {
         }
     }
     bar.finish_and_clear();
+    let reference_images: serde_json::Map<String, serde_json::Value> = rows
+        .iter()
+        .filter(|r| r["config"] == reference.as_str())
+        .map(|r| {
+            (
+                format!("{}x{}", r["width"], r["height"]),
+                r["images"].clone(),
+            )
+        })
+        .collect();
     // The Pareto front per scene and resolution: frame time median against FLIP mean.
     let key = |r: &serde_json::Value| (r["width"].as_u64(), r["height"].as_u64());
     let mut on_front = vec![false; rows.len()];
@@ -697,7 +802,7 @@ pub fn run(a: &BenchArgs) -> Result<()> {
     }
     for g in groups_seen {
         let idx: Vec<usize> = (0..rows.len())
-            .filter(|&i| key(&rows[i]) == g && rows[i]["config"] != "native")
+            .filter(|&i| key(&rows[i]) == g && rows[i]["config"] != reference.as_str())
             .collect();
         let pts: Vec<(f64, f64)> = idx
             .iter()
@@ -729,10 +834,13 @@ pub fn run(a: &BenchArgs) -> Result<()> {
             "measured_frames": frames,
             "timing": "GPU timestamps per pass; compute passes bracketed by barriers (lavapipe); median, p5, p95 over the measured frames",
             "frame_ms": format!("sum of the technique's passes per frame (not {})", NOT_TECHNIQUE.join(", ")),
-            "reference": "native at the same resolution and frame",
+            "reference": format!("{reference} at the same resolution and frame"),
+            "edge_pixels": "FLIP mean over the reference's edge pixels: more than one object ID among a supersampled reference's samples (its coverage layer), or for a one-sample reference an object ID that differs from a 4-neighbour's",
             "display": DisplayTransform { exposure_stops: scene.settings.exposure }.describe(),
             "metrics": "PSNR and SSIM on display values, LDR-FLIP (67.02 ppd), relMSE on linear HDR (eps 0.01)",
         },
+        "reference": reference,
+        "reference_images": reference_images,
         "rows": rows,
         "validation": {"enabled": a.validation, "messages": messages.len()},
         "wall_s": started.elapsed().as_secs_f64(),
@@ -753,7 +861,7 @@ pub fn run(a: &BenchArgs) -> Result<()> {
 }
 
 /// Columns of bench.csv: every row carries device, driver, resolution and settings.
-pub const CSV_COLUMNS: [&str; 24] = [
+pub const CSV_COLUMNS: [&str; 26] = [
     "scene",
     "config",
     "technique",
@@ -776,7 +884,9 @@ pub const CSV_COLUMNS: [&str; 24] = [
     "psnr_mean",
     "ssim_mean",
     "flip_mean",
+    "flip_edge_mean",
     "relmse_mean",
+    "reference",
     "pareto",
 ];
 
@@ -818,7 +928,9 @@ fn csv(bench: &serde_json::Value) -> String {
             &r["error"]["psnr_mean"],
             &r["error"]["ssim_mean"],
             &r["error"]["flip_mean"],
+            &r["error"]["flip_edge_mean"],
             &r["error"]["relmse_mean"],
+            &r["reference"],
             &r["pareto"],
         ];
         out += &vals.map(cell).join(",");
