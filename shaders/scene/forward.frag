@@ -19,8 +19,8 @@ layout(push_constant) uniform Push { uint object_index; } pc;
 
 #include "../inc/shading.glsl"
 
-// msaa2x shades per sample: every input is interpolated at the sample position.
-#if LAYOUT == LAYOUT_MSAA2X
+// msaa2x and `msaa:N:sample` shade per sample: every input is interpolated at the sample position.
+#if LAYOUT == LAYOUT_MSAA2X || defined(SAMPLE_SHADING)
 #define INTERP sample
 #else
 #define INTERP
@@ -37,7 +37,9 @@ layout(location = 0) out uvec2 o_ids;
 #else
 layout(location = 0) out vec4 o_color;     // HDR radiance; alpha 1 = shaded this frame
 layout(location = 1) out vec2 o_velocity;  // full-res pixels moved since the previous frame (current - previous)
+#ifndef NO_IDS
 layout(location = 2) out uvec2 o_ids;      // x: object ID, y: primitive ID within the object
+#endif
 #endif
 
 vec2 to_pixels(vec4 clip) {
@@ -133,7 +135,9 @@ void main() {
         o_color = vec4(m.tex.x >= 0 ? lod_of(albedo_tex, v_uv) : -100.0, 0.0, 0.0, 1.0);
     }
     o_velocity = to_pixels(v_clip) - to_pixels(v_prev_clip);
+#ifndef NO_IDS
     o_ids = uvec2(o.ids.x, uint(gl_PrimitiveID));
+#endif
     // Helpers (and demoted lanes) do not count: their atomics have no effect.
     if ((frame.counts.w & FLAG_COUNT_SHADED) != 0u) atomicAdd(shaded_fragments, 1u);
 #endif

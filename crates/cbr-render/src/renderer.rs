@@ -30,6 +30,10 @@ pub struct RenderSettings {
     pub debug_lod: bool,
     /// Also build instrumentation passes (the resolve's copy-kernel floor): benchmarks.
     pub instrument: bool,
+    /// A sub-pixel offset of the whole raster, in pixels (+x right, +y down moves the geometry):
+    /// pixel centres then see the scene at centre - jitter. Techniques that place their own
+    /// samples (checkerboard layouts, ssaa) replace it.
+    pub jitter: [f32; 2],
     /// Where frames of cacheable techniques (`ssaa`) are kept between runs; `None`: no cache.
     #[serde(skip)]
     pub cache: Option<std::path::PathBuf>,
@@ -49,6 +53,7 @@ impl RenderSettings {
             count_shaded: false,
             debug_lod: false,
             instrument: false,
+            jitter: [0.0; 2],
             cache: None,
         }
     }
@@ -290,6 +295,7 @@ impl Renderer {
             frame_index: frame,
             raster: RasterUniforms {
                 viewport: (s.width as f32, s.height as f32),
+                jitter: [s.jitter, [0.0; 2]],
                 flags,
                 ..Default::default()
             },
@@ -302,10 +308,7 @@ impl Renderer {
     pub fn render(&mut self, scene: &Scene, frame: u32) -> Result<FrameOutput> {
         let view = self.view(scene, frame);
         let reset = frame == 0 || self.last_frame != Some(frame - 1);
-        let key = match &self.cache {
-            Some(c) => Some(c.key(scene, &view, frame)),
-            None => None,
-        };
+        let key = self.cache.as_ref().map(|c| c.key(scene, &view, frame));
         if let (Some(c), Some(k)) = (&self.cache, &key)
             && let Some(out) = c.load(k, frame, view.time)
         {

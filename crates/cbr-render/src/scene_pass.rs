@@ -79,6 +79,12 @@ pub struct RasterConfig {
     pub viewport: [f32; 4],
     /// Depth and IDs only, no shading (the `--id-prepass` pass).
     pub id_only: bool,
+    /// Write the ID attachment (off: colour and velocity only, for multisampled targets on
+    /// devices without multisampled integer attachments: `msaa`).
+    pub write_ids: bool,
+    /// Shade every sample (`sampleRateShading`, `minSampleShading = 1`, inputs interpolated at
+    /// the sample): msaa2x, `msaa:N:sample`.
+    pub sample_shading: bool,
     /// msaa2x with VK_EXT_sample_locations: the frame's two sample locations.
     pub sample_locations: Option<[[f32; 2]; 2]>,
 }
@@ -92,6 +98,8 @@ impl RasterConfig {
             instances: 1,
             viewport: [0.0, 0.0, width as f32, height as f32],
             id_only: false,
+            write_ids: true,
+            sample_shading: false,
             sample_locations: None,
         }
     }
@@ -115,6 +123,8 @@ impl RasterConfig {
             },
             viewport,
             id_only: false,
+            write_ids: true,
+            sample_shading: plan.samples > 1,
             sample_locations: plan.sample_locations,
         }
     }
@@ -145,6 +155,12 @@ impl ScenePass {
         if config.id_only {
             defines.push(("ID_ONLY".into(), "1".into()));
         }
+        if !config.write_ids {
+            defines.push(("NO_IDS".into(), "1".into()));
+        }
+        if config.sample_shading {
+            defines.push(("SAMPLE_SHADING".into(), "1".into()));
+        }
         let vs = shaders.compile("scene/forward.vert", &defines)?;
         let fs = shaders.compile("scene/forward.frag", &defines)?;
         let pipeline = Pipeline::graphics(
@@ -156,17 +172,17 @@ impl ScenePass {
                 fragment: &fs,
                 set_layouts: &[&layout, &material_layout],
                 push_constant_bytes: std::mem::size_of::<ScenePush>() as u32,
-                color_formats: if config.id_only {
-                    &[ID_FORMAT]
-                } else {
-                    &[COLOR_FORMAT, VELOCITY_FORMAT, ID_FORMAT]
+                color_formats: match (config.id_only, config.write_ids) {
+                    (true, _) => &[ID_FORMAT],
+                    (false, false) => &[COLOR_FORMAT, VELOCITY_FORMAT],
+                    (false, true) => &[COLOR_FORMAT, VELOCITY_FORMAT, ID_FORMAT],
                 },
                 depth_format: Some(DEPTH_FORMAT),
                 // Reverse-Z: nearer is larger.
                 depth_compare: vk::CompareOp::GREATER,
                 depth_write: true,
                 samples: config.samples,
-                min_sample_shading: (config.samples > 1).then_some(1.0),
+                min_sample_shading: config.sample_shading.then_some(1.0),
                 cull_back_faces: false,
                 sample_locations: config.sample_locations.is_some(),
             },

@@ -109,6 +109,9 @@ pub trait Technique {
     }
 }
 
+/// A technique's constructor: context and parameters.
+pub type Build = fn(&BuildCtx, &[&str]) -> Result<Box<dyn Technique>>;
+
 /// One registered technique.
 pub struct Registration {
     pub name: &'static str,
@@ -121,13 +124,14 @@ pub struct Registration {
     pub check: fn(&[&str]) -> std::result::Result<(), String>,
     /// The device feature the parameters need and `caps` lacks, if any.
     pub needs: fn(&[&str], &Caps) -> Option<String>,
-    pub build: fn(&BuildCtx, &[&str]) -> Result<Box<dyn Technique>>,
+    pub build: Build,
 }
 
 /// Every technique, in the order `cbr render --help` and errors list them.
 pub const TECHNIQUES: &[Registration] = &[
     techniques::native::REGISTRATION,
     techniques::ssaa::REGISTRATION,
+    techniques::msaa::REGISTRATION,
     techniques::checkerboard::REGISTRATION,
     techniques::upscale::REGISTRATION,
 ];

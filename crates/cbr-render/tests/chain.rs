@@ -27,13 +27,17 @@ fn spec(w: u32, h: u32, s: &str) -> RenderSettings {
     RenderSettings::parse(w, h, s).expect("spec")
 }
 
-fn bits(o: &FrameOutput) -> (Vec<u16>, Vec<u32>, Vec<[u32; 2]>, Vec<[u32; 2]>) {
-    (
-        o.color.iter().map(|c| c.to_bits()).collect(),
+/// Every bit of the four common layers, in one vector per layer.
+fn bits(o: &FrameOutput) -> [Vec<u32>; 4] {
+    [
+        o.color.iter().map(|c| u32::from(c.to_bits())).collect(),
         o.depth.iter().map(|d| d.to_bits()).collect(),
-        o.velocity.iter().map(|v| v.map(f32::to_bits)).collect(),
-        o.ids.clone(),
-    )
+        o.velocity
+            .iter()
+            .flat_map(|v| v.map(f32::to_bits))
+            .collect(),
+        o.ids.iter().flatten().copied().collect(),
+    ]
 }
 
 #[test]

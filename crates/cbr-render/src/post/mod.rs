@@ -29,12 +29,15 @@ pub trait PostPass {
     fn output(&self) -> &Image;
 }
 
+/// A post pass's constructor: context, parameters, its input images (one per frame parity).
+pub type PostBuild = fn(&PostBuildCtx, &[&str], &[&Image]) -> Result<Box<dyn PostPass>>;
+
 pub struct PostRegistration {
     pub name: &'static str,
     pub grammar: &'static str,
     pub about: &'static str,
     pub check: fn(&[&str]) -> std::result::Result<(), String>,
-    pub build: fn(&PostBuildCtx, &[&str], &[&Image]) -> Result<Box<dyn PostPass>>,
+    pub build: PostBuild,
 }
 
 pub const POST_PASSES: &[PostRegistration] = &[sharpen::REGISTRATION];

@@ -2,15 +2,88 @@
 //! of them share: reading the four common layers back.
 
 pub mod checkerboard;
+pub mod msaa;
 
 pub mod native;
 pub mod ssaa;
 pub mod upscale;
 
-use cbr_gpu::{Cmd, Gpu, Image, PassKind, Profiler, Readback, Result};
+use cbr_gpu::{Buffer, Cmd, Gpu, Image, PassKind, Profiler, Readback, Result, Shaders};
 use half::f16;
 
+use crate::gpu_scene::GpuScene;
 use crate::renderer::FrameOutput;
+use crate::scene_pass::{RasterConfig, ScenePass};
+use crate::targets::FrameTargets;
+
+/// A native-resolution depth + ID pass at the pixel centres, no shading: checkerboard's
+/// `prepass`, and the depth and IDs of `msaa` (whose multisampled targets hold no IDs).
+pub struct IdPass {
+    pass: ScenePass,
+    config: RasterConfig,
+    pub ids: Image,
+    pub depth: Image,
+    pub ids_rb: Readback,
+    pub depth_rb: Readback,
+}
+
+impl IdPass {
+    pub fn new(
+        gpu: &Gpu,
+        shaders: &Shaders,
+        scene: &GpuScene,
+        w: u32,
+        h: u32,
+        counter: &Buffer,
+    ) -> Result<IdPass> {
+        let config = RasterConfig {
+            id_only: true,
+            ..RasterConfig::native(w, h)
+        };
+        let pass = ScenePass::new(gpu, shaders, scene, "id_prepass.raster", &config, counter)?;
+        // Only the ID and depth targets are kept; colour and velocity are dropped unused.
+        let FrameTargets { ids, depth, .. } = FrameTargets::new(gpu, "id_prepass", w, h)?;
+        let ids_rb = Readback::for_image(gpu, "readback.prepass_ids", &ids)?;
+        let depth_rb = Readback::for_image(gpu, "readback.prepass_depth", &depth)?;
+        Ok(IdPass {
+            pass,
+            config,
+            ids,
+            depth,
+            ids_rb,
+            depth_rb,
+        })
+    }
+
+    /// Records the raster and the copies of its IDs and depth.
+    pub fn record(
+        &self,
+        cmd: &mut Cmd,
+        profiler: &mut Profiler,
+        scene: &GpuScene,
+        counter: &Buffer,
+    ) {
+        self.pass.record(
+            cmd,
+            profiler,
+            scene,
+            &[&self.ids],
+            &self.depth,
+            counter,
+            &self.config,
+        );
+        cmd.read_image(&self.ids, &self.ids_rb);
+        cmd.read_image(&self.depth, &self.depth_rb);
+    }
+
+    /// View depths (+inf where empty) and IDs.
+    pub fn output(&self, near: f64) -> Result<(Vec<f32>, Vec<[u32; 2]>)> {
+        Ok((
+            linear_depths(bytemuck::cast_slice(self.depth_rb.bytes()?), near),
+            bytemuck::cast_slice::<u8, [u32; 2]>(self.ids_rb.bytes()?).to_vec(),
+        ))
+    }
+}
 
 /// Readbacks of full-resolution colour (RGBA16F), reverse-Z depth (D32 or R32F), velocity and
 /// IDs: the common layers of every technique that ends in four images.

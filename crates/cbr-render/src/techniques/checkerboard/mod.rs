@@ -6,14 +6,14 @@
 pub mod config;
 pub mod unpack;
 
-use cbr_gpu::{Buffer, Gpu, Image, Readback, Result, Shaders};
+use cbr_gpu::{Image, Result};
 use half::f16;
 
 pub use config::{CheckerboardConfig, LodMode};
 use unpack::{UnpackPass, UnpackedPixel};
 
-use super::linear_depths;
-use crate::gpu_scene::{FrameView, GpuScene, RasterUniforms};
+use super::{IdPass, linear_depths};
+use crate::gpu_scene::{FrameView, RasterUniforms};
 use crate::gpu_types::{FLAG_LOD_GRADIENTS, FLAG_PARITY};
 use crate::layouts::LayoutPlan;
 use crate::renderer::{FrameOutput, ResolveOutput};
@@ -51,45 +51,6 @@ pub const REGISTRATION: Registration = Registration {
     },
 };
 
-/// The native-resolution depth + ID prepass.
-struct Prepass {
-    pass: ScenePass,
-    config: RasterConfig,
-    ids: Image,
-    depth: Image,
-    ids_rb: Readback,
-    depth_rb: Readback,
-}
-
-impl Prepass {
-    fn new(
-        gpu: &Gpu,
-        shaders: &Shaders,
-        scene: &GpuScene,
-        w: u32,
-        h: u32,
-        counter: &Buffer,
-    ) -> Result<Prepass> {
-        let config = RasterConfig {
-            id_only: true,
-            ..RasterConfig::native(w, h)
-        };
-        let pass = ScenePass::new(gpu, shaders, scene, "id_prepass.raster", &config, counter)?;
-        // Only the ID and depth targets are kept; colour and velocity are dropped unused.
-        let FrameTargets { ids, depth, .. } = FrameTargets::new(gpu, "id_prepass", w, h)?;
-        let ids_rb = Readback::for_image(gpu, "readback.prepass_ids", &ids)?;
-        let depth_rb = Readback::for_image(gpu, "readback.prepass_depth", &depth)?;
-        Ok(Prepass {
-            pass,
-            config,
-            ids,
-            depth,
-            ids_rb,
-            depth_rb,
-        })
-    }
-}
-
 struct Resolve {
     pass: ResolvePass,
     rb: ResolveReadbacks,
@@ -103,7 +64,7 @@ pub struct Checkerboard {
     targets: FrameTargets,
     unpack: UnpackPass,
     resolve: Option<Resolve>,
-    prepass: Option<Prepass>,
+    prepass: Option<IdPass>,
     /// (frame parity, history reset) of the last frame rendered.
     last: (u32, bool),
 }
@@ -136,7 +97,7 @@ impl Checkerboard {
             plans[0].sample_locations.is_some(),
         )?;
         let prepass = match config.prepass {
-            true => Some(Prepass::new(gpu, shaders, ctx.scene, w, h, ctx.counter)?),
+            true => Some(IdPass::new(gpu, shaders, ctx.scene, w, h, ctx.counter)?),
             false => None,
         };
         let unpack = UnpackPass::new(gpu, shaders, &plans[0], &targets)?;
@@ -167,7 +128,7 @@ impl Checkerboard {
     /// The frame's view in the layout's raster target: parity, viewport, jitter, tangram.
     fn view(&self, base: &FrameView, parity: u32) -> FrameView {
         let plan = &self.plans[parity as usize];
-        let mut flags = base.raster.flags | plan.parity * FLAG_PARITY;
+        let mut flags = base.raster.flags | (plan.parity * FLAG_PARITY);
         if self.config.lod_mode == LodMode::Gradients {
             flags |= FLAG_LOD_GRADIENTS;
         }
@@ -215,10 +176,7 @@ impl Technique for Checkerboard {
             if let Some(p) = &this.prepass {
                 // Native resolution: the frame constants' raster fields describe the checkerboard
                 // pass; the ID-only native variant ignores them (no jitter, tangram or layers).
-                p.pass
-                    .record(cmd, profiler, gs, &[&p.ids], &p.depth, counter, &p.config);
-                cmd.read_image(&p.ids, &p.ids_rb);
-                cmd.read_image(&p.depth, &p.depth_rb);
+                p.record(cmd, profiler, gs, counter);
             }
             let t = &this.targets;
             let config = &this.configs[parity as usize];
@@ -264,10 +222,7 @@ impl Technique for Checkerboard {
         );
         out.parity = Some(parity);
         if let Some(p) = &self.prepass {
-            out.prepass = Some((
-                linear_depths(bytemuck::cast_slice(p.depth_rb.bytes()?), near),
-                bytemuck::cast_slice::<u8, [u32; 2]>(p.ids_rb.bytes()?).to_vec(),
-            ));
+            out.prepass = Some(p.output(near)?);
         }
         if let Some(r) = &self.resolve {
             // The resolved frame replaces the raw colour; depth, velocity, IDs and the mask stay
