@@ -90,6 +90,18 @@ pub fn run(a: &InfoArgs) -> Result<()> {
         caps.sub_pixel_precision_bits,
         caps.viewport_sub_pixel_bits
     );
+    println!("\ntechniques (--technique SPEC, bench --techniques; post passes append +PASS):");
+    for t in cbr_render::technique::TECHNIQUES {
+        let params: Vec<&str> = Vec::new();
+        let runs = match (t.needs)(&params, caps) {
+            None => String::new(),
+            Some(why) => format!(" (here: needs {why})"),
+        };
+        println!("  {:44} {}{runs}", t.grammar, t.about);
+    }
+    for p in cbr_render::post::POST_PASSES {
+        println!("  +{:43} {}", p.grammar, p.about);
+    }
     println!("\ncheckerboard layouts:");
     for l in Layout::ALL {
         match caps.layout_unsupported(l) {

@@ -7,7 +7,6 @@ mod compare;
 mod info;
 mod render;
 mod report;
-mod stats;
 
 use std::process::ExitCode;
 

@@ -19,7 +19,7 @@ use cbr_scene::{LoadOptions, MissingTextures, check_resolution};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 
-use crate::stats::summarize;
+use cbr_bench::stats::summarize;
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum FilterArg {
@@ -234,7 +234,10 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     if let Some(dir) = renderer.cache_dir() {
         eprintln!("frame cache: {} (--no-cache renders afresh)", dir.display());
     }
-    renderer.set_progress(sample_progress(format!("{} samples", settings.spec)));
+    renderer.set_progress(cbr_bench::sample_progress(format!(
+        "{} samples",
+        settings.spec
+    )));
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("cannot create the output folder {}", a.out.display()))?;
     let display = DisplayTransform {
@@ -581,33 +584,6 @@ fn write_debug_pngs(dir: &Path, f: u32, out: &FrameOutput) -> Result<()> {
         .collect();
     png("ids", rgba)?;
     Ok(())
-}
-
-/// A progress callback for many-pass frames (ssaa): a bar of the frame's samples, shown once
-/// the frame has taken more than a second.
-pub fn sample_progress(label: String) -> impl FnMut(u32, u32) + 'static {
-    let mut started = Instant::now();
-    let mut bar: Option<ProgressBar> = None;
-    move |done, total| {
-        if done <= 1 {
-            started = Instant::now();
-        }
-        if bar.is_none() && started.elapsed().as_secs_f64() > 1.0 && done < total {
-            let b = ProgressBar::new(u64::from(total)).with_style(
-                ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} {elapsed}/{eta}")
-                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
-            );
-            b.set_prefix(label.clone());
-            bar = Some(b);
-        }
-        if let Some(b) = &bar {
-            b.set_position(u64::from(done));
-            if done >= total {
-                b.finish_and_clear();
-                bar = None;
-            }
-        }
-    }
 }
 
 fn file_name(p: &Path) -> String {

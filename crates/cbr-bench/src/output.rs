@@ -1,0 +1,238 @@
+//! What a bench run writes: the last frame of each configuration for the report, worst-FLIP
+//! crop windows, the Pareto front, bench.csv, provenance helpers.
+
+use anyhow::Result;
+use cbr_metrics::DisplayTransform;
+use serde_json::json;
+
+use crate::measure::Snapshot;
+use crate::stats::Summary;
+
+fn slug(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '.' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// Writes the last measured frame of a configuration for the report: the display PNG, the FLIP
+/// map as a magma PNG (same size; the report draws the colour bar) and the EXR with all layers.
+/// Returns the paths relative to the bench folder.
+pub fn save_snapshot(
+    dir: &std::path::Path,
+    res: (u32, u32),
+    name: &str,
+    snap: &Snapshot,
+    display: &DisplayTransform,
+) -> Result<serde_json::Value> {
+    let sub = format!("{}x{}", res.0, res.1);
+    let base = slug(name);
+    let img = format!("images/{sub}/{base}.png");
+    let exr = format!("frames/{sub}/{base}.exr");
+    std::fs::create_dir_all(dir.join("images").join(&sub))?;
+    std::fs::create_dir_all(dir.join("frames").join(&sub))?;
+    let o = &snap.out;
+    cbr_metrics::io::write_png_rgba8(
+        &dir.join(&img),
+        o.width,
+        o.height,
+        &display.to_rgba8(&o.color),
+    )?;
+    cbr_metrics::io::write_frame_exr(
+        &dir.join(&exr),
+        &cbr_metrics::io::FrameLayers {
+            width: o.width,
+            height: o.height,
+            color: &o.color,
+            depth: &o.depth,
+            velocity: &o.velocity,
+            ids: &o.ids,
+            mask: o.mask.as_deref(),
+            prepass: None,
+            extra: Vec::new(),
+            metadata: vec![
+                ("cbr.config".to_string(), name.to_string()),
+                ("cbr.frame".to_string(), o.index.to_string()),
+            ],
+        },
+    )?;
+    let flip = match &snap.flip_map {
+        Some(map) => {
+            let path = format!("images/{sub}/{base}.flip.png");
+            let rgba: Vec<u8> = map
+                .data
+                .iter()
+                .flat_map(|&v| {
+                    let c = cbr_metrics::heatmap::magma(v);
+                    [c[0], c[1], c[2], 255]
+                })
+                .collect();
+            cbr_metrics::io::write_png_rgba8(&dir.join(&path), o.width, o.height, &rgba)?;
+            json!(path)
+        }
+        None => json!(null),
+    };
+    Ok(json!({"frame": o.index, "image": img, "flip": flip, "exr": exr}))
+}
+
+/// Up to `count` non-overlapping square windows (side ~ 1/6 of the short side) with the highest
+/// mean of the given FLIP maps: where the techniques err most. [x, y, w, h] each.
+pub fn worst_windows(maps: &[&cbr_metrics::planes::Plane], count: usize) -> Vec<[usize; 4]> {
+    let Some(first) = maps.first() else {
+        return Vec::new();
+    };
+    let (w, h) = (first.width, first.height);
+    let side = (w.min(h) / 6).max(8).min(w).min(h);
+    let stride = (side / 2).max(1);
+    let mut scored = Vec::new();
+    let mut y = 0;
+    while y + side <= h {
+        let mut x = 0;
+        while x + side <= w {
+            let mut sum = 0.0f64;
+            for m in maps {
+                for yy in y..y + side {
+                    sum += m.data[yy * w + x..yy * w + x + side]
+                        .iter()
+                        .map(|&v| f64::from(v))
+                        .sum::<f64>();
+                }
+            }
+            scored.push((sum, x, y));
+            x += stride;
+        }
+        y += stride;
+    }
+    scored.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut picked: Vec<[usize; 4]> = Vec::new();
+    for (_, x, y) in scored {
+        let overlaps = picked
+            .iter()
+            .any(|p| x < p[0] + p[2] && p[0] < x + side && y < p[1] + p[3] && p[1] < y + side);
+        if !overlaps {
+            picked.push([x, y, side, side]);
+            if picked.len() == count {
+                break;
+            }
+        }
+    }
+    picked
+}
+
+pub fn finite_or_null(x: f64) -> serde_json::Value {
+    if x.is_finite() { json!(x) } else { json!(null) }
+}
+
+pub fn summary_json(s: Option<Summary>) -> serde_json::Value {
+    s.map(|s| json!(s)).unwrap_or(json!(null))
+}
+
+pub fn git_commit() -> String {
+    std::process::Command::new("git")
+        .args(["rev-parse", "--short=12", "HEAD"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_else(|| "unknown".into())
+}
+
+/// Indices of the rows on the speed-vs-error Pareto front (lower time and lower error are
+/// better): no other row is at least as good in both and better in one.
+pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
+    (0..points.len())
+        .filter(|&i| {
+            let (ti, ei) = points[i];
+            ti.is_finite()
+                && ei.is_finite()
+                && !points
+                    .iter()
+                    .enumerate()
+                    .any(|(j, &(tj, ej))| j != i && tj <= ti && ej <= ei && (tj < ti || ej < ei))
+        })
+        .collect()
+}
+
+/// Columns of bench.csv: every row carries device, driver, resolution and settings.
+pub const CSV_COLUMNS: [&str; 26] = [
+    "scene",
+    "config",
+    "technique",
+    "resolve",
+    "mapping",
+    "group",
+    "fp16",
+    "id_prepass",
+    "lod_bias",
+    "width",
+    "height",
+    "device",
+    "driver",
+    "warmup",
+    "frames",
+    "frame_ms_median",
+    "frame_ms_p5",
+    "frame_ms_p95",
+    "copy_floor_ms_median",
+    "psnr_mean",
+    "ssim_mean",
+    "flip_mean",
+    "flip_edge_mean",
+    "relmse_mean",
+    "reference",
+    "pareto",
+];
+
+pub fn csv(bench: &serde_json::Value) -> String {
+    let mut out = CSV_COLUMNS.join(",") + "\n";
+    let empty = vec![];
+    for r in bench["rows"].as_array().unwrap_or(&empty) {
+        let cell = |v: &serde_json::Value| match v {
+            serde_json::Value::Null => String::new(),
+            serde_json::Value::String(s) => {
+                if s.contains([',', '"']) {
+                    format!("\"{}\"", s.replace('"', "\"\""))
+                } else {
+                    s.clone()
+                }
+            }
+            other => other.to_string(),
+        };
+        let vals = [
+            &r["scene"],
+            &r["config"],
+            &r["technique"],
+            &r["resolve"],
+            &r["mapping"],
+            &r["group"],
+            &r["fp16"],
+            &r["id_prepass"],
+            &r["lod_bias"],
+            &r["width"],
+            &r["height"],
+            &r["device"],
+            &r["driver"],
+            &r["warmup"],
+            &r["frames"],
+            &r["frame_ms"]["median"],
+            &r["frame_ms"]["p5"],
+            &r["frame_ms"]["p95"],
+            &r["copy_floor_ms"]["median"],
+            &r["error"]["psnr_mean"],
+            &r["error"]["ssim_mean"],
+            &r["error"]["flip_mean"],
+            &r["error"]["flip_edge_mean"],
+            &r["error"]["relmse_mean"],
+            &r["reference"],
+            &r["pareto"],
+        ];
+        out += &vals.map(cell).join(",");
+        out.push('\n');
+    }
+    out
+}
