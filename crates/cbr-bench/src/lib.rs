@@ -317,6 +317,7 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
                 "warmup": warmup,
                 "frames": frames,
                 "frame_ms": summary_json(summarize(&m.frame_ms)),
+                "cached_frames": m.cached_frames,
                 "passes": passes,
                 "fragment_invocations_median": fragments,
                 "images": images,

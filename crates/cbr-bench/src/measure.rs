@@ -83,6 +83,8 @@ pub struct Snapshot {
 #[derive(Default)]
 pub struct Measured {
     pub lod_bias: f32,
+    /// Frames read from the frame cache (not rendered, so not timed).
+    pub cached_frames: u32,
     pub snapshot: Option<Snapshot>,
     pub passes: BTreeMap<String, Vec<f64>>,
     pub frame_ms: Vec<f64>,
@@ -142,6 +144,9 @@ pub fn measure(
     for f in first..warmup + frames {
         let out = r.render(scene, f)?;
         bar.inc(1);
+        if out.timings.is_empty() && out.cached.is_some() && f >= warmup {
+            m.cached_frames += 1;
+        }
         if f < warmup {
             continue;
         }
@@ -158,7 +163,9 @@ pub fn measure(
                     .push(s.fragment_invocations as f64);
             }
         }
-        m.frame_ms.push(total);
+        if !out.timings.is_empty() {
+            m.frame_ms.push(total);
+        }
         let last = f + 1 == warmup + frames;
         let mut flip_map = None;
         if let Some((ref_name, refs)) = reference {
