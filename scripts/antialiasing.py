@@ -21,6 +21,10 @@ SCENES = ["builtin:demo", "scenes/sibenik.toml", "scenes/foliage.toml"]
 
 
 def bench(cbr, scene, out, reference, a, env):
+    done = os.path.join(out, "bench.json")
+    if a.reuse and os.path.exists(done):
+        print(f"[aa] reusing {done}", file=sys.stderr)
+        return json.load(open(done))
     techs = [t for t in TECHNIQUES if t != reference]
     cmd = [cbr, "bench", scene, "--width", str(a.width), "--height", str(a.height),
            "--warmup", str(a.warmup), "--frames", str(a.frames), "--reference", reference,
@@ -64,6 +68,8 @@ def main():
     ap.add_argument("--warmup", type=int, default=2)
     ap.add_argument("--frames", type=int, default=8)
     ap.add_argument("--doc", default="docs/antialiasing.md")
+    ap.add_argument("--reuse", action="store_true",
+                    help="keep bench runs whose bench.json exists (resume an interrupted run)")
     a = ap.parse_args()
     env = dict(os.environ, CBR_CACHE_DIR=os.path.join(a.out, "cache"))
     lines = [f"Written by `just bench` (scripts/antialiasing.py); do not edit by hand. "

@@ -235,7 +235,8 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
         scene.settings.height = *h;
         let mut ref_config =
             expand(std::slice::from_ref(&reference), *w, *h, &[], &[], &[])?.remove(0);
-        ref_config.settings.cache = (!a.no_cache).then(cbr_render::cache::default_dir);
+        let cache = (!a.no_cache).then(cbr_render::cache::default_dir);
+        ref_config.settings.cache = cache.clone();
         if let Some(dir) = &ref_config.settings.cache
             && reference != "native"
         {
@@ -250,17 +251,20 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
         let mut all = vec![(ref_config, rm)];
         for c in configs {
             bar.set_message(format!("{} {w}x{h}", c.name));
+            // Cacheable techniques (ssaa) among the rows share the reference's cache.
+            let mut c = c.clone();
+            c.settings.cache = cache.clone();
             let (m, _) = measure(
                 &gpu,
                 &scene,
-                c,
+                &c,
                 warmup,
                 frames,
                 Some((&reference, &ref_frames)),
                 false,
                 &bar,
             )?;
-            all.push((c.clone(), m));
+            all.push((c, m));
         }
         let display = DisplayTransform {
             exposure_stops: scene.settings.exposure,

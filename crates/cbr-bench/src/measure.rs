@@ -133,13 +133,9 @@ pub fn measure(
         ..Measured::default()
     };
     let mut kept = Vec::new();
-    // A cacheable reference (ssaa) has no history: its warm-up frames would cost N^2 rasters
+    // A cacheable technique (ssaa) has no history: its warm-up frames would cost N^2 rasters
     // each for nothing.
-    let first = if keep && r.cache_dir().is_some() {
-        warmup
-    } else {
-        0
-    };
+    let first = if r.cache_dir().is_some() { warmup } else { 0 };
     bar.inc(u64::from(first));
     for f in first..warmup + frames {
         let out = r.render(scene, f)?;

@@ -233,8 +233,20 @@ impl ScenePass {
         })
     }
 
-    /// Clears the targets and draws every object. `background` alpha: 1 for native (every pixel
-    /// is rendered), 0 for checkerboard layouts (unrendered samples stay marked).
+    /// `record` into a full set of frame targets (colour, velocity, IDs, depth).
+    pub fn record_targets(
+        &self,
+        cmd: &mut Cmd,
+        profiler: &mut Profiler,
+        scene: &GpuScene,
+        targets: &crate::targets::FrameTargets,
+        counter: &Buffer,
+        config: &RasterConfig,
+    ) {
+        let t = targets;
+        self.record(cmd, profiler, scene, &t.colors(), &t.depth, counter, config);
+    }
+
     /// Clears `colors` (in the pipeline's order: colour, velocity, IDs; IDs only for `id_only`)
     /// and `depth`, and draws every object. Colour clears to the background radiance with alpha 1
     /// for native, 0 for checkerboard layouts (the unpack marks rendered samples).

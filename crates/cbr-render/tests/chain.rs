@@ -97,13 +97,9 @@ fn triangle_scene() -> (Scene, [[f64; 2]; 3]) {
         settings: Settings {
             width: W,
             height: H,
-            frames: 1,
-            fps: 10.0,
-            seed: 0,
-            exposure: 0.0,
             ambient: [0.0; 3],
             background: [0.0; 3],
-            bump: false,
+            ..Settings::default()
         },
         stats: LoadStats::default(),
     };

@@ -61,15 +61,7 @@ impl Technique for Native {
             ctx.counter,
         );
         ctx.submit("frame", |cmd, profiler, scene| {
-            pass.record(
-                cmd,
-                profiler,
-                scene,
-                &targets.colors(),
-                &targets.depth,
-                counter,
-                config,
-            );
+            pass.record_targets(cmd, profiler, scene, targets, counter, config);
             rb.record(cmd, profiler, targets.layers());
             cmd.use_buffer(counter, cbr_gpu::Access::HostRead);
             Ok(())

@@ -216,15 +216,8 @@ impl Ssaa {
         let push = index.map(|s| self.push(s, false));
         ctx.submit("ssaa.sample", |cmd, profiler, gs| {
             let t = &self.targets;
-            self.pass.record(
-                cmd,
-                profiler,
-                gs,
-                &t.colors(),
-                &t.depth,
-                counter,
-                &self.config,
-            );
+            self.pass
+                .record_targets(cmd, profiler, gs, t, counter, &self.config);
             if centre {
                 self.centre.record(cmd, profiler, t.layers());
             }

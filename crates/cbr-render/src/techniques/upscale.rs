@@ -237,15 +237,8 @@ impl Technique for Upscale {
         let this = &*self;
         ctx.submit("frame", |cmd, profiler, gs| {
             let t = &this.targets;
-            this.pass.record(
-                cmd,
-                profiler,
-                gs,
-                &t.colors(),
-                &t.depth,
-                counter,
-                &this.config,
-            );
+            this.pass
+                .record_targets(cmd, profiler, gs, t, counter, &this.config);
             this.up.record(cmd, profiler, t);
             let o = &this.up.out;
             this.readbacks

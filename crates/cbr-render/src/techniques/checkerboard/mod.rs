@@ -181,7 +181,7 @@ impl Technique for Checkerboard {
             let t = &this.targets;
             let config = &this.configs[parity as usize];
             this.pass
-                .record(cmd, profiler, gs, &t.colors(), &t.depth, counter, config);
+                .record_targets(cmd, profiler, gs, t, counter, config);
             if let Some(r) = &this.resolve {
                 let pre = this.prepass.as_ref().map(|p| (&p.ids, &p.depth));
                 r.pass.record(cmd, profiler, t, pre, &rf);
