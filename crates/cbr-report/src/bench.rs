@@ -44,24 +44,58 @@ impl BenchDir {
             .map(Vec::as_slice)
             .unwrap_or(&[])
     }
+
+    /// The technique every error of this folder is measured against: `reference` (a technique
+    /// spec such as `native` or `ssaa:16`), else the rows' `reference`; bench.json files from
+    /// before the field: native.
+    pub(crate) fn reference(&self) -> &str {
+        self.recorded_reference().unwrap_or("native")
+    }
+
+    /// The reference as bench.json records it (top level, else on the rows); None in files from
+    /// before the field.
+    pub(crate) fn recorded_reference(&self) -> Option<&str> {
+        self.json["reference"]
+            .as_str()
+            .or_else(|| self.rows().iter().find_map(|r| r["reference"].as_str()))
+    }
+
+    /// The reference's own snapshot at `w`x`h` (`reference_images`, path relative to the
+    /// folder), with key `image` or `exr`. Older files have none: the native row's images are the
+    /// reference.
+    pub(crate) fn reference_file(&self, w: u64, h: u64, key: &str) -> Option<&str> {
+        self.json["reference_images"][format!("{w}x{h}")][key].as_str()
+    }
+
+    /// Rows grouped by (scene, width, height), in order of appearance.
+    pub(crate) fn groups(&self) -> Vec<Group<'_>> {
+        let mut out: Vec<Group> = Vec::new();
+        for r in self.rows() {
+            let key = (
+                r["scene"].as_str().unwrap_or("").to_string(),
+                r["width"].as_u64().unwrap_or(0),
+                r["height"].as_u64().unwrap_or(0),
+            );
+            match out.iter_mut().find(|g| g.key == key) {
+                Some(g) => g.rows.push(r),
+                None => out.push(Group {
+                    key,
+                    rows: vec![r],
+                    reference: self.reference(),
+                }),
+            }
+        }
+        out
+    }
 }
 
 /// (scene, width, height).
 pub(crate) type GroupKey = (String, u64, u64);
 
-/// Rows of one bench folder grouped by (scene, width, height), in order of appearance.
-pub(crate) fn groups(rows: &[Value]) -> Vec<(GroupKey, Vec<&Value>)> {
-    let mut out: Vec<(GroupKey, Vec<&Value>)> = Vec::new();
-    for r in rows {
-        let k = (
-            r["scene"].as_str().unwrap_or("").to_string(),
-            r["width"].as_u64().unwrap_or(0),
-            r["height"].as_u64().unwrap_or(0),
-        );
-        match out.iter_mut().find(|(g, _)| *g == k) {
-            Some((_, v)) => v.push(r),
-            None => out.push((k, vec![r])),
-        }
-    }
-    out
+/// The rows of one scene at one resolution of a bench folder.
+pub(crate) struct Group<'a> {
+    pub key: GroupKey,
+    pub rows: Vec<&'a Value>,
+    /// What the rows' errors are measured against (the folder's reference).
+    pub reference: &'a str,
 }

@@ -34,9 +34,11 @@ pub(crate) fn outlines(crops: &[[u64; 4]]) -> String {
         .collect()
 }
 
-/// Every crop window, magnified x4-x8, for every panel (name, image id).
+/// Every crop window, magnified x4-x8, for every panel (name, image id); the windows are where
+/// FLIP against `reference` is highest.
 pub(crate) fn crops(
     html: &mut String,
+    reference: &str,
     crops: &[[u64; 4]],
     panels: &[(String, String)],
     w: u64,
@@ -45,8 +47,10 @@ pub(crate) fn crops(
     if crops.is_empty() {
         return;
     }
-    html.push_str(
-        "<h3>Crops: the windows with the highest FLIP (outlined in the reference)</h3>\n",
+    let _ = writeln!(
+        html,
+        "<h3>Crops: the windows with the highest FLIP vs {} (outlined in the reference)</h3>",
+        esc(reference)
     );
     for c in crops {
         let mag = (240 / c[2].max(1)).clamp(4, 8);

@@ -6,7 +6,8 @@ use serde_json::Value;
 
 use crate::util::{PALETTE, esc, num};
 
-pub(crate) fn error_curves(html: &mut String, g: &[&Value]) {
+/// FLIP mean against `reference` per frame; the legend and the y axis name the reference.
+pub(crate) fn error_curves(html: &mut String, g: &[&Value], reference: &str) {
     let series: Vec<(&str, Vec<(f64, f64)>)> = g
         .iter()
         .filter_map(|r| {
@@ -33,9 +34,18 @@ pub(crate) fn error_curves(html: &mut String, g: &[&Value]) {
     let y1 = (y1 * 1.1).max(1e-6);
     let sx = |x: f64| ml + (x - x0) / (x1 - x0) * (w - ml - mr);
     let sy = |y: f64| h - mb - y / y1 * (h - mt - mb);
+    let vs = format!("vs {}", esc(reference));
     let _ = writeln!(
         html,
-        "<svg width=\"{w}\" height=\"{h}\" role=\"img\" aria-label=\"FLIP per frame\">"
+        "<svg width=\"{w}\" height=\"{h}\" role=\"img\" aria-label=\"FLIP per frame {vs}\">"
+    );
+    let _ = writeln!(
+        html,
+        "<text x=\"14\" y=\"{:.1}\" transform=\"rotate(-90 14 {:.1})\" text-anchor=\"middle\">FLIP mean {vs}</text><text x=\"{:.1}\" y=\"{:.1}\">FLIP mean {vs}:</text>",
+        (mt + h - mb) / 2.0,
+        (mt + h - mb) / 2.0,
+        w - mr + 8.0,
+        mt + 12.0
     );
     let _ = writeln!(
         html,
@@ -64,7 +74,7 @@ pub(crate) fn error_curves(html: &mut String, g: &[&Value]) {
             "<polyline fill=\"none\" stroke=\"{c}\" stroke-width=\"1.5\" points=\"{}\"/><text x=\"{:.1}\" y=\"{:.1}\" fill=\"{c}\">{}</text>",
             d.join(" "),
             w - mr + 8.0,
-            mt + 12.0 + 14.0 * k as f64,
+            mt + 26.0 + 14.0 * k as f64,
             esc(name)
         );
     }

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use base64::Engine as _;
 use serde_json::Value;
 
-use crate::bench::BenchDir;
+use crate::bench::{BenchDir, Group};
 use crate::util::{esc, relative, url};
 use crate::{Options, ReportError, Result};
 
@@ -88,8 +88,9 @@ impl<'a> Ctx<'a> {
     }
 }
 
-/// Links to bench.json, bench.csv and each configuration's EXR.
-pub(crate) fn raw_files(ctx: &Ctx, html: &mut String, b: &BenchDir, g: &[&Value]) {
+/// Links to bench.json, bench.csv, the reference's EXR (when it has its own snapshot) and each
+/// configuration's EXR.
+pub(crate) fn raw_files(ctx: &Ctx, html: &mut String, b: &BenchDir, g: &Group) {
     html.push_str("<h3>Raw files</h3><ul>");
     let _ = write!(
         html,
@@ -97,7 +98,16 @@ pub(crate) fn raw_files(ctx: &Ctx, html: &mut String, b: &BenchDir, g: &[&Value]
         ctx.link(&b.dir, "bench.json"),
         ctx.link(&b.dir, "bench.csv")
     );
-    for r in g {
+    let (_, w, h) = g.key;
+    if let Some(exr) = b.reference_file(w, h, "exr") {
+        let _ = write!(
+            html,
+            "<li><a href=\"{}\">{} (reference)</a> (EXR, all layers)</li>",
+            ctx.link(&b.dir, exr),
+            esc(g.reference)
+        );
+    }
+    for r in &g.rows {
         if let Some(exr) = r["images"]["exr"].as_str() {
             let _ = write!(
                 html,

@@ -14,8 +14,6 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use serde_json::Value;
-
 mod bench;
 mod chart;
 mod crops;
@@ -33,7 +31,7 @@ mod viewer;
 pub use bench::BenchDir;
 pub use util::relative;
 
-use bench::GroupKey;
+use bench::Group;
 use files::Ctx;
 use util::esc;
 
@@ -59,35 +57,35 @@ pub struct Options {
 }
 
 /// One scene at one resolution of one bench folder: chart, viewer, crops, timing bars, error
-/// curves and raw files.
+/// curves and raw files; every error names the group's reference.
 fn scene_section(
     ctx: &mut Ctx,
     html: &mut String,
     bench: usize,
     b: &BenchDir,
-    key: &GroupKey,
-    g: &[&Value],
+    g: &Group,
     viewer_id: usize,
 ) -> Result<()> {
-    let (scene, w, h) = key;
+    let (scene, w, h) = &g.key;
     let _ = writeln!(
         html,
-        "<h2 id=\"scene-{viewer_id}\">{} at {w}x{h}</h2>",
-        esc(scene)
+        "<h2 id=\"scene-{viewer_id}\">{} at {w}x{h}, errors vs {}</h2>",
+        esc(scene),
+        esc(g.reference)
     );
-    chart::chart(html, g);
+    chart::chart(html, &g.rows, g.reference);
     let Some(panels) = viewer::panels(ctx, bench, b, g)? else {
         html.push_str("<p class=\"muted\">No images in this bench folder.</p>");
         return Ok(());
     };
-    let windows = crops::windows(g);
+    let windows = crops::windows(&g.rows);
     viewer::viewer(html, &panels, *w, *h, &windows);
     viewer::colour_bar(html, &ctx.opts.colormap);
-    crops::crops(html, &windows, &panels.panels, *w, *h);
+    crops::crops(html, g.reference, &windows, &panels.panels, *w, *h);
     html.push_str("<h3>GPU time per pass (medians)</h3>\n");
-    timing::timing_bars(html, g);
-    html.push_str("<h3>FLIP per frame</h3>\n");
-    curves::error_curves(html, g);
+    timing::timing_bars(html, &g.rows);
+    let _ = writeln!(html, "<h3>FLIP per frame vs {}</h3>", esc(g.reference));
+    curves::error_curves(html, &g.rows, g.reference);
     files::raw_files(ctx, html, b, g);
     Ok(())
 }
@@ -100,8 +98,8 @@ pub fn render(benches: &[BenchDir], opts: &Options) -> Result<String> {
     summary::summary_table(&mut body, benches);
     let mut viewer_id = 0;
     for (i, b) in benches.iter().enumerate() {
-        for (key, g) in bench::groups(b.rows()) {
-            scene_section(&mut ctx, &mut body, i, b, &key, &g, viewer_id)?;
+        for g in b.groups() {
+            scene_section(&mut ctx, &mut body, i, b, &g, viewer_id)?;
             viewer_id += 1;
         }
     }
@@ -110,8 +108,22 @@ pub fn render(benches: &[BenchDir], opts: &Options) -> Result<String> {
         .map(|b| b.json["scene"]["name"].as_str().unwrap_or("?").to_string())
         .collect::<Vec<_>>()
         .join(", ");
+    let mut references: Vec<&str> = Vec::new();
+    for g in benches.iter().flat_map(BenchDir::groups) {
+        if !references.contains(&g.reference) {
+            references.push(g.reference);
+        }
+    }
+    let against = match references.as_slice() {
+        [] => "the reference".to_string(),
+        [r] => esc(r),
+        rs => format!(
+            "{} (per bench folder)",
+            rs.iter().map(|r| esc(r)).collect::<Vec<_>>().join(" or ")
+        ),
+    };
     Ok(format!(
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>cbr report: {t}</title>\n<style>\n{css}</style></head>\n<body>\n<h1>cbr report: {t}</h1>\n<p class=\"muted\">Speed against error of checkerboard rendering techniques, each against native at the same resolution. <a href=\"#summary\">Summary</a> · <a href=\"#provenance\">Provenance</a></p>\n{body}\n<script>\nconst IMAGES = {images};\n{js}\n</script>\n</body></html>\n",
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>cbr report: {t}</title>\n<style>\n{css}</style></head>\n<body>\n<h1>cbr report: {t}</h1>\n<p class=\"muted\">Speed against error of checkerboard rendering techniques, each against {against} at the same resolution. <a href=\"#summary\">Summary</a> · <a href=\"#provenance\">Provenance</a></p>\n{body}\n<script>\nconst IMAGES = {images};\n{js}\n</script>\n</body></html>\n",
         t = esc(&title),
         css = include_str!("assets/report.css"),
         images = ctx.images_json(),

@@ -29,7 +29,7 @@ pub(crate) fn provenance(html: &mut String, benches: &[BenchDir], created: &str)
             .unwrap_or_default();
         let _ = writeln!(
             html,
-            "<table class=\"prov\">{}{}{}{}{}{}{}{}{}{}</table>",
+            "<table class=\"prov\">{}{}{}{}{}{}{}{}{}{}{}</table>",
             row("bench folder", b.dir.display().to_string()),
             row("command", cmd),
             row("git commit", s(&j["git_commit"])),
@@ -64,6 +64,13 @@ pub(crate) fn provenance(html: &mut String, benches: &[BenchDir], created: &str)
                 format!("{}; {}", s(&p["timing"]), s(&p["frame_ms"]))
             ),
             row("display transform", s(&p["display"])),
+            row(
+                "reference (every error is against it)",
+                match b.recorded_reference() {
+                    Some(r) => r.to_string(),
+                    None => "native (bench.json from before the reference field)".into(),
+                }
+            ),
             row(
                 "metrics",
                 format!("{}; reference: {}", s(&p["metrics"]), s(&p["reference"]))

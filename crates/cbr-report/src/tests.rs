@@ -126,27 +126,257 @@ fn options(out: &std::path::Path, assets_dir: Option<std::path::PathBuf>) -> Opt
     }
 }
 
+fn report(dirs: &[(&str, serde_json::Value)]) -> String {
+    let d = tempfile::tempdir().unwrap();
+    let benches: Vec<BenchDir> = dirs
+        .iter()
+        .map(|(name, json)| {
+            let dir = d.path().join(name);
+            std::fs::create_dir_all(&dir).unwrap();
+            write_fixture(&dir, json)
+        })
+        .collect();
+    render(&benches, &options(&d.path().join("report.html"), None)).unwrap()
+}
+
+/// The header cells (data-key, inner HTML) of every summary table.
+fn summary_headers(html: &str) -> Vec<Vec<(String, String)>> {
+    html.split("<table class=\"sortable\"")
+        .skip(1)
+        .map(|t| {
+            let head = &t[..t.find("</thead>").unwrap()];
+            head.split("<th ")
+                .skip(1)
+                .map(|th| {
+                    let k = th.find("data-key=\"").unwrap() + 10;
+                    let key = &th[k..k + th[k..].find('"').unwrap()];
+                    let body = &th[th.find('>').unwrap() + 1..th.find("</th>").unwrap()];
+                    (key.to_string(), body.to_string())
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The rows of summary table `t`: (configuration at resolution, column key -> cell text).
+fn summary_rows(html: &str, t: usize) -> Vec<(String, Vec<(String, String)>)> {
+    let keys: Vec<String> = summary_headers(html)[t]
+        .iter()
+        .map(|h| h.0.clone())
+        .collect();
+    let table = html.split("<table class=\"sortable\"").nth(t + 1).unwrap();
+    let body = &table[table.find("<tbody>").unwrap()..table.find("</tbody>").unwrap()];
+    body.split("<tr>")
+        .skip(1)
+        .map(|tr| {
+            let cells: Vec<String> = tr
+                .split("<td")
+                .skip(1)
+                .map(|td| td[td.find('>').unwrap() + 1..td.find("</td>").unwrap()].to_string())
+                .collect();
+            assert_eq!(cells.len(), keys.len());
+            let name = format!("{}@{}", cells[2], cells[1]);
+            (name, keys.iter().cloned().zip(cells).collect())
+        })
+        .collect()
+}
+
+fn cell<'a>(rows: &'a [(String, Vec<(String, String)>)], row: &str, key: &str) -> &'a str {
+    let r = &rows.iter().find(|r| r.0 == row).unwrap().1;
+    &r.iter().find(|c| c.0 == key).unwrap().1
+}
+
+const ERROR_KEYS: [&str; 6] = [
+    "psnr",
+    "ssim",
+    "flip_mean",
+    "flip_median",
+    "flip_edge",
+    "relmse",
+];
+
+/// Every error column of `table` (and the Pareto column) says `vs reference`; `edge`: whether
+/// the edge FLIP column is there.
+fn assert_headers(table: &[(String, String)], reference: &str, edge: bool) {
+    let vs = format!("<br><span class=\"vs\">vs {reference}</span>");
+    for key in ERROR_KEYS.iter().chain(&["pareto"]) {
+        match table.iter().find(|(k, _)| k == key) {
+            Some((_, body)) => assert!(body.ends_with(&vs), "{key}: {body}"),
+            None => assert!(*key == "flip_edge" && !edge, "no {key} column"),
+        }
+    }
+    assert_eq!(table.iter().any(|(k, _)| k == "flip_edge"), edge);
+    for (k, body) in table {
+        if !ERROR_KEYS.contains(&k.as_str()) && k != "pareto" {
+            assert!(!body.contains("vs "), "{k}: {body}");
+        }
+    }
+}
+
 #[test]
 fn old_form_renders_every_section() {
-    let d = tempfile::tempdir().unwrap();
-    let b = write_fixture(d.path(), &fixture_json(false, "native"));
-    let html = render(&[b], &options(&d.path().join("report.html"), None)).unwrap();
+    let html = report(&[("a", fixture_json(false, "native"))]);
     for s in [
         "<h2 id=\"provenance\">",
         "<table class=\"sortable\" id=\"summary-table\">",
-        "<h2 id=\"scene-0\">demo at 8x6</h2>",
-        "<h2 id=\"scene-1\">demo at 16x12</h2>",
+        "<h2 id=\"scene-0\">demo at 8x6, errors vs native</h2>",
+        "<h2 id=\"scene-1\">demo at 16x12, errors vs native</h2>",
         "<svg class=\"chart\"",
         "data-name=\"native (reference)\"",
         "class=\"crop-outline\"",
         "GPU time per pass",
-        "aria-label=\"FLIP per frame\"",
-        "<a href=\"bench.json\">bench.json</a>",
+        "aria-label=\"FLIP per frame vs native\"",
+        "<a href=\"a/bench.json\">bench.json</a>",
     ] {
         assert!(html.contains(s), "{s}");
     }
     // Every image once: 2 resolutions x (3 images + 2 FLIP maps).
     assert_eq!(html.matches("data:image/png;base64,").count(), 10);
+}
+
+#[test]
+fn old_form_errors_say_vs_native() {
+    let html = report(&[("a", fixture_json(false, "native"))]);
+    let tables = summary_headers(&html);
+    assert_eq!(tables.len(), 1);
+    assert_headers(&tables[0], "native", false);
+    for s in [
+        "each against native at the same resolution",
+        "native (bench.json from before the reference field)",
+        ">FLIP mean vs native (log scale)</text>",
+        "<h3>Viewer (frame 6, reference: native)</h3>",
+        "data-name=\"FLIP upscale:bilinear vs native\"",
+        "the highest FLIP vs native (outlined in the reference)",
+        "<h3>FLIP per frame vs native</h3>",
+        ">FLIP mean vs native:</text>",
+    ] {
+        assert!(html.contains(s), "{s}");
+    }
+    assert!(!html.contains("ssaa"));
+    assert!(!html.contains("FLIP native"), "native is the reference");
+    assert!(!html.contains("vs reference"));
+}
+
+#[test]
+fn new_form_names_its_reference_and_adds_edge_flip() {
+    let html = report(&[("a", fixture_json(true, "ssaa:16"))]);
+    assert!(html.contains("vs ssaa:16"));
+    assert!(!html.contains("vs native"), "no error is against native");
+    let tables = summary_headers(&html);
+    assert_eq!(tables.len(), 1);
+    assert_headers(&tables[0], "ssaa:16", true);
+    // The edge column: two rows with a value, upscale's is null; native is measured too.
+    let rows = summary_rows(&html, 0);
+    assert_eq!(rows.len(), 6);
+    assert_eq!(cell(&rows, "native@8x6", "flip_edge"), "0.1000");
+    assert_eq!(
+        cell(&rows, "checkerboard:rotated:ours@8x6", "flip_edge"),
+        "0.1500"
+    );
+    assert_eq!(cell(&rows, "upscale:bilinear@8x6", "flip_edge"), "–");
+    assert_eq!(cell(&rows, "native@8x6", "flip_mean"), "0.0300");
+    assert_eq!(cell(&rows, "native@16x12", "psnr"), "30.00");
+    // ... a point, a technique panel and a FLIP map.
+    assert!(html.contains("<title>native: 1.500 ms, FLIP vs ssaa:16 0.0300</title>"));
+    assert!(html.contains("data-name=\"native\""));
+    assert!(html.contains("{&quot;im&quot;:&quot;im1&quot;,&quot;name&quot;:&quot;native&quot;}"));
+    assert!(html.contains("data-name=\"FLIP native vs ssaa:16\""));
+    // The reference panel and the wipe's reference are the reference's own snapshot.
+    assert!(html.contains("<img alt=\"ssaa:16 (reference)\" data-im=\"im0\""));
+    assert!(html.contains("<img alt=\"reference\" data-im=\"im0\""));
+    assert!(html.contains(&format!(
+        "\"im0\":\"data:image/png;base64,{}\"",
+        base64::Engine::encode(
+            &base64::engine::general_purpose::STANDARD,
+            "images/8x6/ref.png"
+        )
+    )));
+    assert!(!html.contains("native (reference)"));
+    assert!(html.contains("<a href=\"a/frames/8x6/ref.exr\">ssaa:16 (reference)</a>"));
+    for s in [
+        "each against ssaa:16 at the same resolution",
+        "<h2 id=\"scene-0\">demo at 8x6, errors vs ssaa:16</h2>",
+        "<tr><th class=\"t\">reference (every error is against it)</th><td>ssaa:16</td></tr>",
+        ">FLIP mean vs ssaa:16 (log scale)</text>",
+        "<h3>Viewer (frame 6, reference: ssaa:16)</h3>",
+        "the highest FLIP vs ssaa:16 (outlined in the reference)",
+        "<h3>FLIP per frame vs ssaa:16</h3>",
+        ">FLIP mean vs ssaa:16:</text>",
+    ] {
+        assert!(html.contains(s), "{s}");
+    }
+    // 2 resolutions x (reference + 3 images + 3 FLIP maps).
+    assert_eq!(html.matches("data:image/png;base64,").count(), 14);
+}
+
+#[test]
+fn new_form_against_native() {
+    let html = report(&[("a", fixture_json(true, "native"))]);
+    let tables = summary_headers(&html);
+    assert_headers(&tables[0], "native", true);
+    assert!(html.contains("data-name=\"native (reference)\""));
+    assert!(html.contains(
+        "<tr><th class=\"t\">reference (every error is against it)</th><td>native</td></tr>"
+    ));
+}
+
+#[test]
+fn reference_from_the_top_level_or_the_rows() {
+    let mut only_top = fixture_json(true, "ssaa:16");
+    for r in only_top["rows"].as_array_mut().unwrap() {
+        r.as_object_mut().unwrap().remove("reference");
+    }
+    let mut only_rows = fixture_json(true, "ssaa:16");
+    only_rows.as_object_mut().unwrap().remove("reference");
+    for json in [only_top, only_rows] {
+        let html = report(&[("a", json)]);
+        assert_headers(&summary_headers(&html)[0], "ssaa:16", true);
+        assert!(!html.contains("vs native"));
+        assert!(html.contains("<td>ssaa:16</td>"), "provenance");
+        assert!(html.contains("data-name=\"ssaa:16 (reference)\""));
+    }
+}
+
+#[test]
+fn mixed_references_are_labelled_per_folder() {
+    let html = report(&[
+        ("old", fixture_json(false, "native")),
+        ("new", fixture_json(true, "ssaa:16")),
+    ]);
+    let tables = summary_headers(&html);
+    assert_eq!(tables.len(), 2, "one table per reference");
+    assert_headers(&tables[0], "native", false);
+    assert_headers(&tables[1], "ssaa:16", true);
+    let native = html.find("<h3>Errors against native</h3>").unwrap();
+    let ssaa = html.find("<h3>Errors against ssaa:16</h3>").unwrap();
+    assert!(native < ssaa);
+    assert!(html.contains("each against native or ssaa:16 (per bench folder) at the same"));
+    for (id, reference) in [(0, "native"), (1, "native"), (2, "ssaa:16"), (3, "ssaa:16")] {
+        let i = html.find(&format!("<h2 id=\"scene-{id}\">")).unwrap();
+        let end = html[i + 1..]
+            .find("<h2 ")
+            .map(|e| i + 1 + e)
+            .unwrap_or(html.len());
+        let section = &html[i..end];
+        let other = if reference == "native" {
+            "ssaa:16"
+        } else {
+            "native"
+        };
+        assert!(
+            section.contains(&format!("errors vs {reference}</h2>")),
+            "{id}"
+        );
+        assert!(
+            section.contains(&format!("FLIP mean vs {reference} (log scale)")),
+            "{id}"
+        );
+        assert!(
+            section.contains(&format!("FLIP per frame vs {reference}")),
+            "{id}"
+        );
+        assert!(!section.contains(&format!("vs {other}")), "{id}");
+    }
 }
 
 #[test]

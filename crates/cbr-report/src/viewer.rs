@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use serde_json::Value;
 
 use crate::Result;
-use crate::bench::BenchDir;
+use crate::bench::{BenchDir, Group};
 use crate::crops;
 use crate::files::Ctx;
 use crate::util::esc;
@@ -19,46 +19,62 @@ pub(crate) struct Panels {
     pub techs: Vec<(String, String)>,
     /// The reference's image id.
     pub reference: String,
+    /// What the reference is (a technique spec: native, ssaa:16).
+    pub reference_name: String,
     /// The frame the images show.
     pub frame: Option<u64>,
 }
 
-/// The viewer's panels, or None when the rows carry no reference image.
+/// The viewer's panels, or None when there is no reference image: the reference's own snapshot
+/// (`reference_images`), else the image of the row whose configuration is the reference (older
+/// files: native).
 pub(crate) fn panels(
     ctx: &mut Ctx,
     bench: usize,
     b: &BenchDir,
-    g: &[&Value],
+    g: &Group,
 ) -> Result<Option<Panels>> {
+    let (_, w, h) = g.key;
+    let reference_name = format!("{} (reference)", g.reference);
     let mut panels: Vec<(String, String)> = Vec::new(); // (name, image id)
     let mut techs: Vec<(String, String)> = Vec::new();
     let mut reference: Option<String> = None;
     let mut frame = None;
-    for r in g {
+    if let Some(img) = b.reference_file(w, h, "image") {
+        let id = ctx.image(bench, &b.dir, img)?;
+        reference = Some(id.clone());
+        panels.push((reference_name.clone(), id));
+    }
+    for r in &g.rows {
         let name = r["config"].as_str().unwrap_or("").to_string();
         let Some(img) = r["images"]["image"].as_str() else {
             continue;
         };
-        let id = ctx.image(bench, &b.dir, img)?;
         frame = frame.or(r["images"]["frame"].as_u64());
-        if name == "native" {
-            reference = Some(id.clone());
-            panels.insert(0, ("native (reference)".into(), id));
+        if name == g.reference {
+            if reference.is_none() {
+                let id = ctx.image(bench, &b.dir, img)?;
+                reference = Some(id.clone());
+                panels.insert(0, (reference_name.clone(), id));
+            }
         } else {
+            let id = ctx.image(bench, &b.dir, img)?;
             techs.push((name.clone(), id.clone()));
             panels.push((name, id));
         }
     }
-    for r in g {
+    for r in &g.rows {
         if let Some(flip) = r["images"]["flip"].as_str() {
             let id = ctx.image(bench, &b.dir, flip)?;
-            panels.push((format!("FLIP {}", r["config"].as_str().unwrap_or("")), id));
+            let name = r["config"].as_str().unwrap_or("");
+            panels.push((format!("FLIP {name} vs {}", g.reference), id));
         }
     }
     Ok(reference.map(|reference| Panels {
         panels,
         techs,
         reference,
+        reference_name: g.reference.to_string(),
         frame,
     }))
 }
@@ -74,8 +90,9 @@ pub(crate) fn viewer(html: &mut String, p: &Panels, w: u64, h: u64, crops: &[[u6
     );
     let _ = writeln!(
         html,
-        "<h3>Viewer (frame {})</h3><p class=\"muted\">Wheel: zoom (all panels together), drag: pan, <kbd>1</kbd>-<kbd>9</kbd>: technique in the comparison, hold <kbd>F</kbd>: flip to the reference, <kbd>R</kbd>: reset. The slider wipes between technique (left) and reference (right). Values under the cursor are display sRGB.</p>",
-        p.frame.map(|f| f.to_string()).unwrap_or_default()
+        "<h3>Viewer (frame {}, reference: {})</h3><p class=\"muted\">Wheel: zoom (all panels together), drag: pan, <kbd>1</kbd>-<kbd>9</kbd>: technique in the comparison, hold <kbd>F</kbd>: flip to the reference, <kbd>R</kbd>: reset. The slider wipes between technique (left) and reference (right). Values under the cursor are display sRGB.</p>",
+        p.frame.map(|f| f.to_string()).unwrap_or_default(),
+        esc(&p.reference_name)
     );
     let _ = writeln!(
         html,
