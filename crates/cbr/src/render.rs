@@ -166,6 +166,10 @@ pub struct RenderArgs {
     /// Display exposure in stops (PNG only; EXR stays linear). Default: the scene's.
     #[arg(long, allow_hyphen_values = true)]
     exposure: Option<f32>,
+    /// msaa: shade every sample (sampleRateShading, minSampleShading = 1, sample-interpolated
+    /// inputs); shorthand for `msaa:N:sample`.
+    #[arg(long)]
+    sample_shading: bool,
     /// Render cacheable techniques (ssaa) afresh instead of reading the frame cache.
     #[arg(long)]
     no_cache: bool,
@@ -405,6 +409,14 @@ impl RenderArgs {
             "--lod-mode gradients",
             matches!(self.lod_mode, Some(LodModeArg::Gradients)),
         )?;
+        if self.sample_shading {
+            if name != "msaa" {
+                bail!("--sample-shading applies to the msaa technique, not `{name}`");
+            }
+            if !spec.has("sample") {
+                spec = spec.with("sample");
+            }
+        }
         if self.filter.is_some() && name != "upscale" {
             bail!("--filter applies to the upscale technique, not `{name}`");
         }

@@ -411,7 +411,7 @@ fn resolve_and_upscale_write_their_layers_and_debug_views() {
         serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json"))
             .expect("json");
     assert_eq!(run["validation"]["messages"], 0, "{}", run["validation"]);
-    // The shorthand flags become one spec, recorded whole.
+    // The shorthand flags become one spec, recorded whole (more cases: shorthand_flags_edit_the_spec).
     assert_eq!(
         run["settings"]["technique"],
         "checkerboard:split:pq4k:pixel:16:debug:without-clamp:without-prepass"
@@ -700,5 +700,94 @@ fn bench_against_a_supersampled_reference_names_it_everywhere_and_caches_it() {
         );
         assert!(!o.status.success());
         assert!(stderr(&o).contains(says), "{bad}: {}", stderr(&o));
+    }
+}
+
+#[test]
+fn shorthand_flags_edit_the_spec_and_contradictions_are_refused() {
+    let d = tempfile::tempdir().expect("tempdir");
+    let spec_of = |args: &[&str]| -> Result<String, String> {
+        let out = d
+            .path()
+            .join(format!("o{}", args.join("_").replace([':', '+', '-'], "")));
+        let mut all = vec![
+            "render",
+            "builtin:demo",
+            "--width",
+            "32",
+            "--height",
+            "18",
+            "--frames",
+            "1",
+            "-o",
+            out.to_str().expect("utf8"),
+        ];
+        all.extend_from_slice(args);
+        let o = cbr(&all, &[]);
+        if !o.status.success() {
+            return Err(stderr(&o));
+        }
+        let run: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json"))
+                .expect("json");
+        Ok(run["settings"]["technique"]
+            .as_str()
+            .unwrap_or("")
+            .to_string())
+    };
+    let ok = |args: &[&str], want: &str| {
+        assert_eq!(spec_of(args).as_deref(), Ok(want), "{args:?}");
+    };
+    ok(
+        &["--technique", "checkerboard"],
+        "checkerboard:rotated:ours",
+    );
+    ok(
+        &[
+            "--technique",
+            "checkerboard",
+            "--layout",
+            "split",
+            "--id-prepass",
+        ],
+        "checkerboard:split:ours:prepass",
+    );
+    ok(
+        &["--technique", "upscale", "--filter", "bicubic"],
+        "upscale:bicubic",
+    );
+    ok(
+        &["--technique", "msaa:4", "--sample-shading"],
+        "msaa:4:sample",
+    );
+    ok(
+        &["--technique", "native+sharpen:0.25"],
+        "native+sharpen:0.25",
+    );
+    for (args, says) in [
+        (
+            &["--technique", "checkerboard:split", "--layout", "rotated"][..],
+            "contradicts",
+        ),
+        (
+            &["--technique", "native", "--layout", "split"],
+            "--layout applies to",
+        ),
+        (
+            &["--technique", "native", "--sample-shading"],
+            "--sample-shading applies to",
+        ),
+        (
+            &["--technique", "ssaa:4", "--filter", "bicubic"],
+            "--filter applies to",
+        ),
+        (
+            &["--technique", "checkerboard:split:none+sharpen"],
+            "full frame",
+        ),
+        (&["--technique", "native+blur"], "+sharpen"),
+    ] {
+        let e = spec_of(args).expect_err("refused");
+        assert!(e.contains(says) && !e.contains("panicked"), "{args:?}: {e}");
     }
 }
