@@ -63,8 +63,8 @@ impl FrameCache {
         put("format", MAGIC);
         put("spec", s.spec.to_string().as_bytes());
         let flags = format!(
-            "{}x{} lod {:?} count {} debug_lod {}",
-            s.width, s.height, s.lod_bias, s.count_shaded, s.debug_lod
+            "{}x{} lod {:?} count {} debug_lod {} jitter {:?}",
+            s.width, s.height, s.lod_bias, s.count_shaded, s.debug_lod, s.jitter
         );
         put("settings", flags.as_bytes());
         let info = gpu.info();
@@ -110,7 +110,7 @@ impl FrameCache {
     }
 
     /// The key of frame `frame` (its time and cameras are part of it).
-    pub fn key(&self, _scene: &Scene, view: &FrameView, frame: u32) -> FrameKey {
+    pub fn key(&self, view: &FrameView, frame: u32) -> FrameKey {
         let mut h = self.base.clone();
         h.update(&frame.to_le_bytes());
         let cams = format!(

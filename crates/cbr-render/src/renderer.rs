@@ -308,7 +308,7 @@ impl Renderer {
     pub fn render(&mut self, scene: &Scene, frame: u32) -> Result<FrameOutput> {
         let view = self.view(scene, frame);
         let reset = frame == 0 || self.last_frame != Some(frame - 1);
-        let key = self.cache.as_ref().map(|c| c.key(scene, &view, frame));
+        let key = self.cache.as_ref().map(|c| c.key(&view, frame));
         if let (Some(c), Some(k)) = (&self.cache, &key)
             && let Some(out) = c.load(k, frame, view.time)
         {
