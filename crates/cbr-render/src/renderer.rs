@@ -216,6 +216,7 @@ impl Renderer {
                 shaders,
                 width: w,
                 height: h,
+                exposure_stops: scene.settings.exposure,
             };
             let p = (pr.build)(&pctx, &part.params(), &inputs)
                 .map_err(|e| GpuError::Other(format!("`+{part}`: {e}")))?;

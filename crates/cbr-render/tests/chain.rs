@@ -379,3 +379,78 @@ fn post_passes_chain_and_match_their_cpu_reference() {
     assert!(Spec::parse("native+blur").is_err());
     assert_clean(&gpu);
 }
+
+/// `+fxaa` against its CPU reference on rendered frames (the demo: edges, foliage, wires; the
+/// flat triangle: one hard edge), every preset. FXAA takes `>=`/`<` decisions between lumas that
+/// tie exactly on flat colours (a search end at exactly a quarter of the gradient, equal second
+/// differences both ways); the shader's rounding (pow, fused multiply-adds) decides those. A
+/// pixel passes when it matches, within f16, the reference or one of its variants with ties
+/// (within 1e-5 relative) taken the other way; any other difference fails, and tie-decided
+/// pixels must stay rare.
+#[test]
+fn fxaa_matches_its_cpu_reference() {
+    use cbr_render::post::fxaa::{FxaaConfig, reference, reference_variants};
+    let gpu = gpu();
+    let (w, h) = (96, 54);
+    let demo = demo(w, h);
+    let (tri, _) = triangle_scene();
+    for (name, s, sw, sh) in [("demo", &demo, w, h), ("triangle", &tri, W, H)] {
+        let base = frames(&gpu, s, spec(sw, sh, "native"), &[2])[0].clone();
+        let input = rgba(&base);
+        let exposure = s.settings.exposure.exp2();
+        let mut outputs = Vec::new();
+        for preset in ["12", "29", "39"] {
+            let out = &frames(
+                &gpu,
+                s,
+                spec(sw, sh, &format!("native+fxaa:{preset}")),
+                &[2],
+            )[0];
+            outputs.push(out.color.clone());
+            let c = FxaaConfig::parse(&[preset]).expect("preset");
+            let (wu, hu) = (sw as usize, sh as usize);
+            let want = reference(wu, hu, &input, &c, exposure);
+            let got = rgba(out);
+            let close = |r: &[f32], i: usize| {
+                (0..3).all(|k| (got[4 * i + k] - r[k]).abs() <= 2e-3 * r[k].abs().max(0.05))
+            };
+            let off: Vec<usize> = (0..wu * hu)
+                .filter(|&i| !close(&want[4 * i..4 * i + 3], i))
+                .collect();
+            let bad: Vec<usize> = off
+                .iter()
+                .copied()
+                .filter(|&i| {
+                    let v = reference_variants(wu, hu, &input, &c, exposure, i % wu, i / wu, 1e-5);
+                    !v.iter().any(|r| close(r, i))
+                })
+                .collect();
+            let changed = (0..wu * hu)
+                .filter(|&i| base.color[4 * i] != out.color[4 * i])
+                .count();
+            eprintln!(
+                "{name} fxaa:{preset}: {changed} pixels filtered, {} decided by a tie, {} off",
+                off.len() - bad.len(),
+                bad.len()
+            );
+            assert!(
+                bad.is_empty(),
+                "{name} fxaa:{preset}: {} pixels match no variant, e.g. {:?}",
+                bad.len(),
+                &bad[..bad.len().min(8)]
+            );
+            assert!(off.len() * 10 <= changed, "tie-decided pixels stay rare");
+            assert!(
+                changed > 10,
+                "{name} fxaa:{preset} filters edges ({changed})"
+            );
+            assert!(out.timings.iter().any(|t| t.name == "fxaa"));
+        }
+        // The presets search differently: their outputs differ.
+        assert!(
+            outputs[0] != outputs[2],
+            "{name}: fxaa:12 and fxaa:39 differ"
+        );
+    }
+    assert_clean(&gpu);
+}

@@ -3,6 +3,7 @@
 //! [`POST_PASSES`]. A post pass built for the first link of the chain gets one input per frame
 //! parity (techniques with ping-pong histories alternate their output image).
 
+pub mod fxaa;
 pub mod sharpen;
 
 use cbr_gpu::{Cmd, Gpu, Image, Profiler, Result, Shaders};
@@ -13,6 +14,8 @@ pub struct PostBuildCtx<'a> {
     pub shaders: &'a Shaders,
     pub width: u32,
     pub height: u32,
+    /// The scene's display exposure in stops (passes that judge display-space luma use it).
+    pub exposure_stops: f32,
 }
 
 /// The frame a post pass records for.
@@ -40,7 +43,7 @@ pub struct PostRegistration {
     pub build: PostBuild,
 }
 
-pub const POST_PASSES: &[PostRegistration] = &[sharpen::REGISTRATION];
+pub const POST_PASSES: &[PostRegistration] = &[fxaa::REGISTRATION, sharpen::REGISTRATION];
 
 pub fn find(name: &str) -> Option<&'static PostRegistration> {
     POST_PASSES.iter().find(|p| p.name == name)
