@@ -4,10 +4,12 @@
 // the blend mixes linear HDR colour. Filtered taps are bilinear by hand from texel fetches with
 // clamp-to-edge addressing, so the CPU reference (crates/cbr-render/src/post/fxaa.rs) matches it
 // within float rounding; the steps below follow it one for one.
+// Display luma comes from the first pass (fxaa_luma.comp), read once per tap.
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 0, binding = BINDING_SRC) uniform sampler2D src;
 layout(set = 0, binding = BINDING_DST, rgba16f) uniform writeonly image2D dst;
+layout(set = 0, binding = BINDING_LUMA_IN) uniform sampler2D luma_in;
 layout(push_constant) uniform Push {
     ivec4 size_steps;  // W, H, number of steps, 0
     vec4 params;       // edge threshold, minimum edge threshold, sub-pixel quality, 2^exposure
@@ -18,17 +20,9 @@ vec4 texel(ivec2 p) {
     return texelFetch(src, clamp(p, ivec2(0), pc.size_steps.xy - 1), 0);
 }
 
-float display(float x) {
-    x = max(x * pc.params.w, 0.0);
-    float t = clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
-    return t <= 0.0031308 ? 12.92 * t : 1.055 * pow(t, 1.0 / 2.4) - 0.055;
+float luma_texel(ivec2 p) {
+    return texelFetch(luma_in, clamp(p, ivec2(0), pc.size_steps.xy - 1), 0).r;
 }
-
-float luma(vec3 c) {
-    return 0.299 * display(c.r) + 0.587 * display(c.g) + 0.114 * display(c.b);
-}
-
-float luma_texel(ivec2 p) { return luma(texel(p).rgb); }
 
 // Bilinear at `pos` (texel units, centres at +0.5).
 float luma_at(vec2 pos) {
@@ -59,7 +53,7 @@ void main() {
     if (any(greaterThanEqual(p, pc.size_steps.xy))) return;
     vec4 m = texel(p);
     vec2 pos_m = vec2(p) + 0.5;
-    float luma_m = luma(m.rgb);
+    float luma_m = luma_texel(p);
     float luma_n = luma_texel(p + ivec2(0, -1)), luma_s = luma_texel(p + ivec2(0, 1));
     float luma_w = luma_texel(p + ivec2(-1, 0)), luma_e = luma_texel(p + ivec2(1, 0));
 

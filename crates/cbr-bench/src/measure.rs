@@ -16,7 +16,12 @@ use crate::Config;
 use crate::output::finite_or_null;
 
 /// Passes that instrument the run rather than belong to the technique.
-pub const NOT_TECHNIQUE: [&str; 3] = ["readback", "checkerboard.unpack", "resolve.copy_floor"];
+pub const NOT_TECHNIQUE: [&str; 4] = [
+    "readback",
+    "readback.post",
+    "checkerboard.unpack",
+    "resolve.copy_floor",
+];
 
 /// A frame's RGBA16F colour as an image to compare.
 fn to_input(width: u32, height: u32, color: &[half::f16], name: &str) -> cbr_metrics::InputImage {

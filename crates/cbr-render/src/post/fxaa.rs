@@ -4,7 +4,8 @@
 //!
 //! Luma is taken in display space: the colour through the display transform cbr's PNGs and
 //! metrics use (scene exposure, Narkowicz ACES fit, clamp, sRGB OETF), then Rec. 601 weights,
-//! as FXAA expects perceptual luma. The blend itself mixes the linear HDR colour. Every
+//! as FXAA expects perceptual luma, computed once per pixel by a first pass into an R32F image
+//! (shaders/post/fxaa_luma.comp). The blend itself mixes the linear HDR colour. Every
 //! filtered lookup (FXAA's bilinear taps) is done by hand from texel fetches, in the shader and
 //! in [`reference`] alike, so the two agree within float rounding whatever a device's filtering
 //! precision; addressing clamps to the edge. shaders/post/fxaa.comp.
@@ -86,9 +87,17 @@ impl FxaaConfig {
 
 pub const MAX_STEPS: usize = 12;
 
-pub const BINDINGS: [BindingDesc; 2] = [
+/// The filter pass (shaders/post/fxaa.comp).
+pub const BINDINGS: [BindingDesc; 3] = [
     BindingDesc::one("src", 0, DescriptorKind::CombinedImageSampler),
     BindingDesc::one("dst", 1, DescriptorKind::StorageImage),
+    BindingDesc::one("luma_in", 2, DescriptorKind::CombinedImageSampler),
+];
+
+/// The luma pass (shaders/post/fxaa_luma.comp): display luma once per pixel.
+pub const LUMA_BINDINGS: [BindingDesc; 2] = [
+    BindingDesc::one("src", 0, DescriptorKind::CombinedImageSampler),
+    BindingDesc::one("luma_out", 1, DescriptorKind::StorageImage),
 ];
 
 /// Push constants (shaders/post/fxaa.comp `Push`).
@@ -104,9 +113,12 @@ struct Push {
 
 pub struct Fxaa {
     pipeline: Pipeline,
-    _layout: SetLayout,
+    luma_pipeline: Pipeline,
+    _layouts: [SetLayout; 2],
     sets: Vec<DescriptorSet>,
+    luma_sets: Vec<DescriptorSet>,
     _sampler: Sampler,
+    luma: Image,
     out: Image,
     push: Push,
 }
@@ -115,9 +127,22 @@ impl Fxaa {
     fn new(ctx: &PostBuildCtx, c: FxaaConfig, inputs: &[&Image]) -> Result<Fxaa> {
         let gpu = ctx.gpu;
         let layout = SetLayout::new(gpu, "fxaa.set_layout", &BINDINGS)?;
+        let luma_layout = SetLayout::new(gpu, "fxaa.luma.set_layout", &LUMA_BINDINGS)?;
         let mut defines: Vec<(String, String)> = BINDINGS.iter().map(BindingDesc::define).collect();
         defines.push(("MAX_STEPS".into(), MAX_STEPS.to_string()));
         let cs = ctx.shaders.compile("post/fxaa.comp", &defines)?;
+        let luma_defines: Vec<(String, String)> =
+            LUMA_BINDINGS.iter().map(BindingDesc::define).collect();
+        let luma_cs = ctx.shaders.compile("post/fxaa_luma.comp", &luma_defines)?;
+        let luma_pipeline = Pipeline::compute(
+            gpu,
+            &ComputeDesc {
+                name: "fxaa.luma",
+                shader: &luma_cs,
+                set_layouts: &[&luma_layout],
+                push_constant_bytes: 32,
+            },
+        )?;
         let pipeline = Pipeline::compute(
             gpu,
             &ComputeDesc {
@@ -135,6 +160,16 @@ impl Fxaa {
             gpu,
             &ImageDesc::new_2d("fxaa.out", COLOR_FORMAT, ctx.width, ctx.height, usage),
         )?;
+        let luma = Image::new(
+            gpu,
+            &ImageDesc::new_2d(
+                "fxaa.luma",
+                vk::Format::R32_SFLOAT,
+                ctx.width,
+                ctx.height,
+                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED,
+            ),
+        )?;
         let sets = inputs
             .iter()
             .enumerate()
@@ -146,6 +181,22 @@ impl Fxaa {
                     &[
                         Write::Sampled(0, vec![(src, &sampler)]),
                         Write::Storage(1, &out),
+                        Write::Sampled(2, vec![(&luma, &sampler)]),
+                    ],
+                )
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let luma_sets = inputs
+            .iter()
+            .enumerate()
+            .map(|(i, src)| {
+                DescriptorSet::new(
+                    gpu,
+                    &format!("fxaa.luma.set[{i}]"),
+                    &luma_layout,
+                    &[
+                        Write::Sampled(0, vec![(src, &sampler)]),
+                        Write::Storage(1, &luma),
                     ],
                 )
             })
@@ -169,9 +220,12 @@ impl Fxaa {
         };
         Ok(Fxaa {
             pipeline,
-            _layout: layout,
+            luma_pipeline,
+            _layouts: [layout, luma_layout],
             sets,
+            luma_sets,
             _sampler: sampler,
+            luma,
             out,
             push,
         })
@@ -181,13 +235,26 @@ impl Fxaa {
 impl PostPass for Fxaa {
     fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler, frame: &PostFrame, input: &Image) {
         let k = frame.frame as usize % self.sets.len();
+        let groups = (self.out.width.div_ceil(8), self.out.height.div_ceil(8));
         cmd.use_image(input, Access::ComputeSampled);
+        cmd.use_image(&self.luma, Access::ComputeStorageWrite);
+        let scope = profiler.begin(cmd, "fxaa.luma", PassKind::Compute);
+        cmd.bind_pipeline(&self.luma_pipeline);
+        cmd.bind_set(&self.luma_pipeline, 0, &self.luma_sets[k]);
+        let luma_push: [f32; 8] = bytemuck::cast([
+            bytemuck::cast::<[i32; 4], [f32; 4]>(self.push.size_steps),
+            self.push.params,
+        ]);
+        cmd.push_constants(&self.luma_pipeline, bytemuck::cast_slice(&luma_push));
+        cmd.dispatch(groups.0, groups.1, 1);
+        profiler.end(cmd, scope);
+        cmd.use_image(&self.luma, Access::ComputeSampled);
         cmd.use_image(&self.out, Access::ComputeStorageWrite);
         let scope = profiler.begin(cmd, "fxaa", PassKind::Compute);
         cmd.bind_pipeline(&self.pipeline);
         cmd.bind_set(&self.pipeline, 0, &self.sets[k]);
         cmd.push_constants(&self.pipeline, bytemuck::bytes_of(&self.push));
-        cmd.dispatch(self.out.width.div_ceil(8), self.out.height.div_ceil(8), 1);
+        cmd.dispatch(groups.0, groups.1, 1);
         profiler.end(cmd, scope);
     }
 
