@@ -11,8 +11,8 @@ layout(set = 0, binding = BINDING_ACCUM, rgba32f) uniform image2D accum;
 layout(set = 0, binding = BINDING_AUX, rg32ui) uniform uimage2D aux;
 layout(set = 0, binding = BINDING_OUT, rgba16f) uniform writeonly image2D outc;
 // x, y: size; z: the sample's index (0 starts the sum); w: 0 accumulate, 1 resolve.
-// scale: 1 / samples.
-layout(push_constant) uniform Push { ivec4 size_sample_mode; vec4 scale; } pc;
+// samples.x: the number of samples.
+layout(push_constant) uniform Push { ivec4 size_sample_mode; vec4 samples; } pc;
 
 const uint EDGE = 0x80000000u;
 
@@ -22,7 +22,7 @@ void main() {
     if (pc.size_sample_mode.w == 1) {
         // Division, not a multiply by the reciprocal: ssaa:1 must equal native bit for bit, and
         // x / 1 is exact.
-        imageStore(outc, p, imageLoad(accum, p) / float(pc.scale.y));
+        imageStore(outc, p, imageLoad(accum, p) / pc.samples.x);
         return;
     }
     vec4 c = texelFetch(color, p, 0);

@@ -95,6 +95,7 @@ impl Drop for SetLayout {
 }
 
 /// What to bind at one binding.
+#[derive(Clone)]
 pub enum Write<'a> {
     Buffer(u32, &'a Buffer),
     /// Images in `SHADER_READ_ONLY_OPTIMAL` (depth: `DEPTH_READ_ONLY_OPTIMAL`) with their samplers.

@@ -11,12 +11,11 @@
 //! precision; addressing clamps to the edge. shaders/post/fxaa.comp.
 
 use cbr_gpu::{
-    Access, BindingDesc, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Image, ImageDesc,
-    PassKind, Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout, Write, vk,
+    Access, BindingDesc, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Image, PassKind,
+    Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout, Write, vk,
 };
 
 use super::{PostBuildCtx, PostFrame, PostPass, PostRegistration};
-use crate::targets::COLOR_FORMAT;
 
 pub const REGISTRATION: PostRegistration = PostRegistration {
     name: "fxaa",
@@ -100,6 +99,16 @@ pub const LUMA_BINDINGS: [BindingDesc; 2] = [
     BindingDesc::one("luma_out", 1, DescriptorKind::StorageImage),
 ];
 
+/// Push constants of the luma pass (shaders/post/fxaa_luma.comp `Push`).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct LumaPush {
+    /// W, H, 0, 0.
+    size: [i32; 4],
+    /// .w: the exposure scale (2^stops).
+    params: [f32; 4],
+}
+
 /// Push constants (shaders/post/fxaa.comp `Push`).
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -121,6 +130,7 @@ pub struct Fxaa {
     luma: Image,
     out: Image,
     push: Push,
+    luma_push: LumaPush,
 }
 
 impl Fxaa {
@@ -140,7 +150,7 @@ impl Fxaa {
                 name: "fxaa.luma",
                 shader: &luma_cs,
                 set_layouts: &[&luma_layout],
-                push_constant_bytes: 32,
+                push_constant_bytes: std::mem::size_of::<LumaPush>() as u32,
             },
         )?;
         let pipeline = Pipeline::compute(
@@ -153,54 +163,25 @@ impl Fxaa {
             },
         )?;
         let sampler = Sampler::new(gpu, "fxaa.sampler", SamplerDesc::NEAREST)?;
-        let usage = vk::ImageUsageFlags::STORAGE
-            | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::TRANSFER_SRC;
-        let out = Image::new(
-            gpu,
-            &ImageDesc::new_2d("fxaa.out", COLOR_FORMAT, ctx.width, ctx.height, usage),
+        let out = ctx.output("fxaa.out")?;
+        let luma = ctx.image("fxaa.luma", vk::Format::R32_SFLOAT)?;
+        let sets = ctx.sets_per_input(
+            "fxaa.set",
+            &layout,
+            inputs,
+            &sampler,
+            &[
+                Write::Storage(1, &out),
+                Write::Sampled(2, vec![(&luma, &sampler)]),
+            ],
         )?;
-        let luma = Image::new(
-            gpu,
-            &ImageDesc::new_2d(
-                "fxaa.luma",
-                vk::Format::R32_SFLOAT,
-                ctx.width,
-                ctx.height,
-                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED,
-            ),
+        let luma_sets = ctx.sets_per_input(
+            "fxaa.luma.set",
+            &luma_layout,
+            inputs,
+            &sampler,
+            &[Write::Storage(1, &luma)],
         )?;
-        let sets = inputs
-            .iter()
-            .enumerate()
-            .map(|(i, src)| {
-                DescriptorSet::new(
-                    gpu,
-                    &format!("fxaa.set[{i}]"),
-                    &layout,
-                    &[
-                        Write::Sampled(0, vec![(src, &sampler)]),
-                        Write::Storage(1, &out),
-                        Write::Sampled(2, vec![(&luma, &sampler)]),
-                    ],
-                )
-            })
-            .collect::<Result<Vec<_>>>()?;
-        let luma_sets = inputs
-            .iter()
-            .enumerate()
-            .map(|(i, src)| {
-                DescriptorSet::new(
-                    gpu,
-                    &format!("fxaa.luma.set[{i}]"),
-                    &luma_layout,
-                    &[
-                        Write::Sampled(0, vec![(src, &sampler)]),
-                        Write::Storage(1, &luma),
-                    ],
-                )
-            })
-            .collect::<Result<Vec<_>>>()?;
         let mut steps = [0.0; MAX_STEPS];
         steps[..c.steps().len()].copy_from_slice(c.steps());
         let push = Push {
@@ -227,6 +208,10 @@ impl Fxaa {
             _sampler: sampler,
             luma,
             out,
+            luma_push: LumaPush {
+                size: [push.size_steps[0], push.size_steps[1], 0, 0],
+                params: push.params,
+            },
             push,
         })
     }
@@ -241,11 +226,7 @@ impl PostPass for Fxaa {
         let scope = profiler.begin(cmd, "fxaa.luma", PassKind::Compute);
         cmd.bind_pipeline(&self.luma_pipeline);
         cmd.bind_set(&self.luma_pipeline, 0, &self.luma_sets[k]);
-        let luma_push: [f32; 8] = bytemuck::cast([
-            bytemuck::cast::<[i32; 4], [f32; 4]>(self.push.size_steps),
-            self.push.params,
-        ]);
-        cmd.push_constants(&self.luma_pipeline, bytemuck::cast_slice(&luma_push));
+        cmd.push_constants(&self.luma_pipeline, bytemuck::bytes_of(&self.luma_push));
         cmd.dispatch(groups.0, groups.1, 1);
         profiler.end(cmd, scope);
         cmd.use_image(&self.luma, Access::ComputeSampled);

@@ -6,7 +6,12 @@
 pub mod fxaa;
 pub mod sharpen;
 
-use cbr_gpu::{Cmd, Gpu, Image, Profiler, Result, Shaders};
+use cbr_gpu::{Cmd, vk};
+use cbr_gpu::{
+    DescriptorSet, Gpu, Image, ImageDesc, Profiler, Result, Sampler, SetLayout, Shaders, Write,
+};
+
+use crate::targets::COLOR_FORMAT;
 
 /// What a post pass's constructor gets.
 pub struct PostBuildCtx<'a> {
@@ -16,6 +21,45 @@ pub struct PostBuildCtx<'a> {
     pub height: u32,
     /// The scene's display exposure in stops (passes that judge display-space luma use it).
     pub exposure_stops: f32,
+}
+
+impl PostBuildCtx<'_> {
+    /// A full-resolution image of `format` that a pass writes (storage) and the next link reads
+    /// (sampled).
+    pub fn image(&self, name: &str, format: vk::Format) -> Result<Image> {
+        let usage = vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::TRANSFER_SRC;
+        Image::new(
+            self.gpu,
+            &ImageDesc::new_2d(name, format, self.width, self.height, usage),
+        )
+    }
+
+    /// The pass's RGBA16F output.
+    pub fn output(&self, name: &str) -> Result<Image> {
+        self.image(name, COLOR_FORMAT)
+    }
+
+    /// One descriptor set per input image: the input sampled at binding 0, then `rest`.
+    pub fn sets_per_input(
+        &self,
+        name: &str,
+        layout: &SetLayout,
+        inputs: &[&Image],
+        sampler: &Sampler,
+        rest: &[Write],
+    ) -> Result<Vec<DescriptorSet>> {
+        inputs
+            .iter()
+            .enumerate()
+            .map(|(i, src)| {
+                let mut writes = vec![Write::Sampled(0, vec![(*src, sampler)])];
+                writes.extend(rest.iter().cloned());
+                DescriptorSet::new(self.gpu, &format!("{name}[{i}]"), layout, &writes)
+            })
+            .collect()
+    }
 }
 
 /// The frame a post pass records for.

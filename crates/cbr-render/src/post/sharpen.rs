@@ -4,12 +4,11 @@
 //! reference [`reference`] holds the shader to the formula.
 
 use cbr_gpu::{
-    Access, BindingDesc, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Image, ImageDesc,
-    PassKind, Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout, Write, vk,
+    Access, BindingDesc, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Image, PassKind,
+    Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout, Write,
 };
 
 use super::{PostBuildCtx, PostFrame, PostPass, PostRegistration};
-use crate::targets::COLOR_FORMAT;
 
 pub const REGISTRATION: PostRegistration = PostRegistration {
     name: "sharpen",
@@ -65,28 +64,14 @@ impl Sharpen {
             },
         )?;
         let sampler = Sampler::new(gpu, "sharpen.sampler", SamplerDesc::NEAREST)?;
-        let usage = vk::ImageUsageFlags::STORAGE
-            | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::TRANSFER_SRC;
-        let out = Image::new(
-            gpu,
-            &ImageDesc::new_2d("sharpen.out", COLOR_FORMAT, ctx.width, ctx.height, usage),
+        let out = ctx.output("sharpen.out")?;
+        let sets = ctx.sets_per_input(
+            "sharpen.set",
+            &layout,
+            inputs,
+            &sampler,
+            &[Write::Storage(1, &out)],
         )?;
-        let sets = inputs
-            .iter()
-            .enumerate()
-            .map(|(i, src)| {
-                DescriptorSet::new(
-                    gpu,
-                    &format!("sharpen.set[{i}]"),
-                    &layout,
-                    &[
-                        Write::Sampled(0, vec![(src, &sampler)]),
-                        Write::Storage(1, &out),
-                    ],
-                )
-            })
-            .collect::<Result<Vec<_>>>()?;
         Ok(Sharpen {
             pipeline,
             _layout: layout,

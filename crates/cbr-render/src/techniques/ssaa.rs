@@ -90,7 +90,8 @@ pub const BINDINGS: [BindingDesc; 5] = {
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct Push {
     size_sample_mode: [i32; 4],
-    scale: [f32; 4],
+    /// x: the number of samples (the divisor of the resolve).
+    samples: [f32; 4],
 }
 
 pub struct Ssaa {
@@ -194,7 +195,7 @@ impl Ssaa {
                 sample as i32,
                 i32::from(resolve),
             ],
-            scale: [1.0 / samples as f32, samples as f32, 0.0, 0.0],
+            samples: [samples as f32, 0.0, 0.0, 0.0],
         }
     }
 

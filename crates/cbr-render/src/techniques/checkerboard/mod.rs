@@ -65,8 +65,6 @@ pub struct Checkerboard {
     unpack: UnpackPass,
     resolve: Option<Resolve>,
     prepass: Option<IdPass>,
-    /// (frame parity, history reset) of the last frame rendered.
-    last: (u32, bool),
 }
 
 impl Checkerboard {
@@ -121,7 +119,6 @@ impl Checkerboard {
             unpack,
             resolve,
             prepass,
-            last: (0, true),
         })
     }
 
@@ -169,7 +166,6 @@ impl Technique for Checkerboard {
             reset: ctx.reset,
             reproj: reprojection(&view),
         };
-        self.last = (parity, ctx.reset);
         let counter = ctx.counter;
         let this = &*self;
         ctx.submit("frame", |cmd, profiler, gs| {
@@ -201,7 +197,7 @@ impl Technique for Checkerboard {
     }
 
     fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput> {
-        let (parity, reset) = self.last;
+        let (parity, reset) = (ctx.frame % 2, ctx.reset);
         let near = ctx.view.camera.near;
         let px: &[UnpackedPixel] = bytemuck::cast_slice(self.unpack.out.bytes()?);
         let rz: Vec<f32> = px.iter().map(|p| p.velocity_depth_mask[2]).collect();
