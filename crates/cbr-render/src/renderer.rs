@@ -185,6 +185,13 @@ impl Renderer {
             Location::GpuToCpu,
         )?;
         let (w, h) = (settings.width, settings.height);
+        let mut post_regs = Vec::new();
+        for part in &spec.post {
+            let pr = crate::post::find(&part.name)
+                .ok_or_else(|| GpuError::Other(format!("no post pass `+{}`", part.name)))?;
+            post_regs.push((pr, part));
+        }
+        let geometry = post_regs.iter().any(|(pr, _)| pr.geometry);
         let ctx = BuildCtx {
             gpu,
             shaders,
@@ -193,12 +200,30 @@ impl Renderer {
             width: w,
             height: h,
             instrument: settings.instrument,
+            geometry,
         };
         let technique = (reg.build)(&ctx, &params)?;
+        let geometries = match geometry {
+            false => Vec::new(),
+            true => (0..2)
+                .map(|f| technique.geometry(f))
+                .collect::<Option<Vec<_>>>()
+                .ok_or_else(|| {
+                    let needs: Vec<String> = post_regs
+                        .iter()
+                        .filter(|(pr, _)| pr.geometry)
+                        .map(|(_, part)| format!("`+{part}`"))
+                        .collect();
+                    GpuError::Other(format!(
+                        "`{spec}`: {} needs the frame's geometry (velocity, depth, IDs), and `{}` \
+                         gives none",
+                        needs.join(", "),
+                        spec.technique
+                    ))
+                })?,
+        };
         let mut post: Vec<Box<dyn PostPass>> = Vec::new();
-        for part in &spec.post {
-            let pr = crate::post::find(&part.name)
-                .ok_or_else(|| GpuError::Other(format!("no post pass `+{}`", part.name)))?;
+        for (pr, part) in post_regs {
             let inputs: Vec<&cbr_gpu::Image> = match post.last() {
                 Some(p) => vec![p.output()],
                 None => (0..2)
@@ -217,11 +242,18 @@ impl Renderer {
                 width: w,
                 height: h,
                 exposure_stops: scene.settings.exposure,
+                geometry: &geometries,
             };
             let p = (pr.build)(&pctx, &part.params(), &inputs)
                 .map_err(|e| GpuError::Other(format!("`+{part}`: {e}")))?;
             post.push(p);
         }
+        if post.iter().filter(|p| p.jitter(0).is_some()).count() > 1 {
+            return Err(GpuError::Other(format!(
+                "`{spec}`: more than one post pass jitters the frame"
+            )));
+        }
+        drop(geometries);
         let post_rb = match post.last() {
             Some(p) => Some(Readback::for_image(gpu, "readback.post", p.output())?),
             None => None,
@@ -277,6 +309,15 @@ impl Renderer {
         self.last_frame = None;
     }
 
+    /// The frame's sub-pixel jitter: the setting plus the jittering post pass's (TAA).
+    fn jitter(&self, frame: u32) -> [f32; 2] {
+        let j = self.settings.jitter;
+        match self.post.iter().find_map(|p| p.jitter(frame)) {
+            Some(p) => [j[0] + p[0], j[1] + p[1]],
+            None => j,
+        }
+    }
+
     fn view(&self, scene: &Scene, frame: u32) -> FrameView {
         let time = scene.time_of_frame(frame);
         let s = &self.settings;
@@ -296,7 +337,7 @@ impl Renderer {
             frame_index: frame,
             raster: RasterUniforms {
                 viewport: (s.width as f32, s.height as f32),
-                jitter: [s.jitter, [0.0; 2]],
+                jitter: [self.jitter(frame), [0.0; 2]],
                 flags,
                 ..Default::default()
             },
@@ -305,10 +346,12 @@ impl Renderer {
 
     /// Renders frame `frame` of `scene` (the scene this renderer was built for) and reads it back.
     /// Histories (resolves, post passes) continue from frame f - 1 when that was the last frame
-    /// rendered, and reset otherwise.
+    /// rendered and no camera cut lies between the two, and reset otherwise.
     pub fn render(&mut self, scene: &Scene, frame: u32) -> Result<FrameOutput> {
         let view = self.view(scene, frame);
-        let reset = frame == 0 || self.last_frame != Some(frame - 1);
+        let reset = frame == 0
+            || self.last_frame != Some(frame - 1)
+            || scene.camera.cut_between(view.prev_time, view.time);
         let key = self.cache.as_ref().map(|c| c.key(&view, frame));
         if let (Some(c), Some(k)) = (&self.cache, &key)
             && let Some(out) = c.load(k, frame, view.time)
@@ -337,7 +380,11 @@ impl Renderer {
             if self.post.is_empty() {
                 return Ok(());
             }
-            let pf = PostFrame { frame, reset };
+            let pf = PostFrame {
+                frame,
+                reset,
+                jitter: ctx.view.raster.jitter[0],
+            };
             let (post, rb, technique) = (&self.post, &self.post_rb, &self.technique);
             ctx.submit("post", |cmd, profiler, _| {
                 let mut input = technique.color(frame);

@@ -22,6 +22,21 @@ pub struct BuildCtx<'a> {
     pub height: u32,
     /// Also build instrumentation passes (the resolve's copy-kernel floor) for benchmarks.
     pub instrument: bool,
+    /// A post pass of the chain reads the frame's geometry ([`Technique::geometry`]): write
+    /// full-resolution velocity, depth and IDs where the technique would not otherwise.
+    pub geometry: bool,
+}
+
+/// A frame's geometry at full resolution (or, for `upscale`, at its raster's resolution: readers
+/// scale by the image sizes), sampled by temporal post passes.
+pub struct Geometry<'a> {
+    /// RG32F: screen motion since the previous frame in pixels of this image (current - previous),
+    /// without the frame's jitter.
+    pub velocity: &'a Image,
+    /// Reverse-Z depth (0 = nothing drawn): D32 or R32F, read through `.r` of a sampler.
+    pub depth: &'a Image,
+    /// RG32UI: object ID (0 = background), primitive ID.
+    pub ids: &'a Image,
 }
 
 /// What a technique gets for one frame. `view` is the frame's camera at the output resolution
@@ -94,6 +109,12 @@ pub trait Technique {
     /// The frame's full-resolution HDR colour on the GPU (sampled), input of the post chain;
     /// `None` where the technique has no full frame (the raw checkerboard, `:none`).
     fn color(&self, frame: u32) -> Option<&Image>;
+    /// The frame's full-resolution geometry on the GPU, input of temporal post passes (`+taa`):
+    /// `None` where the technique has none (`ssaa`, the raw checkerboard). Only asked for, and
+    /// only needed, when the [`BuildCtx::geometry`] flag was set.
+    fn geometry(&self, _frame: u32) -> Option<Geometry<'_>> {
+        None
+    }
     /// The frame's layers read back to the host. The sequencer fills index, time, timings and
     /// the shaded-fragment count.
     fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput>;

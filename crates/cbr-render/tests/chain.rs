@@ -80,6 +80,7 @@ fn triangle_scene() -> (Scene, [[f64; 2]; 3]) {
         position: [0.0, 0.0, 5.0],
         target: [0.0, 0.0, 0.0],
         fov_y_deg: 40.0,
+        cut: false,
     };
     let s = Scene {
         name: "triangle".into(),

@@ -64,6 +64,7 @@ fn key(time: f64, x: f64) -> CameraKey {
         position: [x, 0.0, 5.0],
         target: [x, 0.0, 0.0],
         fov_y_deg: 60.0,
+        cut: false,
     }
 }
 
@@ -136,12 +137,14 @@ fn moving_camera_depth_and_velocity_match_the_analytic_projection() {
             position: [0.0, 0.0, 5.0],
             target: [0.0, 0.0, 0.0],
             fov_y_deg: 60.0,
+            cut: false,
         },
         CameraKey {
             time: 1.0,
             position: [3.0, 1.0, 6.0],
             target: [1.0, 0.5, 0.0],
             fov_y_deg: 50.0,
+            cut: false,
         },
     ];
     let s = scene(vec![plane], keys, 80, 60);

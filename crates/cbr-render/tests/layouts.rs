@@ -167,6 +167,7 @@ fn closed_box(w: u32, h: u32) -> Scene {
             position: [0.3, 2.0, 0.2],
             target: [0.3, 0.0, 0.25],
             fov_y_deg: 60.0,
+            cut: false,
         }],
         near: 0.05,
     };

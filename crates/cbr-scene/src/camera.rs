@@ -1,5 +1,8 @@
 //! Camera keyframes interpolated over time: Catmull-Rom on position and target (passing through
 //! every key), linear on field of view; held constant before the first and after the last key.
+//! A key with `cut` (or at the same time as the key before it) is a camera cut: the path is not
+//! interpolated across it (the camera holds the previous key until the cut's time, then follows
+//! the path from the cut key), and histories reset on the first frame after it.
 
 use glam::{DMat4, DVec3};
 use serde::Serialize;
@@ -10,6 +13,9 @@ pub struct CameraKey {
     pub position: [f64; 3],
     pub target: [f64; 3],
     pub fov_y_deg: f64,
+    /// The camera jumps to this key at its time (a camera cut).
+    #[serde(default)]
+    pub cut: bool,
 }
 
 /// The camera at one instant.
@@ -67,8 +73,29 @@ fn catmull_rom(p0: DVec3, p1: DVec3, p2: DVec3, p3: DVec3, s: f64) -> DVec3 {
 }
 
 impl CameraPath {
+    /// Whether key `i` starts a new shot: flagged `cut`, or at the time of the key before it.
+    fn is_cut(&self, i: usize) -> bool {
+        i > 0 && (self.keys[i].cut || self.keys[i].time <= self.keys[i - 1].time)
+    }
+
+    /// Whether a camera cut falls in (t0, t1]: the frame at t1 does not continue the one at t0.
+    pub fn cut_between(&self, t0: f64, t1: f64) -> bool {
+        (1..self.keys.len())
+            .any(|i| self.is_cut(i) && t0 < self.keys[i].time && self.keys[i].time <= t1)
+    }
+
     pub fn at(&self, t: f64) -> Camera {
-        let k = &self.keys;
+        // The shot containing t: from the last cut at or before t to the next cut.
+        let n = self.keys.len();
+        let start = (1..n)
+            .rev()
+            .find(|&i| self.is_cut(i) && self.keys[i].time <= t)
+            .unwrap_or(0);
+        let end = (start + 1..n).find(|&i| self.is_cut(i)).unwrap_or(n);
+        self.at_in_shot(&self.keys[start..end], t)
+    }
+
+    fn at_in_shot(&self, k: &[CameraKey], t: f64) -> Camera {
         let cam = |i: usize| {
             (
                 DVec3::from(k[i].position),
@@ -131,6 +158,7 @@ impl CameraPath {
                 position: (c + dir * dist).to_array(),
                 target: c.to_array(),
                 fov_y_deg: fov,
+                cut: false,
             }],
             near: (r * 0.002).max(1e-4),
         }
@@ -147,7 +175,32 @@ mod tests {
             position: [x, 0.0, 0.0],
             target: [x, 0.0, -1.0],
             fov_y_deg: 40.0 + x,
+            cut: false,
         }
+    }
+
+    #[test]
+    fn cuts_jump_and_are_reported_once() {
+        let mut keys = vec![key(0.0, 0.0), key(1.0, 2.0), key(2.0, 5.0), key(3.0, 6.0)];
+        keys[2].cut = true;
+        let p = CameraPath { keys, near: 0.1 };
+        // Before the cut the camera holds the key before it; from the cut on it follows the new shot.
+        assert!((p.at(1.5).position.x - 2.0).abs() < 1e-12);
+        assert!((p.at(1.999).position.x - 2.0).abs() < 1e-12);
+        assert!((p.at(2.0).position.x - 5.0).abs() < 1e-12);
+        let mid = p.at(2.5).position.x;
+        assert!(mid > 5.0 && mid < 6.0, "{mid}");
+        assert!(p.cut_between(1.9, 2.0));
+        assert!(!p.cut_between(2.0, 2.1));
+        assert!(!p.cut_between(0.0, 1.9));
+        // Two keys at one time: a cut without the flag.
+        let q = CameraPath {
+            keys: vec![key(0.0, 0.0), key(1.0, 1.0), key(1.0, 9.0)],
+            near: 0.1,
+        };
+        assert!(q.cut_between(0.5, 1.0));
+        assert!((q.at(1.0).position.x - 9.0).abs() < 1e-12);
+        assert!((q.at(0.999).position.x - 1.0).abs() < 0.01);
     }
 
     #[test]

@@ -12,6 +12,7 @@
 //! position = [-12.0, -8.0, 0.0]
 //! target = [10.0, -10.0, 0.0]
 //! fov_y_deg = 60.0
+//! cut = false            # true: the camera jumps to this key (histories reset)
 //! [[lights.directional]]
 //! direction = [-0.3, -1.0, -0.2]
 //! intensity = 3.0
@@ -73,6 +74,9 @@ pub struct KeyDesc {
     pub position: [f64; 3],
     pub target: [f64; 3],
     pub fov_y_deg: Option<f64>,
+    /// A camera cut: the camera jumps to this key (histories reset).
+    #[serde(default)]
+    pub cut: bool,
 }
 
 #[derive(Debug, Deserialize, Default)]
@@ -178,6 +182,7 @@ pub(crate) fn camera_path(desc: Option<&CameraDesc>) -> Option<CameraPath> {
             position: k.position,
             target: k.target,
             fov_y_deg: k.fov_y_deg.unwrap_or(fov),
+            cut: k.cut,
         })
         .collect();
     keys.sort_by(|a, b| a.time.total_cmp(&b.time));

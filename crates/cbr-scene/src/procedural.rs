@@ -376,6 +376,7 @@ pub fn demo() -> Scene {
         position,
         target,
         fov_y_deg: 50.0,
+        cut: false,
     };
     let spinner_index = objects
         .iter()

@@ -22,6 +22,7 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
     grammar: "fxaa[:12|29|39[:EDGE[:EDGE_MIN[:SUBPIX]]]]",
     about: "FXAA 3.11 quality presets 12, 29 (default), 39; luma in display space",
     check: |p| FxaaConfig::parse(p).map(|_| ()),
+    geometry: false,
     build: |ctx, p, inputs| {
         let c = FxaaConfig::parse(p).map_err(cbr_gpu::GpuError::Other)?;
         Ok(Box::new(Fxaa::new(ctx, c, inputs)?))

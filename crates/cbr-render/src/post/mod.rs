@@ -12,6 +12,7 @@ use cbr_gpu::{
 };
 
 use crate::targets::COLOR_FORMAT;
+use crate::technique::Geometry;
 
 /// What a post pass's constructor gets.
 pub struct PostBuildCtx<'a> {
@@ -21,6 +22,9 @@ pub struct PostBuildCtx<'a> {
     pub height: u32,
     /// The scene's display exposure in stops (passes that judge display-space luma use it).
     pub exposure_stops: f32,
+    /// The technique's geometry, one per frame parity like the first link's inputs; empty unless
+    /// a pass of the chain registered `geometry` (and then the technique gives it).
+    pub geometry: &'a [Geometry<'a>],
 }
 
 impl PostBuildCtx<'_> {
@@ -65,8 +69,11 @@ impl PostBuildCtx<'_> {
 /// The frame a post pass records for.
 pub struct PostFrame {
     pub frame: u32,
-    /// No usable history (post passes with histories start over).
+    /// No usable history (post passes with histories start over): the first frame, a frame that
+    /// does not follow the last one rendered, a camera cut.
     pub reset: bool,
+    /// The sub-pixel jitter the frame was rendered with (pixels; crate::renderer::RenderSettings).
+    pub jitter: [f32; 2],
 }
 
 pub trait PostPass {
@@ -74,6 +81,11 @@ pub trait PostPass {
     fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler, frame: &PostFrame, input: &Image);
     /// Its full-resolution RGBA16F output (sampled by the next link, read back after the last).
     fn output(&self) -> &Image;
+    /// The sub-pixel jitter (pixels) the pass wants frame `frame` rendered with (TAA's Halton
+    /// sequence); at most one pass of a chain jitters.
+    fn jitter(&self, _frame: u32) -> Option<[f32; 2]> {
+        None
+    }
 }
 
 /// A post pass's constructor: context, parameters, its input images (one per frame parity).
@@ -84,6 +96,8 @@ pub struct PostRegistration {
     pub grammar: &'static str,
     pub about: &'static str,
     pub check: fn(&[&str]) -> std::result::Result<(), String>,
+    /// It reads the technique's geometry (velocity, depth, IDs): temporal passes.
+    pub geometry: bool,
     pub build: PostBuild,
 }
 

@@ -15,6 +15,7 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
     grammar: "sharpen[:AMOUNT]",
     about: "5-tap unsharp mask on linear HDR colour (AMOUNT 0..4, default 0.5)",
     check: |p| parse(p).map(|_| ()),
+    geometry: false,
     build: |ctx, p, inputs| {
         let amount = parse(p).map_err(cbr_gpu::GpuError::Other)?;
         Ok(Box::new(Sharpen::new(ctx, amount, inputs)?))
