@@ -1,7 +1,8 @@
 //! The on-disk cache of expensive frames (techniques that say `cacheable`: `ssaa`). A frame is
 //! keyed on everything that changes it: the technique spec, resolution, LOD bias and debug flags,
 //! the scene's content (geometry, materials, texture texels, lights, camera path, animation,
-//! ambient and background), the frame index and its time, every shader source, the device and
+//! ambient and background), the frame index and its time, the source of every shader in the folders the technique names
+//! (`Technique::cacheable`: for `ssaa` the scene shaders and its own; includes resolved), the device and
 //! its driver, and the cache format. An entry is one file `<blake3 key>.cbrf`: a header, the
 //! layers, and a blake3 checksum of both; an entry that fails the checksum or does not parse is
 //! reported and recomputed. Writes go to a temporary name and are renamed.
@@ -47,6 +48,7 @@ impl FrameCache {
         shaders: &Shaders,
         scene: &Scene,
         s: &RenderSettings,
+        folders: &[&str],
     ) -> Result<FrameCache> {
         std::fs::create_dir_all(dir).map_err(|e| {
             GpuError::Other(format!(
@@ -79,7 +81,9 @@ impl FrameCache {
         );
         put("device", device.as_bytes());
         for (path, text) in shaders.sources() {
-            put(&path, text.as_bytes());
+            if folders.iter().any(|f| path.starts_with(f)) {
+                put(&path, text.as_bytes());
+            }
         }
         for o in &scene.objects {
             put(&o.name, bytemuck::cast_slice(&o.vertices));

@@ -142,6 +142,8 @@ pub struct Renderer {
     scene: GpuScene,
     technique: Box<dyn Technique>,
     post: Vec<Box<dyn PostPass>>,
+    /// A post pass reads the technique's geometry.
+    geometry: bool,
     /// The post chain's final colour, read back (with post passes only).
     post_rb: Option<Readback>,
     counter: Buffer,
@@ -259,7 +261,14 @@ impl Renderer {
             None => None,
         };
         let cache = match (&settings.cache, technique.cacheable()) {
-            (Some(dir), true) => Some(FrameCache::new(dir, gpu, shaders, scene, &settings)?),
+            (Some(dir), Some(folders)) => {
+                // Post passes change the frame too: their shaders key it as well.
+                let mut folders = folders.to_vec();
+                if !post.is_empty() {
+                    folders.push("post/");
+                }
+                Some(FrameCache::new(dir, gpu, shaders, scene, &settings, &folders)?)
+            }
             _ => None,
         };
         let profiler = Profiler::new(gpu, "renderer.profiler", 8)?;
@@ -268,6 +277,7 @@ impl Renderer {
             scene: gpu_scene,
             technique,
             post,
+            geometry,
             post_rb,
             counter,
             profiler,
@@ -384,6 +394,10 @@ impl Renderer {
                 frame,
                 reset,
                 jitter: ctx.view.raster.jitter[0],
+                geometry: match self.geometry {
+                    true => self.technique.geometry(frame),
+                    false => None,
+                },
             };
             let (post, rb, technique) = (&self.post, &self.post_rb, &self.technique);
             ctx.submit("post", |cmd, profiler, _| {

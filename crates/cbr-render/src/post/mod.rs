@@ -5,6 +5,7 @@
 
 pub mod fxaa;
 pub mod sharpen;
+pub mod taa;
 
 use cbr_gpu::{Cmd, vk};
 use cbr_gpu::{
@@ -67,13 +68,15 @@ impl PostBuildCtx<'_> {
 }
 
 /// The frame a post pass records for.
-pub struct PostFrame {
+pub struct PostFrame<'a> {
     pub frame: u32,
     /// No usable history (post passes with histories start over): the first frame, a frame that
     /// does not follow the last one rendered, a camera cut.
     pub reset: bool,
     /// The sub-pixel jitter the frame was rendered with (pixels; crate::renderer::RenderSettings).
     pub jitter: [f32; 2],
+    /// The technique's geometry this frame (when a pass of the chain reads it).
+    pub geometry: Option<Geometry<'a>>,
 }
 
 pub trait PostPass {
@@ -101,7 +104,11 @@ pub struct PostRegistration {
     pub build: PostBuild,
 }
 
-pub const POST_PASSES: &[PostRegistration] = &[fxaa::REGISTRATION, sharpen::REGISTRATION];
+pub const POST_PASSES: &[PostRegistration] = &[
+    fxaa::REGISTRATION,
+    taa::REGISTRATION,
+    sharpen::REGISTRATION,
+];
 
 pub fn find(name: &str) -> Option<&'static PostRegistration> {
     POST_PASSES.iter().find(|p| p.name == name)
