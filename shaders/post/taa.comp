@@ -17,7 +17,9 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 0, binding = BINDING_CUR) uniform sampler2D cur;
 layout(set = 0, binding = BINDING_VELOCITY) uniform sampler2D velocity;
+#if !PACKED
 layout(set = 0, binding = BINDING_DEPTH) uniform sampler2D depth;
+#endif
 layout(set = 0, binding = BINDING_IDS) uniform usampler2D ids;
 layout(set = 0, binding = BINDING_HIST) uniform sampler2D hist;  // bilinear, clamped
 layout(set = 0, binding = BINDING_HIST_GEOM) uniform usampler2D hist_geom;
@@ -58,6 +60,16 @@ vec3 from_p(vec3 y) {
 }
 
 bool finite3(vec3 c) { return !any(isnan(c)) && !any(isinf(c)); }
+
+// The geometry texel's reverse-Z depth and object ID (PACKED: the checkerboard resolve's history
+// geometry, (object ID | moved bit, depth bits), in the IDs image).
+#if PACKED
+float geom_depth(ivec2 t) { return uintBitsToFloat(texelFetch(ids, t, 0).y); }
+uint geom_id(ivec2 t) { return texelFetch(ids, t, 0).x & 0x7fffffffu; }
+#else
+float geom_depth(ivec2 t) { return texelFetch(depth, t, 0).r; }
+uint geom_id(ivec2 t) { return texelFetch(ids, t, 0).x; }
+#endif
 
 ivec2 clamp_px(ivec2 q) { return clamp(q, ivec2(0), pc.size.xy - 1); }
 // The geometry texel of output pixel p (geometry may be coarser: `upscale`).
@@ -149,8 +161,8 @@ void main() {
     uint nid[9];
     for (int k = 0; k < 9; k++) {
         ivec2 t = clamp(gp + OFF[k], ivec2(0), gsize - 1);
-        float d = texelFetch(depth, t, 0).r;
-        nid[k] = texelFetch(ids, t, 0).x;
+        float d = geom_depth(t);
+        nid[k] = geom_id(t);
         lo = min(lo, d);
         hi = max(hi, d);
         if (d > d_best) {
@@ -241,5 +253,5 @@ void main() {
     }
     imageStore(out_hist, p, vec4(result, 1.0));
     imageStore(out_color, p, vec4(result, 1.0));
-    imageStore(out_geom, p, uvec2(texelFetch(ids, gp, 0).x, floatBitsToUint(texelFetch(depth, gp, 0).r)).xyxy);
+    imageStore(out_geom, p, uvec4(nid[4], floatBitsToUint(geom_depth(clamp(gp, ivec2(0), gsize - 1))), 0u, 0u));
 }

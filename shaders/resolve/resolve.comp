@@ -7,7 +7,7 @@
 //
 // Defines: LAYOUT (the raster layout, read through layout_fetch.glsl), MODE, MAPPING, GROUP
 // (workgroup side), FP16 (colour arithmetic in float16), OUT_FORMAT (rgba16f or rgba32f), DEBUG
-// (write the debug bits and the velocity used), BINDING_* (crates/cbr-render/src/resolve/mod.rs).
+// (write the debug bits), OUT_VELOCITY (write the velocity used: debug, `+taa`), BINDING_* (crates/cbr-render/src/resolve/mod.rs).
 #if FP16
 #extension GL_EXT_shader_explicit_arithmetic_types_float16 : require
 #define real float16_t
@@ -61,6 +61,8 @@ layout(set = 0, binding = BINDING_OUT_COLOR, OUT_FORMAT) uniform writeonly image
 layout(set = 0, binding = BINDING_OUT_GEOM, rg32ui) uniform writeonly uimage2D out_geom;
 #if DEBUG
 layout(set = 0, binding = BINDING_DEBUG_BITS, r32ui) uniform writeonly uimage2D out_debug;
+#endif
+#if OUT_VELOCITY
 layout(set = 0, binding = BINDING_DEBUG_VELOCITY, rg32f) uniform writeonly image2D out_velocity;
 #endif
 
@@ -515,6 +517,8 @@ void write_result(ivec2 p, Result r) {
     imageStore(out_geom, p, uvec4(id, floatBitsToUint(r.d), 0u, 0u));
 #if DEBUG
     imageStore(out_debug, p, uvec4(r.dbg));
+#endif
+#if OUT_VELOCITY
     imageStore(out_velocity, p, vec4(r.v, 0.0, 0.0));
 #endif
 }

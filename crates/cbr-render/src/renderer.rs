@@ -30,9 +30,10 @@ pub struct RenderSettings {
     pub debug_lod: bool,
     /// Also build instrumentation passes (the resolve's copy-kernel floor): benchmarks.
     pub instrument: bool,
-    /// A sub-pixel offset of the whole raster, in pixels (+x right, +y down moves the geometry):
-    /// pixel centres then see the scene at centre - jitter. Techniques that place their own
-    /// samples (checkerboard layouts, ssaa) replace it.
+    /// A sub-pixel offset of the projection, in output pixels (+x right, +y down moves the
+    /// geometry): pixel centres then see the scene at centre - jitter. Every technique and layout
+    /// applies it (on top of the samples they place themselves); a jittering post pass (`+taa`)
+    /// adds its own.
     pub jitter: [f32; 2],
     /// Where frames of cacheable techniques (`ssaa`) are kept between runs; `None`: no cache.
     #[serde(skip)]
@@ -267,7 +268,9 @@ impl Renderer {
                 if !post.is_empty() {
                     folders.push("post/");
                 }
-                Some(FrameCache::new(dir, gpu, shaders, scene, &settings, &folders)?)
+                Some(FrameCache::new(
+                    dir, gpu, shaders, scene, &settings, &folders,
+                )?)
             }
             _ => None,
         };
@@ -345,9 +348,10 @@ impl Renderer {
             aspect: f64::from(s.width) / f64::from(s.height),
             lod_bias: self.lod_bias(),
             frame_index: frame,
+            screen_jitter: self.jitter(frame),
             raster: RasterUniforms {
                 viewport: (s.width as f32, s.height as f32),
-                jitter: [self.jitter(frame), [0.0; 2]],
+                jitter: [[0.0; 2]; 2],
                 flags,
                 ..Default::default()
             },
@@ -393,7 +397,7 @@ impl Renderer {
             let pf = PostFrame {
                 frame,
                 reset,
-                jitter: ctx.view.raster.jitter[0],
+                jitter: ctx.view.screen_jitter,
                 geometry: match self.geometry {
                     true => self.technique.geometry(frame),
                     false => None,

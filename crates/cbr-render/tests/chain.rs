@@ -334,9 +334,15 @@ fn the_cache_key_holds_the_shaders_the_frame_depends_on() {
     };
     assert!(!render().timings.is_empty(), "first: rendered");
     append("post/sharpen.comp");
-    assert!(render().timings.is_empty(), "a post shader edit keeps the entry");
+    assert!(
+        render().timings.is_empty(),
+        "a post shader edit keeps the entry"
+    );
     append("scene/forward.frag");
-    assert!(!render().timings.is_empty(), "a scene shader edit recomputes it");
+    assert!(
+        !render().timings.is_empty(),
+        "a scene shader edit recomputes it"
+    );
     assert_clean(&gpu);
 }
 

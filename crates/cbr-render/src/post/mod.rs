@@ -104,11 +104,8 @@ pub struct PostRegistration {
     pub build: PostBuild,
 }
 
-pub const POST_PASSES: &[PostRegistration] = &[
-    fxaa::REGISTRATION,
-    taa::REGISTRATION,
-    sharpen::REGISTRATION,
-];
+pub const POST_PASSES: &[PostRegistration] =
+    &[fxaa::REGISTRATION, taa::REGISTRATION, sharpen::REGISTRATION];
 
 pub fn find(name: &str) -> Option<&'static PostRegistration> {
     POST_PASSES.iter().find(|p| p.name == name)

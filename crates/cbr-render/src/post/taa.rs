@@ -256,6 +256,7 @@ impl Taa {
         let layout = SetLayout::new(gpu, "taa.set_layout", &BINDINGS)?;
         let mut defines: Vec<(String, String)> = BINDINGS.iter().map(BindingDesc::define).collect();
         defines.push(("MODE".into(), u32::from(c.inside).to_string()));
+        defines.push(("PACKED".into(), u32::from(geo[0].packed).to_string()));
         let cs = ctx.shaders.compile("post/taa.comp", &defines)?;
         let pipeline = Pipeline::compute(
             gpu,

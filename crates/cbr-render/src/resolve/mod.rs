@@ -102,6 +102,8 @@ pub struct ResolveSettings {
     pub f32_history: bool,
     /// Write the debug bits and the velocity used (extra EXR layers and PNGs).
     pub debug: bool,
+    /// Write the velocity each pixel used (a temporal post pass reads it: `+taa`).
+    pub velocity: bool,
     /// Relative linear-depth tolerance of the history validation (`ours`, `intel`).
     pub depth_tolerance: f32,
     /// Below this motion (pixels) `ours` takes validated history unclamped.
@@ -122,6 +124,7 @@ impl Default for ResolveSettings {
             fp16: false,
             f32_history: false,
             debug: false,
+            velocity: false,
             depth_tolerance: 0.05,
             static_threshold: 1.0 / 64.0,
             motion_threshold: 0.25,
@@ -320,6 +323,10 @@ impl ResolvePass {
             ("FP16", u32::from(settings.fp16).to_string()),
             ("OUT_FORMAT", out_format.to_string()),
             ("DEBUG", u32::from(settings.debug).to_string()),
+            (
+                "OUT_VELOCITY",
+                u32::from(settings.debug || settings.velocity).to_string(),
+            ),
         ] {
             defines.push((k.into(), v));
         }
@@ -462,6 +469,19 @@ impl ResolvePass {
         profiler.end(cmd, scope);
         if let Some(f) = &self.floor {
             f.record(cmd, profiler);
+        }
+    }
+
+    /// The frame's geometry (`ResolveSettings::velocity`): the velocity each pixel used, and the
+    /// history geometry of slot `slot` (object ID | moved bit, reverse-Z depth bits) as IDs and
+    /// depth both.
+    pub fn geometry(&self, slot: usize) -> crate::technique::Geometry<'_> {
+        let g = &self.history[slot].geom;
+        crate::technique::Geometry {
+            velocity: &self.debug_velocity,
+            depth: g,
+            ids: g,
+            packed: true,
         }
     }
 

@@ -78,6 +78,7 @@ impl Technique for Native {
             velocity: &t.velocity,
             depth: &t.depth,
             ids: &t.ids,
+            packed: false,
         })
     }
 

@@ -20,7 +20,7 @@ use crate::renderer::{FrameOutput, ResolveOutput};
 use crate::resolve::{ResolveFrame, ResolvePass, ResolveReadbacks};
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::FrameTargets;
-use crate::technique::{BuildCtx, FrameCtx, Registration, Technique};
+use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique};
 
 pub const REGISTRATION: Registration = Registration {
     name: "checkerboard",
@@ -103,6 +103,7 @@ impl Checkerboard {
             Some(rs) => {
                 let mut rs = *rs;
                 rs.bandwidth_floor = ctx.instrument;
+                rs.velocity = ctx.geometry;
                 let pre = prepass.as_ref().map(|p| (&p.ids, &p.depth));
                 let pass = ResolvePass::new(gpu, shaders, &rs, &plans[0], &targets, pre)?;
                 let rb = pass.readbacks(gpu)?;
@@ -194,6 +195,14 @@ impl Technique for Checkerboard {
         self.resolve
             .as_ref()
             .map(|r| r.pass.output((frame % 2) as usize))
+    }
+
+    /// The resolved frame's geometry (with a resolve): the velocity each pixel used and its
+    /// history geometry.
+    fn geometry(&self, frame: u32) -> Option<Geometry<'_>> {
+        self.resolve
+            .as_ref()
+            .map(|r| r.pass.geometry((frame % 2) as usize))
     }
 
     fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput> {
