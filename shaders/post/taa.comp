@@ -33,13 +33,16 @@ layout(set = 0, binding = BINDING_OUT_COLOR, rgba16f) uniform writeonly image2D 
 #define F_IDS 8u
 #define F_DEPTH 16u
 #define F_CATMULL 32u
-#define F_MEAN 64u  // blend weight 1 / (n + 1): the running mean (known-answer tests)
+#define F_MEAN 64u
+// History geometry: x = object ID | MOVED where the pixel moved more than the still threshold.
+#define MOVED 0x80000000u
+#define ID_MASK 0x7fffffffu  // blend weight 1 / (n + 1): the running mean (known-answer tests)
 
 layout(push_constant) uniform Push {
     ivec4 size;    // W, H, geometry W, geometry H
     uvec4 flags;   // x: F_*, y: n (frames accumulated since the reset)
     vec4 params;   // alpha (current-frame weight), gamma, depth tolerance, exposure scale
-    vec4 inside;   // feedback min, feedback max, 0, 0
+    vec4 inside;   // feedback min, feedback max, still threshold (pixels), 0
 } pc;
 
 bool has(uint f) { return (pc.flags.x & f) != 0u; }
@@ -65,7 +68,7 @@ bool finite3(vec3 c) { return !any(isnan(c)) && !any(isinf(c)); }
 // geometry, (object ID | moved bit, depth bits), in the IDs image).
 #if PACKED
 float geom_depth(ivec2 t) { return uintBitsToFloat(texelFetch(ids, t, 0).y); }
-uint geom_id(ivec2 t) { return texelFetch(ids, t, 0).x & 0x7fffffffu; }
+uint geom_id(ivec2 t) { return texelFetch(ids, t, 0).x & ID_MASK; }
 #else
 float geom_depth(ivec2 t) { return texelFetch(depth, t, 0).r; }
 uint geom_id(ivec2 t) { return texelFetch(ids, t, 0).x; }
@@ -98,9 +101,10 @@ vec3 history_catmull(vec2 q) {
     vec4 wx = catmull_rom(f.x);
     vec4 wy = catmull_rom(f.y);
     vec2 w12 = vec2(wx.y + wx.z, wy.y + wy.z);
-    vec2 c12 = b + 0.5 + vec2(1.0) + vec2(wx.z, wy.z) / w12;  // pixel position of the middle tap
-    vec2 c0 = b + 0.5 - vec2(1.0);
-    vec2 c3 = b + 0.5 + vec2(2.0);
+    // Tap k of -1..2 is centred at b + k + 0.5; the middle pair in one bilinear tap between them.
+    vec2 c12 = b + 0.5 + vec2(wx.z, wy.z) / w12;
+    vec2 c0 = b - 0.5;
+    vec2 c3 = b + 2.5;
     vec2 inv = 1.0 / vec2(pc.size.xy);
     float w[5] = float[5](w12.x * wy.x, wx.x * w12.y, w12.x * w12.y, wx.w * w12.y, w12.x * wy.w);
     vec2 at[5] = vec2[5](vec2(c12.x, c0.y), vec2(c0.x, c12.y), c12, vec2(c3.x, c12.y),
@@ -176,11 +180,17 @@ void main() {
 
     bool use = !has(F_RESET) && all(greaterThanEqual(q, vec2(0.0))) &&
                all(lessThan(q, vec2(pc.size.xy)));
-    if (use && (has(F_IDS) || has(F_DEPTH))) {
-        uvec2 g = texelFetch(hist_geom, ivec2(floor(q)), 0).xy;
+    // Still: this pixel and its history texel did not move (the checkerboard resolve's rule):
+    // nothing can have been disoccluded, and the tests would only reject jittered sub-pixel
+    // features (a wire that one jitter sees and the next misses).
+    bool moving = length(v) > pc.inside.z;
+    uvec2 g = uvec2(0u);
+    if (use) g = texelFetch(hist_geom, ivec2(floor(q)), 0).xy;
+    bool still = !moving && (g.x & MOVED) == 0u;
+    if (use && !still && (has(F_IDS) || has(F_DEPTH))) {
         if (has(F_IDS)) {
             bool seen = false;
-            for (int k = 0; k < 9; k++) seen = seen || nid[k] == g.x;
+            for (int k = 0; k < 9; k++) seen = seen || nid[k] == (g.x & ID_MASK);
             use = use && seen;
         }
         if (has(F_DEPTH)) {
@@ -253,5 +263,5 @@ void main() {
     }
     imageStore(out_hist, p, vec4(result, 1.0));
     imageStore(out_color, p, vec4(result, 1.0));
-    imageStore(out_geom, p, uvec4(nid[4], floatBitsToUint(geom_depth(clamp(gp, ivec2(0), gsize - 1))), 0u, 0u));
+    imageStore(out_geom, p, uvec4(nid[4] | (moving ? MOVED : 0u), floatBitsToUint(geom_depth(clamp(gp, ivec2(0), gsize - 1))), 0u, 0u));
 }

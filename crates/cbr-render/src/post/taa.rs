@@ -71,6 +71,12 @@ pub struct TaaConfig {
     pub catmull: bool,
 }
 
+/// Below this motion (pixels) a pixel is still: when its history texel was still too, the ID
+/// and depth tests are skipped (the checkerboard resolve's static threshold).
+pub const STILL_THRESHOLD: f32 = 1.0 / 64.0;
+/// History geometry's moved bit.
+pub const MOVED: u32 = 0x8000_0000;
+
 /// INSIDE's feedback range (the history's weight).
 pub const INSIDE_FEEDBACK: [f32; 2] = [0.88, 0.97];
 
@@ -319,7 +325,7 @@ impl Taa {
                 c.depth_tolerance,
                 ctx.exposure_stops.exp2(),
             ],
-            inside: [INSIDE_FEEDBACK[0], INSIDE_FEEDBACK[1], 0.0, 0.0],
+            inside: [INSIDE_FEEDBACK[0], INSIDE_FEEDBACK[1], STILL_THRESHOLD, 0.0],
         };
         Ok(Taa {
             config: c,
@@ -373,5 +379,487 @@ impl PostPass for Taa {
 
     fn jitter(&self, frame: u32) -> Option<[f32; 2]> {
         Some(jitter(self.config.length, frame))
+    }
+}
+
+// ---- The CPU reference ----------------------------------------------------------------------
+
+/// One frame's inputs to [`reference`], all at the output resolution, rows top to bottom.
+pub struct RefInputs<'a> {
+    pub width: usize,
+    pub height: usize,
+    /// The technique's colour this frame (linear HDR).
+    pub color: &'a [[f32; 3]],
+    /// Pixels moved since the previous frame (current - previous).
+    pub velocity: &'a [[f32; 2]],
+    /// View distance along the camera axis (linear; +inf where nothing was drawn). The shader
+    /// compares reverse-Z `near / z`: every test here is the same in linear depth (relative
+    /// differences are symmetric, the order reverses), so the two agree up to rounding.
+    pub depth: &'a [f32],
+    /// Object IDs.
+    pub ids: &'a [u32],
+    /// The previous output and its geometry (object ID | [`MOVED`], linear depth); `None`: reset.
+    pub history: Option<(&'a [[f32; 3]], &'a [(u32, f32)])>,
+    /// Frames accumulated since the reset (the `mean` weight 1 / (n + 1)).
+    pub n: u32,
+    /// 2^exposure stops.
+    pub exposure_scale: f32,
+}
+
+const LUMA: [f32; 3] = [0.2126, 0.7152, 0.0722];
+const OFF: [[i32; 2]; 9] = [
+    [-1, -1],
+    [0, -1],
+    [1, -1],
+    [-1, 0],
+    [0, 0],
+    [1, 0],
+    [-1, 1],
+    [0, 1],
+    [1, 1],
+];
+
+type V3 = [f32; 3];
+
+fn dot(a: V3, b: V3) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn map3(a: V3, f: impl Fn(f32) -> f32) -> V3 {
+    [f(a[0]), f(a[1]), f(a[2])]
+}
+fn zip3(a: V3, b: V3, f: impl Fn(f32, f32) -> f32) -> V3 {
+    [f(a[0], b[0]), f(a[1], b[1]), f(a[2], b[2])]
+}
+
+/// Linear HDR to the perceptual YCoCg the shader compares in (`to_p`), and back (`from_p`).
+pub fn to_p(c: V3, e: f32) -> V3 {
+    let x = map3(c, |v| v * e);
+    let t = map3(x, |v| v / (1.0 + dot(x, LUMA).max(0.0)));
+    [
+        0.25 * t[0] + 0.5 * t[1] + 0.25 * t[2],
+        0.5 * t[0] - 0.5 * t[2],
+        -0.25 * t[0] + 0.5 * t[1] - 0.25 * t[2],
+    ]
+}
+pub fn from_p(y: V3, e: f32) -> V3 {
+    let t = [y[0] + y[1] - y[2], y[0] + y[2], y[0] - y[1] - y[2]];
+    let k = (1.0 - dot(t, LUMA)).max(1e-3);
+    map3(t, |v| v / k / e)
+}
+
+fn catmull_rom(f: f32) -> [f32; 4] {
+    let (f2, f3) = (f * f, f * f * f);
+    [
+        -0.5 * f3 + f2 - 0.5 * f,
+        1.5 * f3 - 2.5 * f2 + 1.0,
+        -1.5 * f3 + 2.0 * f2 + 0.5 * f,
+        0.5 * f3 - 0.5 * f2,
+    ]
+}
+
+/// Moves h towards p until it lies in [lo, hi] (`clip_towards`).
+fn clip_towards(p: V3, h: V3, lo: V3, hi: V3) -> V3 {
+    let r = zip3(h, p, |a, b| a - b);
+    let mut t = 1.0f32;
+    for i in 0..3 {
+        if r[i] > 1e-7 {
+            t = t.min((hi[i] - p[i]) / r[i]);
+        } else if r[i] < -1e-7 {
+            t = t.min((lo[i] - p[i]) / r[i]);
+        }
+    }
+    let t = t.max(0.0);
+    zip3(p, r, |a, b| a + b * t)
+}
+
+/// |a - b| / max(a, b) (the shader's `depth_rel_diff`, here of linear depths).
+fn rel_diff(a: f32, b: f32) -> f32 {
+    let m = a.max(b);
+    if m > 0.0 && m.is_finite() {
+        (a - b).abs() / m
+    } else if a == b {
+        0.0
+    } else {
+        1.0
+    }
+}
+
+fn moving(v: [f32; 2]) -> bool {
+    (v[0] * v[0] + v[1] * v[1]).sqrt() > STILL_THRESHOLD
+}
+
+/// The CPU reference of shaders/post/taa.comp: (output colour, output geometry).
+pub fn reference(c: &TaaConfig, i: &RefInputs) -> (Vec<V3>, Vec<(u32, f32)>) {
+    let (w, h) = (i.width as i32, i.height as i32);
+    let e = i.exposure_scale;
+    let at = |p: [i32; 2]| (p[1].clamp(0, h - 1) * w + p[0].clamp(0, w - 1)) as usize;
+    let finite = |v: V3| v.iter().all(|x| x.is_finite());
+    let mut out = Vec::with_capacity(i.color.len());
+    let mut geom = Vec::with_capacity(i.color.len());
+    for y in 0..h {
+        for x in 0..w {
+            let cs: Vec<V3> = OFF
+                .iter()
+                .map(|o| i.color[at([x + o[0], y + o[1]])])
+                .collect();
+            let ok: Vec<bool> = cs.iter().map(|&v| finite(v)).collect();
+            let (mut sum, mut n_ok) = ([0.0f32; 3], 0.0f32);
+            for k in 0..9 {
+                if ok[k] {
+                    sum = zip3(sum, cs[k], |a, b| a + b);
+                    n_ok += 1.0;
+                }
+            }
+            let c0 = if ok[4] {
+                cs[4]
+            } else if n_ok > 0.0 {
+                map3(sum, |v| v / n_ok)
+            } else {
+                [0.0; 3]
+            };
+            let y0 = to_p(c0, e);
+            // Geometry: nearest of the 3x3 (smallest linear depth), IDs, depth span.
+            let (mut best, mut z_best) = (at([x, y]), f32::INFINITY);
+            let (mut lo, mut hi) = (f32::INFINITY, -f32::INFINITY);
+            let mut nid = [0u32; 9];
+            let mut any = false;
+            for (k, o) in OFF.iter().enumerate() {
+                let t = at([x + o[0], y + o[1]]);
+                let z = i.depth[t];
+                nid[k] = i.ids[t];
+                lo = lo.min(z);
+                hi = hi.max(z);
+                if !any || z < z_best {
+                    (best, z_best, any) = (t, z, true);
+                }
+            }
+            let v = i.velocity[if c.dilation { best } else { at([x, y]) }];
+            let q = [x as f32 + 0.5 - v[0], y as f32 + 0.5 - v[1]];
+            let mut result = c0;
+            if let Some((hist, hgeom)) = i.history {
+                let mut use_h = q[0] >= 0.0 && q[1] >= 0.0 && q[0] < w as f32 && q[1] < h as f32;
+                let (hid, hz) = match use_h {
+                    true => hgeom[at([q[0].floor() as i32, q[1].floor() as i32])],
+                    false => (0, 0.0),
+                };
+                let still = !moving(v) && hid & MOVED == 0;
+                if use_h && !still && (c.ids || c.depth) {
+                    if c.ids {
+                        use_h = use_h && nid.contains(&(hid & !MOVED));
+                    }
+                    if c.depth {
+                        let tol = c.depth_tolerance;
+                        use_h = use_h
+                            && ((hz >= lo && hz <= hi)
+                                || rel_diff(hz, lo) <= tol
+                                || rel_diff(hz, hi) <= tol);
+                    }
+                }
+                let fetch = |p: [i32; 2]| hist[at(p)];
+                let bilinear = |q: [f32; 2]| -> V3 {
+                    let g = [q[0] - 0.5, q[1] - 0.5];
+                    let b = [g[0].floor(), g[1].floor()];
+                    let f = [g[0] - b[0], g[1] - b[1]];
+                    let (bx, by) = (b[0] as i32, b[1] as i32);
+                    let mut acc = [0.0f32; 3];
+                    for (dx, dy, wt) in [
+                        (0, 0, (1.0 - f[0]) * (1.0 - f[1])),
+                        (1, 0, f[0] * (1.0 - f[1])),
+                        (0, 1, (1.0 - f[0]) * f[1]),
+                        (1, 1, f[0] * f[1]),
+                    ] {
+                        acc = zip3(acc, fetch([bx + dx, by + dy]), |a, s| a + wt * s);
+                    }
+                    acc
+                };
+                let mut hc = [0.0f32; 3];
+                if use_h {
+                    hc = if c.catmull {
+                        let g = [q[0] - 0.5, q[1] - 0.5];
+                        let b = [g[0].floor(), g[1].floor()];
+                        let f = [g[0] - b[0], g[1] - b[1]];
+                        let (wx, wy) = (catmull_rom(f[0]), catmull_rom(f[1]));
+                        let w12 = [wx[1] + wx[2], wy[1] + wy[2]];
+                        let c12 = [b[0] + 0.5 + wx[2] / w12[0], b[1] + 0.5 + wy[2] / w12[1]];
+                        let c0 = [b[0] - 0.5, b[1] - 0.5];
+                        let c3 = [b[0] + 2.5, b[1] + 2.5];
+                        let taps = [
+                            (w12[0] * wy[0], [c12[0], c0[1]]),
+                            (wx[0] * w12[1], [c0[0], c12[1]]),
+                            (w12[0] * w12[1], c12),
+                            (wx[3] * w12[1], [c3[0], c12[1]]),
+                            (w12[0] * wy[3], [c12[0], c3[1]]),
+                        ];
+                        let (mut acc, mut ws) = ([0.0f32; 3], 0.0f32);
+                        for (wt, p) in taps {
+                            acc = zip3(acc, bilinear(p), |a, s| a + wt * s);
+                            ws += wt;
+                        }
+                        map3(acc, |a| (a / ws).max(0.0))
+                    } else {
+                        bilinear(q)
+                    };
+                    use_h = finite(hc);
+                }
+                if use_h {
+                    let yk: Vec<V3> = (0..9)
+                        .map(|k| if ok[k] { to_p(cs[k], e) } else { y0 })
+                        .collect();
+                    if !c.inside {
+                        if c.clip {
+                            let (mut m1, mut m2) = ([0.0f32; 3], [0.0f32; 3]);
+                            for yv in &yk {
+                                m1 = zip3(m1, *yv, |a, b| a + b);
+                                m2 = zip3(m2, *yv, |a, b| a + b * b);
+                            }
+                            let mu = map3(m1, |v| v / 9.0);
+                            let sigma = zip3(m2, mu, |a, m| (a / 9.0 - m * m).max(0.0).sqrt());
+                            let g = c.gamma;
+                            let yh = clip_towards(
+                                mu,
+                                to_p(hc, e),
+                                zip3(mu, sigma, |m, s| m - g * s),
+                                zip3(mu, sigma, |m, s| m + g * s),
+                            );
+                            hc = from_p(yh, e);
+                        }
+                        result = if c.mean {
+                            let wt = 1.0 / (i.n + 1) as f32;
+                            zip3(hc, c0, |a, b| a + (b - a) * wt)
+                        } else {
+                            let wc = c.alpha / (1.0 + dot(map3(c0, |v| v * e), LUMA));
+                            let wh = (1.0 - c.alpha) / (1.0 + dot(map3(hc, |v| v * e), LUMA));
+                            zip3(c0, hc, |a, b| (wc * a + wh * b) / (wc + wh))
+                        };
+                    } else {
+                        let (mut mn, mut mx, mut avg) = ([f32::MAX; 3], [f32::MIN; 3], [0.0f32; 3]);
+                        let (mut mn5, mut mx5, mut avg5) =
+                            ([f32::MAX; 3], [f32::MIN; 3], [0.0f32; 3]);
+                        for (k, yv) in yk.iter().enumerate() {
+                            mn = zip3(mn, *yv, f32::min);
+                            mx = zip3(mx, *yv, f32::max);
+                            avg = zip3(avg, *yv, |a, b| a + b);
+                            if matches!(k, 1 | 3 | 4 | 5 | 7) {
+                                mn5 = zip3(mn5, *yv, f32::min);
+                                mx5 = zip3(mx5, *yv, f32::max);
+                                avg5 = zip3(avg5, *yv, |a, b| a + b);
+                            }
+                        }
+                        mn = zip3(mn, mn5, |a, b| 0.5 * (a + b));
+                        mx = zip3(mx, mx5, |a, b| 0.5 * (a + b));
+                        avg = zip3(avg, avg5, |a, b| 0.5 * (a / 9.0 + b / 5.0));
+                        let ext = 0.125 * (mx[0] - mn[0]);
+                        for k in 1..3 {
+                            mn[k] = y0[k] - ext;
+                            mx[k] = y0[k] + ext;
+                            avg[k] = y0[k];
+                        }
+                        let mut yh = to_p(hc, e);
+                        if c.clip {
+                            let centre = [0, 1, 2].map(|k| avg[k].clamp(mn[k], mx[k]));
+                            yh = clip_towards(centre, yh, mn, mx);
+                        }
+                        let (l0, l1) = (y0[0], yh[0]);
+                        let diff = (l0 - l1).abs() / l0.max(l1.max(0.2));
+                        let wgt = (1.0 - diff) * (1.0 - diff);
+                        let [fmin, fmax] = INSIDE_FEEDBACK;
+                        let feedback = fmin + (fmax - fmin) * wgt;
+                        result = from_p(zip3(y0, yh, |a, b| a + (b - a) * feedback), e);
+                    }
+                }
+            }
+            out.push(result);
+            let centre = at([x, y]);
+            let moved = if moving(v) { MOVED } else { 0 };
+            geom.push((i.ids[centre] | moved, i.depth[centre]));
+        }
+    }
+    (out, geom)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn halton_jitter_is_the_published_sequence() {
+        // Halton(2): 1/2, 1/4, 3/4, 1/8; Halton(3): 1/3, 2/3, 1/9, 4/9.
+        let j: Vec<[f32; 2]> = (0..4).map(|f| jitter(8, f)).collect();
+        let want = [
+            [0.0, 1.0 / 3.0 - 0.5],
+            [-0.25, 2.0 / 3.0 - 0.5],
+            [0.25, 1.0 / 9.0 - 0.5],
+            [-0.375, 4.0 / 9.0 - 0.5],
+        ];
+        for (a, b) in j.iter().zip(&want) {
+            assert!(
+                (a[0] - b[0]).abs() < 1e-6 && (a[1] - b[1]).abs() < 1e-6,
+                "{a:?}"
+            );
+        }
+        assert_eq!(jitter(8, 8), jitter(8, 0), "length 8 repeats");
+        assert_ne!(jitter(16, 8), jitter(16, 0));
+        // The jitters of one cycle average to about the pixel centre.
+        let m: f32 = (0..16).map(|f| jitter(16, f)[0]).sum::<f32>() / 16.0;
+        assert!(m.abs() < 0.05, "{m}");
+    }
+
+    #[test]
+    fn parameters_parse_and_inside_refuses_ours() {
+        assert_eq!(TaaConfig::parse(&[]), Ok(TaaConfig::OURS));
+        assert_eq!(TaaConfig::parse(&["inside"]), Ok(TaaConfig::INSIDE));
+        let c = TaaConfig::parse(&["16", "gamma=1.5", "without-clip", "without-ids"]).unwrap();
+        assert!(c.length == 16 && c.gamma == 1.5 && !c.clip && !c.ids && c.depth);
+        assert!(TaaConfig::parse(&["inside", "without-ids"]).is_err());
+        assert!(TaaConfig::parse(&["inside", "alpha=0.2"]).is_err());
+        assert!(TaaConfig::parse(&["gamma=-1"]).is_err());
+        assert!(TaaConfig::parse(&["12"]).is_err());
+        assert!(TaaConfig::parse(&["without-sharpness"]).is_err());
+    }
+
+    #[test]
+    fn perceptual_space_round_trips() {
+        for c in [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.5, 0.25],
+            [40.0, 3.0, 0.01],
+            [0.02, 0.9, 7.0],
+        ] {
+            let back = from_p(to_p(c, 2.0), 2.0);
+            for k in 0..3 {
+                assert!(
+                    (back[k] - c[k]).abs() <= 1e-4 * (1.0 + c[k]),
+                    "{c:?} -> {back:?}"
+                );
+            }
+        }
+    }
+
+    fn flat(w: usize, h: usize, c: V3) -> Vec<V3> {
+        vec![c; w * h]
+    }
+
+    /// Known answers on a 6x5 frame: a reset passes the current frame through; a static
+    /// history is blended with weight alpha (luminance-weighted) or 1 / (n + 1) with `mean`;
+    /// a history showing an object the neighbourhood does not is rejected; a NaN never leaves.
+    #[test]
+    fn known_answers_on_small_frames() {
+        let (w, h) = (6, 5);
+        let cur = flat(w, h, [1.0, 1.0, 1.0]);
+        let vel = vec![[0.0f32; 2]; w * h];
+        let depth = vec![2.0f32; w * h];
+        let ids = vec![1u32; w * h];
+        let base = RefInputs {
+            width: w,
+            height: h,
+            color: &cur,
+            velocity: &vel,
+            depth: &depth,
+            ids: &ids,
+            history: None,
+            n: 0,
+            exposure_scale: 1.0,
+        };
+        let (o, g) = reference(&TaaConfig::OURS, &base);
+        assert!(o.iter().all(|c| *c == [1.0; 3]) && g.iter().all(|g| *g == (1, 2.0)));
+        // Mean weight, clipping off: 1/(n+1) of the current frame.
+        let hist = flat(w, h, [3.0, 3.0, 3.0]);
+        let hg: Vec<(u32, f32)> = vec![(1, 2.0); w * h];
+        let c = TaaConfig {
+            mean: true,
+            clip: false,
+            ..TaaConfig::OURS
+        };
+        let i = RefInputs {
+            history: Some((&hist, &hg)),
+            n: 3,
+            ..base
+        };
+        let (o, _) = reference(&c, &i);
+        assert!(o.iter().all(|c| (c[0] - 2.5).abs() < 1e-6), "{:?}", o[0]);
+        // Clipping on: a flat neighbourhood has a zero-width box, the history clips to it.
+        let (o, _) = reference(&TaaConfig::OURS, &i);
+        assert!(o.iter().all(|c| (c[0] - 1.0).abs() < 1e-5), "{:?}", o[0]);
+        // Without clipping: Karis's luminance weights, alpha 0.1: (0.1/2 * 1 + 0.9/4 * 3) / (0.1/2 + 0.9/4).
+        let c = TaaConfig {
+            clip: false,
+            ..TaaConfig::OURS
+        };
+        let (o, _) = reference(&c, &i);
+        let want = (0.05 + 0.225 * 3.0) / (0.05 + 0.225);
+        assert!((o[0][0] - want).abs() < 1e-5, "{} vs {want}", o[0][0]);
+        // A history of object 7, seen nowhere in the 3x3: kept while everything is still (a
+        // jittered sub-pixel feature), rejected once the pixel moves (a quarter pixel), and
+        // when the history texel moved.
+        let hg7: Vec<(u32, f32)> = vec![(7, 2.0); w * h];
+        let i7 = RefInputs {
+            history: Some((&hist, &hg7)),
+            ..i
+        };
+        let (o, _) = reference(&c, &i7);
+        assert!((o[0][0] - want).abs() < 1e-5, "still: kept");
+        let slow = vec![[0.25f32, 0.0]; w * h];
+        let i7m = RefInputs {
+            velocity: &slow,
+            ..i7
+        };
+        let (o, g) = reference(&c, &i7m);
+        assert!(o.iter().all(|c| *c == [1.0; 3]), "moving: rejected");
+        assert!(
+            g.iter().all(|g| g.0 == 1 | MOVED),
+            "moving pixels carry the bit"
+        );
+        let hg7m: Vec<(u32, f32)> = vec![(7 | MOVED, 2.0); w * h];
+        let (o, _) = reference(
+            &c,
+            &RefInputs {
+                history: Some((&hist, &hg7m)),
+                ..i
+            },
+        );
+        assert!(o.iter().all(|c| *c == [1.0; 3]), "history moved: rejected");
+        let no_ids = TaaConfig { ids: false, ..c };
+        let (o, _) = reference(&no_ids, &i7m);
+        assert!((o[0][0] - want).abs() < 1e-5, "without-ids keeps it");
+        // A history 50% farther than the neighbourhood: rejected by the depth test.
+        let hg_far: Vec<(u32, f32)> = vec![(1, 3.0); w * h];
+        let far = RefInputs {
+            velocity: &slow,
+            history: Some((&hist, &hg_far)),
+            ..i
+        };
+        assert!(reference(&c, &far).0.iter().all(|c| *c == [1.0; 3]));
+        let no_depth = TaaConfig { depth: false, ..c };
+        assert!((reference(&no_depth, &far).0[0][0] - want).abs() < 1e-5);
+        // A NaN in the current frame: replaced by its neighbours' mean, never output.
+        let mut nan = cur.clone();
+        nan[2 * w + 3] = [f32::NAN, 1.0, 1.0];
+        nan[2 * w + 4] = [f32::INFINITY, 0.0, 0.0];
+        let (o, _) = reference(&TaaConfig::OURS, &RefInputs { color: &nan, ..i });
+        assert!(o.iter().all(|c| c.iter().all(|v| v.is_finite())));
+        assert!((o[2 * w + 3][0] - 1.0).abs() < 1e-5);
+        // Catmull-Rom at texel centres (no motion) returns the history texel itself.
+        let ramp: Vec<V3> = (0..w * h)
+            .map(|k| [k as f32, (k % 7) as f32, 0.5])
+            .collect();
+        let keep = TaaConfig {
+            clip: false,
+            mean: true,
+            ..TaaConfig::OURS
+        };
+        let i = RefInputs {
+            history: Some((&ramp, &hg)),
+            n: 1_000_000,
+            ..base
+        };
+        let (o, _) = reference(&keep, &i);
+        for (k, (a, b)) in o.iter().zip(&ramp).enumerate() {
+            for c in 0..3 {
+                assert!(
+                    (a[c] - b[c]).abs() <= 1e-4 * (1.0 + b[c]),
+                    "pixel {k}: {a:?} vs {b:?}"
+                );
+            }
+        }
     }
 }
