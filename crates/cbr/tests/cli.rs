@@ -764,7 +764,25 @@ fn shorthand_flags_edit_the_spec_and_contradictions_are_refused() {
         &["--technique", "native+sharpen:0.25"],
         "native+sharpen:0.25",
     );
+    ok(
+        &[
+            "--technique",
+            "checkerboard:rotated:ours+taa:16",
+            "--taa-without",
+            "clip,catmull",
+        ],
+        "checkerboard:rotated:ours+taa:16:without-clip:without-catmull",
+    );
     for (args, says) in [
+        (
+            &["--technique", "native", "--taa-without", "ids"][..],
+            "needs `+taa`",
+        ),
+        (
+            &["--technique", "native+taa:inside", "--taa-without", "ids"],
+            "INSIDE",
+        ),
+        (&["--technique", "ssaa:2+taa"], "geometry"),
         (
             &["--technique", "checkerboard:split", "--layout", "rotated"][..],
             "contradicts",
