@@ -363,3 +363,99 @@ fn taa_chains_after_every_technique_with_a_full_frame() {
     assert!(err.contains("jitters"), "{err}");
     assert_clean(&gpu);
 }
+
+/// Checkerboard under TAA, chained (two histories) and fused (one), on every layout this device
+/// runs (msaa2x needs 2x MSAA: GPUs), with and without the prepass.
+#[test]
+fn checkerboard_with_taa_chained_and_fused_runs_on_every_layout() {
+    let gpu = gpu();
+    let (w, h) = (40u32, 24u32);
+    let s = demo(w, h);
+    for layout in cbr_gpu::Layout::ALL {
+        if let Some(missing) = gpu.caps().layout_unsupported(layout) {
+            eprintln!("skipped: the {} layout needs {missing}", layout.name());
+            continue;
+        }
+        for t in [
+            "ours+taa",
+            "ours:prepass+taa:inside",
+            "fused",
+            "fused:prepass+fxaa",
+        ] {
+            let spec_text = format!("checkerboard:{}:{t}", layout.name());
+            let outs = render(&gpu, &s, spec(w, h, &spec_text), &[0, 1, 2, 3]);
+            assert!(
+                outs.iter()
+                    .all(|o| o.color.iter().all(|c| c.to_f32().is_finite())),
+                "{spec_text}"
+            );
+        }
+    }
+    assert_clean(&gpu);
+}
+
+/// `fused` on a static scene: the jitter advances every second frame, rendered pixels accumulate
+/// into the one history, missing pixels take it as it is; after four cycles the output changes
+/// from frame to frame by a small fraction of what the raw jittered checkerboard frames change,
+/// and it is nearer the mean of the 8 jittered native frames than one native frame is.
+#[test]
+fn fused_converges_on_a_static_scene() {
+    let gpu = gpu();
+    let (w, h) = (48u32, 28u32);
+    let s = static_demo(w, h);
+    let frames: Vec<u32> = (0..40).collect();
+    let outs: Vec<Vec<[f32; 3]>> =
+        render(&gpu, &s, spec(w, h, "checkerboard:masked:fused"), &frames)
+            .iter()
+            .map(rgb)
+            .collect();
+    let plain: Vec<Vec<[f32; 3]>> = render(
+        &gpu,
+        &s,
+        spec(w, h, "checkerboard:masked:ours"),
+        &frames[..8],
+    )
+    .iter()
+    .map(rgb)
+    .collect();
+    let mean_abs = |a: &[[f32; 3]], b: &[[f32; 3]]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (0..3).map(|c| (x[c] - y[c]).abs()).sum::<f32>() / 3.0)
+            .sum::<f32>()
+            / a.len() as f32
+    };
+    let natives: Vec<Vec<[f32; 3]>> = (0..8)
+        .map(|f| {
+            let settings = RenderSettings {
+                jitter: taa::jitter(8, f),
+                ..spec(w, h, "native")
+            };
+            rgb(&render(&gpu, &s, settings, &[0]).remove(0))
+        })
+        .collect();
+    let native_change = (1..8)
+        .map(|f| mean_abs(&natives[f], &natives[f - 1]))
+        .sum::<f32>()
+        / 7.0;
+    let fused_change = (33..40)
+        .map(|f| mean_abs(&outs[f], &outs[f - 1]))
+        .sum::<f32>()
+        / 7.0;
+    let mean: Vec<[f32; 3]> = (0..(w * h) as usize)
+        .map(|i| [0, 1, 2].map(|c| natives.iter().map(|f| f[i][c]).sum::<f32>() / 8.0))
+        .collect();
+    let fused_off = mean_abs(&outs[39], &mean);
+    let native_off = natives.iter().map(|n| mean_abs(n, &mean)).sum::<f32>() / 8.0;
+    let plain_off = mean_abs(&plain[7], &mean);
+    eprintln!(
+        "change: fused {fused_change:.5}, jittered native {native_change:.5}; distance to the \
+         8-sample mean: fused {fused_off:.5}, native {native_off:.5}, unjittered ours {plain_off:.5}"
+    );
+    assert!(
+        fused_change < 0.25 * native_change,
+        "{fused_change} vs {native_change}"
+    );
+    assert!(fused_off < 0.75 * native_off, "{fused_off} vs {native_off}");
+    assert_clean(&gpu);
+}

@@ -159,7 +159,11 @@ fn reprojection(view: &FrameView) -> [f32; 16] {
 impl Technique for Checkerboard {
     fn render(&mut self, ctx: &mut FrameCtx) -> Result<()> {
         let parity = ctx.frame % 2;
-        let view = self.view(&ctx.view, parity);
+        let mut view = self.view(&ctx.view, parity);
+        if self.config.resolve.is_some_and(|r| r.fused) {
+            let j = crate::resolve::fused_jitter(ctx.frame);
+            view.screen_jitter = [view.screen_jitter[0] + j[0], view.screen_jitter[1] + j[1]];
+        }
         ctx.upload(&view)?;
         let rf = ResolveFrame {
             slot: parity as usize,
