@@ -43,6 +43,7 @@ layout(push_constant) uniform Push {
     uvec4 flags;   // x: F_*, y: n (frames accumulated since the reset)
     vec4 params;   // alpha (current-frame weight), gamma, depth tolerance, exposure scale
     vec4 inside;   // feedback min, feedback max, still threshold (pixels), 0
+    vec4 speed;    // x: current-frame weight at and above speed y (pixels per frame); 0: off
 } pc;
 
 bool has(uint f) { return (pc.flags.x & f) != 0u; }
@@ -57,8 +58,9 @@ vec3 to_p(vec3 c) {
     return vec3(0.25 * t.r + 0.5 * t.g + 0.25 * t.b, 0.5 * t.r - 0.5 * t.b,
                 -0.25 * t.r + 0.5 * t.g - 0.25 * t.b);
 }
+// Clipping in YCoCg can leave the RGB gamut: negative components are clamped to 0.
 vec3 from_p(vec3 y) {
-    vec3 t = vec3(y.x + y.y - y.z, y.x + y.z, y.x - y.y - y.z);
+    vec3 t = max(vec3(y.x + y.y - y.z, y.x + y.z, y.x - y.y - y.z), vec3(0.0));
     return t / max(1.0 - luma(t), 1e-3) / pc.params.w;
 }
 
@@ -225,8 +227,12 @@ void main() {
             float w = 1.0 / float(pc.flags.y + 1u);
             result = mix(h, c0, w);
         } else {
-            float wc = pc.params.x / (1.0 + luma(c0 * pc.params.w));
-            float wh = (1.0 - pc.params.x) / (1.0 + luma(h * pc.params.w));
+            // Each reprojection resamples the history and softens it: the faster the pixel moves,
+            // the more the current frame weighs (alpha rises linearly to speed.x at speed.y px).
+            float a = pc.params.x;
+            if (pc.speed.y > 0.0) a = mix(a, pc.speed.x, min(length(v) / pc.speed.y, 1.0));
+            float wc = a / (1.0 + luma(c0 * pc.params.w));
+            float wh = (1.0 - a) / (1.0 + luma(h * pc.params.w));
             result = (wc * c0 + wh * h) / (wc + wh);
         }
 #else

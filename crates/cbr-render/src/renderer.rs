@@ -300,11 +300,12 @@ impl Renderer {
         &self.settings
     }
 
-    /// The texture LOD bias in effect: the setting, else the technique's matching bias.
+    /// The texture LOD bias in effect: the setting, else the technique's matching bias plus the
+    /// post passes' (TAA's sharper inputs).
     pub fn lod_bias(&self) -> f32 {
-        self.settings
-            .lod_bias
-            .unwrap_or_else(|| self.technique.default_lod_bias())
+        self.settings.lod_bias.unwrap_or_else(|| {
+            self.technique.default_lod_bias() + self.post.iter().map(|p| p.lod_bias()).sum::<f32>()
+        })
     }
 
     /// Bytes of the raster targets (what a technique costs in memory).

@@ -46,6 +46,7 @@ fn rgb(o: &FrameOutput) -> Vec<[f32; 3]> {
 fn jittered_native(gpu: &cbr_gpu::Gpu, s: &Scene, w: u32, h: u32, len: u32, f: u32) -> FrameOutput {
     let settings = RenderSettings {
         jitter: taa::jitter(len, f),
+        lod_bias: Some(TaaConfig::OURS.lod_bias),
         ..spec(w, h, "native")
     };
     render(gpu, s, settings, &[f]).remove(0)
@@ -429,6 +430,7 @@ fn fused_converges_on_a_static_scene() {
         .map(|f| {
             let settings = RenderSettings {
                 jitter: taa::jitter(8, f),
+                lod_bias: Some(TaaConfig::OURS.lod_bias),
                 ..spec(w, h, "native")
             };
             rgb(&render(&gpu, &s, settings, &[0]).remove(0))

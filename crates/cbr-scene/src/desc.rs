@@ -236,7 +236,10 @@ mod tests {
         assert_eq!(d.width, Some(64));
         let path = camera_path(d.camera.as_ref()).expect("path");
         assert_eq!(path.keys[0].time, 0.0, "keys sorted by time");
-        assert!(!path.keys[0].cut && path.keys[1].cut, "the cut stays with its key");
+        assert!(
+            !path.keys[0].cut && path.keys[1].cut,
+            "the cut stays with its key"
+        );
         assert!(path.cut_between(0.5, 1.0));
         assert_eq!(
             d.lights.and_then(|l| l.random_points).map(|r| r.count),

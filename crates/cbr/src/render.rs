@@ -58,6 +58,8 @@ pub enum TaaAblationArg {
     Depth,
     /// Catmull-Rom history fetch: bilinear instead.
     Catmull,
+    /// The current-frame weight rising with speed: alpha everywhere.
+    Speed,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]

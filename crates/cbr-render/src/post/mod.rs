@@ -89,6 +89,11 @@ pub trait PostPass {
     fn jitter(&self, _frame: u32) -> Option<[f32; 2]> {
         None
     }
+    /// Added to the technique's texture LOD bias (TAA: its jittered samples average over the
+    /// pixel, so each may look up a sharper level; the setting `--lod-bias` overrides).
+    fn lod_bias(&self) -> f32 {
+        0.0
+    }
 }
 
 /// A post pass's constructor: context, parameters, its input images (one per frame parity).

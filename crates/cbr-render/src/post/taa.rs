@@ -7,10 +7,11 @@
 //! - `+taa` (after Karis 2014): velocity of the nearest of the 3x3 neighbours (dilation), history
 //!   by a 5-tap Catmull-Rom, clipped towards the neighbourhood mean into the YCoCg variance box
 //!   mean +- gamma sigma (Salvi 2016), blended with current-frame weight alpha, both weighted by
-//!   1 / (1 + luma) (Karis). Beyond the published: the history is rejected where the object ID it
-//!   shows is none of the current 3x3's, or its depth is outside their span (the checkerboard
-//!   resolve's tests); `without-X` switches one part off (`dilation`, `clip`, `ids`, `depth`,
-//!   `catmull`).
+//!   1 / (1 + luma) (Karis); alpha rises with the pixel's speed (0.1 still, 0.5 from 2 px per
+//!   frame: every reprojection resamples and softens the history). Beyond the published: the
+//!   history is rejected where the object ID it shows is none of the current 3x3's, or its depth
+//!   is outside their span (the checkerboard resolve's tests); `without-X` switches one part off
+//!   (`dilation`, `clip`, `ids`, `depth`, `catmull`, `speed`).
 //! - `+taa:inside` (Pedersen 2016, Playdead's INSIDE): Halton x16, 3x3 closest-depth dilation,
 //!   bilinear history, the rounded min-max box (3x3 averaged with the cross) with chroma shrunk to
 //!   1/8 of the luma extent around the centre's, clipped towards the clamped mean, feedback
@@ -35,10 +36,10 @@ use crate::technique::Geometry;
 
 pub const REGISTRATION: PostRegistration = PostRegistration {
     name: "taa",
-    grammar: "taa[:inside][:8|16][:alpha=A][:gamma=G][:tol=T][:mean][:without-X...]",
+    grammar: "taa[:inside][:8|16][:alpha=A][:amax=A][:speed=V][:gamma=G][:tol=T][:lod=B][:mean][:without-X...]",
     about: "temporal AA: Halton jitter, dilated velocity, Catmull-Rom history, YCoCg variance \
-            clipping, ID and depth rejection (X: dilation, clip, ids, depth, catmull); \
-            `inside`: Playdead's INSIDE TAA",
+            clipping, ID and depth rejection, speed-dependent weight (X: dilation, clip, ids, \
+            depth, catmull, speed); `inside`: Playdead's INSIDE TAA",
     check: |p| TaaConfig::parse(p).map(|_| ()),
     geometry: true,
     build: |ctx, p, inputs| {
@@ -48,7 +49,7 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
 };
 
 /// The parts `without-X` switches off.
-pub const ABLATIONS: [&str; 5] = ["dilation", "clip", "ids", "depth", "catmull"];
+pub const ABLATIONS: [&str; 6] = ["dilation", "clip", "ids", "depth", "catmull", "speed"];
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TaaConfig {
@@ -56,14 +57,22 @@ pub struct TaaConfig {
     pub inside: bool,
     /// Halton(2, 3) sequence length (8 or 16).
     pub length: u32,
-    /// Current-frame blend weight (ours).
+    /// Current-frame blend weight of a still pixel (ours).
     pub alpha: f32,
+    /// The current-frame weight at and above `speed` pixels per frame: alpha rises linearly with
+    /// the pixel's speed to it (each reprojection resamples and softens the history). `speed`
+    /// 0: off (`without-speed`).
+    pub alpha_max: f32,
+    pub speed: f32,
     /// Variance clipping box half-width in standard deviations (ours).
     pub gamma: f32,
     /// Relative linear-depth tolerance of the history depth test (ours).
     pub depth_tolerance: f32,
     /// Blend weight 1 / (n + 1): the running mean.
     pub mean: bool,
+    /// Added to the technique's texture LOD bias: the jittered samples average over the pixel
+    /// footprint, so each looks up a level finer (texture prefiltering would blur twice).
+    pub lod_bias: f32,
     pub dilation: bool,
     pub clip: bool,
     pub ids: bool,
@@ -85,9 +94,12 @@ impl TaaConfig {
         inside: false,
         length: 8,
         alpha: 0.1,
+        alpha_max: 0.5,
+        speed: 2.0,
         gamma: 1.0,
         depth_tolerance: 0.05,
         mean: false,
+        lod_bias: -1.0,
         dilation: true,
         clip: true,
         ids: true,
@@ -139,6 +151,10 @@ impl TaaConfig {
                     ours_only("depth test")?;
                     c.depth = false
                 }
+                "without-speed" => {
+                    ours_only("speed-dependent weight")?;
+                    c.speed = 0.0
+                }
                 "without-catmull" => {
                     ours_only("Catmull-Rom history (it is bilinear)")?;
                     c.catmull = false
@@ -152,6 +168,15 @@ impl TaaConfig {
                         ours_only("variance gamma (it clips to min-max)")?;
                         c.gamma = num(p, v, 0.0, 8.0)?
                     }
+                    Some(("lod", v)) => c.lod_bias = num(p, v, -4.0, 4.0)?,
+                    Some(("amax", v)) => {
+                        ours_only("speed-dependent weight")?;
+                        c.alpha_max = num(p, v, 0.001, 1.0)?
+                    }
+                    Some(("speed", v)) => {
+                        ours_only("speed-dependent weight")?;
+                        c.speed = num(p, v, 0.0, 1000.0)?
+                    }
                     Some(("tol", v)) => {
                         ours_only("depth test")?;
                         c.depth_tolerance = num(p, v, 0.0, 1.0)?
@@ -160,8 +185,9 @@ impl TaaConfig {
                         return Err(crate::technique::unknown_param(
                             "taa",
                             p,
-                            "inside, 8, 16, alpha=A, gamma=G, tol=T, mean, without-dilation, \
-                             without-clip, without-ids, without-depth, without-catmull",
+                            "inside, 8, 16, alpha=A, amax=A, speed=V, gamma=G, tol=T, lod=B, mean, \
+                             without-dilation, without-clip, without-ids, without-depth, \
+                             without-catmull, without-speed",
                         ));
                     }
                 },
@@ -233,6 +259,7 @@ struct Push {
     flags: [u32; 4],
     params: [f32; 4],
     inside: [f32; 4],
+    speed: [f32; 4],
 }
 
 pub struct Taa {
@@ -326,6 +353,7 @@ impl Taa {
                 ctx.exposure_stops.exp2(),
             ],
             inside: [INSIDE_FEEDBACK[0], INSIDE_FEEDBACK[1], STILL_THRESHOLD, 0.0],
+            speed: [c.alpha_max, c.speed, 0.0, 0.0],
         };
         Ok(Taa {
             config: c,
@@ -379,6 +407,10 @@ impl PostPass for Taa {
 
     fn jitter(&self, frame: u32) -> Option<[f32; 2]> {
         Some(jitter(self.config.length, frame))
+    }
+
+    fn lod_bias(&self) -> f32 {
+        self.config.lod_bias
     }
 }
 
@@ -442,7 +474,7 @@ pub fn to_p(c: V3, e: f32) -> V3 {
     ]
 }
 pub fn from_p(y: V3, e: f32) -> V3 {
-    let t = [y[0] + y[1] - y[2], y[0] + y[2], y[0] - y[1] - y[2]];
+    let t = [y[0] + y[1] - y[2], y[0] + y[2], y[0] - y[1] - y[2]].map(|v| v.max(0.0));
     let k = (1.0 - dot(t, LUMA)).max(1e-3);
     map3(t, |v| v / k / e)
 }
@@ -627,8 +659,13 @@ pub fn reference(c: &TaaConfig, i: &RefInputs) -> (Vec<V3>, Vec<(u32, f32)>) {
                             let wt = 1.0 / (i.n + 1) as f32;
                             zip3(hc, c0, |a, b| a + (b - a) * wt)
                         } else {
-                            let wc = c.alpha / (1.0 + dot(map3(c0, |v| v * e), LUMA));
-                            let wh = (1.0 - c.alpha) / (1.0 + dot(map3(hc, |v| v * e), LUMA));
+                            let mut a = c.alpha;
+                            if c.speed > 0.0 {
+                                let s = (v[0] * v[0] + v[1] * v[1]).sqrt() / c.speed;
+                                a += (c.alpha_max - a) * s.min(1.0);
+                            }
+                            let wc = a / (1.0 + dot(map3(c0, |v| v * e), LUMA));
+                            let wh = (1.0 - a) / (1.0 + dot(map3(hc, |v| v * e), LUMA));
                             zip3(c0, hc, |a, b| (wc * a + wh * b) / (wc + wh))
                         };
                     } else {
@@ -783,11 +820,29 @@ mod tests {
         // Without clipping: Karis's luminance weights, alpha 0.1: (0.1/2 * 1 + 0.9/4 * 3) / (0.1/2 + 0.9/4).
         let c = TaaConfig {
             clip: false,
+            speed: 0.0,
             ..TaaConfig::OURS
         };
         let (o, _) = reference(&c, &i);
         let want = (0.05 + 0.225 * 3.0) / (0.05 + 0.225);
         assert!((o[0][0] - want).abs() < 1e-5, "{} vs {want}", o[0][0]);
+        // With the speed term, 1 px per frame of 2: alpha = 0.1 + (0.5 - 0.1) / 2 = 0.3.
+        let one = vec![[0.6f32, 0.8]; w * h];
+        let fast = TaaConfig { speed: 2.0, ..c };
+        let (o, _) = reference(
+            &fast,
+            &RefInputs {
+                velocity: &one,
+                ..i
+            },
+        );
+        let want_fast = (0.3 / 2.0 + 0.7 / 4.0 * 3.0) / (0.3 / 2.0 + 0.7 / 4.0);
+        let centre = 2 * w + 2;
+        assert!(
+            (o[centre][0] - want_fast).abs() < 1e-4,
+            "{} vs {want_fast}",
+            o[centre][0]
+        );
         // A history of object 7, seen nowhere in the 3x3: kept while everything is still (a
         // jittered sub-pixel feature), rejected once the pixel moves (a quarter pixel), and
         // when the history texel moved.

@@ -172,12 +172,21 @@ impl CheckerboardConfig {
 
     /// The mip bias that matches the layout's sample spacing: 2 px (split, msaa2x) is one level,
     /// sqrt(2) px (rotated) half a level.
+    /// The layout's matching bias; `fused` (jittered, accumulated) looks up one level finer, as
+    /// `+taa` does.
     pub fn default_lod_bias(&self) -> f32 {
-        match self.layout {
+        let layout = match self.layout {
             Layout::Masked => 0.0,
             Layout::Split | Layout::Msaa2x => -1.0,
             Layout::Rotated => -0.5,
-        }
+        };
+        let fused = self.resolve.is_some_and(|r| r.fused);
+        layout
+            + if fused {
+                crate::post::taa::TaaConfig::OURS.lod_bias
+            } else {
+                0.0
+            }
     }
 }
 
