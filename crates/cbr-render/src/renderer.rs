@@ -195,6 +195,8 @@ impl Renderer {
             post_regs.push((pr, part));
         }
         let geometry = post_regs.iter().any(|(pr, _)| pr.geometry);
+        // The shader modules the technique and its post chain are built from key the frame cache.
+        let mark = shaders.request_mark();
         let ctx = BuildCtx {
             gpu,
             shaders,
@@ -262,14 +264,10 @@ impl Renderer {
             None => None,
         };
         let cache = match (&settings.cache, technique.cacheable()) {
-            (Some(dir), Some(folders)) => {
-                // Post passes change the frame too: their shaders key it as well.
-                let mut folders = folders.to_vec();
-                if !post.is_empty() {
-                    folders.push("post/");
-                }
+            (Some(dir), true) => {
+                let modules = shaders.requests_since(mark);
                 Some(FrameCache::new(
-                    dir, gpu, shaders, scene, &settings, &folders,
+                    dir, gpu, shaders, scene, &settings, &modules,
                 )?)
             }
             _ => None,

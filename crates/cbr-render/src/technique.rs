@@ -127,10 +127,9 @@ pub trait Technique {
     }
     /// Bytes of the technique's raster targets (what it costs in memory).
     fn target_bytes(&self) -> u64;
-    /// Frames of this technique are worth caching on disk (expensive references): the shader
-    /// folders (under `shaders/`, e.g. `"scene/"`) its frames depend on, which key the cache.
-    fn cacheable(&self) -> Option<&'static [&'static str]> {
-        None
+    /// Frames of this technique are worth caching on disk (expensive references).
+    fn cacheable(&self) -> bool {
+        false
     }
 }
 

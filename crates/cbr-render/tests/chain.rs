@@ -303,9 +303,9 @@ fn the_cache_returns_the_same_frame_and_recomputes_corrupt_entries() {
     assert_clean(&gpu);
 }
 
-/// The cache key holds the shaders the cached technique's frames depend on (ssaa: scene, inc,
-/// ssaa), not every shader: an edit of a post pass keeps the references, one of the scene shader
-/// recomputes them.
+/// The cache key holds what the cached technique's shader modules compute, not every source: an
+/// edit of a post pass, a comment, or code in a branch of another layout keeps the references;
+/// a change of what the scene shaders compute recomputes them.
 #[test]
 fn the_cache_key_holds_the_shaders_the_frame_depends_on() {
     let gpu = gpu();
@@ -332,6 +332,12 @@ fn the_cache_key_holds_the_shaders_the_frame_depends_on() {
         let text = std::fs::read_to_string(&p).expect("read") + "\n// edited\n";
         std::fs::write(&p, text).expect("write");
     };
+    let replace = |rel: &str, from: &str, to: &str| {
+        let p = src.path().join(rel);
+        let text = std::fs::read_to_string(&p).expect("read");
+        assert!(text.contains(from), "{rel} has no `{from}`");
+        std::fs::write(&p, text.replacen(from, to, 1)).expect("write");
+    };
     assert!(!render().timings.is_empty(), "first: rendered");
     append("post/sharpen.comp");
     assert!(
@@ -339,9 +345,28 @@ fn the_cache_key_holds_the_shaders_the_frame_depends_on() {
         "a post shader edit keeps the entry"
     );
     append("scene/forward.frag");
+    replace(
+        "scene/forward.frag",
+        "void main() {",
+        "// a comment that shifts every line below\nvoid main() {",
+    );
+    assert!(
+        render().timings.is_empty(),
+        "comments and line shifts keep it"
+    );
+    replace(
+        "scene/forward.frag",
+        "#if LAYOUT == LAYOUT_MASKED\n",
+        "#if LAYOUT == LAYOUT_MASKED\n    if (frame.counts.z == 12345u) demote;\n",
+    );
+    assert!(
+        render().timings.is_empty(),
+        "code only another layout compiles keeps it"
+    );
+    replace("inc/shading.glsl", "1e-8", "2e-8");
     assert!(
         !render().timings.is_empty(),
-        "a scene shader edit recomputes it"
+        "a change of what it computes recomputes it"
     );
     assert_clean(&gpu);
 }

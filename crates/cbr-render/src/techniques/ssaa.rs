@@ -311,8 +311,8 @@ impl Technique for Ssaa {
         self.targets.bytes() + px * (16 + 8 + 8)
     }
 
-    fn cacheable(&self) -> Option<&'static [&'static str]> {
-        Some(&["scene/", "inc/", "ssaa/"])
+    fn cacheable(&self) -> bool {
+        true
     }
 }
 
