@@ -51,7 +51,7 @@ layout(set = 0, binding = BINDING_DEBUG_BITS, r32ui) uniform writeonly uimage2D 
 layout(push_constant) uniform Push {
     ivec4 size_parity;  // W, H, parity (the rendered rows' y mod 2), 0
     uvec4 flags;        // x: F_* flags
-    vec4 params;        // x: depth tolerance, y: static threshold (px), zw: 0
+    vec4 params;        // x: depth tolerance, y: static threshold (px), z: clamp margin, w: 0
 } pc;
 
 ivec2 size() { return pc.size_parity.xy; }
@@ -214,7 +214,10 @@ vec3 spatial_fill(Sample n[6], int nearest) {
     return best < 0 ? n[nearest].c : untonemap(best_mean);
 }
 
-// Clamps h to the YCoCg min/max box of the six rendered samples around the pixel.
+// Clamps h to the YCoCg min/max box of the six rendered samples around the pixel, widened on
+// each side by a fraction (params.z) of its extent: the rows above and below do not hold the
+// missing row's own content (thin horizontal features, steep vertical gradients), so their box
+// alone is too tight (docs/interlaced.md: measured).
 vec3 clamp_to_box(vec3 h, Sample n[6], inout uint dbg) {
     vec3 y = to_ycocg(h);
     vec3 lo = to_ycocg(n[0].c);
@@ -224,7 +227,8 @@ vec3 clamp_to_box(vec3 h, Sample n[6], inout uint dbg) {
         lo = min(lo, q);
         hi = max(hi, q);
     }
-    vec3 yc = clamp(y, lo, hi);
+    vec3 margin = pc.params.z * (hi - lo);
+    vec3 yc = clamp(y, lo - margin, hi + margin);
     if (any(notEqual(yc, y))) {
         dbg |= DBG_CLAMPED;
         return from_ycocg(yc);

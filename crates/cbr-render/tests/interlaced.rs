@@ -235,6 +235,7 @@ fn the_resolve_matches_its_cpu_reference_on_a_moving_camera() {
         "without-ids",
         "without-depth",
         "without-clamp",
+        "margin=0",
         "without-diagonals",
         "without-history",
     ];

@@ -20,7 +20,7 @@ use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, un
 
 pub const REGISTRATION: Registration = Registration {
     name: "interlaced",
-    grammar: "interlaced[:debug][:without-history|ids|depth|clamp|diagonals]",
+    grammar: "interlaced[:debug][:margin=M][:without-history|ids|depth|clamp|diagonals]",
     about: "even rows on even frames, odd rows on odd frames; missing rows from the previous \
             frame (velocity, ID and depth tests), else edge-directed line averaging",
     layers: &["mask", "resolve_* (debug)"],
@@ -32,10 +32,10 @@ pub const REGISTRATION: Registration = Registration {
     },
 };
 
-const EXPECTED: &str =
-    "debug, without-history, without-ids, without-depth, without-clamp, without-diagonals";
+const EXPECTED: &str = "debug, margin=M, without-history, without-ids, without-depth, \
+    without-clamp, without-diagonals";
 
-/// The parameters: `debug` and the ablations, in any order.
+/// The parameters: `debug`, the clamp margin and the ablations, in any order.
 pub fn parse(params: &[&str]) -> std::result::Result<InterlacedSettings, String> {
     let mut s = InterlacedSettings::default();
     for p in params {
@@ -46,17 +46,26 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterlacedSettings, String>
             "without-depth" => s.depth = false,
             "without-clamp" => s.clamp = false,
             "without-diagonals" => s.diagonals = false,
-            _ => return Err(unknown_param("interlaced", p, EXPECTED)),
+            _ => match p.strip_prefix("margin=").map(str::parse::<f32>) {
+                Some(Ok(m)) if m >= 0.0 && m.is_finite() => s.clamp_margin = m,
+                Some(_) => return Err(format!("`{p}`: the clamp margin is a number >= 0")),
+                None => return Err(unknown_param("interlaced", p, EXPECTED)),
+            },
         }
     }
     Ok(s)
 }
 
 /// The canonical parameters of `s` (defaults left out), the inverse of `parse`.
-pub fn params(s: &InterlacedSettings) -> Vec<&'static str> {
+pub fn params(s: &InterlacedSettings) -> Vec<String> {
     let mut p = Vec::new();
+    if s.debug {
+        p.push("debug".to_string());
+    }
+    if s.clamp_margin != InterlacedSettings::default().clamp_margin {
+        p.push(format!("margin={}", s.clamp_margin));
+    }
     for (on, name) in [
-        (s.debug, "debug"),
         (!s.history, "without-history"),
         (!s.ids, "without-ids"),
         (!s.depth, "without-depth"),
@@ -64,7 +73,7 @@ pub fn params(s: &InterlacedSettings) -> Vec<&'static str> {
         (!s.diagonals, "without-diagonals"),
     ] {
         if on {
-            p.push(name);
+            p.push(name.to_string());
         }
     }
     p
@@ -187,6 +196,7 @@ mod tests {
     fn params_round_trip_and_refuse_unknown_ones() {
         let all = [
             "debug",
+            "margin=0.25",
             "without-history",
             "without-ids",
             "without-depth",

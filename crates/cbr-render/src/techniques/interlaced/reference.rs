@@ -226,7 +226,10 @@ impl Ctx<'_> {
                 hi[k] = hi[k].max(q[k]);
             }
         }
-        let yc = [0, 1, 2].map(|k| y[k].max(lo[k]).min(hi[k]));
+        let yc = [0, 1, 2].map(|k| {
+            let margin = self.s.clamp_margin * (hi[k] - lo[k]);
+            y[k].max(lo[k] - margin).min(hi[k] + margin)
+        });
         if yc != y {
             *dbg |= DBG_CLAMPED;
             return from_ycocg(yc);
@@ -502,5 +505,40 @@ mod tests {
             history: h(),
         };
         assert_eq!(resolve(&inputs, &s).color[4], [0.75; 3]);
+    }
+
+    #[test]
+    fn the_clamp_box_is_widened_by_the_margin() {
+        // Rows of grey 1 above and 2 below, all moving 1 px right; history 2.4 at (0, 1).
+        let (mut a, mut b) = (sample(1.0, 0.5, 1), sample(2.0, 0.5, 1));
+        (a.v, b.v) = ([1.0, 0.0], [1.0, 0.0]);
+        let cur = frame([[a; 3], [b; 3]]);
+        let color = vec![[2.4; 3]; 12];
+        let (velocity, depth, ids) = (vec![[1.0, 0.0]; 12], vec![0.5; 12], vec![[1, 0]; 12]);
+        let run = |clamp_margin: f32| {
+            let s = InterlacedSettings {
+                clamp_margin,
+                ..InterlacedSettings::default()
+            };
+            let history = HistoryRef {
+                color: &color,
+                velocity: &velocity,
+                depth: &depth,
+                ids: &ids,
+            };
+            let inputs = Inputs {
+                width: 3,
+                height: 4,
+                parity: 0,
+                current: &cur,
+                history: Some(history),
+            };
+            let out = resolve(&inputs, &s);
+            (out.color[4][0], out.debug[4] & DBG_CLAMPED)
+        };
+        // The box's luma spans [1, 2]; half its extent on each side lets 2.4 through.
+        assert_eq!(run(0.5), (2.4, 0));
+        assert_eq!(run(0.0), (2.0, DBG_CLAMPED));
+        assert_eq!(run(0.25), (2.25, DBG_CLAMPED));
     }
 }

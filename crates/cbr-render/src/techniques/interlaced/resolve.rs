@@ -38,6 +38,8 @@ pub struct InterlacedSettings {
     pub depth: bool,
     /// Clamp moving history to the six rendered neighbours' YCoCg box.
     pub clamp: bool,
+    /// The clamp box's margin on each side, a fraction of its extent.
+    pub clamp_margin: f32,
     /// Spatial fill along the best of three directions (off: the vertical pair only).
     pub diagonals: bool,
     /// Write the debug bits (resolve::DBG_*).
@@ -53,6 +55,7 @@ impl Default for InterlacedSettings {
             ids: true,
             depth: true,
             clamp: true,
+            clamp_margin: 0.5,
             diagonals: true,
             debug: false,
         }
@@ -273,7 +276,7 @@ impl InterlacedResolve {
                 0,
             ],
             flags: [s.flags(frame.reset), 0, 0, 0],
-            params: [s.depth_tolerance, s.static_threshold, 0.0, 0.0],
+            params: [s.depth_tolerance, s.static_threshold, s.clamp_margin, 0.0],
         };
         let scope = profiler.begin(cmd, "interlaced.resolve", PassKind::Compute);
         cmd.bind_pipeline(&self.pipeline);
