@@ -9,9 +9,10 @@
 #define LAYOUT_SPLIT 2
 #define LAYOUT_ROTATED 3
 #define LAYOUT_MSAA2X 4
+#define LAYOUT_INTERLACED 5  // `interlaced`: full resolution, the rows of the other parity demoted
 
 // counts.w flags
-#define FLAG_PARITY 1u          // the frame's checkerboard parity (x + y) mod 2
+#define FLAG_PARITY 1u          // the frame's parity: checkerboard (x + y) mod 2, interlaced y mod 2
 #define FLAG_COUNT_SHADED 2u    // count shaded (non-helper) fragments in the counter buffer
 #define FLAG_LOD_GRADIENTS 4u   // textureGrad with derivatives scaled to full-res pixels
 #define FLAG_DEBUG_LOD 8u       // write the albedo lookup's level of detail to colour.r

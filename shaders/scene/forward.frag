@@ -3,7 +3,7 @@
 #extension GL_EXT_demote_to_helper_invocation : require
 // Scene raster, fragment stage: alpha test, bump, lighting; writes colour, velocity and IDs.
 // Discards are demotions, so the remaining lanes of a quad keep valid derivatives (the masked
-// layout drops half of every quad).
+// and interlaced layouts drop half of every quad).
 #include "../inc/scene_types.glsl"
 
 layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
@@ -113,6 +113,9 @@ void main() {
     MaterialData m = materials[o.ids.y];
 #if LAYOUT == LAYOUT_MASKED
     if (((int(gl_FragCoord.x) + int(gl_FragCoord.y)) & 1) != int(frame.counts.w & FLAG_PARITY)) demote;
+#elif LAYOUT == LAYOUT_INTERLACED
+    // Rows of the other parity: every 2x2 quad keeps one row, whose derivatives stay native's.
+    if ((int(gl_FragCoord.y) & 1) != int(frame.counts.w & FLAG_PARITY)) demote;
 #endif
     if (m.tex.y >= 0) {
         float a = tex(mask_tex, v_uv)[m.tex.z];

@@ -1,5 +1,5 @@
 //! The scene raster pass, for the `native` technique (full resolution, one sample at each pixel
-//! centre: the reference) and for every checkerboard layout (the LAYOUT define).
+//! centre: the reference), for every checkerboard layout and for `interlaced` (the LAYOUT define).
 
 use cbr_gpu::{
     Attachment, BindingDesc, Buffer, Cmd, DescriptorKind, DescriptorSet, Gpu, GraphicsDesc, Image,
@@ -17,6 +17,8 @@ pub const LAYOUT_MASKED: u32 = 1;
 pub const LAYOUT_SPLIT: u32 = 2;
 pub const LAYOUT_ROTATED: u32 = 3;
 pub const LAYOUT_MSAA2X: u32 = 4;
+/// `interlaced`: native's raster with the rows of the other parity demoted.
+pub const LAYOUT_INTERLACED: u32 = 5;
 
 pub fn layout_id(l: Layout) -> u32 {
     match l {
@@ -249,7 +251,7 @@ impl ScenePass {
 
     /// Clears `colors` (in the pipeline's order: colour, velocity, IDs; IDs only for `id_only`)
     /// and `depth`, and draws every object. Colour clears to the background radiance with alpha 1
-    /// for native, 0 for checkerboard layouts (the unpack marks rendered samples).
+    /// for native, 0 for the other layouts (checkerboard, interlaced: alpha marks shaded samples).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,

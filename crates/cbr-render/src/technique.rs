@@ -158,6 +158,7 @@ pub const TECHNIQUES: &[Registration] = &[
     techniques::msaa::REGISTRATION,
     techniques::checkerboard::REGISTRATION,
     techniques::upscale::REGISTRATION,
+    techniques::interlaced::REGISTRATION,
 ];
 
 pub fn find(name: &str) -> Option<&'static Registration> {

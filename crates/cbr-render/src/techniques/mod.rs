@@ -2,6 +2,7 @@
 //! of them share: reading the four common layers back.
 
 pub mod checkerboard;
+pub mod interlaced;
 pub mod msaa;
 
 pub mod native;
