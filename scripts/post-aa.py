@@ -25,12 +25,13 @@ QUALITY = [
     "checkerboard:split:fused", "checkerboard:rotated:fused:prepass",
     "checkerboard:rotated:ours+taa:inside", "checkerboard:rotated:pq4k+taa",
     "checkerboard:split:pq4k+taa", "checkerboard:split:spatial+taa", "upscale:bicubic+taa",
-    "msaa:4+taa",
+    "msaa:4+taa", "interlaced", "interlaced+taa",
 ]
 COST = ["native", "native+fxaa", "native+taa", "native+taa:inside",
         "checkerboard:rotated:ours", "checkerboard:rotated:ours+taa",
         "checkerboard:split:ours+taa", "checkerboard:rotated:fused", "checkerboard:split:fused",
-        "checkerboard:split:pq4k+taa", "checkerboard:split:spatial+taa"]
+        "checkerboard:split:pq4k+taa", "checkerboard:split:spatial+taa", "interlaced",
+        "interlaced+taa"]
 SCENES = {"builtin:demo": "demo", "scenes/sibenik.toml": "sibenik", "scenes/foliage.toml": "foliage"}
 
 

@@ -343,6 +343,7 @@ fn taa_chains_after_every_technique_with_a_full_frame() {
         "checkerboard:split:ours:prepass+taa:inside",
         "checkerboard:masked:pq4k+fxaa+taa",
         "native+taa+fxaa",
+        "interlaced+taa",
     ] {
         let outs = render(&gpu, &s, spec(w, h, t), &[0, 1, 2, 3]);
         assert!(
