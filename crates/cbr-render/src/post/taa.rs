@@ -416,6 +416,9 @@ impl PostPass for Taa {
 
 // ---- The CPU reference ----------------------------------------------------------------------
 
+/// The previous output colour and its geometry (object ID | [`MOVED`], linear depth).
+pub type RefHistory<'a> = (&'a [[f32; 3]], &'a [(u32, f32)]);
+
 /// One frame's inputs to [`reference`], all at the output resolution, rows top to bottom.
 pub struct RefInputs<'a> {
     pub width: usize,
@@ -431,7 +434,7 @@ pub struct RefInputs<'a> {
     /// Object IDs.
     pub ids: &'a [u32],
     /// The previous output and its geometry (object ID | [`MOVED`], linear depth); `None`: reset.
-    pub history: Option<(&'a [[f32; 3]], &'a [(u32, f32)])>,
+    pub history: Option<RefHistory<'a>>,
     /// Frames accumulated since the reset (the `mean` weight 1 / (n + 1)).
     pub n: u32,
     /// 2^exposure stops.
