@@ -168,27 +168,8 @@ pub fn measure(
         Role::Reference {
             disocclusion_frames: k,
         } => {
-            let mut h = IdHistory::new(k);
-            // The IDs of the skipped frames the first masks need, and of the first measured
-            // frame to check them against.
-            let check = if first > 0 {
-                let from = first.saturating_sub(k);
-                let (w, h2) = (config.settings.width, config.settings.height);
-                let mut native = native_ids(gpu, scene, (w, h2), m.lod_bias, from, first)?;
-                let check = native.pop();
-                for i in native {
-                    h.push(i);
-                }
-                m.id_stand_in = Some(IdStandIn {
-                    native_frames: [from, first],
-                    lod_bias: m.lod_bias,
-                    mismatched_pixels: 0,
-                    pixels: (w * h2) as usize,
-                });
-                check
-            } else {
-                None
-            };
+            let (h, check, stand_in) = id_history(gpu, scene, config, m.lod_bias, k, first)?;
+            m.id_stand_in = stand_in;
             Some((h, check))
         }
         Role::Against { .. } => None,
@@ -242,6 +223,38 @@ pub fn measure(
         }
     }
     Ok((m, kept))
+}
+
+/// The reference's ID history before its first rendered frame `first`: empty when it renders
+/// from frame 0; else (a cached reference skips its warm-up frames) the IDs of the k frames
+/// before from a native raster at the reference's LOD bias, with that raster's IDs of frame
+/// `first` to check them against the reference's, and what was rendered.
+fn id_history(
+    gpu: &Gpu,
+    scene: &Scene,
+    config: &Config,
+    lod_bias: f32,
+    k: u32,
+    first: u32,
+) -> Result<(IdHistory, Option<Vec<u32>>, Option<IdStandIn>)> {
+    let mut history = IdHistory::new(k);
+    if first == 0 {
+        return Ok((history, None, None));
+    }
+    let from = first.saturating_sub(k);
+    let (w, h) = (config.settings.width, config.settings.height);
+    let mut native = native_ids(gpu, scene, (w, h), lod_bias, from, first)?;
+    let check = native.pop();
+    for ids in native {
+        history.push(ids);
+    }
+    let stand_in = IdStandIn {
+        native_frames: [from, first],
+        lod_bias,
+        mismatched_pixels: 0,
+        pixels: (w * h) as usize,
+    };
+    Ok((history, check, Some(stand_in)))
 }
 
 /// A measured frame's GPU times per pass, frame time and fragment counts.
