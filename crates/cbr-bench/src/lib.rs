@@ -1,7 +1,8 @@
 //! `cbr bench` as a library: every configuration over the scene's camera path, GPU timestamps
 //! per pass (median, p5, p95 after warm-up), pipeline statistics, the resolve's copy-kernel
 //! floor, and the error of every frame against a reference (`native`, or a supersampled ground
-//! truth such as `ssaa:16`) at the same resolution, whole frame and edge pixels. Writes
+//! truth such as `ssaa:16`) at the same resolution, whole frame, edge pixels and disoccluded
+//! pixels, and the frame-to-frame change of the error beside the reference's own. Writes
 //! bench.json (schema cbr.bench/1) and bench.csv with device, driver, resolution and settings on
 //! every row. DESIGN.md "Benchmark protocol"; docs/bench-and-report.md.
 #![forbid(unsafe_code)]
