@@ -88,7 +88,7 @@ def main():
                    f"measured after {a.warmup} warm-up, against `ssaa:16`):\n")
         has_ghost = any(err(r, "flip_disocc_mean") is not None for r in b["rows"])
         head = "| configuration | FLIP | edge FLIP |" + (" disocclusion FLIP |" if has_ghost else "")
-        head += " FLIP / native |"
+        head += " flicker | change (reference's) | FLIP / native |"
         out.append(head)
         out.append("|" + "---|" * (head.count("|") - 1))
         nat = err(rows["native"], "flip_mean")
@@ -100,6 +100,8 @@ def main():
             line = f"| `{t}` | {f(fl)} | {f(err(r, 'flip_edge_mean'))} |"
             if has_ghost:
                 line += f" {f(err(r, 'flip_disocc_mean'))} |"
+            line += (f" {f(err(r, 'flicker_mean'))} | {f(err(r, 'change_mean'))} "
+                     f"({f(err(r, 'ref_change_mean'))}) |")
             line += f" {f(fl / nat if fl and nat else None, 3)} |"
             out.append(line)
         taa = err(rows["native+taa"], "flip_mean")
