@@ -34,6 +34,7 @@ layout(set = 0, binding = BINDING_OUT_COLOR, rgba16f) uniform writeonly image2D 
 #define F_DEPTH 16u
 #define F_CATMULL 32u
 #define F_MEAN 64u
+#define F_FILTER 128u  // reconstruct the current sample at the pixel centre (Karis' filter)
 // History geometry: x = object ID | MOVED where the pixel moved more than the still threshold.
 #define MOVED 0x80000000u
 #define ID_MASK 0x7fffffffu  // blend weight 1 / (n + 1): the running mean (known-answer tests)
@@ -43,7 +44,8 @@ layout(push_constant) uniform Push {
     uvec4 flags;   // x: F_*, y: n (frames accumulated since the reset)
     vec4 params;   // alpha (current-frame weight), gamma, depth tolerance, exposure scale
     vec4 inside;   // feedback min, feedback max, still threshold (pixels), 0
-    vec4 speed;    // x: current-frame weight at and above speed y (pixels per frame); 0: off
+    vec4 speed;    // x: current-frame weight at and above speed y (pixels per frame); 0: off;
+                   // zw: the frame's jitter (pixels)
 } pc;
 
 bool has(uint f) { return (pc.flags.x & f) != 0u; }
@@ -155,6 +157,20 @@ void main() {
     }
     // A non-finite centre is replaced by the mean of the finite neighbours (0 when none).
     vec3 c0 = ok[4] ? c[4] : (n_ok > 0.0 ? sum / n_ok : vec3(0.0));
+    if (has(F_FILTER)) {
+        // The current frame at the pixel centre: the 3x3's samples (at offset o - jitter from
+        // it) weighted by a Gaussian fit of Blackman-Harris (Karis 2014), exp(-2.29 d^2).
+        vec3 acc = vec3(0.0);
+        float ws = 0.0;
+        for (int k = 0; k < 9; k++) {
+            if (!ok[k]) continue;
+            vec2 d = vec2(OFF[k]) - pc.speed.zw;
+            float w = exp(-2.29 * dot(d, d));
+            acc += w * c[k];
+            ws += w;
+        }
+        if (ws > 0.0) c0 = acc / ws;
+    }
     vec3 y0 = to_p(c0);
 
     // Geometry: the nearest (largest reverse-Z) texel of the 3x3 gives the velocity (dilation);

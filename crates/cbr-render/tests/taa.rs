@@ -97,6 +97,7 @@ fn the_shader_matches_its_cpu_reference_on_a_moving_camera() {
             history: None,
             n: k as u32,
             exposure_scale: s.settings.exposure.exp2(),
+            jitter: taa::jitter(c.length, frames[k]),
         };
         for k in 1..outs.len() {
             let f = frames[k];

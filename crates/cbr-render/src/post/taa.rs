@@ -49,7 +49,9 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
 };
 
 /// The parts `without-X` switches off.
-pub const ABLATIONS: [&str; 6] = ["dilation", "clip", "ids", "depth", "catmull", "speed"];
+pub const ABLATIONS: [&str; 7] = [
+    "dilation", "clip", "ids", "depth", "catmull", "speed", "filter",
+];
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TaaConfig {
@@ -78,6 +80,9 @@ pub struct TaaConfig {
     pub ids: bool,
     pub depth: bool,
     pub catmull: bool,
+    /// Reconstruct the current sample at the pixel centre from the 3x3 (Karis' Blackman-Harris
+    /// fit); off with `mean` (the running mean of the raw jittered frames) and in INSIDE mode.
+    pub filter: bool,
 }
 
 /// Below this motion (pixels) a pixel is still: when its history texel was still too, the ID
@@ -105,6 +110,7 @@ impl TaaConfig {
         ids: true,
         depth: true,
         catmull: true,
+        filter: true,
     };
 
     pub const INSIDE: TaaConfig = TaaConfig {
@@ -113,6 +119,7 @@ impl TaaConfig {
         ids: false,
         depth: false,
         catmull: false,
+        filter: false,
         ..TaaConfig::OURS
     };
 
@@ -140,7 +147,14 @@ impl TaaConfig {
                 "inside" => {}
                 "8" => c.length = 8,
                 "16" => c.length = 16,
-                "mean" => c.mean = true,
+                "mean" => {
+                    c.mean = true;
+                    c.filter = false
+                }
+                "without-filter" => {
+                    ours_only("current-sample filter")?;
+                    c.filter = false
+                }
                 "without-dilation" => c.dilation = false,
                 "without-clip" => c.clip = false,
                 "without-ids" => {
@@ -187,7 +201,7 @@ impl TaaConfig {
                             p,
                             "inside, 8, 16, alpha=A, amax=A, speed=V, gamma=G, tol=T, lod=B, mean, \
                              without-dilation, without-clip, without-ids, without-depth, \
-                             without-catmull, without-speed",
+                             without-catmull, without-speed, without-filter",
                         ));
                     }
                 },
@@ -205,6 +219,7 @@ impl TaaConfig {
             (self.depth, F_DEPTH),
             (self.catmull, F_CATMULL),
             (self.mean, F_MEAN),
+            (self.filter, F_FILTER),
         ] {
             if on {
                 f |= bit;
@@ -221,6 +236,7 @@ pub const F_IDS: u32 = 8;
 pub const F_DEPTH: u32 = 16;
 pub const F_CATMULL: u32 = 32;
 pub const F_MEAN: u32 = 64;
+pub const F_FILTER: u32 = 128;
 
 /// The radical inverse of `i` in `base` (the Halton sequence's element i).
 pub fn halton(mut i: u32, base: u32) -> f32 {
@@ -382,6 +398,8 @@ impl PostPass for Taa {
         let mut push = self.push;
         push.flags[0] |= if frame.reset { F_RESET } else { 0 };
         push.flags[1] = n;
+        push.speed[2] = frame.jitter[0];
+        push.speed[3] = frame.jitter[1];
         cmd.use_image(input, Access::ComputeSampled);
         if let Some(g) = &frame.geometry {
             for image in [g.velocity, g.depth, g.ids] {
@@ -439,6 +457,8 @@ pub struct RefInputs<'a> {
     pub n: u32,
     /// 2^exposure stops.
     pub exposure_scale: f32,
+    /// The frame's jitter (pixels), for the current-sample filter.
+    pub jitter: [f32; 2],
 }
 
 const LUMA: [f32; 3] = [0.2126, 0.7152, 0.0722];
@@ -552,6 +572,25 @@ pub fn reference(c: &TaaConfig, i: &RefInputs) -> (Vec<V3>, Vec<(u32, f32)>) {
             } else {
                 [0.0; 3]
             };
+            let mut c0 = c0;
+            if c.filter {
+                let (mut acc, mut ws) = ([0.0f32; 3], 0.0f32);
+                for k in 0..9 {
+                    if !ok[k] {
+                        continue;
+                    }
+                    let d = [
+                        OFF[k][0] as f32 - i.jitter[0],
+                        OFF[k][1] as f32 - i.jitter[1],
+                    ];
+                    let wt = (-2.29 * (d[0] * d[0] + d[1] * d[1])).exp();
+                    acc = zip3(acc, cs[k], |a, b| a + wt * b);
+                    ws += wt;
+                }
+                if ws > 0.0 {
+                    c0 = map3(acc, |a| a / ws);
+                }
+            }
             let y0 = to_p(c0, e);
             // Geometry: nearest of the 3x3 (smallest linear depth), IDs, depth span.
             let (mut best, mut z_best) = (at([x, y]), f32::INFINITY);
@@ -799,6 +838,7 @@ mod tests {
             history: None,
             n: 0,
             exposure_scale: 1.0,
+            jitter: [0.0; 2],
         };
         let (o, g) = reference(&TaaConfig::OURS, &base);
         assert!(o.iter().all(|c| *c == [1.0; 3]) && g.iter().all(|g| *g == (1, 2.0)));
