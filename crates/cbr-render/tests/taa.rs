@@ -68,7 +68,7 @@ fn the_shader_matches_its_cpu_reference_on_a_moving_camera() {
         "",
         "inside",
         "without-catmull:without-dilation",
-        "gamma=1.5:alpha=0.2",
+        "gamma=1.5:alpha=0.2:filter",
     ] {
         let taa_spec = if params.is_empty() {
             "native+taa".to_string()
@@ -295,7 +295,7 @@ fn nan_and_inf_never_enter_the_history() {
 }
 
 /// A camera cut (a key flagged `cut`) resets the history: the first frame after it is the
-/// jittered native frame itself (current-sample filter off), with no trace of the previous shot.
+/// jittered native frame itself, with no trace of the previous shot.
 #[test]
 fn a_camera_cut_resets_the_history() {
     let gpu = gpu();
@@ -308,8 +308,7 @@ fn a_camera_cut_resets_the_history() {
     cut.position[0] += 3.0;
     s.camera.keys.retain(|k| k.time < cut.time);
     s.camera.keys.push(cut);
-    // Without the current-sample filter, a reset frame is the jittered native frame itself.
-    let taa = "native+taa:without-filter";
+    let taa = "native+taa";
     let outs = render(&gpu, &s, spec(w, h, taa), &(0..6).collect::<Vec<_>>());
     let native4 = jittered_native(&gpu, &s, w, h, 8, 4);
     assert!(

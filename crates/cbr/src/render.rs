@@ -60,8 +60,6 @@ pub enum TaaAblationArg {
     Catmull,
     /// The current-frame weight rising with speed: alpha everywhere.
     Speed,
-    /// The current sample reconstructed at the pixel centre: the raw jittered sample.
-    Filter,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]

@@ -36,7 +36,7 @@ use crate::technique::Geometry;
 
 pub const REGISTRATION: PostRegistration = PostRegistration {
     name: "taa",
-    grammar: "taa[:inside][:8|16][:alpha=A][:amax=A][:speed=V][:gamma=G][:tol=T][:lod=B][:mean][:without-X...]",
+    grammar: "taa[:inside][:8|16][:alpha=A][:amax=A][:speed=V][:gamma=G][:tol=T][:lod=B][:mean][:filter][:without-X...]",
     about: "temporal AA: Halton jitter, dilated velocity, Catmull-Rom history, YCoCg variance \
             clipping, ID and depth rejection, speed-dependent weight (X: dilation, clip, ids, \
             depth, catmull, speed); `inside`: Playdead's INSIDE TAA",
@@ -49,9 +49,7 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
 };
 
 /// The parts `without-X` switches off.
-pub const ABLATIONS: [&str; 7] = [
-    "dilation", "clip", "ids", "depth", "catmull", "speed", "filter",
-];
+pub const ABLATIONS: [&str; 6] = ["dilation", "clip", "ids", "depth", "catmull", "speed"];
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TaaConfig {
@@ -80,8 +78,9 @@ pub struct TaaConfig {
     pub ids: bool,
     pub depth: bool,
     pub catmull: bool,
-    /// Reconstruct the current sample at the pixel centre from the 3x3 (Karis' Blackman-Harris
-    /// fit); off with `mean` (the running mean of the raw jittered frames) and in INSIDE mode.
+    /// `filter`: reconstruct the current sample at the pixel centre from the 3x3 (Karis'
+    /// Blackman-Harris fit). Off by default: on the moving demo it blurs texture more than it
+    /// removes jitter (docs/post-aa.md).
     pub filter: bool,
 }
 
@@ -110,7 +109,7 @@ impl TaaConfig {
         ids: true,
         depth: true,
         catmull: true,
-        filter: true,
+        filter: false,
     };
 
     pub const INSIDE: TaaConfig = TaaConfig {
@@ -147,13 +146,10 @@ impl TaaConfig {
                 "inside" => {}
                 "8" => c.length = 8,
                 "16" => c.length = 16,
-                "mean" => {
-                    c.mean = true;
-                    c.filter = false
-                }
-                "without-filter" => {
+                "mean" => c.mean = true,
+                "filter" => {
                     ours_only("current-sample filter")?;
-                    c.filter = false
+                    c.filter = true
                 }
                 "without-dilation" => c.dilation = false,
                 "without-clip" => c.clip = false,
@@ -201,7 +197,7 @@ impl TaaConfig {
                             p,
                             "inside, 8, 16, alpha=A, amax=A, speed=V, gamma=G, tol=T, lod=B, mean, \
                              without-dilation, without-clip, without-ids, without-depth, \
-                             without-catmull, without-speed, without-filter",
+                             without-catmull, without-speed, filter",
                         ));
                     }
                 },
