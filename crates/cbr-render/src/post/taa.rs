@@ -787,6 +787,11 @@ mod tests {
         assert!(c.length == 16 && c.gamma == 1.5 && !c.clip && !c.ids && c.depth);
         assert!(TaaConfig::parse(&["inside", "without-ids"]).is_err());
         assert!(TaaConfig::parse(&["inside", "alpha=0.2"]).is_err());
+        assert!(TaaConfig::parse(&["inside", "filter"]).is_err());
+        assert!(TaaConfig::parse(&["filter"]).unwrap().filter && !TaaConfig::OURS.filter);
+        let s = TaaConfig::parse(&["speed=4", "amax=0.7", "lod=-2"]).unwrap();
+        assert!(s.speed == 4.0 && s.alpha_max == 0.7 && s.lod_bias == -2.0);
+        assert_eq!(TaaConfig::parse(&["without-speed"]).unwrap().speed, 0.0);
         assert!(TaaConfig::parse(&["gamma=-1"]).is_err());
         assert!(TaaConfig::parse(&["12"]).is_err());
         assert!(TaaConfig::parse(&["without-sharpness"]).is_err());
