@@ -17,12 +17,13 @@ setup:
 # The demo: native frames of the built-in scene's camera path (960x540), then a bench at 320x180
 # against the 256-sample ground truth (ssaa:16; frames 2-4 measured: each costs 256 native
 # rasters, ~37 s on lavapipe, cached in out/demo/cache) of native, msaa:4, checkerboard (rotated
-# and split with `ours`, rotated with `pq4k`) and bilinear upscale, then the HTML report.
+# and split with `ours`, rotated with `pq4k`), bilinear upscale, FXAA, TAA, checkerboard + TAA
+# chained and fused, then the HTML report.
 demo: setup
     @echo "[demo] native frames of builtin:demo (16 frames, 960x540) -> {{out}}/demo/native"
     ./target/release/cbr render builtin:demo --technique native -o {{out}}/demo/native
     @echo "[demo] bench at 320x180 against ssaa:16 (frames 2-4; ~2 min on 2 cores, cached after)"
-    CBR_CACHE_DIR={{out}}/demo/cache ./target/release/cbr bench builtin:demo --width 320 --height 180 --warmup 2 --frames 3 --reference ssaa:16 --techniques native,msaa:4,checkerboard:rotated:ours,checkerboard:split:ours,checkerboard:rotated:pq4k,upscale:bilinear -o {{out}}/demo/bench
+    CBR_CACHE_DIR={{out}}/demo/cache ./target/release/cbr bench builtin:demo --width 320 --height 180 --warmup 2 --frames 3 --reference ssaa:16 --techniques native,msaa:4,checkerboard:rotated:ours,checkerboard:split:ours,checkerboard:rotated:pq4k,upscale:bilinear,native+fxaa,native+taa,checkerboard:rotated:ours+taa,checkerboard:rotated:fused -o {{out}}/demo/bench
     ./target/release/cbr report {{out}}/demo/bench -o {{out}}/demo/report.html
     @echo "[demo] report: $(realpath {{out}}/demo/report.html)"
 
@@ -41,6 +42,8 @@ bench: setup
     @echo "[bench] docs/results.md, $(realpath {{out}}/bench/standard/report.html)"
     @echo "[bench] anti-aliasing: every technique against native and ssaa:16 -> docs/antialiasing.md"
     python3 scripts/antialiasing.py --cbr ./target/release/cbr -o {{out}}/bench/aa
+    @echo "[bench] temporal anti-aliasing: FXAA, TAA, checkerboard + TAA against ssaa:16, cost at 1280x720 -> docs/post-aa.md"
+    python3 scripts/post-aa.py --cbr ./target/release/cbr -o {{out}}/bench/post-aa
 
 # Format check, clippy, then the whole test suite on lavapipe with validation on.
 test: lint

@@ -24,6 +24,8 @@ struct FrameConstants {
     vec4 ambient;       // rgb: ambient irradiance; w: texture LOD bias
     uvec4 counts;       // x: directional lights, y: point lights, z: frame index, w: flags
     ivec4 tangram;      // x: side L, y: number of pieces
+    vec4 screen_jitter; // xy: sub-pixel offset of the projection in output pixels, every layout
+                        // (+x right, +y down moves the geometry: `--jitter`, `+taa`); zw: 0
     ivec4 pieces[8];    // xy: the (m, n) translation of each tangram piece, in units of L
 };
 

@@ -7,7 +7,7 @@
 //
 // Defines: LAYOUT (the raster layout, read through layout_fetch.glsl), MODE, MAPPING, GROUP
 // (workgroup side), FP16 (colour arithmetic in float16), OUT_FORMAT (rgba16f or rgba32f), DEBUG
-// (write the debug bits and the velocity used), BINDING_* (crates/cbr-render/src/resolve/mod.rs).
+// (write the debug bits), OUT_VELOCITY (write the velocity used: debug, `+taa`), BINDING_* (crates/cbr-render/src/resolve/mod.rs).
 #if FP16
 #extension GL_EXT_shader_explicit_arithmetic_types_float16 : require
 #define real float16_t
@@ -61,6 +61,8 @@ layout(set = 0, binding = BINDING_OUT_COLOR, OUT_FORMAT) uniform writeonly image
 layout(set = 0, binding = BINDING_OUT_GEOM, rg32ui) uniform writeonly uimage2D out_geom;
 #if DEBUG
 layout(set = 0, binding = BINDING_DEBUG_BITS, r32ui) uniform writeonly uimage2D out_debug;
+#endif
+#if OUT_VELOCITY
 layout(set = 0, binding = BINDING_DEBUG_VELOCITY, rg32f) uniform writeonly image2D out_velocity;
 #endif
 
@@ -515,6 +517,8 @@ void write_result(ivec2 p, Result r) {
     imageStore(out_geom, p, uvec4(id, floatBitsToUint(r.d), 0u, 0u));
 #if DEBUG
     imageStore(out_debug, p, uvec4(r.dbg));
+#endif
+#if OUT_VELOCITY
     imageStore(out_velocity, p, vec4(r.v, 0.0, 0.0));
 #endif
 }
@@ -531,6 +535,65 @@ Result pass_through(Sample s) {
 
 const ivec2 NEIGHBOUR[4] = ivec2[4](ivec2(-1, 0), ivec2(1, 0), ivec2(0, -1), ivec2(0, 1));
 
+#if FUSED
+const ivec2 DIAGONAL[4] = ivec2[4](ivec2(-1, -1), ivec2(1, -1), ivec2(-1, 1), ivec2(1, 1));
+
+// `fused` (checkerboard and TAA in one history): a rendered pixel blends its fresh (jittered)
+// sample into its own history: taken as it is where pixel and history texel are still, else
+// reprojected and validated against the sample's object and depth like a missing pixel's; then
+// clipped towards the mean of the variance box (mean +- sigma, tonemapped YCoCg) of the sample
+// and its four diagonal neighbours (rendered this frame too) and blended with a luminance-weighted
+// weight params.w for the sample.
+Result rendered_result(ivec2 p, Sample s) {
+    Result r = pass_through(s);
+    if (has(F_RESET)) return r;
+    real3 h = real3(0.0);
+    bool found = false;
+    uint why = 0u;
+    if (length(s.v) <= pc.params.y && (texelFetch(hist_geom, p, 0).x & ID_MOVED) == 0u) {
+        h = real3(texelFetch(hist_color, p, 0).rgb);
+        found = true;
+        r.dbg |= DBG_STILL;
+    } else {
+        found = history_validated(vec2(p) + 0.5 - s.v, s.ids.x, s.d, s.d, !has(F_NO_IDS),
+                                  !has(F_NO_DEPTH), h, why);
+    }
+    if (!found) {
+        r.dbg |= why;
+        return r;
+    }
+    r.dbg |= DBG_REPROJECTED;
+    real3 y = to_ycocg(tonemap(s.c));
+    real3 m1 = y;
+    real3 m2 = y * y;
+    for (int i = 0; i < 4; i++) {
+        real3 yd = to_ycocg(tonemap(load_sample(p + DIAGONAL[i]).c));
+        m1 += yd;
+        m2 += yd * yd;
+    }
+    real3 mu = m1 * real(0.2);
+    real3 sigma = sqrt(max(m2 * real(0.2) - mu * mu, real3(0.0)));
+    real3 yh = to_ycocg(tonemap(h));
+    // Clip towards mu into [mu - sigma, mu + sigma].
+    real3 d = yh - mu;
+    real t = real(1.0);
+    for (int i = 0; i < 3; i++) {
+        if (abs(d[i]) > sigma[i]) t = min(t, sigma[i] / abs(d[i]));
+    }
+    if (t < real(1.0)) {
+        r.dbg |= DBG_CLAMPED;
+        h = untonemap(from_ycocg(mu + d * t));
+    }
+    real a = real(pc.params.w);
+    real wc = a / (real(1.0) + max(luma(s.c), real(0.0)));
+    real wh = (real(1.0) - a) / (real(1.0) + max(luma(h), real(0.0)));
+    r.c = (wc * s.c + wh * h) / (wc + wh);
+    return r;
+}
+#else
+Result rendered_result(ivec2 p, Sample s) { return pass_through(s); }
+#endif
+
 bool rendered(ivec2 p) { return ((p.x + p.y) & 1) == pc.size_parity_side.z; }
 
 #if MAPPING == 0
@@ -538,7 +601,7 @@ void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (p.x >= size().x || p.y >= size().y) return;
     if (rendered(p)) {
-        write_result(p, pass_through(load_sample(p)));
+        write_result(p, rendered_result(p, load_sample(p)));
         return;
     }
     Sample n[4];
@@ -561,8 +624,8 @@ void main() {
     // which is exactly what a missing pixel's neighbour load would read there.
     Sample sa = load_sample(ra);
     Sample sb = load_sample(rb);
-    if (inside(ra)) write_result(ra, pass_through(sa));
-    if (inside(rb)) write_result(rb, pass_through(sb));
+    if (inside(ra)) write_result(ra, rendered_result(ra, sa));
+    if (inside(rb)) write_result(rb, rendered_result(rb, sb));
     for (int m = 0; m < 2; m++) {
         ivec2 p = m == 0 ? ma : mb;
         if (!inside(p)) continue;

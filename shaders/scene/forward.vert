@@ -36,6 +36,9 @@ void main() {
     v_clip = o.clip_from_local * local;
     v_prev_clip = o.prev_clip_from_local * local;
     vec4 pos = v_clip;
+    // The projection's jitter (`--jitter`, TAA): j output pixels move NDC by 2j / size, before any
+    // layout's mapping, so every layout and the ID prepass see the same jittered scene.
+    pos.xy += frame.screen_jitter.xy * 2.0 * frame.output_size.zw * pos.w;
 #ifdef CLIP_TO_SCREEN
     gl_ClipDistance[0] = pos.x + pos.w;
     gl_ClipDistance[1] = pos.w - pos.x;

@@ -1,7 +1,8 @@
 //! `cbr bench` as a library: every configuration over the scene's camera path, GPU timestamps
 //! per pass (median, p5, p95 after warm-up), pipeline statistics, the resolve's copy-kernel
 //! floor, and the error of every frame against a reference (`native`, or a supersampled ground
-//! truth such as `ssaa:16`) at the same resolution, whole frame and edge pixels. Writes
+//! truth such as `ssaa:16`) at the same resolution, whole frame, edge pixels and disoccluded
+//! pixels, and the frame-to-frame change of the error beside the reference's own. Writes
 //! bench.json (schema cbr.bench/1) and bench.csv with device, driver, resolution and settings on
 //! every row. DESIGN.md "Benchmark protocol"; docs/bench-and-report.md.
 #![forbid(unsafe_code)]
@@ -11,6 +12,7 @@ pub mod config;
 pub mod measure;
 pub mod output;
 pub mod stats;
+pub mod temporal;
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -27,8 +29,9 @@ use serde_json::json;
 pub use config::{Config, SweepFile, checkerboard, expand, parse_resolution, parse_spec};
 pub use measure::{RefFrame, edge_mask, masked_mean};
 pub use output::{CSV_COLUMNS, pareto_front, worst_windows};
+pub use temporal::{DEFAULT_DISOCCLUSION_FRAMES, disocclusion_mask};
 
-use measure::{NOT_TECHNIQUE, mean, measure};
+use measure::{NOT_TECHNIQUE, Role, mean, measure};
 use output::{csv, finite_or_null, git_commit, save_snapshot, summary_json};
 use stats::summarize;
 
@@ -69,6 +72,9 @@ pub struct BenchOptions {
     pub reference: String,
     /// Render cacheable references afresh instead of reading the frame cache.
     pub no_cache: bool,
+    /// k of the disocclusion FLIP: a pixel counts when its reference object ID differs from its
+    /// ID in any of the k frames before (default 4).
+    pub disocclusion_frames: Option<u32>,
     /// Device index or name substring.
     pub device: Option<String>,
     /// Validation layers on (slower; messages counted in bench.json).
@@ -193,6 +199,10 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
     if frames == 0 {
         bail!("--frames must be at least 1");
     }
+    let k = a.disocclusion_frames.unwrap_or(DEFAULT_DISOCCLUSION_FRAMES);
+    if k == 0 {
+        bail!("--disocclusion-frames must be at least 1");
+    }
     let reference = match (&sweep.reference, a.reference.as_str()) {
         (Some(r), "native") => r.clone(),
         _ => a.reference.clone(),
@@ -230,6 +240,7 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
     bar.set_prefix(format!("bench {}", scene.name));
     let info = gpu.info().clone();
     let mut rows = Vec::new();
+    let mut id_sources = Vec::new();
     for ((w, h), configs) in &plan {
         scene.settings.width = *w;
         scene.settings.height = *h;
@@ -246,24 +257,38 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
             );
         }
         bar.set_message(format!("reference {reference} {w}x{h}"));
-        let (rm, ref_frames) =
-            measure(&gpu, &scene, &ref_config, warmup, frames, None, true, &bar)?;
+        let role = Role::Reference {
+            disocclusion_frames: k,
+        };
+        let (rm, ref_frames) = measure(&gpu, &scene, &ref_config, (warmup, frames), role, &bar)?;
+        if let Some(s) = &rm.id_stand_in
+            && s.mismatched_pixels > 0
+        {
+            eprintln!(
+                "warning: the native raster's object IDs differ from {reference}'s at {} of {} pixels of frame {}: the disocclusion masks of the first measured frames are approximate",
+                s.mismatched_pixels, s.pixels, s.native_frames[1]
+            );
+        }
+        id_sources.push(json!({
+            "width": w,
+            "height": h,
+            "source": match &rm.id_stand_in {
+                Some(_) => "reference, with a native raster at the reference's LOD bias for the warm-up frames the reference skipped",
+                None => "reference",
+            },
+            "native": rm.id_stand_in,
+        }));
         let mut all = vec![(ref_config, rm)];
         for c in configs {
             bar.set_message(format!("{} {w}x{h}", c.name));
             // Cacheable techniques (ssaa) among the rows share the reference's cache.
             let mut c = c.clone();
             c.settings.cache = cache.clone();
-            let (m, _) = measure(
-                &gpu,
-                &scene,
-                &c,
-                warmup,
-                frames,
-                Some((&reference, &ref_frames)),
-                false,
-                &bar,
-            )?;
+            let role = Role::Against {
+                name: &reference,
+                frames: &ref_frames,
+            };
+            let (m, _) = measure(&gpu, &scene, &c, (warmup, frames), role, &bar)?;
             all.push((c, m));
         }
         let display = DisplayTransform {
@@ -320,6 +345,7 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
                 "driver": info.driver_info,
                 "warmup": warmup,
                 "frames": frames,
+                "disocclusion_frames": k,
                 "frame_ms": summary_json(summarize(&m.frame_ms)),
                 "cached_frames": m.cached_frames,
                 "passes": passes,
@@ -334,7 +360,12 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
                     "flip_mean": opt(mean(&m.flip)),
                     "flip_median_mean": opt(mean(&m.flip_median)),
                     "flip_edge_mean": opt(mean(&m.flip_edge)),
+                    "flip_disocc_mean": opt(mean(&m.flip_disocc)),
+                    "disocc_fraction_mean": opt(mean(&m.disocc_fraction)),
                     "relmse_mean": opt(mean(&m.relmse)),
+                    "flicker_mean": opt(mean(&m.flicker)),
+                    "change_mean": opt(mean(&m.change)),
+                    "ref_change_mean": opt(mean(&m.ref_change)),
                     "per_frame": m.errors,
                 })},
             }));
@@ -396,6 +427,10 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
             "frame_ms": format!("sum of the technique's passes per frame (not {})", NOT_TECHNIQUE.join(", ")),
             "reference": format!("{reference} at the same resolution and frame"),
             "edge_pixels": "FLIP mean over the reference's edge pixels: more than one object ID among a supersampled reference's samples (its coverage layer), or for a one-sample reference an object ID that differs from a 4-neighbour's",
+            "disocclusion_frames": k,
+            "disocclusion_pixels": format!("FLIP mean over the pixels whose reference object ID differs from their ID in any of the k = {k} frames before (frames before frame 0 do not exist); frames whose mask is empty are left out of the mean"),
+            "disocclusion_ids": id_sources,
+            "temporal": "over consecutive measured frames, display values: flicker = mean |e_t - e_(t-1)| with e = test - reference (cbr compare's flicker), change = mean |x_t - x_(t-1)| of the test, ref_change = the same of the reference",
             "display": DisplayTransform { exposure_stops: scene.settings.exposure }.describe(),
             "metrics": "PSNR and SSIM on display values, LDR-FLIP (67.02 ppd), relMSE on linear HDR (eps 0.01)",
         },

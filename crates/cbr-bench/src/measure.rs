@@ -14,6 +14,7 @@ use serde_json::json;
 
 use crate::Config;
 use crate::output::finite_or_null;
+use crate::temporal::{IdHistory, IdStandIn, Stability, fraction, native_ids, object_ids};
 
 /// Passes that instrument the run rather than belong to the technique.
 pub const NOT_TECHNIQUE: [&str; 4] = [
@@ -41,12 +42,15 @@ fn to_input(width: u32, height: u32, color: &[half::f16], name: &str) -> cbr_met
     }
 }
 
-/// A reference frame: its colour and its edge mask (pixels with more than one object ID among the
+/// A reference frame: its colour, its edge mask (pixels with more than one object ID among the
 /// reference's samples: `coverage.edge` of a supersampled reference; for a one-sample reference,
-/// pixels whose object ID differs from a 4-neighbour's).
+/// pixels whose object ID differs from a 4-neighbour's) and its disocclusion mask (pixels whose
+/// object ID differs from theirs in any of the k frames before: crate::temporal).
 pub struct RefFrame {
     color: Vec<half::f16>,
     edge: Vec<bool>,
+    disocc: Vec<bool>,
+    disocc_fraction: f64,
 }
 
 pub fn edge_mask(out: &FrameOutput) -> Vec<bool> {
@@ -100,7 +104,15 @@ pub struct Measured {
     pub flip: Vec<f64>,
     pub flip_median: Vec<f64>,
     pub flip_edge: Vec<f64>,
+    pub flip_disocc: Vec<f64>,
+    pub disocc_fraction: Vec<f64>,
     pub relmse: Vec<f64>,
+    /// Per measured frame after the first (crate::temporal::Change).
+    pub flicker: Vec<f64>,
+    pub change: Vec<f64>,
+    pub ref_change: Vec<f64>,
+    /// The reference only: the native raster that gave the IDs of the frames it skipped.
+    pub id_stand_in: Option<IdStandIn>,
 }
 
 pub fn mean(v: &[f64]) -> Option<f64> {
@@ -108,20 +120,31 @@ pub fn mean(v: &[f64]) -> Option<f64> {
     (!f.is_empty()).then(|| f.iter().sum::<f64>() / f.len() as f64)
 }
 
-#[allow(clippy::too_many_arguments)]
+/// How a configuration is measured: against the reference's frames, or as the reference itself
+/// (keeping its frames and the object IDs of the `disocclusion_frames` frames before each).
+#[derive(Clone, Copy)]
+pub enum Role<'a> {
+    Reference {
+        disocclusion_frames: u32,
+    },
+    Against {
+        name: &'a str,
+        frames: &'a [RefFrame],
+    },
+}
+
 pub fn measure(
     gpu: &Gpu,
     scene: &Scene,
     config: &Config,
-    warmup: u32,
-    frames: u32,
-    reference: Option<(&str, &[RefFrame])>,
-    keep: bool,
+    (warmup, frames): (u32, u32),
+    role: Role,
     bar: &ProgressBar,
 ) -> Result<(Measured, Vec<RefFrame>)> {
     let shaders = cbr_render::shader_library();
     let mut r = Renderer::new(gpu, &shaders, scene, config.settings.clone())
         .with_context(|| format!("setting up {} on {}", config.name, gpu.info().name))?;
+    let keep = matches!(role, Role::Reference { .. });
     if keep && config.settings.spec.technique.name != "native" {
         let label = format!("reference {}", config.name);
         r.set_progress(crate::sample_progress(label));
@@ -141,6 +164,17 @@ pub fn measure(
     // A cacheable technique (ssaa) has no history: its warm-up frames would cost N^2 rasters
     // each for nothing.
     let first = if r.cache_dir().is_some() { warmup } else { 0 };
+    let mut ids = match role {
+        Role::Reference {
+            disocclusion_frames: k,
+        } => {
+            let (h, check, stand_in) = id_history(gpu, scene, config, m.lod_bias, k, first)?;
+            m.id_stand_in = stand_in;
+            Some((h, check))
+        }
+        Role::Against { .. } => None,
+    };
+    let mut stability = Stability::default();
     bar.inc(u64::from(first));
     for f in first..warmup + frames {
         let out = r.render(scene, f)?;
@@ -149,70 +183,39 @@ pub fn measure(
             m.cached_frames += 1;
         }
         if f < warmup {
+            if let Some((h, _)) = &mut ids {
+                h.push(object_ids(&out));
+            }
             continue;
         }
-        let mut total = 0.0;
-        for t in &out.timings {
-            m.passes.entry(t.name.clone()).or_default().push(t.gpu_ms);
-            if !NOT_TECHNIQUE.contains(&t.name.as_str()) {
-                total += t.gpu_ms;
-            }
-            if let Some(s) = &t.stats {
-                m.fragments
-                    .entry(t.name.clone())
-                    .or_default()
-                    .push(s.fragment_invocations as f64);
-            }
-        }
-        if !out.timings.is_empty() {
-            m.frame_ms.push(total);
-        }
+        record_timings(&mut m, &out);
         let last = f + 1 == warmup + frames;
         let mut flip_map = None;
-        if let Some((ref_name, refs)) = reference {
-            let rf = &refs[(f - warmup) as usize];
-            // The FLIP map of every frame: the edge-pixel mean needs it.
-            let o = CompareOptions {
-                keep_maps: true,
-                ..options.clone()
-            };
-            let (w, h) = (out.width, out.height);
-            let mut p = compare_images(
-                &to_input(w, h, &rf.color, ref_name),
-                &to_input(w, h, &out.color, &config.name),
-                &o,
+        if let Role::Against { name, frames: refs } = role {
+            let map = compare_frame(
+                &mut m,
+                &mut stability,
+                &refs[(f - warmup) as usize],
+                (name, &config.name),
+                &out,
+                &options,
             )?;
-            let map = p.flip_map.take();
-            let flip_edge = map
-                .as_ref()
-                .map(|m| masked_mean(m, &rf.edge))
-                .unwrap_or(f64::NAN);
-            m.flip_edge.push(flip_edge);
             if last {
                 flip_map = map;
             }
-            let v = |k| p.value(k).unwrap_or(f64::NAN);
-            let flip_median = p.flip.map(|x| x.weighted_median).unwrap_or(f64::NAN);
-            m.psnr.push(v(Metric::Psnr));
-            m.ssim.push(v(Metric::Ssim));
-            m.flip.push(v(Metric::Flip));
-            m.flip_median.push(flip_median);
-            m.relmse.push(v(Metric::RelMse));
-            m.errors.push(json!({
-                "frame": f,
-                "psnr": finite_or_null(v(Metric::Psnr)),
-                "ssim": v(Metric::Ssim),
-                "flip_mean": v(Metric::Flip),
-                "flip_median": flip_median,
-                "flip_edge": finite_or_null(flip_edge),
-                "relmse": v(Metric::RelMse),
-            }));
         }
-        // The reference keeps only colour and its edge mask (what the comparison reads).
-        if keep {
+        // The reference keeps only colour and its masks (what the comparison reads).
+        if let Some((h, check)) = &mut ids {
+            let now = object_ids(&out);
+            if let (Some(c), Some(s)) = (check.take(), m.id_stand_in.as_mut()) {
+                s.mismatched_pixels = c.iter().zip(&now).filter(|(a, b)| a != b).count();
+            }
+            let disocc = h.next(now);
             kept.push(RefFrame {
                 color: out.color.clone(),
                 edge: edge_mask(&out),
+                disocc_fraction: fraction(&disocc),
+                disocc,
             });
         }
         if last {
@@ -220,4 +223,117 @@ pub fn measure(
         }
     }
     Ok((m, kept))
+}
+
+/// The reference's ID history before its first rendered frame `first`: empty when it renders
+/// from frame 0; else (a cached reference skips its warm-up frames) the IDs of the k frames
+/// before from a native raster at the reference's LOD bias, with that raster's IDs of frame
+/// `first` to check them against the reference's, and what was rendered.
+fn id_history(
+    gpu: &Gpu,
+    scene: &Scene,
+    config: &Config,
+    lod_bias: f32,
+    k: u32,
+    first: u32,
+) -> Result<(IdHistory, Option<Vec<u32>>, Option<IdStandIn>)> {
+    let mut history = IdHistory::new(k);
+    if first == 0 {
+        return Ok((history, None, None));
+    }
+    let from = first.saturating_sub(k);
+    let (w, h) = (config.settings.width, config.settings.height);
+    let mut native = native_ids(gpu, scene, (w, h), lod_bias, from, first)?;
+    let check = native.pop();
+    for ids in native {
+        history.push(ids);
+    }
+    let stand_in = IdStandIn {
+        native_frames: [from, first],
+        lod_bias,
+        mismatched_pixels: 0,
+        pixels: (w * h) as usize,
+    };
+    Ok((history, check, Some(stand_in)))
+}
+
+/// A measured frame's GPU times per pass, frame time and fragment counts.
+fn record_timings(m: &mut Measured, out: &FrameOutput) {
+    let mut total = 0.0;
+    for t in &out.timings {
+        m.passes.entry(t.name.clone()).or_default().push(t.gpu_ms);
+        if !NOT_TECHNIQUE.contains(&t.name.as_str()) {
+            total += t.gpu_ms;
+        }
+        if let Some(s) = &t.stats {
+            m.fragments
+                .entry(t.name.clone())
+                .or_default()
+                .push(s.fragment_invocations as f64);
+        }
+    }
+    if !out.timings.is_empty() {
+        m.frame_ms.push(total);
+    }
+}
+
+/// The errors of one measured frame against the reference's same frame; returns its FLIP map.
+fn compare_frame(
+    m: &mut Measured,
+    stability: &mut Stability,
+    rf: &RefFrame,
+    (ref_name, name): (&str, &str),
+    out: &FrameOutput,
+    options: &CompareOptions,
+) -> Result<Option<cbr_metrics::planes::Plane>> {
+    // The FLIP map of every frame: the edge and disocclusion means need it.
+    let o = CompareOptions {
+        keep_maps: true,
+        ..options.clone()
+    };
+    let (w, h) = (out.width, out.height);
+    let (ri, ti) = (
+        to_input(w, h, &rf.color, ref_name),
+        to_input(w, h, &out.color, name),
+    );
+    let mut p = compare_images(&ri, &ti, &o)?;
+    let map = p.flip_map.take();
+    let masked = |mask: &[bool]| {
+        map.as_ref()
+            .map(|m| masked_mean(m, mask))
+            .unwrap_or(f64::NAN)
+    };
+    let (flip_edge, flip_disocc) = (masked(&rf.edge), masked(&rf.disocc));
+    let change = stability.next(&ri, &ti, options)?;
+    let v = |k| p.value(k).unwrap_or(f64::NAN);
+    let flip_median = p.flip.map(|x| x.weighted_median).unwrap_or(f64::NAN);
+    m.psnr.push(v(Metric::Psnr));
+    m.ssim.push(v(Metric::Ssim));
+    m.flip.push(v(Metric::Flip));
+    m.flip_median.push(flip_median);
+    m.flip_edge.push(flip_edge);
+    m.flip_disocc.push(flip_disocc);
+    m.disocc_fraction.push(rf.disocc_fraction);
+    m.relmse.push(v(Metric::RelMse));
+    if let Some(c) = change {
+        m.flicker.push(c.flicker);
+        m.change.push(c.change);
+        m.ref_change.push(c.ref_change);
+    }
+    let opt = |x: Option<f64>| x.map(finite_or_null).unwrap_or(json!(null));
+    m.errors.push(json!({
+        "frame": out.index,
+        "psnr": finite_or_null(v(Metric::Psnr)),
+        "ssim": v(Metric::Ssim),
+        "flip_mean": v(Metric::Flip),
+        "flip_median": flip_median,
+        "flip_edge": finite_or_null(flip_edge),
+        "flip_disocc": finite_or_null(flip_disocc),
+        "disocc_fraction": rf.disocc_fraction,
+        "relmse": v(Metric::RelMse),
+        "flicker": opt(change.map(|c| c.flicker)),
+        "change": opt(change.map(|c| c.change)),
+        "ref_change": opt(change.map(|c| c.ref_change)),
+    }));
+    Ok(map)
 }

@@ -158,8 +158,9 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
         .collect()
 }
 
-/// Columns of bench.csv: every row carries device, driver, resolution and settings.
-pub const CSV_COLUMNS: [&str; 26] = [
+/// Columns of bench.csv: every row carries device, driver, resolution and settings. Columns added
+/// later go at the end, so older columns keep their positions.
+pub const CSV_COLUMNS: [&str; 32] = [
     "scene",
     "config",
     "technique",
@@ -186,6 +187,12 @@ pub const CSV_COLUMNS: [&str; 26] = [
     "relmse_mean",
     "reference",
     "pareto",
+    "disocclusion_frames",
+    "flip_disocc_mean",
+    "disocc_fraction_mean",
+    "flicker_mean",
+    "change_mean",
+    "ref_change_mean",
 ];
 
 pub fn csv(bench: &serde_json::Value) -> String {
@@ -230,6 +237,12 @@ pub fn csv(bench: &serde_json::Value) -> String {
             &r["error"]["relmse_mean"],
             &r["reference"],
             &r["pareto"],
+            &r["disocclusion_frames"],
+            &r["error"]["flip_disocc_mean"],
+            &r["error"]["disocc_fraction_mean"],
+            &r["error"]["flicker_mean"],
+            &r["error"]["change_mean"],
+            &r["error"]["ref_change_mean"],
         ];
         out += &vals.map(cell).join(",");
         out.push('\n');

@@ -25,4 +25,4 @@ pub use pipeline::{
 };
 pub use query::{PassKind, PassTiming, PipelineStats, Profiler};
 pub use resource::{Buffer, Image, ImageDesc, Location, Readback, Sampler, SamplerDesc};
-pub use shaders::{DirTree, Shaders, SourceTree, StaticTree};
+pub use shaders::{DirTree, Request, Shaders, SourceTree, StaticTree, semantic_words};

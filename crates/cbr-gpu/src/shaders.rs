@@ -68,6 +68,39 @@ type Key = (String, Vec<(String, String)>);
 pub struct Shaders {
     sources: Box<dyn SourceTree>,
     cache: Mutex<HashMap<Key, Arc<Vec<u32>>>>,
+    /// Every (path, defines) asked for, in order (what a pipeline was built from).
+    requests: Mutex<Vec<Key>>,
+}
+
+/// A compile request: path and sorted defines.
+pub type Request = (String, Vec<(String, String)>);
+
+/// The words of a SPIR-V module without its debug instructions (OpSource, OpSourceContinued,
+/// OpSourceExtension, OpName, OpMemberName, OpString, OpLine, OpNoLine, OpModuleProcessed) and
+/// without the header's ID bound: what the module computes, unchanged by comments, line shifts
+/// or code in branches its defines exclude. Frame caches key on it.
+pub fn semantic_words(spirv: &[u32]) -> Vec<u32> {
+    const DEBUG: [u32; 9] = [2, 3, 4, 5, 6, 7, 8, 317, 330];
+    let mut out = Vec::with_capacity(spirv.len());
+    if spirv.len() < 5 {
+        return spirv.to_vec();
+    }
+    // Header: magic, version, generator, bound (skipped), schema.
+    out.extend_from_slice(&[spirv[0], spirv[1], spirv[2], spirv[4]]);
+    let mut i = 5;
+    while i < spirv.len() {
+        let count = (spirv[i] >> 16) as usize;
+        let opcode = spirv[i] & 0xffff;
+        if count == 0 || i + count > spirv.len() {
+            out.extend_from_slice(&spirv[i..]);
+            break;
+        }
+        if !DEBUG.contains(&opcode) {
+            out.extend_from_slice(&spirv[i..i + count]);
+        }
+        i += count;
+    }
+    out
 }
 
 fn normalise(p: &Path) -> String {
@@ -89,7 +122,26 @@ impl Shaders {
         Shaders {
             sources,
             cache: Mutex::new(HashMap::new()),
+            requests: Mutex::new(Vec::new()),
         }
+    }
+
+    /// How many compile requests were made so far (a mark for [`Shaders::requests_since`]).
+    pub fn request_mark(&self) -> usize {
+        self.requests.lock().map(|r| r.len()).unwrap_or(0)
+    }
+
+    /// The distinct (path, defines) requested since `mark`, sorted: the modules the pipelines
+    /// built in between use.
+    pub fn requests_since(&self, mark: usize) -> Vec<Request> {
+        let mut v: Vec<Request> = self
+            .requests
+            .lock()
+            .map(|r| r.get(mark..).unwrap_or(&[]).to_vec())
+            .unwrap_or_default();
+        v.sort();
+        v.dedup();
+        v
     }
 
     /// Every (path, text) of the source tree, sorted by path.
@@ -106,6 +158,9 @@ impl Shaders {
         let mut defs = defines.to_vec();
         defs.sort();
         let key = (path.to_string(), defs.clone());
+        if let Ok(mut r) = self.requests.lock() {
+            r.push(key.clone());
+        }
         if let Some(hit) = self.cache.lock().ok().and_then(|c| c.get(&key).cloned()) {
             return Ok(hit);
         }

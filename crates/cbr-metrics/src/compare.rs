@@ -335,32 +335,63 @@ pub fn compare_images(
     })
 }
 
-/// The signed display-space error, test - reference, per channel (non-finite read as 0).
-fn display_error(reference: &InputImage, test: &InputImage, o: &CompareOptions) -> Rgb {
+/// Display values of an image, cropped as `o` says: linear inputs (EXR) through the display
+/// transform, LDR inputs as stored (clamped to [0, 1]); non-finite channels read as 0. What PSNR,
+/// SSIM and LDR-FLIP see, and what flicker is measured on.
+pub fn display_values(img: &InputImage, o: &CompareOptions) -> Rgb {
     let d = o.display;
-    let disp = move |enc: Encoding, p: [f32; 3]| match enc {
+    let enc = img.encoding;
+    let disp = move |p: [f32; 3]| match enc {
         Encoding::Linear => zero_nonfinite(p).map(|v| d.apply(v)),
         Encoding::Srgb => zero_nonfinite(p).map(|v| v.clamp(0.0, 1.0)),
     };
-    // Borrow the images unless a crop needs copies.
-    let (r, t): (Cow<Rgb>, Cow<Rgb>) = match o.crop {
-        Some([x, y, w, h]) => (
-            Cow::Owned(reference.rgb.crop(x, y, w, h)),
-            Cow::Owned(test.rgb.crop(x, y, w, h)),
-        ),
-        None => (Cow::Borrowed(&reference.rgb), Cow::Borrowed(&test.rgb)),
+    // Borrow the image unless a crop needs a copy.
+    let rgb: Cow<Rgb> = match o.crop {
+        Some([x, y, w, h]) => Cow::Owned(img.rgb.crop(x, y, w, h)),
+        None => Cow::Borrowed(&img.rgb),
     };
-    let (re, te) = (reference.encoding, test.encoding);
-    let n = r.width * r.height;
-    let px: Vec<[f32; 3]> = (0..n)
+    rgb.map(disp)
+}
+
+/// The signed error test - reference per pixel and channel, of two images of display values
+/// (`display_values`) of the same size.
+pub fn signed_error(reference: &Rgb, test: &Rgb) -> Rgb {
+    let channel = |k: usize| {
+        Plane::from_fn(test.width, test.height, |i| {
+            test.c[k].data[i] - reference.c[k].data[i]
+        })
+    };
+    Rgb {
+        width: test.width,
+        height: test.height,
+        c: [channel(0), channel(1), channel(2)],
+    }
+}
+
+/// The signed display-space error e = test - reference, per channel (non-finite read as 0).
+pub fn display_error(reference: &InputImage, test: &InputImage, o: &CompareOptions) -> Rgb {
+    signed_error(&display_values(reference, o), &display_values(test, o))
+}
+
+/// The mean over pixels and channels of |now - before|. On two consecutive display errors
+/// (`display_error`) it is a frame's **flicker**; on two consecutive display images, how much
+/// the image itself changed. Images of different sizes are an error.
+pub fn mean_abs_change(now: &Rgb, before: &Rgb) -> Result<f64, MetricsError> {
+    if (now.width, now.height) != (before.width, before.height) {
+        return Err(MetricsError::Mismatch(format!(
+            "size mismatch: {}x{} after {}x{}",
+            now.width, now.height, before.width, before.height
+        )));
+    }
+    let n = now.width * now.height;
+    let sum: f64 = (0..n)
         .into_par_iter()
         .map(|i| {
-            let (a, b) = (disp(re, r.pixel(i)), disp(te, t.pixel(i)));
-            [b[0] - a[0], b[1] - a[1], b[2] - a[2]]
+            let (a, b) = (now.pixel(i), before.pixel(i));
+            f64::from((a[0] - b[0]).abs() + (a[1] - b[1]).abs() + (a[2] - b[2]).abs())
         })
-        .collect();
-    let flat: Vec<f32> = px.into_iter().flatten().collect();
-    Rgb::from_interleaved(r.width, r.height, &flat)
+        .sum();
+    Ok(sum / (3 * n) as f64)
 }
 
 /// One frame of a sequence comparison.
@@ -446,17 +477,7 @@ pub fn compare_sequences(
         let measured = k >= warmup;
         let err = measured.then(|| display_error(&r, &t, o));
         let flicker = match (&err, &previous) {
-            (Some(e), Some(p)) => {
-                let n = e.width * e.height;
-                let sum: f64 = (0..n)
-                    .into_par_iter()
-                    .map(|i| {
-                        let (a, b) = (e.pixel(i), p.pixel(i));
-                        f64::from((a[0] - b[0]).abs() + (a[1] - b[1]).abs() + (a[2] - b[2]).abs())
-                    })
-                    .sum();
-                Some(sum / (3 * n) as f64)
-            }
+            (Some(e), Some(p)) => Some(mean_abs_change(e, p)?),
             _ => None,
         };
         if err.is_some() {
@@ -587,5 +608,33 @@ mod tests {
                 .to_string()
                 .contains("does not fit")
         );
+    }
+
+    #[test]
+    fn flicker_is_the_mean_change_of_the_signed_display_error() {
+        // LDR inputs are display values as stored: the error is test - reference exactly.
+        let reference = img(4, 2, |_| 0.5, Encoding::Srgb);
+        let up = img(4, 2, |i| if i % 3 == 0 { 0.6 } else { 0.5 }, Encoding::Srgb);
+        let down = img(4, 2, |i| if i % 3 == 0 { 0.4 } else { 0.5 }, Encoding::Srgb);
+        let o = CompareOptions::default();
+        let (e1, e2) = (
+            display_error(&reference, &up, &o),
+            display_error(&reference, &down, &o),
+        );
+        // The error goes +0.1 -> -0.1 on the 8 of 24 channels with i % 3 == 0: mean |0.2| * 8/24.
+        let f = mean_abs_change(&e2, &e1).expect("same size");
+        assert!((f - 0.2 / 3.0).abs() < 1e-6, "{f}");
+        // A static bias does not flicker.
+        assert_eq!(mean_abs_change(&e1, &e1).expect("same size"), 0.0);
+        assert!(
+            (e1.c[0].data[0] - 0.1).abs() < 1e-6,
+            "test - reference, not the reverse"
+        );
+        // Linear inputs go through the display transform first, non-finite read as 0.
+        let lin = img(2, 1, |i| [0.18, f32::NAN][i / 3], Encoding::Linear);
+        let d = display_values(&lin, &o);
+        assert_eq!(d.pixel(0), [o.display.apply(0.18); 3]);
+        assert_eq!(d.pixel(1), [0.0; 3]);
+        assert!(mean_abs_change(&d, &e1).is_err(), "size mismatch");
     }
 }

@@ -16,6 +16,7 @@ pub mod stats;
 
 pub use compare::{
     CompareOptions, Metric, PairResult, SequenceResult, compare_images, compare_sequences,
+    display_error, display_values, mean_abs_change, signed_error,
 };
 pub use display::DisplayTransform;
 pub use error::MetricsError;

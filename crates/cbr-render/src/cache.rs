@@ -1,7 +1,9 @@
 //! The on-disk cache of expensive frames (techniques that say `cacheable`: `ssaa`). A frame is
 //! keyed on everything that changes it: the technique spec, resolution, LOD bias and debug flags,
 //! the scene's content (geometry, materials, texture texels, lights, camera path, animation,
-//! ambient and background), the frame index and its time, every shader source, the device and
+//! ambient and background), the frame index and its time, the shader modules the technique and its post chain were built
+//! from (path, defines and SPIR-V without debug instructions: comments, line shifts and code in
+//! branches the defines exclude keep the key), the device and
 //! its driver, and the cache format. An entry is one file `<blake3 key>.cbrf`: a header, the
 //! layers, and a blake3 checksum of both; an entry that fails the checksum or does not parse is
 //! reported and recomputed. Writes go to a temporary name and are renamed.
@@ -47,6 +49,7 @@ impl FrameCache {
         shaders: &Shaders,
         scene: &Scene,
         s: &RenderSettings,
+        modules: &[cbr_gpu::Request],
     ) -> Result<FrameCache> {
         std::fs::create_dir_all(dir).map_err(|e| {
             GpuError::Other(format!(
@@ -78,8 +81,9 @@ impl FrameCache {
             info.device_id
         );
         put("device", device.as_bytes());
-        for (path, text) in shaders.sources() {
-            put(&path, text.as_bytes());
+        for (path, defines) in modules {
+            let words = cbr_gpu::semantic_words(&shaders.compile(path, defines)?);
+            put(&format!("{path} {defines:?}"), bytemuck::cast_slice(&words));
         }
         for o in &scene.objects {
             put(&o.name, bytemuck::cast_slice(&o.vertices));

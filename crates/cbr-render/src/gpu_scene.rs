@@ -64,6 +64,9 @@ pub struct FrameView {
     pub aspect: f64,
     pub lod_bias: f32,
     pub frame_index: u32,
+    /// The projection's sub-pixel jitter in output pixels, every layout (RenderSettings::jitter
+    /// plus a jittering post pass's).
+    pub screen_jitter: [f32; 2],
     pub raster: RasterUniforms,
 }
 
@@ -338,6 +341,7 @@ impl GpuScene {
                 r.flags,
             ],
             tangram: [r.tangram as i32, r.pieces.len() as i32, 0, 0],
+            screen_jitter: [view.screen_jitter[0], view.screen_jitter[1], 0.0, 0.0],
             pieces,
         };
         self.frame.write(0, bytemuck::bytes_of(&constants))?;

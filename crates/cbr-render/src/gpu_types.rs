@@ -12,6 +12,7 @@ pub struct FrameConstants {
     pub ambient: [f32; 4],
     pub counts: [u32; 4],
     pub tangram: [i32; 4],
+    pub screen_jitter: [f32; 4],
     pub pieces: [[i32; 4]; MAX_PIECES],
 }
 
@@ -110,7 +111,12 @@ pub(crate) mod tests {
         check("FrameConstants", 3, offset_of!(FrameConstants, ambient));
         check("FrameConstants", 4, offset_of!(FrameConstants, counts));
         check("FrameConstants", 5, offset_of!(FrameConstants, tangram));
-        check("FrameConstants", 6, offset_of!(FrameConstants, pieces));
+        check(
+            "FrameConstants",
+            6,
+            offset_of!(FrameConstants, screen_jitter),
+        );
+        check("FrameConstants", 7, offset_of!(FrameConstants, pieces));
         check("ObjectData", 0, offset_of!(ObjectData, clip_from_local));
         check(
             "ObjectData",

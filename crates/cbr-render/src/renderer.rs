@@ -30,9 +30,10 @@ pub struct RenderSettings {
     pub debug_lod: bool,
     /// Also build instrumentation passes (the resolve's copy-kernel floor): benchmarks.
     pub instrument: bool,
-    /// A sub-pixel offset of the whole raster, in pixels (+x right, +y down moves the geometry):
-    /// pixel centres then see the scene at centre - jitter. Techniques that place their own
-    /// samples (checkerboard layouts, ssaa) replace it.
+    /// A sub-pixel offset of the projection, in output pixels (+x right, +y down moves the
+    /// geometry): pixel centres then see the scene at centre - jitter. Every technique and layout
+    /// applies it (on top of the samples they place themselves); a jittering post pass (`+taa`)
+    /// adds its own.
     pub jitter: [f32; 2],
     /// Where frames of cacheable techniques (`ssaa`) are kept between runs; `None`: no cache.
     #[serde(skip)]
@@ -142,6 +143,8 @@ pub struct Renderer {
     scene: GpuScene,
     technique: Box<dyn Technique>,
     post: Vec<Box<dyn PostPass>>,
+    /// A post pass reads the technique's geometry.
+    geometry: bool,
     /// The post chain's final colour, read back (with post passes only).
     post_rb: Option<Readback>,
     counter: Buffer,
@@ -192,6 +195,8 @@ impl Renderer {
             post_regs.push((pr, part));
         }
         let geometry = post_regs.iter().any(|(pr, _)| pr.geometry);
+        // The shader modules the technique and its post chain are built from key the frame cache.
+        let mark = shaders.request_mark();
         let ctx = BuildCtx {
             gpu,
             shaders,
@@ -259,7 +264,12 @@ impl Renderer {
             None => None,
         };
         let cache = match (&settings.cache, technique.cacheable()) {
-            (Some(dir), true) => Some(FrameCache::new(dir, gpu, shaders, scene, &settings)?),
+            (Some(dir), true) => {
+                let modules = shaders.requests_since(mark);
+                Some(FrameCache::new(
+                    dir, gpu, shaders, scene, &settings, &modules,
+                )?)
+            }
             _ => None,
         };
         let profiler = Profiler::new(gpu, "renderer.profiler", 8)?;
@@ -268,6 +278,7 @@ impl Renderer {
             scene: gpu_scene,
             technique,
             post,
+            geometry,
             post_rb,
             counter,
             profiler,
@@ -287,11 +298,12 @@ impl Renderer {
         &self.settings
     }
 
-    /// The texture LOD bias in effect: the setting, else the technique's matching bias.
+    /// The texture LOD bias in effect: the setting, else the technique's matching bias plus the
+    /// post passes' (TAA's sharper inputs).
     pub fn lod_bias(&self) -> f32 {
-        self.settings
-            .lod_bias
-            .unwrap_or_else(|| self.technique.default_lod_bias())
+        self.settings.lod_bias.unwrap_or_else(|| {
+            self.technique.default_lod_bias() + self.post.iter().map(|p| p.lod_bias()).sum::<f32>()
+        })
     }
 
     /// Bytes of the raster targets (what a technique costs in memory).
@@ -335,9 +347,10 @@ impl Renderer {
             aspect: f64::from(s.width) / f64::from(s.height),
             lod_bias: self.lod_bias(),
             frame_index: frame,
+            screen_jitter: self.jitter(frame),
             raster: RasterUniforms {
                 viewport: (s.width as f32, s.height as f32),
-                jitter: [self.jitter(frame), [0.0; 2]],
+                jitter: [[0.0; 2]; 2],
                 flags,
                 ..Default::default()
             },
@@ -383,7 +396,11 @@ impl Renderer {
             let pf = PostFrame {
                 frame,
                 reset,
-                jitter: ctx.view.raster.jitter[0],
+                jitter: ctx.view.screen_jitter,
+                geometry: match self.geometry {
+                    true => self.technique.geometry(frame),
+                    false => None,
+                },
             };
             let (post, rb, technique) = (&self.post, &self.post_rb, &self.technique);
             ctx.submit("post", |cmd, profiler, _| {

@@ -35,8 +35,11 @@ pub struct Geometry<'a> {
     pub velocity: &'a Image,
     /// Reverse-Z depth (0 = nothing drawn): D32 or R32F, read through `.r` of a sampler.
     pub depth: &'a Image,
-    /// RG32UI: object ID (0 = background), primitive ID.
+    /// RG32UI: object ID (0 = background), primitive ID; or, when `packed`, (object ID | bit 31
+    /// set where the pixel moved, reverse-Z depth bits) and `depth` is this image too (the
+    /// checkerboard resolve's history geometry).
     pub ids: &'a Image,
+    pub packed: bool,
 }
 
 /// What a technique gets for one frame. `view` is the frame's camera at the output resolution

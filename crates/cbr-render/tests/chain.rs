@@ -303,6 +303,87 @@ fn the_cache_returns_the_same_frame_and_recomputes_corrupt_entries() {
     assert_clean(&gpu);
 }
 
+/// The cache key holds what the cached technique's shader modules compute, not every source: an
+/// edit of a post pass, a comment, or code in a branch of another layout keeps the references;
+/// a change of what the scene shaders compute recomputes them.
+#[test]
+fn the_cache_key_holds_the_shaders_the_frame_depends_on() {
+    let gpu = gpu();
+    let s = demo(24, 16);
+    let cache = tempfile::tempdir().expect("tempdir");
+    let src = tempfile::tempdir().expect("tempdir");
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shaders");
+    for e in walk(&root) {
+        let to = src.path().join(e.strip_prefix(&root).expect("prefix"));
+        std::fs::create_dir_all(to.parent().expect("parent")).expect("mkdir");
+        std::fs::copy(&e, &to).expect("copy");
+    }
+    let render = || {
+        let shaders = cbr_gpu::Shaders::new(Box::new(cbr_gpu::DirTree(src.path().into())));
+        let settings = RenderSettings {
+            cache: Some(cache.path().to_path_buf()),
+            ..spec(24, 16, "ssaa:2")
+        };
+        let mut r = Renderer::new(&gpu, &shaders, &s, settings).expect("renderer");
+        r.render(&s, 1).expect("frame")
+    };
+    let append = |rel: &str| {
+        let p = src.path().join(rel);
+        let text = std::fs::read_to_string(&p).expect("read") + "\n// edited\n";
+        std::fs::write(&p, text).expect("write");
+    };
+    let replace = |rel: &str, from: &str, to: &str| {
+        let p = src.path().join(rel);
+        let text = std::fs::read_to_string(&p).expect("read");
+        assert!(text.contains(from), "{rel} has no `{from}`");
+        std::fs::write(&p, text.replacen(from, to, 1)).expect("write");
+    };
+    assert!(!render().timings.is_empty(), "first: rendered");
+    append("post/sharpen.comp");
+    assert!(
+        render().timings.is_empty(),
+        "a post shader edit keeps the entry"
+    );
+    append("scene/forward.frag");
+    replace(
+        "scene/forward.frag",
+        "void main() {",
+        "// a comment that shifts every line below\nvoid main() {",
+    );
+    assert!(
+        render().timings.is_empty(),
+        "comments and line shifts keep it"
+    );
+    replace(
+        "scene/forward.frag",
+        "#if LAYOUT == LAYOUT_MASKED\n",
+        "#if LAYOUT == LAYOUT_MASKED\n    if (frame.counts.z == 12345u) demote;\n",
+    );
+    assert!(
+        render().timings.is_empty(),
+        "code only another layout compiles keeps it"
+    );
+    replace("inc/shading.glsl", "1e-8", "2e-8");
+    assert!(
+        !render().timings.is_empty(),
+        "a change of what it computes recomputes it"
+    );
+    assert_clean(&gpu);
+}
+
+fn walk(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).expect("read_dir") {
+        let p = e.expect("entry").path();
+        if p.is_dir() {
+            out.extend(walk(&p));
+        } else {
+            out.push(p);
+        }
+    }
+    out
+}
+
 fn rgba(o: &FrameOutput) -> Vec<f32> {
     o.color.iter().map(|c| c.to_f32()).collect()
 }

@@ -404,18 +404,30 @@ fn reset_prepass_and_ablations_match_the_cpu_reference() {
     let mut cases = Vec::new();
     for (name, ablation) in ablations {
         for prepass in [false, true] {
-            cases.push((name, ResolveMode::Ours, ablation, false, prepass));
+            cases.push((name, ResolveMode::Ours, ablation, false, prepass, false));
         }
     }
     for mode in ResolveMode::ALL {
-        cases.push(("reset", mode, Ablation::default(), true, false));
-        cases.push(("prepass", mode, Ablation::default(), false, true));
+        cases.push(("reset", mode, Ablation::default(), true, false, false));
+        cases.push(("prepass", mode, Ablation::default(), false, true, false));
     }
-    for (name, mode, ablation, reset, prepass) in cases {
+    // `fused` (checkerboard + TAA): rendered pixels blend into their history as well.
+    for (name, ablation) in [ablations[0], ablations[3], ablations[2]] {
+        for (reset, prepass) in [(false, false), (false, true), (true, false)] {
+            cases.push((name, ResolveMode::Ours, ablation, reset, prepass, true));
+        }
+    }
+    for (name, mode, ablation, reset, prepass, fused) in cases {
         for mapping in [Mapping::Pixel, Mapping::Quad] {
             let st = ResolveSettings {
                 ablation,
+                fused,
                 ..settings(mode, mapping, 8)
+            };
+            let name = if fused {
+                format!("fused {name}")
+            } else {
+                name.to_string()
             };
             let g = bench.run(&s, &st, 1, reset, prepass);
             let c = cpu(&s, &st, 1, reset, prepass);

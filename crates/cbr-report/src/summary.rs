@@ -29,9 +29,14 @@ struct Col {
     error: bool,
     /// Some(true): higher is better; Some(false): lower is better; None: not ranked.
     higher: Option<bool>,
+    /// Shown only when some row of the table has a value (bench.json from before the column
+    /// lacks it).
+    optional: bool,
+    /// The header's tooltip.
+    tip: &'static str,
 }
 
-const COLS: [Col; 9] = [
+const COLS: [Col; 13] = [
     Col {
         key: "frame_ms",
         title: "GPU ms (median)",
@@ -39,6 +44,8 @@ const COLS: [Col; 9] = [
         digits: 3,
         error: false,
         higher: Some(false),
+        optional: false,
+        tip: "",
     },
     Col {
         key: "raster_ms",
@@ -47,6 +54,8 @@ const COLS: [Col; 9] = [
         digits: 3,
         error: false,
         higher: None,
+        optional: false,
+        tip: "",
     },
     Col {
         key: "recon_ms",
@@ -55,6 +64,8 @@ const COLS: [Col; 9] = [
         digits: 3,
         error: false,
         higher: None,
+        optional: false,
+        tip: "",
     },
     Col {
         key: "psnr",
@@ -63,6 +74,8 @@ const COLS: [Col; 9] = [
         digits: 2,
         error: true,
         higher: Some(true),
+        optional: false,
+        tip: "",
     },
     Col {
         key: "ssim",
@@ -71,6 +84,8 @@ const COLS: [Col; 9] = [
         digits: 4,
         error: true,
         higher: Some(true),
+        optional: false,
+        tip: "",
     },
     Col {
         key: "flip_mean",
@@ -79,6 +94,8 @@ const COLS: [Col; 9] = [
         digits: 4,
         error: true,
         higher: Some(false),
+        optional: false,
+        tip: "",
     },
     Col {
         key: "flip_median",
@@ -87,6 +104,8 @@ const COLS: [Col; 9] = [
         digits: 4,
         error: true,
         higher: Some(false),
+        optional: false,
+        tip: "",
     },
     Col {
         key: "flip_edge",
@@ -95,6 +114,48 @@ const COLS: [Col; 9] = [
         digits: 4,
         error: true,
         higher: Some(false),
+        optional: true,
+        tip: "FLIP mean over the reference's edge pixels: more than one object ID among its samples",
+    },
+    Col {
+        key: "flip_disocc",
+        title: "disocclusion FLIP",
+        get: |r| num(&r["error"]["flip_disocc_mean"]),
+        digits: 4,
+        error: true,
+        higher: Some(false),
+        optional: true,
+        tip: "FLIP mean over the pixels whose reference object ID changed within the last k frames (ghosting and disocclusion error); frames with no such pixel are left out",
+    },
+    Col {
+        key: "flicker",
+        title: "flicker",
+        get: |r| num(&r["error"]["flicker_mean"]),
+        digits: 4,
+        error: true,
+        higher: Some(false),
+        optional: true,
+        tip: "mean |e_t - e_(t-1)| over consecutive measured frames, e = test - reference in display values: the part of the frame-to-frame change that the reference does not have",
+    },
+    Col {
+        key: "change",
+        title: "change",
+        get: |r| num(&r["error"]["change_mean"]),
+        digits: 4,
+        error: false,
+        higher: None,
+        optional: true,
+        tip: "the technique's own frame-to-frame change, mean |x_t - x_(t-1)| in display values; a stable technique's tracks the reference's",
+    },
+    Col {
+        key: "ref_change",
+        title: "reference change",
+        get: |r| num(&r["error"]["ref_change_mean"]),
+        digits: 4,
+        error: false,
+        higher: None,
+        optional: true,
+        tip: "the reference's own frame-to-frame change, mean |r_t - r_(t-1)| in display values, over the same frames",
     },
     Col {
         key: "relmse",
@@ -103,6 +164,8 @@ const COLS: [Col; 9] = [
         digits: 4,
         error: true,
         higher: Some(false),
+        optional: false,
+        tip: "",
     },
 ];
 
@@ -131,17 +194,21 @@ pub(crate) fn summary_table(html: &mut String, benches: &[BenchDir]) {
     }
 }
 
-/// One sortable table of the groups measured against `reference`; the edge FLIP column only when
-/// some row has it.
+/// One sortable table of the groups measured against `reference`; the optional columns (edge
+/// and disocclusion FLIP, the temporal ones) only when some row has them.
 fn table(html: &mut String, reference: &str, groups: &[Group], first: bool) {
-    let has_edge = groups
-        .iter()
-        .flat_map(|g| &g.rows)
-        .any(|r| num(&r["error"]["flip_edge_mean"]).is_some());
+    let rows = || groups.iter().flat_map(|g| &g.rows);
     let cols: Vec<&Col> = COLS
         .iter()
-        .filter(|c| has_edge || c.key != "flip_edge")
+        .filter(|c| !c.optional || rows().any(|r| (c.get)(r).is_some()))
         .collect();
+    // The disocclusion window of the rows (one value unless bench folders differ).
+    let mut ks: Vec<u64> = rows()
+        .filter_map(|r| r["disocclusion_frames"].as_u64())
+        .collect();
+    ks.sort_unstable();
+    ks.dedup();
+    let ks = ks.iter().map(u64::to_string).collect::<Vec<_>>().join(", ");
     let vs = format!("<br><span class=\"vs\">vs {}</span>", esc(reference));
     let _ = write!(
         html,
@@ -149,11 +216,23 @@ fn table(html: &mut String, reference: &str, groups: &[Group], first: bool) {
         if first { " id=\"summary-table\"" } else { "" }
     );
     for c in &cols {
+        let (title, tip) = if c.key == "flip_disocc" && !ks.is_empty() {
+            (
+                format!("{} (k = {ks})", c.title),
+                format!("{} (k = {ks})", c.tip),
+            )
+        } else {
+            (c.title.to_string(), c.tip.to_string())
+        };
+        let tip = if tip.is_empty() {
+            String::new()
+        } else {
+            format!(" title=\"{}\"", esc(&tip))
+        };
         let _ = write!(
             html,
-            "<th data-key=\"{}\">{}{}</th>",
+            "<th data-key=\"{}\"{tip}>{title}{}</th>",
             c.key,
-            c.title,
             if c.error { vs.as_str() } else { "" }
         );
     }

@@ -186,31 +186,76 @@ fn cell<'a>(rows: &'a [(String, Vec<(String, String)>)], row: &str, key: &str) -
     &r.iter().find(|c| c.0 == key).unwrap().1
 }
 
-const ERROR_KEYS: [&str; 6] = [
+const ERROR_KEYS: [&str; 8] = [
     "psnr",
     "ssim",
     "flip_mean",
     "flip_median",
     "flip_edge",
+    "flip_disocc",
+    "flicker",
     "relmse",
 ];
 
 /// Every error column of `table` (and the Pareto column) says `vs reference`; `edge`: whether
-/// the edge FLIP column is there.
+/// the edge FLIP column is there; `temporal`: whether the disocclusion FLIP, flicker, change and
+/// reference change columns are.
 fn assert_headers(table: &[(String, String)], reference: &str, edge: bool) {
+    assert_headers_with(table, reference, edge, false);
+}
+
+fn assert_headers_with(table: &[(String, String)], reference: &str, edge: bool, temporal: bool) {
     let vs = format!("<br><span class=\"vs\">vs {reference}</span>");
+    let shown = |key: &str| match key {
+        "flip_edge" => edge,
+        "flip_disocc" | "flicker" | "change" | "ref_change" => temporal,
+        _ => true,
+    };
     for key in ERROR_KEYS.iter().chain(&["pareto"]) {
         match table.iter().find(|(k, _)| k == key) {
             Some((_, body)) => assert!(body.ends_with(&vs), "{key}: {body}"),
-            None => assert!(*key == "flip_edge" && !edge, "no {key} column"),
+            None => assert!(!shown(key), "no {key} column"),
         }
     }
-    assert_eq!(table.iter().any(|(k, _)| k == "flip_edge"), edge);
+    for key in [
+        "flip_edge",
+        "flip_disocc",
+        "flicker",
+        "change",
+        "ref_change",
+    ] {
+        assert_eq!(table.iter().any(|(k, _)| k == key), shown(key), "{key}");
+    }
     for (k, body) in table {
         if !ERROR_KEYS.contains(&k.as_str()) && k != "pareto" {
             assert!(!body.contains("vs "), "{k}: {body}");
         }
     }
+}
+
+/// Adds what `cbr bench` writes since the temporal metrics: k on every row, the disocclusion
+/// FLIP (null for upscale:bilinear at 8x6: no disoccluded pixel in any frame), flicker, change
+/// and the reference's change.
+fn with_temporal(mut json: serde_json::Value, k: u64) -> serde_json::Value {
+    use serde_json::json;
+    for (n, r) in json["rows"].as_array_mut().unwrap().iter_mut().enumerate() {
+        r["disocclusion_frames"] = json!(k);
+        let i = (n % 3) as f64;
+        let e = &mut r["error"];
+        if e.is_null() {
+            continue;
+        }
+        e["flip_disocc_mean"] = if n == 2 {
+            json!(null)
+        } else {
+            json!(0.2 + 0.1 * i)
+        };
+        e["disocc_fraction_mean"] = json!(0.05);
+        e["flicker_mean"] = json!(0.01 + 0.002 * i);
+        e["change_mean"] = json!(0.03 + 0.001 * i);
+        e["ref_change_mean"] = json!(0.025);
+    }
+    json
 }
 
 #[test]
@@ -425,4 +470,56 @@ fn chart_axes_have_three_labelled_ticks() {
         assert_eq!(y, ["0.04", "0.05", "0.06"]);
         assert!(svg.contains(">GPU ms per frame (median, log scale)</text>"));
     }
+}
+
+#[test]
+fn temporal_columns_appear_with_their_window_and_values() {
+    // Without the fields (bench.json from before them) the columns are hidden.
+    let html = report(&[("a", fixture_json(true, "ssaa:16"))]);
+    assert_headers_with(&summary_headers(&html)[0], "ssaa:16", true, false);
+    assert!(!html.contains("disocclusion FLIP"));
+
+    let html = report(&[("a", with_temporal(fixture_json(true, "ssaa:16"), 4))]);
+    let tables = summary_headers(&html);
+    assert_headers_with(&tables[0], "ssaa:16", true, true);
+    let head = |key: &str| {
+        tables[0]
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, b)| b.clone())
+            .unwrap()
+    };
+    assert!(head("flip_disocc").starts_with("disocclusion FLIP (k = 4)<br>"));
+    assert_eq!(head("ref_change"), "reference change");
+    assert!(html.contains(
+        "title=\"FLIP mean over the pixels whose reference object ID changed within the last k frames"
+    ));
+    assert!(html.contains("frames with no such pixel are left out (k = 4)\">"));
+    // Values, a null as a dash, and the lowest flicker and disocclusion FLIP marked best.
+    let rows = summary_rows(&html, 0);
+    assert_eq!(cell(&rows, "native@8x6", "flip_disocc"), "0.2000");
+    assert_eq!(
+        cell(&rows, "checkerboard:rotated:ours@8x6", "flip_disocc"),
+        "0.3000"
+    );
+    assert_eq!(cell(&rows, "upscale:bilinear@8x6", "flip_disocc"), "–");
+    assert_eq!(
+        cell(&rows, "checkerboard:rotated:ours@16x12", "flicker"),
+        "0.0120"
+    );
+    assert_eq!(cell(&rows, "upscale:bilinear@16x12", "change"), "0.0320");
+    assert_eq!(cell(&rows, "native@16x12", "ref_change"), "0.0250");
+    assert!(html.contains("<td class=\"best\" data-v=\"0.01\">0.0100</td>"));
+    assert!(html.contains("<td class=\"best\" data-v=\"0.2\">0.2000</td>"));
+    assert!(
+        !html.contains("<td class=\"best\" data-v=\"0.025\">"),
+        "the reference's change is not ranked"
+    );
+
+    // Two bench folders with different windows: the header names both.
+    let html = report(&[
+        ("a", with_temporal(fixture_json(true, "ssaa:16"), 4)),
+        ("b", with_temporal(fixture_json(true, "ssaa:16"), 2)),
+    ]);
+    assert!(html.contains(">disocclusion FLIP (k = 2, 4)<br>"));
 }

@@ -230,12 +230,17 @@ mod tests {
     #[test]
     fn full_description_parses() {
         let d = parse(
-            "procedural = \"demo\"\nwidth = 64\nheight = 32\nframes = 3\n[camera]\n[[camera.keys]]\ntime = 1\nposition = [0,1,2]\ntarget = [0,0,0]\n[[camera.keys]]\ntime = 0\nposition = [0,1,3]\ntarget = [0,0,0]\n[lights.random_points]\ncount = 10\n[[animate]]\nobject = \"x\"\nspin_deg_per_s = 90\n",
+            "procedural = \"demo\"\nwidth = 64\nheight = 32\nframes = 3\n[camera]\n[[camera.keys]]\ntime = 1\nposition = [0,1,2]\ntarget = [0,0,0]\ncut = true\n[[camera.keys]]\ntime = 0\nposition = [0,1,3]\ntarget = [0,0,0]\n[lights.random_points]\ncount = 10\n[[animate]]\nobject = \"x\"\nspin_deg_per_s = 90\n",
         )
         .expect("parses");
         assert_eq!(d.width, Some(64));
         let path = camera_path(d.camera.as_ref()).expect("path");
         assert_eq!(path.keys[0].time, 0.0, "keys sorted by time");
+        assert!(
+            !path.keys[0].cut && path.keys[1].cut,
+            "the cut stays with its key"
+        );
+        assert!(path.cut_between(0.5, 1.0));
         assert_eq!(
             d.lights.and_then(|l| l.random_points).map(|r| r.count),
             Some(10)

@@ -54,6 +54,10 @@ pub struct BenchArgs {
     /// Render cacheable references afresh instead of reading the frame cache.
     #[arg(long)]
     no_cache: bool,
+    /// k of the disocclusion FLIP: the error over pixels whose reference object ID differs from
+    /// their ID in any of the k frames before [default: 4].
+    #[arg(long, value_name = "K")]
+    disocclusion_frames: Option<u32>,
     /// Device index or name substring.
     #[arg(long)]
     device: Option<String>,
@@ -82,6 +86,7 @@ impl BenchArgs {
             crops: self.crops.clone(),
             reference: self.reference.clone(),
             no_cache: self.no_cache,
+            disocclusion_frames: self.disocclusion_frames,
             device: self.device.clone(),
             validation: self.validation,
             out: self.out.clone(),

@@ -45,6 +45,25 @@ pub enum AblationArg {
     Prepass,
 }
 
+/// Parts of `+taa` that `--taa-without` switches off.
+#[derive(Clone, Copy, Debug, PartialEq, clap::ValueEnum)]
+pub enum TaaAblationArg {
+    /// Velocity of the nearest 3x3 neighbour: the pixel's own instead.
+    Dilation,
+    /// YCoCg variance clipping of the history.
+    Clip,
+    /// Rejection of history showing an object none of the 3x3 shows.
+    Ids,
+    /// Rejection of history outside the 3x3's depth span.
+    Depth,
+    /// Catmull-Rom history fetch: bilinear instead.
+    Catmull,
+    /// The current-frame weight rising with speed: alpha everywhere.
+    Speed,
+    /// The current sample reconstructed at the pixel centre: the raw jittered sample.
+    Filter,
+}
+
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum LayoutArg {
     /// Quarter-resolution 2x MSAA (needs 2x MSAA: GPUs, not lavapipe).
@@ -144,6 +163,10 @@ pub struct RenderArgs {
     /// Relative linear-depth tolerance of the history validation (default 0.05).
     #[arg(long)]
     depth_tolerance: Option<f32>,
+    /// Switch parts of the spec's `+taa` off for ablation (comma-separated): adds
+    /// `without-X` parameters to it.
+    #[arg(long, value_enum, value_delimiter = ',')]
+    taa_without: Vec<TaaAblationArg>,
     /// Also time a copy kernel moving the resolve's minimum bytes (its bandwidth floor).
     #[arg(long)]
     bandwidth_floor: bool,
@@ -419,6 +442,25 @@ impl RenderArgs {
         }
         if self.filter.is_some() && name != "upscale" {
             bail!("--filter applies to the upscale technique, not `{name}`");
+        }
+        if !self.taa_without.is_empty() {
+            let text = spec.to_string();
+            let taa = spec
+                .post
+                .iter_mut()
+                .find(|p| p.name == "taa")
+                .ok_or_else(|| {
+                    anyhow::anyhow!("--taa-without needs `+taa` in the spec `{text}`")
+                })?;
+            for a in &self.taa_without {
+                let p = format!("without-{}", format!("{a:?}").to_lowercase());
+                if !taa.params.contains(&p) {
+                    taa.params.push(p);
+                }
+            }
+            let params = taa.params();
+            cbr_render::post::taa::TaaConfig::parse(&params)
+                .map_err(|e| anyhow::anyhow!("--taa-without: {e}"))?;
         }
         match name.as_str() {
             "checkerboard" => spec.technique.params = self.edit_checkerboard(&spec)?.params(),

@@ -511,7 +511,19 @@ fn check_bench_schema(b: &serde_json::Value) {
             }
             let frames = r["frames"].as_u64().expect("frames") as usize;
             assert_eq!(e["per_frame"].as_array().map(Vec::len), Some(frames));
+            // Temporal: the disocclusion FLIP is null only when no frame has a disoccluded
+            // pixel; flicker and the changes need two measured frames.
+            assert!(e["disocc_fraction_mean"].is_f64(), "{r}");
+            let k = "flip_disocc_mean";
+            assert!(e[k].is_f64() || e[k].is_null() && e["disocc_fraction_mean"] == 0.0);
+            for k in ["flicker_mean", "change_mean", "ref_change_mean"] {
+                assert_eq!(e[k].is_f64(), frames > 1, "error.{k}: {r}");
+            }
         }
+        assert_eq!(
+            r["disocclusion_frames"],
+            b["protocol"]["disocclusion_frames"]
+        );
         if r["resolve"].is_string() {
             assert!(r["copy_floor_ms"]["median"].is_f64(), "copy floor: {r}");
             assert!(r["passes"]["resolve"]["median"].is_f64());
@@ -704,6 +716,133 @@ fn bench_against_a_supersampled_reference_names_it_everywhere_and_caches_it() {
 }
 
 #[test]
+fn bench_writes_the_temporal_metrics_with_finite_values() {
+    let d = tempfile::tempdir().expect("tempdir");
+    let cache = d.path().join("cache");
+    let cache_env = [("CBR_CACHE_DIR", cache.to_str().expect("utf8"))];
+    let run = |reference: &str, k: Option<&str>, out: &Path| {
+        let mut args = vec![
+            "bench",
+            "builtin:demo",
+            "--width",
+            "48",
+            "--height",
+            "27",
+            "--warmup",
+            "3",
+            "--frames",
+            "3",
+            "--reference",
+            reference,
+            "--techniques",
+            "native,upscale:bilinear",
+            "-o",
+            out.to_str().expect("utf8"),
+        ];
+        if let Some(k) = k {
+            args.extend(["--disocclusion-frames", k]);
+        }
+        let o = cbr(&args, &cache_env);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let b: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("bench.json")).expect("bench.json"))
+                .expect("json");
+        check_bench_schema(&b);
+        b
+    };
+    let per_frame = |r: &serde_json::Value, key: &str| -> Vec<Option<f64>> {
+        r["error"]["per_frame"]
+            .as_array()
+            .expect("per_frame")
+            .iter()
+            .map(|f| f[key].as_f64())
+            .collect()
+    };
+    // ssaa:2 skips its warm-up frames: a native raster gives their IDs, checked on frame 3.
+    let b = run("ssaa:2", None, &d.path().join("k4"));
+    assert_eq!(b["protocol"]["disocclusion_frames"], 4);
+    let ids = &b["protocol"]["disocclusion_ids"][0];
+    assert_eq!(ids["native"]["native_frames"], serde_json::json!([0, 3]));
+    assert_eq!(ids["native"]["mismatched_pixels"], 0, "{ids}");
+    let rows = b["rows"].as_array().expect("rows");
+    let ref_change = per_frame(&rows[1], "ref_change");
+    assert_eq!(
+        ref_change[0], None,
+        "no change before the first measured frame"
+    );
+    for r in &rows[1..] {
+        let e = &r["error"];
+        for k in [
+            "flip_disocc_mean",
+            "flicker_mean",
+            "change_mean",
+            "ref_change_mean",
+        ] {
+            assert!(e[k].as_f64().is_some_and(f64::is_finite), "{k}: {r}");
+        }
+        let fraction = per_frame(r, "disocc_fraction");
+        assert!(
+            fraction
+                .iter()
+                .all(|f| f.is_some_and(|f| f > 0.0 && f < 0.5)),
+            "{fraction:?}"
+        );
+        assert!(per_frame(r, "flip_disocc").iter().all(Option::is_some));
+        // The reference's change is the reference's: the same on every row.
+        assert_eq!(per_frame(r, "ref_change"), ref_change);
+        // |change - ref_change| <= flicker, frame by frame (the triangle inequality).
+        let (x, f) = (per_frame(r, "change"), per_frame(r, "flicker"));
+        for t in 1..3 {
+            let (x, rc, f) = (
+                x[t].expect("x"),
+                ref_change[t].expect("r"),
+                f[t].expect("f"),
+            );
+            assert!((x - rc).abs() <= f + 1e-9 && f > 0.0, "{x} {rc} {f}");
+        }
+    }
+    // Where the ID changed, the error is higher than over the whole frame (edges move there).
+    let native = &rows[1]["error"];
+    assert!(
+        native["flip_disocc_mean"].as_f64() > native["flip_mean"].as_f64(),
+        "{native}"
+    );
+    let csv = std::fs::read_to_string(d.path().join("k4/bench.csv")).expect("csv");
+    let head: Vec<&str> = csv.lines().next().unwrap_or("").split(',').collect();
+    // The native row; counted from the end (the device name holds a quoted comma).
+    let cells: Vec<&str> = csv.lines().nth(2).unwrap_or("").split(',').collect();
+    for c in [
+        "disocclusion_frames",
+        "flip_disocc_mean",
+        "flicker_mean",
+        "ref_change_mean",
+    ] {
+        let from_end = head.len() - head.iter().position(|h| *h == c).expect(c);
+        let cell = cells[cells.len() - from_end];
+        assert!(cell.parse::<f64>().is_ok(), "{c}: {csv}");
+    }
+    // A shorter window marks a subset of the pixels; the reference's own frames give the IDs
+    // when it renders its warm-up frames (native).
+    let b1 = run("ssaa:2", Some("1"), &d.path().join("k1"));
+    assert_eq!(b1["rows"][1]["disocclusion_frames"], 1);
+    let (f1, f4) = (
+        per_frame(&b1["rows"][1], "disocc_fraction"),
+        per_frame(&rows[1], "disocc_fraction"),
+    );
+    assert!(f1.iter().zip(&f4).all(|(a, b)| a < b), "{f1:?} {f4:?}");
+    let n = run("native", Some("2"), &d.path().join("native"));
+    assert_eq!(n["protocol"]["disocclusion_ids"][0]["source"], "reference");
+    assert!(n["protocol"]["disocclusion_ids"][0]["native"].is_null());
+    assert!(n["rows"][1]["error"]["flip_disocc_mean"].is_f64());
+    let o = cbr(
+        &["bench", "builtin:demo", "--disocclusion-frames", "0"],
+        &cache_env,
+    );
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--disocclusion-frames must be at least 1"));
+}
+
+#[test]
 fn shorthand_flags_edit_the_spec_and_contradictions_are_refused() {
     let d = tempfile::tempdir().expect("tempdir");
     let spec_of = |args: &[&str]| -> Result<String, String> {
@@ -764,7 +903,25 @@ fn shorthand_flags_edit_the_spec_and_contradictions_are_refused() {
         &["--technique", "native+sharpen:0.25"],
         "native+sharpen:0.25",
     );
+    ok(
+        &[
+            "--technique",
+            "checkerboard:rotated:ours+taa:16",
+            "--taa-without",
+            "clip,catmull",
+        ],
+        "checkerboard:rotated:ours+taa:16:without-clip:without-catmull",
+    );
     for (args, says) in [
+        (
+            &["--technique", "native", "--taa-without", "ids"][..],
+            "needs `+taa`",
+        ),
+        (
+            &["--technique", "native+taa:inside", "--taa-without", "ids"],
+            "INSIDE",
+        ),
+        (&["--technique", "ssaa:2+taa"], "geometry"),
         (
             &["--technique", "checkerboard:split", "--layout", "rotated"][..],
             "contradicts",

@@ -5,6 +5,7 @@
 
 pub mod fxaa;
 pub mod sharpen;
+pub mod taa;
 
 use cbr_gpu::{Cmd, vk};
 use cbr_gpu::{
@@ -67,13 +68,15 @@ impl PostBuildCtx<'_> {
 }
 
 /// The frame a post pass records for.
-pub struct PostFrame {
+pub struct PostFrame<'a> {
     pub frame: u32,
     /// No usable history (post passes with histories start over): the first frame, a frame that
     /// does not follow the last one rendered, a camera cut.
     pub reset: bool,
     /// The sub-pixel jitter the frame was rendered with (pixels; crate::renderer::RenderSettings).
     pub jitter: [f32; 2],
+    /// The technique's geometry this frame (when a pass of the chain reads it).
+    pub geometry: Option<Geometry<'a>>,
 }
 
 pub trait PostPass {
@@ -85,6 +88,11 @@ pub trait PostPass {
     /// sequence); at most one pass of a chain jitters.
     fn jitter(&self, _frame: u32) -> Option<[f32; 2]> {
         None
+    }
+    /// Added to the technique's texture LOD bias (TAA: its jittered samples average over the
+    /// pixel, so each may look up a sharper level; the setting `--lod-bias` overrides).
+    fn lod_bias(&self) -> f32 {
+        0.0
     }
 }
 
@@ -101,7 +109,8 @@ pub struct PostRegistration {
     pub build: PostBuild,
 }
 
-pub const POST_PASSES: &[PostRegistration] = &[fxaa::REGISTRATION, sharpen::REGISTRATION];
+pub const POST_PASSES: &[PostRegistration] =
+    &[fxaa::REGISTRATION, taa::REGISTRATION, sharpen::REGISTRATION];
 
 pub fn find(name: &str) -> Option<&'static PostRegistration> {
     POST_PASSES.iter().find(|p| p.name == name)

@@ -102,6 +102,12 @@ pub struct ResolveSettings {
     pub f32_history: bool,
     /// Write the debug bits and the velocity used (extra EXR layers and PNGs).
     pub debug: bool,
+    /// Write the velocity each pixel used (a temporal post pass reads it: `+taa`).
+    pub velocity: bool,
+    /// Checkerboard and TAA in one history (`ours` only): rendered pixels blend their sample
+    /// into their validated, variance-clipped history with weight [`FUSED_ALPHA`]; the frame is
+    /// jittered by Halton(2, 3) advancing every second frame (docs/post-aa.md).
+    pub fused: bool,
     /// Relative linear-depth tolerance of the history validation (`ours`, `intel`).
     pub depth_tolerance: f32,
     /// Below this motion (pixels) `ours` takes validated history unclamped.
@@ -122,6 +128,8 @@ impl Default for ResolveSettings {
             fp16: false,
             f32_history: false,
             debug: false,
+            velocity: false,
+            fused: false,
             depth_tolerance: 0.05,
             static_threshold: 1.0 / 64.0,
             motion_threshold: 0.25,
@@ -129,6 +137,16 @@ impl Default for ResolveSettings {
             bandwidth_floor: false,
         }
     }
+}
+
+/// `fused`: the weight of a rendered pixel's fresh sample against its history (each pixel is
+/// rendered every second frame: twice `+taa`'s 0.1 per frame).
+pub const FUSED_ALPHA: f32 = 0.2;
+
+/// `fused`: the frame's jitter (pixels): Halton(2, 3) of length 8 advancing every second frame, so
+/// each parity's pixels see the whole sequence.
+pub fn fused_jitter(frame: u32) -> [f32; 2] {
+    crate::post::taa::jitter(8, frame / 2)
 }
 
 /// Push-constant flags (F_* in resolve.comp).
@@ -195,11 +213,17 @@ impl ResolveSettings {
             self.depth_tolerance,
             self.static_threshold,
             self.motion_threshold,
-            0.0,
+            if self.fused { FUSED_ALPHA } else { 0.0 },
         ]
     }
 
     pub fn validate(&self) -> std::result::Result<(), String> {
+        if self.fused && self.mode != ResolveMode::Ours {
+            return Err(format!(
+                "`fused` is a variant of the `ours` resolve, not of `{}`",
+                self.mode.name()
+            ));
+        }
         if self.group != 8 && self.group != 16 {
             return Err(format!("resolve group {} (8 or 16)", self.group));
         }
@@ -320,6 +344,11 @@ impl ResolvePass {
             ("FP16", u32::from(settings.fp16).to_string()),
             ("OUT_FORMAT", out_format.to_string()),
             ("DEBUG", u32::from(settings.debug).to_string()),
+            ("FUSED", u32::from(settings.fused).to_string()),
+            (
+                "OUT_VELOCITY",
+                u32::from(settings.debug || settings.velocity).to_string(),
+            ),
         ] {
             defines.push((k.into(), v));
         }
@@ -462,6 +491,19 @@ impl ResolvePass {
         profiler.end(cmd, scope);
         if let Some(f) = &self.floor {
             f.record(cmd, profiler);
+        }
+    }
+
+    /// The frame's geometry (`ResolveSettings::velocity`): the velocity each pixel used, and the
+    /// history geometry of slot `slot` (object ID | moved bit, reverse-Z depth bits) as IDs and
+    /// depth both.
+    pub fn geometry(&self, slot: usize) -> crate::technique::Geometry<'_> {
+        let g = &self.history[slot].geom;
+        crate::technique::Geometry {
+            velocity: &self.debug_velocity,
+            depth: g,
+            ids: g,
+            packed: true,
         }
     }
 

@@ -230,6 +230,63 @@ impl Ctx<'_> {
         Some(h)
     }
 
+    /// A rendered pixel: its sample, or with `fused` the sample blended into its history
+    /// (`rendered_result` in resolve.comp).
+    fn rendered(&self, x: i32, y: i32, s: Sample) -> Res {
+        let mut r = Res {
+            c: s.c,
+            d: s.d,
+            id: s.ids[0],
+            v: s.v,
+            dbg: DBG_RENDERED,
+        };
+        if !self.s.fused || self.reset {
+            return r;
+        }
+        let hist = self.hist();
+        let i = self.idx(x, y);
+        let mut why = 0;
+        let h = if length(s.v) <= self.s.static_threshold && hist.ids[i] & ID_MOVED == 0 {
+            r.dbg |= DBG_STILL;
+            Some(hist.color[i])
+        } else {
+            let q = [x as f32 + 0.5 - s.v[0], y as f32 + 0.5 - s.v[1]];
+            let a = &self.s.ablation;
+            self.history_validated(q, s.ids[0], s.d, s.d, a.ids, a.depth, &mut why)
+        };
+        let Some(mut h) = h else {
+            r.dbg |= why;
+            return r;
+        };
+        r.dbg |= DBG_REPROJECTED;
+        let yc = to_ycocg(tonemap(s.c));
+        let (mut m1, mut m2) = (yc, [yc[0] * yc[0], yc[1] * yc[1], yc[2] * yc[2]]);
+        for [dx, dy] in [[-1, -1], [1, -1], [-1, 1], [1, 1]] {
+            let yd = to_ycocg(tonemap(self.load(x + dx, y + dy).c));
+            m1 = add(m1, yd);
+            m2 = add(m2, [yd[0] * yd[0], yd[1] * yd[1], yd[2] * yd[2]]);
+        }
+        let mu = scale(m1, 0.2);
+        let sigma = [0, 1, 2].map(|k| (m2[k] * 0.2 - mu[k] * mu[k]).max(0.0).sqrt());
+        let yh = to_ycocg(tonemap(h));
+        let d = [0, 1, 2].map(|k| yh[k] - mu[k]);
+        let mut t = 1.0f32;
+        for k in 0..3 {
+            if d[k].abs() > sigma[k] {
+                t = t.min(sigma[k] / d[k].abs());
+            }
+        }
+        if t < 1.0 {
+            r.dbg |= DBG_CLAMPED;
+            h = untonemap(from_ycocg(add(mu, scale(d, t))));
+        }
+        let a = super::FUSED_ALPHA;
+        let wc = a / (1.0 + luma(s.c).max(0.0));
+        let wh = (1.0 - a) / (1.0 + luma(h).max(0.0));
+        r.c = [0, 1, 2].map(|k| (wc * s.c[k] + wh * h[k]) / (wc + wh));
+        r
+    }
+
     fn history_plain(&self, q: [f32; 2]) -> V3 {
         let hist = self.hist();
         let (base, w) = Self::taps(q);
@@ -550,14 +607,7 @@ pub fn resolve(inputs: &Inputs, settings: &ResolveSettings) -> Output {
     for y in 0..h {
         for x in 0..w {
             let r = if (x + y) as u32 & 1 == inputs.parity {
-                let s = inputs.current[ctx.idx(x, y)];
-                Res {
-                    c: s.c,
-                    d: s.d,
-                    id: s.ids[0],
-                    v: s.v,
-                    dbg: DBG_RENDERED,
-                }
+                ctx.rendered(x, y, inputs.current[ctx.idx(x, y)])
             } else {
                 let nb = NEIGHBOUR.map(|o| ctx.load(x + o[0], y + o[1]));
                 ctx.missing(x, y, &nb)

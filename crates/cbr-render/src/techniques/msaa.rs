@@ -18,7 +18,7 @@ use super::IdPass;
 use crate::renderer::FrameOutput;
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, VELOCITY_FORMAT};
-use crate::technique::{BuildCtx, FrameCtx, Registration, Technique, unknown_param};
+use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, unknown_param};
 
 pub const REGISTRATION: Registration = Registration {
     name: "msaa",
@@ -239,6 +239,16 @@ impl Technique for Msaa {
 
     fn color(&self, _frame: u32) -> Option<&Image> {
         Some(&self.out_color)
+    }
+
+    /// Velocity of sample 0 (the resolve's), depth and IDs of the 1x ID pass at the pixel centres.
+    fn geometry(&self, _frame: u32) -> Option<Geometry<'_>> {
+        Some(Geometry {
+            velocity: &self.out_velocity,
+            depth: &self.ids.depth,
+            ids: &self.ids.ids,
+            packed: false,
+        })
     }
 
     fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput> {

@@ -7,7 +7,7 @@ use super::{LayerReadbacks, no_params};
 use crate::renderer::FrameOutput;
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::FrameTargets;
-use crate::technique::{BuildCtx, FrameCtx, Registration, Technique};
+use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique};
 
 pub const REGISTRATION: Registration = Registration {
     name: "native",
@@ -70,6 +70,16 @@ impl Technique for Native {
 
     fn color(&self, _frame: u32) -> Option<&Image> {
         Some(&self.targets.color)
+    }
+
+    fn geometry(&self, _frame: u32) -> Option<Geometry<'_>> {
+        let t = &self.targets;
+        Some(Geometry {
+            velocity: &t.velocity,
+            depth: &t.depth,
+            ids: &t.ids,
+            packed: false,
+        })
     }
 
     fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput> {

@@ -11,7 +11,7 @@ use crate::gpu_scene::RasterUniforms;
 use crate::renderer::FrameOutput;
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::{COLOR_FORMAT, FrameTargets, ID_FORMAT, VELOCITY_FORMAT};
-use crate::technique::{BuildCtx, FrameCtx, Registration, Technique, unknown_param};
+use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, unknown_param};
 
 pub const REGISTRATION: Registration = Registration {
     name: "upscale",
@@ -250,6 +250,17 @@ impl Technique for Upscale {
 
     fn color(&self, _frame: u32) -> Option<&Image> {
         Some(&self.up.out.color)
+    }
+
+    /// The upscale's full-resolution layers: nearest low-resolution sample, velocity rescaled.
+    fn geometry(&self, _frame: u32) -> Option<Geometry<'_>> {
+        let o = &self.up.out;
+        Some(Geometry {
+            velocity: &o.velocity,
+            depth: &o.depth,
+            ids: &o.ids,
+            packed: false,
+        })
     }
 
     fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput> {

@@ -33,7 +33,7 @@ pub struct CheckerboardConfig {
 }
 
 const EXPECTED: &str = "a layout (rotated, split, masked, msaa2x) first, then a resolve mode \
-    (ours, pq4k, intel, spatial, temporal, none) and options pixel, quad, 8, 16, fp16, \
+    (ours, fused, pq4k, intel, spatial, temporal, none) and options pixel, quad, 8, 16, fp16, \
     f32history, debug, prepass, locations, gradients, tol=T, without-velocity|depth|ids|clamp|prepass";
 
 impl CheckerboardConfig {
@@ -66,6 +66,10 @@ impl CheckerboardConfig {
             let a = &mut r.ablation;
             match p {
                 "none" => none = true,
+                "fused" => {
+                    r.mode = ResolveMode::Ours;
+                    r.fused = true;
+                }
                 "pixel" => r.mapping = Mapping::Pixel,
                 "quad" => r.mapping = Mapping::Quad,
                 "8" => r.group = 8,
@@ -109,7 +113,7 @@ impl CheckerboardConfig {
         match &self.resolve {
             None => p.push("none".into()),
             Some(r) => {
-                p.push(r.mode.name().into());
+                p.push(if r.fused { "fused" } else { r.mode.name() }.into());
                 if r.mapping != d.mapping {
                     p.push("pixel".into());
                 }
@@ -168,12 +172,21 @@ impl CheckerboardConfig {
 
     /// The mip bias that matches the layout's sample spacing: 2 px (split, msaa2x) is one level,
     /// sqrt(2) px (rotated) half a level.
+    /// The layout's matching bias; `fused` (jittered, accumulated) looks up one level finer, as
+    /// `+taa` does.
     pub fn default_lod_bias(&self) -> f32 {
-        match self.layout {
+        let layout = match self.layout {
             Layout::Masked => 0.0,
             Layout::Split | Layout::Msaa2x => -1.0,
             Layout::Rotated => -0.5,
-        }
+        };
+        let fused = self.resolve.is_some_and(|r| r.fused);
+        layout
+            + if fused {
+                crate::post::taa::TaaConfig::OURS.lod_bias
+            } else {
+                0.0
+            }
     }
 }
 
@@ -189,6 +202,7 @@ mod tests {
             "masked:none",
             "rotated:ours:pixel:16:fp16:f32history:prepass:gradients:debug:tol=0.1:without-ids:without-clamp",
             "msaa2x:intel:locations",
+            "rotated:fused:prepass",
         ] {
             let p: Vec<&str> = s.split(':').collect();
             let c = CheckerboardConfig::parse(&p).unwrap_or_else(|e| panic!("{s}: {e}"));

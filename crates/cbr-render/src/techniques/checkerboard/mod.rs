@@ -20,7 +20,7 @@ use crate::renderer::{FrameOutput, ResolveOutput};
 use crate::resolve::{ResolveFrame, ResolvePass, ResolveReadbacks};
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::FrameTargets;
-use crate::technique::{BuildCtx, FrameCtx, Registration, Technique};
+use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique};
 
 pub const REGISTRATION: Registration = Registration {
     name: "checkerboard",
@@ -103,6 +103,7 @@ impl Checkerboard {
             Some(rs) => {
                 let mut rs = *rs;
                 rs.bandwidth_floor = ctx.instrument;
+                rs.velocity = ctx.geometry;
                 let pre = prepass.as_ref().map(|p| (&p.ids, &p.depth));
                 let pass = ResolvePass::new(gpu, shaders, &rs, &plans[0], &targets, pre)?;
                 let rb = pass.readbacks(gpu)?;
@@ -158,7 +159,11 @@ fn reprojection(view: &FrameView) -> [f32; 16] {
 impl Technique for Checkerboard {
     fn render(&mut self, ctx: &mut FrameCtx) -> Result<()> {
         let parity = ctx.frame % 2;
-        let view = self.view(&ctx.view, parity);
+        let mut view = self.view(&ctx.view, parity);
+        if self.config.resolve.is_some_and(|r| r.fused) {
+            let j = crate::resolve::fused_jitter(ctx.frame);
+            view.screen_jitter = [view.screen_jitter[0] + j[0], view.screen_jitter[1] + j[1]];
+        }
         ctx.upload(&view)?;
         let rf = ResolveFrame {
             slot: parity as usize,
@@ -194,6 +199,14 @@ impl Technique for Checkerboard {
         self.resolve
             .as_ref()
             .map(|r| r.pass.output((frame % 2) as usize))
+    }
+
+    /// The resolved frame's geometry (with a resolve): the velocity each pixel used and its
+    /// history geometry.
+    fn geometry(&self, frame: u32) -> Option<Geometry<'_>> {
+        self.resolve
+            .as_ref()
+            .map(|r| r.pass.geometry((frame % 2) as usize))
     }
 
     fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput> {

@@ -159,6 +159,7 @@ impl Technique for Interlaced {
             velocity: &s.velocity,
             depth: &s.depth,
             ids: &s.ids,
+            packed: false,
         })
     }
 

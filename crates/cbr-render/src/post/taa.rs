@@ -1,0 +1,963 @@
+//! `+taa`: temporal anti-aliasing as a post pass (docs/post-aa.md, shaders/post/taa.comp).
+//!
+//! The frame is jittered by a Halton(2, 3) sequence of length 8 or 16 ([`jitter`]; the sequencer
+//! applies [`PostPass::jitter`] to the projection). Each pixel blends the current sample with the
+//! history reprojected through the technique's velocity:
+//!
+//! - `+taa` (after Karis 2014): velocity of the nearest of the 3x3 neighbours (dilation), history
+//!   by a 5-tap Catmull-Rom, clipped towards the neighbourhood mean into the YCoCg variance box
+//!   mean +- gamma sigma (Salvi 2016), blended with current-frame weight alpha, both weighted by
+//!   1 / (1 + luma) (Karis); alpha rises with the pixel's speed (0.1 still, 0.5 from 2 px per
+//!   frame: every reprojection resamples and softens the history). Beyond the published: the
+//!   history is rejected where the object ID it shows is none of the current 3x3's, or its depth
+//!   is outside their span (the checkerboard resolve's tests); `without-X` switches one part off
+//!   (`dilation`, `clip`, `ids`, `depth`, `catmull`, `speed`).
+//! - `+taa:inside` (Pedersen 2016, Playdead's INSIDE): Halton x16, 3x3 closest-depth dilation,
+//!   bilinear history, the rounded min-max box (3x3 averaged with the cross) with chroma shrunk to
+//!   1/8 of the luma extent around the centre's, clipped towards the clamped mean, feedback
+//!   lerp(0.88, 0.97, (1 - |dL| / max(L0, L1, 0.2))^2). No ID or depth tests.
+//! - `mean`: blend weight 1 / (n + 1), n frames since the reset: the running mean of the jittered
+//!   frames (with `without-clip`, a static scene's frame n is the mean of n + 1 jittered frames).
+//!
+//! Colours are compared in a perceptual space (exposure-scaled, Reinhard on luminance, YCoCg);
+//! history and output stay linear HDR (RGBA16F). A non-finite current sample is replaced by the
+//! mean of its finite neighbours, so NaN and Inf never enter the history. [`reference`] is the
+//! CPU reference, operation for operation.
+
+use std::cell::Cell;
+
+use cbr_gpu::{
+    Access, BindingDesc, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, GpuError, Image,
+    PassKind, Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout, Write, vk,
+};
+
+use super::{PostBuildCtx, PostFrame, PostPass, PostRegistration};
+use crate::technique::Geometry;
+
+pub const REGISTRATION: PostRegistration = PostRegistration {
+    name: "taa",
+    grammar: "taa[:inside][:8|16][:alpha=A][:amax=A][:speed=V][:gamma=G][:tol=T][:lod=B][:mean][:without-X...]",
+    about: "temporal AA: Halton jitter, dilated velocity, Catmull-Rom history, YCoCg variance \
+            clipping, ID and depth rejection, speed-dependent weight (X: dilation, clip, ids, \
+            depth, catmull, speed); `inside`: Playdead's INSIDE TAA",
+    check: |p| TaaConfig::parse(p).map(|_| ()),
+    geometry: true,
+    build: |ctx, p, inputs| {
+        let c = TaaConfig::parse(p).map_err(GpuError::Other)?;
+        Ok(Box::new(Taa::new(ctx, c, inputs)?))
+    },
+};
+
+/// The parts `without-X` switches off.
+pub const ABLATIONS: [&str; 7] = [
+    "dilation", "clip", "ids", "depth", "catmull", "speed", "filter",
+];
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TaaConfig {
+    /// Playdead's INSIDE TAA instead of ours.
+    pub inside: bool,
+    /// Halton(2, 3) sequence length (8 or 16).
+    pub length: u32,
+    /// Current-frame blend weight of a still pixel (ours).
+    pub alpha: f32,
+    /// The current-frame weight at and above `speed` pixels per frame: alpha rises linearly with
+    /// the pixel's speed to it (each reprojection resamples and softens the history). `speed`
+    /// 0: off (`without-speed`).
+    pub alpha_max: f32,
+    pub speed: f32,
+    /// Variance clipping box half-width in standard deviations (ours).
+    pub gamma: f32,
+    /// Relative linear-depth tolerance of the history depth test (ours).
+    pub depth_tolerance: f32,
+    /// Blend weight 1 / (n + 1): the running mean.
+    pub mean: bool,
+    /// Added to the technique's texture LOD bias: the jittered samples average over the pixel
+    /// footprint, so each looks up a level finer (texture prefiltering would blur twice).
+    pub lod_bias: f32,
+    pub dilation: bool,
+    pub clip: bool,
+    pub ids: bool,
+    pub depth: bool,
+    pub catmull: bool,
+    /// Reconstruct the current sample at the pixel centre from the 3x3 (Karis' Blackman-Harris
+    /// fit); off with `mean` (the running mean of the raw jittered frames) and in INSIDE mode.
+    pub filter: bool,
+}
+
+/// Below this motion (pixels) a pixel is still: when its history texel was still too, the ID
+/// and depth tests are skipped (the checkerboard resolve's static threshold).
+pub const STILL_THRESHOLD: f32 = 1.0 / 64.0;
+/// History geometry's moved bit.
+pub const MOVED: u32 = 0x8000_0000;
+
+/// INSIDE's feedback range (the history's weight).
+pub const INSIDE_FEEDBACK: [f32; 2] = [0.88, 0.97];
+
+impl TaaConfig {
+    pub const OURS: TaaConfig = TaaConfig {
+        inside: false,
+        length: 8,
+        alpha: 0.1,
+        alpha_max: 0.5,
+        speed: 2.0,
+        gamma: 1.0,
+        depth_tolerance: 0.05,
+        mean: false,
+        lod_bias: -1.0,
+        dilation: true,
+        clip: true,
+        ids: true,
+        depth: true,
+        catmull: true,
+        filter: true,
+    };
+
+    pub const INSIDE: TaaConfig = TaaConfig {
+        inside: true,
+        length: 16,
+        ids: false,
+        depth: false,
+        catmull: false,
+        filter: false,
+        ..TaaConfig::OURS
+    };
+
+    pub fn parse(params: &[&str]) -> std::result::Result<TaaConfig, String> {
+        let inside = params.contains(&"inside");
+        let mut c = if inside {
+            TaaConfig::INSIDE
+        } else {
+            TaaConfig::OURS
+        };
+        let num = |p: &str, v: &str, lo: f32, hi: f32| -> std::result::Result<f32, String> {
+            match v.parse::<f32>() {
+                Ok(x) if (lo..=hi).contains(&x) => Ok(x),
+                _ => Err(format!("taa `{p}` (a number from {lo} to {hi})")),
+            }
+        };
+        for p in params {
+            let ours_only = |what: &str| -> std::result::Result<(), String> {
+                match inside {
+                    true => Err(format!("taa `{p}`: INSIDE's TAA has no {what}")),
+                    false => Ok(()),
+                }
+            };
+            match *p {
+                "inside" => {}
+                "8" => c.length = 8,
+                "16" => c.length = 16,
+                "mean" => {
+                    c.mean = true;
+                    c.filter = false
+                }
+                "without-filter" => {
+                    ours_only("current-sample filter")?;
+                    c.filter = false
+                }
+                "without-dilation" => c.dilation = false,
+                "without-clip" => c.clip = false,
+                "without-ids" => {
+                    ours_only("ID test")?;
+                    c.ids = false
+                }
+                "without-depth" => {
+                    ours_only("depth test")?;
+                    c.depth = false
+                }
+                "without-speed" => {
+                    ours_only("speed-dependent weight")?;
+                    c.speed = 0.0
+                }
+                "without-catmull" => {
+                    ours_only("Catmull-Rom history (it is bilinear)")?;
+                    c.catmull = false
+                }
+                _ => match p.split_once('=') {
+                    Some(("alpha", v)) => {
+                        ours_only("alpha (its feedback is 0.88-0.97)")?;
+                        c.alpha = num(p, v, 0.001, 1.0)?
+                    }
+                    Some(("gamma", v)) => {
+                        ours_only("variance gamma (it clips to min-max)")?;
+                        c.gamma = num(p, v, 0.0, 8.0)?
+                    }
+                    Some(("lod", v)) => c.lod_bias = num(p, v, -4.0, 4.0)?,
+                    Some(("amax", v)) => {
+                        ours_only("speed-dependent weight")?;
+                        c.alpha_max = num(p, v, 0.001, 1.0)?
+                    }
+                    Some(("speed", v)) => {
+                        ours_only("speed-dependent weight")?;
+                        c.speed = num(p, v, 0.0, 1000.0)?
+                    }
+                    Some(("tol", v)) => {
+                        ours_only("depth test")?;
+                        c.depth_tolerance = num(p, v, 0.0, 1.0)?
+                    }
+                    _ => {
+                        return Err(crate::technique::unknown_param(
+                            "taa",
+                            p,
+                            "inside, 8, 16, alpha=A, amax=A, speed=V, gamma=G, tol=T, lod=B, mean, \
+                             without-dilation, without-clip, without-ids, without-depth, \
+                             without-catmull, without-speed, without-filter",
+                        ));
+                    }
+                },
+            }
+        }
+        Ok(c)
+    }
+
+    fn flags(&self) -> u32 {
+        let mut f = 0;
+        for (on, bit) in [
+            (self.dilation, F_DILATION),
+            (self.clip, F_CLIP),
+            (self.ids, F_IDS),
+            (self.depth, F_DEPTH),
+            (self.catmull, F_CATMULL),
+            (self.mean, F_MEAN),
+            (self.filter, F_FILTER),
+        ] {
+            if on {
+                f |= bit;
+            }
+        }
+        f
+    }
+}
+
+pub const F_RESET: u32 = 1;
+pub const F_DILATION: u32 = 2;
+pub const F_CLIP: u32 = 4;
+pub const F_IDS: u32 = 8;
+pub const F_DEPTH: u32 = 16;
+pub const F_CATMULL: u32 = 32;
+pub const F_MEAN: u32 = 64;
+pub const F_FILTER: u32 = 128;
+
+/// The radical inverse of `i` in `base` (the Halton sequence's element i).
+pub fn halton(mut i: u32, base: u32) -> f32 {
+    let (mut f, mut r) = (1.0f64, 0.0f64);
+    while i > 0 {
+        f /= f64::from(base);
+        r += f * f64::from(i % base);
+        i /= base;
+    }
+    r as f32
+}
+
+/// The jitter of frame `frame` in pixels: Halton(2, 3) elements 1..=length, centred on 0.
+pub fn jitter(length: u32, frame: u32) -> [f32; 2] {
+    let i = frame % length + 1;
+    [halton(i, 2) - 0.5, halton(i, 3) - 0.5]
+}
+
+pub const BINDINGS: [BindingDesc; 9] = [
+    BindingDesc::one("cur", 0, DescriptorKind::CombinedImageSampler),
+    BindingDesc::one("velocity", 1, DescriptorKind::CombinedImageSampler),
+    BindingDesc::one("depth", 2, DescriptorKind::CombinedImageSampler),
+    BindingDesc::one("ids", 3, DescriptorKind::CombinedImageSampler),
+    BindingDesc::one("hist", 4, DescriptorKind::CombinedImageSampler),
+    BindingDesc::one("hist_geom", 5, DescriptorKind::CombinedImageSampler),
+    BindingDesc::one("out_hist", 6, DescriptorKind::StorageImage),
+    BindingDesc::one("out_geom", 7, DescriptorKind::StorageImage),
+    BindingDesc::one("out_color", 8, DescriptorKind::StorageImage),
+];
+
+/// Push constants (shaders/post/taa.comp `Push`).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Push {
+    size: [i32; 4],
+    flags: [u32; 4],
+    params: [f32; 4],
+    inside: [f32; 4],
+    speed: [f32; 4],
+}
+
+pub struct Taa {
+    config: TaaConfig,
+    pipeline: Pipeline,
+    _layout: SetLayout,
+    _samplers: [Sampler; 2],
+    /// One per frame parity: reads history `(f + 1) % 2`, writes history `f % 2`.
+    sets: Vec<DescriptorSet>,
+    history: [Image; 2],
+    history_geom: [Image; 2],
+    out: Image,
+    push: Push,
+    /// Frames accumulated since the last reset (the `mean` weight).
+    accumulated: Cell<u32>,
+}
+
+impl Taa {
+    fn new(ctx: &PostBuildCtx, c: TaaConfig, inputs: &[&Image]) -> Result<Taa> {
+        let gpu = ctx.gpu;
+        let geo: &[Geometry] = ctx.geometry;
+        if geo.is_empty() {
+            return Err(GpuError::Other(
+                "taa needs the frame's geometry (velocity, depth, IDs)".into(),
+            ));
+        }
+        let layout = SetLayout::new(gpu, "taa.set_layout", &BINDINGS)?;
+        let mut defines: Vec<(String, String)> = BINDINGS.iter().map(BindingDesc::define).collect();
+        defines.push(("MODE".into(), u32::from(c.inside).to_string()));
+        defines.push(("PACKED".into(), u32::from(geo[0].packed).to_string()));
+        let cs = ctx.shaders.compile("post/taa.comp", &defines)?;
+        let pipeline = Pipeline::compute(
+            gpu,
+            &ComputeDesc {
+                name: "taa",
+                shader: &cs,
+                set_layouts: &[&layout],
+                push_constant_bytes: std::mem::size_of::<Push>() as u32,
+            },
+        )?;
+        let nearest = Sampler::new(gpu, "taa.nearest", SamplerDesc::NEAREST)?;
+        let linear = Sampler::new(
+            gpu,
+            "taa.linear",
+            SamplerDesc {
+                linear: true,
+                ..SamplerDesc::NEAREST
+            },
+        )?;
+        let history = [ctx.output("taa.history[0]")?, ctx.output("taa.history[1]")?];
+        let history_geom = [
+            ctx.image("taa.history_geom[0]", vk::Format::R32G32_UINT)?,
+            ctx.image("taa.history_geom[1]", vk::Format::R32G32_UINT)?,
+        ];
+        let out = ctx.output("taa.out")?;
+        let sets = (0..2)
+            .map(|f: usize| {
+                let g = &geo[f % geo.len()];
+                let (read, write) = ((f + 1) % 2, f % 2);
+                DescriptorSet::new(
+                    gpu,
+                    &format!("taa.set[{f}]"),
+                    &layout,
+                    &[
+                        Write::Sampled(0, vec![(inputs[f % inputs.len()], &nearest)]),
+                        Write::Sampled(1, vec![(g.velocity, &nearest)]),
+                        Write::Sampled(2, vec![(g.depth, &nearest)]),
+                        Write::Sampled(3, vec![(g.ids, &nearest)]),
+                        Write::Sampled(4, vec![(&history[read], &linear)]),
+                        Write::Sampled(5, vec![(&history_geom[read], &nearest)]),
+                        Write::Storage(6, &history[write]),
+                        Write::Storage(7, &history_geom[write]),
+                        Write::Storage(8, &out),
+                    ],
+                )
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let g0 = geo[0].velocity;
+        let push = Push {
+            size: [
+                ctx.width as i32,
+                ctx.height as i32,
+                g0.width as i32,
+                g0.height as i32,
+            ],
+            flags: [c.flags(), 0, 0, 0],
+            params: [
+                c.alpha,
+                c.gamma,
+                c.depth_tolerance,
+                ctx.exposure_stops.exp2(),
+            ],
+            inside: [INSIDE_FEEDBACK[0], INSIDE_FEEDBACK[1], STILL_THRESHOLD, 0.0],
+            speed: [c.alpha_max, c.speed, 0.0, 0.0],
+        };
+        Ok(Taa {
+            config: c,
+            pipeline,
+            _layout: layout,
+            _samplers: [nearest, linear],
+            sets,
+            history,
+            history_geom,
+            out,
+            push,
+            accumulated: Cell::new(0),
+        })
+    }
+}
+
+impl PostPass for Taa {
+    fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler, frame: &PostFrame, input: &Image) {
+        let f = frame.frame as usize % 2;
+        let n = if frame.reset {
+            0
+        } else {
+            self.accumulated.get() + 1
+        };
+        self.accumulated.set(n);
+        let mut push = self.push;
+        push.flags[0] |= if frame.reset { F_RESET } else { 0 };
+        push.flags[1] = n;
+        push.speed[2] = frame.jitter[0];
+        push.speed[3] = frame.jitter[1];
+        cmd.use_image(input, Access::ComputeSampled);
+        if let Some(g) = &frame.geometry {
+            for image in [g.velocity, g.depth, g.ids] {
+                cmd.use_image(image, Access::ComputeSampled);
+            }
+        }
+        cmd.use_image(&self.history[(f + 1) % 2], Access::ComputeSampled);
+        cmd.use_image(&self.history_geom[(f + 1) % 2], Access::ComputeSampled);
+        cmd.use_image(&self.history[f], Access::ComputeStorageWrite);
+        cmd.use_image(&self.history_geom[f], Access::ComputeStorageWrite);
+        cmd.use_image(&self.out, Access::ComputeStorageWrite);
+        let scope = profiler.begin(cmd, "taa", PassKind::Compute);
+        cmd.bind_pipeline(&self.pipeline);
+        cmd.bind_set(&self.pipeline, 0, &self.sets[f]);
+        cmd.push_constants(&self.pipeline, bytemuck::bytes_of(&push));
+        cmd.dispatch(self.out.width.div_ceil(8), self.out.height.div_ceil(8), 1);
+        profiler.end(cmd, scope);
+    }
+
+    fn output(&self) -> &Image {
+        &self.out
+    }
+
+    fn jitter(&self, frame: u32) -> Option<[f32; 2]> {
+        Some(jitter(self.config.length, frame))
+    }
+
+    fn lod_bias(&self) -> f32 {
+        self.config.lod_bias
+    }
+}
+
+// ---- The CPU reference ----------------------------------------------------------------------
+
+/// The previous output colour and its geometry (object ID | [`MOVED`], linear depth).
+pub type RefHistory<'a> = (&'a [[f32; 3]], &'a [(u32, f32)]);
+
+/// One frame's inputs to [`reference`], all at the output resolution, rows top to bottom.
+pub struct RefInputs<'a> {
+    pub width: usize,
+    pub height: usize,
+    /// The technique's colour this frame (linear HDR).
+    pub color: &'a [[f32; 3]],
+    /// Pixels moved since the previous frame (current - previous).
+    pub velocity: &'a [[f32; 2]],
+    /// View distance along the camera axis (linear; +inf where nothing was drawn). The shader
+    /// compares reverse-Z `near / z`: every test here is the same in linear depth (relative
+    /// differences are symmetric, the order reverses), so the two agree up to rounding.
+    pub depth: &'a [f32],
+    /// Object IDs.
+    pub ids: &'a [u32],
+    /// The previous output and its geometry (object ID | [`MOVED`], linear depth); `None`: reset.
+    pub history: Option<RefHistory<'a>>,
+    /// Frames accumulated since the reset (the `mean` weight 1 / (n + 1)).
+    pub n: u32,
+    /// 2^exposure stops.
+    pub exposure_scale: f32,
+    /// The frame's jitter (pixels), for the current-sample filter.
+    pub jitter: [f32; 2],
+}
+
+const LUMA: [f32; 3] = [0.2126, 0.7152, 0.0722];
+const OFF: [[i32; 2]; 9] = [
+    [-1, -1],
+    [0, -1],
+    [1, -1],
+    [-1, 0],
+    [0, 0],
+    [1, 0],
+    [-1, 1],
+    [0, 1],
+    [1, 1],
+];
+
+type V3 = [f32; 3];
+
+fn dot(a: V3, b: V3) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn map3(a: V3, f: impl Fn(f32) -> f32) -> V3 {
+    [f(a[0]), f(a[1]), f(a[2])]
+}
+fn zip3(a: V3, b: V3, f: impl Fn(f32, f32) -> f32) -> V3 {
+    [f(a[0], b[0]), f(a[1], b[1]), f(a[2], b[2])]
+}
+
+/// Linear HDR to the perceptual YCoCg the shader compares in (`to_p`), and back (`from_p`).
+pub fn to_p(c: V3, e: f32) -> V3 {
+    let x = map3(c, |v| v * e);
+    let t = map3(x, |v| v / (1.0 + dot(x, LUMA).max(0.0)));
+    [
+        0.25 * t[0] + 0.5 * t[1] + 0.25 * t[2],
+        0.5 * t[0] - 0.5 * t[2],
+        -0.25 * t[0] + 0.5 * t[1] - 0.25 * t[2],
+    ]
+}
+pub fn from_p(y: V3, e: f32) -> V3 {
+    let t = [y[0] + y[1] - y[2], y[0] + y[2], y[0] - y[1] - y[2]].map(|v| v.max(0.0));
+    let k = (1.0 - dot(t, LUMA)).max(1e-3);
+    map3(t, |v| v / k / e)
+}
+
+fn catmull_rom(f: f32) -> [f32; 4] {
+    let (f2, f3) = (f * f, f * f * f);
+    [
+        -0.5 * f3 + f2 - 0.5 * f,
+        1.5 * f3 - 2.5 * f2 + 1.0,
+        -1.5 * f3 + 2.0 * f2 + 0.5 * f,
+        0.5 * f3 - 0.5 * f2,
+    ]
+}
+
+/// Moves h towards p until it lies in [lo, hi] (`clip_towards`).
+fn clip_towards(p: V3, h: V3, lo: V3, hi: V3) -> V3 {
+    let r = zip3(h, p, |a, b| a - b);
+    let mut t = 1.0f32;
+    for i in 0..3 {
+        if r[i] > 1e-7 {
+            t = t.min((hi[i] - p[i]) / r[i]);
+        } else if r[i] < -1e-7 {
+            t = t.min((lo[i] - p[i]) / r[i]);
+        }
+    }
+    let t = t.max(0.0);
+    zip3(p, r, |a, b| a + b * t)
+}
+
+/// |a - b| / max(a, b) (the shader's `depth_rel_diff`, here of linear depths).
+fn rel_diff(a: f32, b: f32) -> f32 {
+    let m = a.max(b);
+    if m > 0.0 && m.is_finite() {
+        (a - b).abs() / m
+    } else if a == b {
+        0.0
+    } else {
+        1.0
+    }
+}
+
+fn moving(v: [f32; 2]) -> bool {
+    (v[0] * v[0] + v[1] * v[1]).sqrt() > STILL_THRESHOLD
+}
+
+/// The CPU reference of shaders/post/taa.comp: (output colour, output geometry).
+pub fn reference(c: &TaaConfig, i: &RefInputs) -> (Vec<V3>, Vec<(u32, f32)>) {
+    let (w, h) = (i.width as i32, i.height as i32);
+    let e = i.exposure_scale;
+    let at = |p: [i32; 2]| (p[1].clamp(0, h - 1) * w + p[0].clamp(0, w - 1)) as usize;
+    let finite = |v: V3| v.iter().all(|x| x.is_finite());
+    let mut out = Vec::with_capacity(i.color.len());
+    let mut geom = Vec::with_capacity(i.color.len());
+    for y in 0..h {
+        for x in 0..w {
+            let cs: Vec<V3> = OFF
+                .iter()
+                .map(|o| i.color[at([x + o[0], y + o[1]])])
+                .collect();
+            let ok: Vec<bool> = cs.iter().map(|&v| finite(v)).collect();
+            let (mut sum, mut n_ok) = ([0.0f32; 3], 0.0f32);
+            for k in 0..9 {
+                if ok[k] {
+                    sum = zip3(sum, cs[k], |a, b| a + b);
+                    n_ok += 1.0;
+                }
+            }
+            let c0 = if ok[4] {
+                cs[4]
+            } else if n_ok > 0.0 {
+                map3(sum, |v| v / n_ok)
+            } else {
+                [0.0; 3]
+            };
+            let mut c0 = c0;
+            if c.filter {
+                let (mut acc, mut ws) = ([0.0f32; 3], 0.0f32);
+                for k in 0..9 {
+                    if !ok[k] {
+                        continue;
+                    }
+                    let d = [
+                        OFF[k][0] as f32 - i.jitter[0],
+                        OFF[k][1] as f32 - i.jitter[1],
+                    ];
+                    let wt = (-2.29 * (d[0] * d[0] + d[1] * d[1])).exp();
+                    acc = zip3(acc, cs[k], |a, b| a + wt * b);
+                    ws += wt;
+                }
+                if ws > 0.0 {
+                    c0 = map3(acc, |a| a / ws);
+                }
+            }
+            let y0 = to_p(c0, e);
+            // Geometry: nearest of the 3x3 (smallest linear depth), IDs, depth span.
+            let (mut best, mut z_best) = (at([x, y]), f32::INFINITY);
+            let (mut lo, mut hi) = (f32::INFINITY, -f32::INFINITY);
+            let mut nid = [0u32; 9];
+            let mut any = false;
+            for (k, o) in OFF.iter().enumerate() {
+                let t = at([x + o[0], y + o[1]]);
+                let z = i.depth[t];
+                nid[k] = i.ids[t];
+                lo = lo.min(z);
+                hi = hi.max(z);
+                if !any || z < z_best {
+                    (best, z_best, any) = (t, z, true);
+                }
+            }
+            let v = i.velocity[if c.dilation { best } else { at([x, y]) }];
+            let q = [x as f32 + 0.5 - v[0], y as f32 + 0.5 - v[1]];
+            let mut result = c0;
+            if let Some((hist, hgeom)) = i.history {
+                let mut use_h = q[0] >= 0.0 && q[1] >= 0.0 && q[0] < w as f32 && q[1] < h as f32;
+                let (hid, hz) = match use_h {
+                    true => hgeom[at([q[0].floor() as i32, q[1].floor() as i32])],
+                    false => (0, 0.0),
+                };
+                let still = !moving(v) && hid & MOVED == 0;
+                if use_h && !still && (c.ids || c.depth) {
+                    if c.ids {
+                        use_h = use_h && nid.contains(&(hid & !MOVED));
+                    }
+                    if c.depth {
+                        let tol = c.depth_tolerance;
+                        use_h = use_h
+                            && ((hz >= lo && hz <= hi)
+                                || rel_diff(hz, lo) <= tol
+                                || rel_diff(hz, hi) <= tol);
+                    }
+                }
+                let fetch = |p: [i32; 2]| hist[at(p)];
+                let bilinear = |q: [f32; 2]| -> V3 {
+                    let g = [q[0] - 0.5, q[1] - 0.5];
+                    let b = [g[0].floor(), g[1].floor()];
+                    let f = [g[0] - b[0], g[1] - b[1]];
+                    let (bx, by) = (b[0] as i32, b[1] as i32);
+                    let mut acc = [0.0f32; 3];
+                    for (dx, dy, wt) in [
+                        (0, 0, (1.0 - f[0]) * (1.0 - f[1])),
+                        (1, 0, f[0] * (1.0 - f[1])),
+                        (0, 1, (1.0 - f[0]) * f[1]),
+                        (1, 1, f[0] * f[1]),
+                    ] {
+                        acc = zip3(acc, fetch([bx + dx, by + dy]), |a, s| a + wt * s);
+                    }
+                    acc
+                };
+                let mut hc = [0.0f32; 3];
+                if use_h {
+                    hc = if c.catmull {
+                        let g = [q[0] - 0.5, q[1] - 0.5];
+                        let b = [g[0].floor(), g[1].floor()];
+                        let f = [g[0] - b[0], g[1] - b[1]];
+                        let (wx, wy) = (catmull_rom(f[0]), catmull_rom(f[1]));
+                        let w12 = [wx[1] + wx[2], wy[1] + wy[2]];
+                        let c12 = [b[0] + 0.5 + wx[2] / w12[0], b[1] + 0.5 + wy[2] / w12[1]];
+                        let c0 = [b[0] - 0.5, b[1] - 0.5];
+                        let c3 = [b[0] + 2.5, b[1] + 2.5];
+                        let taps = [
+                            (w12[0] * wy[0], [c12[0], c0[1]]),
+                            (wx[0] * w12[1], [c0[0], c12[1]]),
+                            (w12[0] * w12[1], c12),
+                            (wx[3] * w12[1], [c3[0], c12[1]]),
+                            (w12[0] * wy[3], [c12[0], c3[1]]),
+                        ];
+                        let (mut acc, mut ws) = ([0.0f32; 3], 0.0f32);
+                        for (wt, p) in taps {
+                            acc = zip3(acc, bilinear(p), |a, s| a + wt * s);
+                            ws += wt;
+                        }
+                        map3(acc, |a| (a / ws).max(0.0))
+                    } else {
+                        bilinear(q)
+                    };
+                    use_h = finite(hc);
+                }
+                if use_h {
+                    let yk: Vec<V3> = (0..9)
+                        .map(|k| if ok[k] { to_p(cs[k], e) } else { y0 })
+                        .collect();
+                    if !c.inside {
+                        if c.clip {
+                            let (mut m1, mut m2) = ([0.0f32; 3], [0.0f32; 3]);
+                            for yv in &yk {
+                                m1 = zip3(m1, *yv, |a, b| a + b);
+                                m2 = zip3(m2, *yv, |a, b| a + b * b);
+                            }
+                            let mu = map3(m1, |v| v / 9.0);
+                            let sigma = zip3(m2, mu, |a, m| (a / 9.0 - m * m).max(0.0).sqrt());
+                            let g = c.gamma;
+                            let yh = clip_towards(
+                                mu,
+                                to_p(hc, e),
+                                zip3(mu, sigma, |m, s| m - g * s),
+                                zip3(mu, sigma, |m, s| m + g * s),
+                            );
+                            hc = from_p(yh, e);
+                        }
+                        result = if c.mean {
+                            let wt = 1.0 / (i.n + 1) as f32;
+                            zip3(hc, c0, |a, b| a + (b - a) * wt)
+                        } else {
+                            let mut a = c.alpha;
+                            if c.speed > 0.0 {
+                                let s = (v[0] * v[0] + v[1] * v[1]).sqrt() / c.speed;
+                                a += (c.alpha_max - a) * s.min(1.0);
+                            }
+                            let wc = a / (1.0 + dot(map3(c0, |v| v * e), LUMA));
+                            let wh = (1.0 - a) / (1.0 + dot(map3(hc, |v| v * e), LUMA));
+                            zip3(c0, hc, |a, b| (wc * a + wh * b) / (wc + wh))
+                        };
+                    } else {
+                        let (mut mn, mut mx, mut avg) = ([f32::MAX; 3], [f32::MIN; 3], [0.0f32; 3]);
+                        let (mut mn5, mut mx5, mut avg5) =
+                            ([f32::MAX; 3], [f32::MIN; 3], [0.0f32; 3]);
+                        for (k, yv) in yk.iter().enumerate() {
+                            mn = zip3(mn, *yv, f32::min);
+                            mx = zip3(mx, *yv, f32::max);
+                            avg = zip3(avg, *yv, |a, b| a + b);
+                            if matches!(k, 1 | 3 | 4 | 5 | 7) {
+                                mn5 = zip3(mn5, *yv, f32::min);
+                                mx5 = zip3(mx5, *yv, f32::max);
+                                avg5 = zip3(avg5, *yv, |a, b| a + b);
+                            }
+                        }
+                        mn = zip3(mn, mn5, |a, b| 0.5 * (a + b));
+                        mx = zip3(mx, mx5, |a, b| 0.5 * (a + b));
+                        avg = zip3(avg, avg5, |a, b| 0.5 * (a / 9.0 + b / 5.0));
+                        let ext = 0.125 * (mx[0] - mn[0]);
+                        for k in 1..3 {
+                            mn[k] = y0[k] - ext;
+                            mx[k] = y0[k] + ext;
+                            avg[k] = y0[k];
+                        }
+                        let mut yh = to_p(hc, e);
+                        if c.clip {
+                            let centre = [0, 1, 2].map(|k| avg[k].clamp(mn[k], mx[k]));
+                            yh = clip_towards(centre, yh, mn, mx);
+                        }
+                        let (l0, l1) = (y0[0], yh[0]);
+                        let diff = (l0 - l1).abs() / l0.max(l1.max(0.2));
+                        let wgt = (1.0 - diff) * (1.0 - diff);
+                        let [fmin, fmax] = INSIDE_FEEDBACK;
+                        let feedback = fmin + (fmax - fmin) * wgt;
+                        result = from_p(zip3(y0, yh, |a, b| a + (b - a) * feedback), e);
+                    }
+                }
+            }
+            out.push(result);
+            let centre = at([x, y]);
+            let moved = if moving(v) { MOVED } else { 0 };
+            geom.push((i.ids[centre] | moved, i.depth[centre]));
+        }
+    }
+    (out, geom)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn halton_jitter_is_the_published_sequence() {
+        // Halton(2): 1/2, 1/4, 3/4, 1/8; Halton(3): 1/3, 2/3, 1/9, 4/9.
+        let j: Vec<[f32; 2]> = (0..4).map(|f| jitter(8, f)).collect();
+        let want = [
+            [0.0, 1.0 / 3.0 - 0.5],
+            [-0.25, 2.0 / 3.0 - 0.5],
+            [0.25, 1.0 / 9.0 - 0.5],
+            [-0.375, 4.0 / 9.0 - 0.5],
+        ];
+        for (a, b) in j.iter().zip(&want) {
+            assert!(
+                (a[0] - b[0]).abs() < 1e-6 && (a[1] - b[1]).abs() < 1e-6,
+                "{a:?}"
+            );
+        }
+        assert_eq!(jitter(8, 8), jitter(8, 0), "length 8 repeats");
+        assert_ne!(jitter(16, 8), jitter(16, 0));
+        // The jitters of one cycle average to about the pixel centre.
+        let m: f32 = (0..16).map(|f| jitter(16, f)[0]).sum::<f32>() / 16.0;
+        assert!(m.abs() < 0.05, "{m}");
+    }
+
+    #[test]
+    fn parameters_parse_and_inside_refuses_ours() {
+        assert_eq!(TaaConfig::parse(&[]), Ok(TaaConfig::OURS));
+        assert_eq!(TaaConfig::parse(&["inside"]), Ok(TaaConfig::INSIDE));
+        let c = TaaConfig::parse(&["16", "gamma=1.5", "without-clip", "without-ids"]).unwrap();
+        assert!(c.length == 16 && c.gamma == 1.5 && !c.clip && !c.ids && c.depth);
+        assert!(TaaConfig::parse(&["inside", "without-ids"]).is_err());
+        assert!(TaaConfig::parse(&["inside", "alpha=0.2"]).is_err());
+        assert!(TaaConfig::parse(&["gamma=-1"]).is_err());
+        assert!(TaaConfig::parse(&["12"]).is_err());
+        assert!(TaaConfig::parse(&["without-sharpness"]).is_err());
+    }
+
+    #[test]
+    fn perceptual_space_round_trips() {
+        for c in [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.5, 0.25],
+            [40.0, 3.0, 0.01],
+            [0.02, 0.9, 7.0],
+        ] {
+            let back = from_p(to_p(c, 2.0), 2.0);
+            for k in 0..3 {
+                assert!(
+                    (back[k] - c[k]).abs() <= 1e-4 * (1.0 + c[k]),
+                    "{c:?} -> {back:?}"
+                );
+            }
+        }
+    }
+
+    fn flat(w: usize, h: usize, c: V3) -> Vec<V3> {
+        vec![c; w * h]
+    }
+
+    /// Known answers on a 6x5 frame: a reset passes the current frame through; a static
+    /// history is blended with weight alpha (luminance-weighted) or 1 / (n + 1) with `mean`;
+    /// a history showing an object the neighbourhood does not is rejected; a NaN never leaves.
+    #[test]
+    fn known_answers_on_small_frames() {
+        let (w, h) = (6, 5);
+        let cur = flat(w, h, [1.0, 1.0, 1.0]);
+        let vel = vec![[0.0f32; 2]; w * h];
+        let depth = vec![2.0f32; w * h];
+        let ids = vec![1u32; w * h];
+        let base = RefInputs {
+            width: w,
+            height: h,
+            color: &cur,
+            velocity: &vel,
+            depth: &depth,
+            ids: &ids,
+            history: None,
+            n: 0,
+            exposure_scale: 1.0,
+            jitter: [0.0; 2],
+        };
+        let (o, g) = reference(&TaaConfig::OURS, &base);
+        assert!(o.iter().all(|c| *c == [1.0; 3]) && g.iter().all(|g| *g == (1, 2.0)));
+        // Mean weight, clipping off: 1/(n+1) of the current frame.
+        let hist = flat(w, h, [3.0, 3.0, 3.0]);
+        let hg: Vec<(u32, f32)> = vec![(1, 2.0); w * h];
+        let c = TaaConfig {
+            mean: true,
+            clip: false,
+            ..TaaConfig::OURS
+        };
+        let i = RefInputs {
+            history: Some((&hist, &hg)),
+            n: 3,
+            ..base
+        };
+        let (o, _) = reference(&c, &i);
+        assert!(o.iter().all(|c| (c[0] - 2.5).abs() < 1e-6), "{:?}", o[0]);
+        // Clipping on: a flat neighbourhood has a zero-width box, the history clips to it.
+        let (o, _) = reference(&TaaConfig::OURS, &i);
+        assert!(o.iter().all(|c| (c[0] - 1.0).abs() < 1e-5), "{:?}", o[0]);
+        // Without clipping: Karis's luminance weights, alpha 0.1: (0.1/2 * 1 + 0.9/4 * 3) / (0.1/2 + 0.9/4).
+        let c = TaaConfig {
+            clip: false,
+            speed: 0.0,
+            ..TaaConfig::OURS
+        };
+        let (o, _) = reference(&c, &i);
+        let want = (0.05 + 0.225 * 3.0) / (0.05 + 0.225);
+        assert!((o[0][0] - want).abs() < 1e-5, "{} vs {want}", o[0][0]);
+        // With the speed term, 1 px per frame of 2: alpha = 0.1 + (0.5 - 0.1) / 2 = 0.3.
+        let one = vec![[0.6f32, 0.8]; w * h];
+        let fast = TaaConfig { speed: 2.0, ..c };
+        let (o, _) = reference(
+            &fast,
+            &RefInputs {
+                velocity: &one,
+                ..i
+            },
+        );
+        let want_fast = (0.3 / 2.0 + 0.7 / 4.0 * 3.0) / (0.3 / 2.0 + 0.7 / 4.0);
+        let centre = 2 * w + 2;
+        assert!(
+            (o[centre][0] - want_fast).abs() < 1e-4,
+            "{} vs {want_fast}",
+            o[centre][0]
+        );
+        // A history of object 7, seen nowhere in the 3x3: kept while everything is still (a
+        // jittered sub-pixel feature), rejected once the pixel moves (a quarter pixel), and
+        // when the history texel moved.
+        let hg7: Vec<(u32, f32)> = vec![(7, 2.0); w * h];
+        let i7 = RefInputs {
+            history: Some((&hist, &hg7)),
+            ..i
+        };
+        let (o, _) = reference(&c, &i7);
+        assert!((o[0][0] - want).abs() < 1e-5, "still: kept");
+        let slow = vec![[0.25f32, 0.0]; w * h];
+        let i7m = RefInputs {
+            velocity: &slow,
+            ..i7
+        };
+        let (o, g) = reference(&c, &i7m);
+        assert!(o.iter().all(|c| *c == [1.0; 3]), "moving: rejected");
+        assert!(
+            g.iter().all(|g| g.0 == 1 | MOVED),
+            "moving pixels carry the bit"
+        );
+        let hg7m: Vec<(u32, f32)> = vec![(7 | MOVED, 2.0); w * h];
+        let (o, _) = reference(
+            &c,
+            &RefInputs {
+                history: Some((&hist, &hg7m)),
+                ..i
+            },
+        );
+        assert!(o.iter().all(|c| *c == [1.0; 3]), "history moved: rejected");
+        let no_ids = TaaConfig { ids: false, ..c };
+        let (o, _) = reference(&no_ids, &i7m);
+        assert!((o[0][0] - want).abs() < 1e-5, "without-ids keeps it");
+        // A history 50% farther than the neighbourhood: rejected by the depth test.
+        let hg_far: Vec<(u32, f32)> = vec![(1, 3.0); w * h];
+        let far = RefInputs {
+            velocity: &slow,
+            history: Some((&hist, &hg_far)),
+            ..i
+        };
+        assert!(reference(&c, &far).0.iter().all(|c| *c == [1.0; 3]));
+        let no_depth = TaaConfig { depth: false, ..c };
+        assert!((reference(&no_depth, &far).0[0][0] - want).abs() < 1e-5);
+        // A NaN in the current frame: replaced by its neighbours' mean, never output.
+        let mut nan = cur.clone();
+        nan[2 * w + 3] = [f32::NAN, 1.0, 1.0];
+        nan[2 * w + 4] = [f32::INFINITY, 0.0, 0.0];
+        let (o, _) = reference(&TaaConfig::OURS, &RefInputs { color: &nan, ..i });
+        assert!(o.iter().all(|c| c.iter().all(|v| v.is_finite())));
+        assert!((o[2 * w + 3][0] - 1.0).abs() < 1e-5);
+        // Catmull-Rom at texel centres (no motion) returns the history texel itself.
+        let ramp: Vec<V3> = (0..w * h)
+            .map(|k| [k as f32, (k % 7) as f32, 0.5])
+            .collect();
+        let keep = TaaConfig {
+            clip: false,
+            mean: true,
+            ..TaaConfig::OURS
+        };
+        let i = RefInputs {
+            history: Some((&ramp, &hg)),
+            n: 1_000_000,
+            ..base
+        };
+        let (o, _) = reference(&keep, &i);
+        for (k, (a, b)) in o.iter().zip(&ramp).enumerate() {
+            for c in 0..3 {
+                assert!(
+                    (a[c] - b[c]).abs() <= 1e-4 * (1.0 + b[c]),
+                    "pixel {k}: {a:?} vs {b:?}"
+                );
+            }
+        }
+    }
+}

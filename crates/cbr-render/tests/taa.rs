@@ -1,0 +1,462 @@
+//! `+taa` on lavapipe with validation on: the shader against its CPU reference on a moving
+//! camera (ours, INSIDE, ablations); the known answer (clipping off, weight 1 / (n + 1): a
+//! static scene's frame n is the mean of the n + 1 jittered native frames); convergence with
+//! clipping on; NaN/Inf never entering the history; camera cuts resetting it; the chain on every
+//! technique with a full frame.
+
+mod common;
+
+use cbr_render::post::taa::{self, RefInputs, TaaConfig};
+use cbr_render::{FrameOutput, RenderSettings, Renderer};
+use cbr_scene::Scene;
+use common::{assert_clean, gpu};
+
+fn demo(w: u32, h: u32) -> Scene {
+    let mut s = cbr_scene::builtin("demo").expect("demo");
+    (s.settings.width, s.settings.height) = (w, h);
+    s
+}
+
+/// The demo with a still camera (its first key) and nothing moving.
+fn static_demo(w: u32, h: u32) -> Scene {
+    let mut s = demo(w, h);
+    s.motions.clear();
+    s.camera.keys.truncate(1);
+    s
+}
+
+fn render(gpu: &cbr_gpu::Gpu, s: &Scene, settings: RenderSettings, f: &[u32]) -> Vec<FrameOutput> {
+    let shaders = cbr_render::shader_library();
+    let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
+    f.iter().map(|&f| r.render(s, f).expect("frame")).collect()
+}
+
+fn spec(w: u32, h: u32, s: &str) -> RenderSettings {
+    RenderSettings::parse(w, h, s).expect("spec")
+}
+
+fn rgb(o: &FrameOutput) -> Vec<[f32; 3]> {
+    o.color
+        .chunks(4)
+        .map(|c| [c[0].to_f32(), c[1].to_f32(), c[2].to_f32()])
+        .collect()
+}
+
+/// Native frame `f` rendered with TAA's jitter for it (what `native+taa` blends in).
+fn jittered_native(gpu: &cbr_gpu::Gpu, s: &Scene, w: u32, h: u32, len: u32, f: u32) -> FrameOutput {
+    let settings = RenderSettings {
+        jitter: taa::jitter(len, f),
+        lod_bias: Some(TaaConfig::OURS.lod_bias),
+        ..spec(w, h, "native")
+    };
+    render(gpu, s, settings, &[f]).remove(0)
+}
+
+/// The shader against the CPU reference, frame by frame: each frame's reference takes the GPU's
+/// previous output as its history, so differences do not compound. The history is fetched
+/// through the hardware bilinear filter (Catmull-Rom's five taps, INSIDE's one), whose weights
+/// lavapipe quantises to 8 bits (subTexelPrecisionBits): the bound is f16 rounding plus 2^-8
+/// of the local history range; and the depth test, done on reverse-Z on the GPU and on linear
+/// depth here, may decide a pixel at its tolerance differently: at most 0.3% of pixels.
+#[test]
+fn the_shader_matches_its_cpu_reference_on_a_moving_camera() {
+    let gpu = gpu();
+    let (w, h) = (64u32, 36u32);
+    let s = demo(w, h);
+    let frames: Vec<u32> = (4..10).collect();
+    for params in [
+        "",
+        "inside",
+        "without-catmull:without-dilation",
+        "gamma=1.5:alpha=0.2",
+    ] {
+        let taa_spec = if params.is_empty() {
+            "native+taa".to_string()
+        } else {
+            format!("native+taa:{params}")
+        };
+        let p: Vec<&str> = params.split(':').filter(|p| !p.is_empty()).collect();
+        let c = TaaConfig::parse(&p).expect("config");
+        let outs = render(&gpu, &s, spec(w, h, &taa_spec), &frames);
+        let mut worst = (0.0f32, 0usize);
+        let natives: Vec<FrameOutput> = frames
+            .iter()
+            .map(|&f| jittered_native(&gpu, &s, w, h, c.length, f))
+            .collect();
+        let inputs: Vec<(Vec<[f32; 3]>, Vec<u32>)> = natives
+            .iter()
+            .map(|n| (rgb(n), n.ids.iter().map(|i| i[0]).collect()))
+            .collect();
+        let input = |k: usize| RefInputs {
+            width: w as usize,
+            height: h as usize,
+            color: &inputs[k].0,
+            velocity: &natives[k].velocity,
+            depth: &natives[k].depth,
+            ids: &inputs[k].1,
+            history: None,
+            n: k as u32,
+            exposure_scale: s.settings.exposure.exp2(),
+            jitter: taa::jitter(c.length, frames[k]),
+        };
+        for k in 1..outs.len() {
+            let f = frames[k];
+            // The history geometry the GPU wrote last frame (it depends on no history).
+            let (_, hgeom) = taa::reference(&c, &input(k - 1));
+            let hist = rgb(&outs[k - 1]);
+            let (want, _) = taa::reference(
+                &c,
+                &RefInputs {
+                    history: Some((&hist, &hgeom)),
+                    ..input(k)
+                },
+            );
+            let got = rgb(&outs[k]);
+            let mut bad = 0;
+            for (i, (g, r)) in got.iter().zip(&want).enumerate() {
+                // The history's range around the pixel: what filter precision can move.
+                let (x, y) = ((i % w as usize) as i32, (i / w as usize) as i32);
+                let mut range = 0.0f32;
+                for dy in -2..=2 {
+                    for dx in -2..=2 {
+                        let q = ((y + dy).clamp(0, h as i32 - 1) * w as i32
+                            + (x + dx).clamp(0, w as i32 - 1))
+                            as usize;
+                        for ch in 0..3 {
+                            range = range.max((hist[q][ch] - r[ch]).abs());
+                        }
+                    }
+                }
+                let err = (0..3).map(|ch| (g[ch] - r[ch]).abs()).fold(0.0, f32::max);
+                let bound =
+                    2e-3 * r.iter().fold(0.0f32, |a, v| a.max(v.abs())) + range / 128.0 + 1e-4;
+                if err > bound {
+                    bad += 1;
+                }
+                if err / bound > worst.0 {
+                    worst = (err / bound, i);
+                }
+            }
+            assert!(
+                bad * 1000 <= 3 * got.len(),
+                "{taa_spec} frame {f}: {bad} of {} pixels off the reference (worst {:.2}x the bound at {})",
+                got.len(),
+                worst.0,
+                worst.1
+            );
+        }
+        eprintln!("{taa_spec}: worst {:.3}x the bound", worst.0);
+    }
+    assert_clean(&gpu);
+}
+
+/// Clipping off, weight 1 / (n + 1): frame n of a static scene is the mean of the n + 1 native
+/// frames rendered with the jitters of frames 0..=n (within f16: each frame's output is rounded
+/// to f16 before it is the next frame's history).
+#[test]
+fn without_clipping_the_mean_weight_gives_the_mean_of_the_jittered_frames() {
+    let gpu = gpu();
+    let (w, h) = (48u32, 27u32);
+    let s = static_demo(w, h);
+    let frames: Vec<u32> = (0..8).collect();
+    let outs = render(
+        &gpu,
+        &s,
+        spec(w, h, "native+taa:mean:without-clip"),
+        &frames,
+    );
+    let natives: Vec<Vec<[f32; 3]>> = frames
+        .iter()
+        .map(|&f| rgb(&jittered_native(&gpu, &s, w, h, 8, f)))
+        .collect();
+    for n in [0usize, 3, 7] {
+        let got = rgb(&outs[n]);
+        let mut worst = 0.0f32;
+        for (i, g) in got.iter().enumerate() {
+            for c in 0..3 {
+                let mean = natives[..=n].iter().map(|f| f[i][c]).sum::<f32>() / (n + 1) as f32;
+                // n + 1 roundings to f16 (relative 2^-11 each) of values up to the largest sample.
+                let scale = natives[..=n]
+                    .iter()
+                    .map(|f| f[i][c].abs())
+                    .fold(0.0, f32::max);
+                let err = (g[c] - mean).abs() / (scale * (n as f32 + 1.0) * 2f32.powi(-11) + 1e-6);
+                worst = worst.max(err);
+            }
+        }
+        assert!(
+            worst <= 1.0,
+            "frame {n}: {worst:.2}x the f16 bound off the mean"
+        );
+        // The jitter matters: frame n differs from frame 0 on edges.
+        if n > 0 {
+            let diff = got.iter().zip(&natives[0]).filter(|(a, b)| a != b).count();
+            assert!(diff > 0, "frame {n} equals the unjittered first frame");
+        }
+    }
+    assert_clean(&gpu);
+}
+
+/// With clipping on, a static scene converges: over the last Halton cycle (frames 24-31) the
+/// output changes from frame to frame by a small fraction of what the jittered native frames
+/// change (the residual the variance box lets through), and it is nearer the mean of a cycle of
+/// jittered frames (8 samples per pixel) than a single native frame is.
+#[test]
+fn with_clipping_a_static_scene_converges() {
+    let gpu = gpu();
+    let (w, h) = (48u32, 27u32);
+    let s = static_demo(w, h);
+    let frames: Vec<u32> = (0..32).collect();
+    let outs: Vec<Vec<[f32; 3]>> = render(&gpu, &s, spec(w, h, "native+taa"), &frames)
+        .iter()
+        .map(rgb)
+        .collect();
+    let natives: Vec<Vec<[f32; 3]>> = (0..8)
+        .map(|f| rgb(&jittered_native(&gpu, &s, w, h, 8, f)))
+        .collect();
+    let mean_abs = |a: &[[f32; 3]], b: &[[f32; 3]]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (0..3).map(|c| (x[c] - y[c]).abs()).sum::<f32>() / 3.0)
+            .sum::<f32>()
+            / a.len() as f32
+    };
+    let taa_change = (24..32)
+        .map(|f| mean_abs(&outs[f], &outs[f - 1]))
+        .sum::<f32>()
+        / 8.0;
+    let native_change = (1..8)
+        .map(|f| mean_abs(&natives[f], &natives[f - 1]))
+        .sum::<f32>()
+        / 7.0;
+    let mean: Vec<[f32; 3]> = (0..(w * h) as usize)
+        .map(|i| [0, 1, 2].map(|c| natives.iter().map(|f| f[i][c]).sum::<f32>() / 8.0))
+        .collect();
+    let taa_off = mean_abs(&outs[31], &mean);
+    let native_off = natives.iter().map(|n| mean_abs(n, &mean)).sum::<f32>() / 8.0;
+    eprintln!(
+        "frame-to-frame change: taa {taa_change:.5}, jittered native {native_change:.5}; \
+         distance to the 8-sample mean: taa {taa_off:.5}, native {native_off:.5}"
+    );
+    assert!(
+        taa_change < 0.25 * native_change,
+        "residual change {taa_change} vs native's {native_change}"
+    );
+    assert!(
+        taa_off < 0.75 * native_off,
+        "no nearer the supersampled mean than one frame: {taa_off} vs {native_off}"
+    );
+    assert_clean(&gpu);
+}
+
+/// A point light of infinite intensity makes frame 3's lit pixels NaN or Inf: native shows them,
+/// TAA's output never does, that frame or the next.
+#[test]
+fn nan_and_inf_never_enter_the_history() {
+    let gpu = gpu();
+    let (w, h) = (48u32, 27u32);
+    let s = static_demo(w, h);
+    let mut poisoned = s.clone();
+    assert!(!poisoned.points.is_empty() || !poisoned.directional.is_empty());
+    for l in &mut poisoned.directional {
+        l.intensity = f32::INFINITY;
+    }
+    for l in &mut poisoned.points {
+        l.intensity = f32::INFINITY;
+    }
+    let shaders = cbr_render::shader_library();
+    let check = |spec_text: &str| {
+        let mut r = Renderer::new(&gpu, &shaders, &s, spec(w, h, spec_text)).expect("renderer");
+        let mut outs = Vec::new();
+        for f in 0..6 {
+            let scene = if f == 3 { &poisoned } else { &s };
+            outs.push(r.render(scene, f).expect("frame"));
+        }
+        outs
+    };
+    let native = check("native");
+    let bad = |o: &FrameOutput| o.color.iter().filter(|c| !c.to_f32().is_finite()).count();
+    assert!(
+        bad(&native[3]) > 0,
+        "the injection made no non-finite pixel"
+    );
+    assert_eq!(bad(&native[4]), 0);
+    for t in [
+        "native+taa",
+        "native+taa:inside",
+        "native+taa:without-clip:mean",
+    ] {
+        let outs = check(t);
+        for (f, o) in outs.iter().enumerate() {
+            assert_eq!(bad(o), 0, "{t}: frame {f} has non-finite pixels");
+        }
+    }
+    assert_clean(&gpu);
+}
+
+/// A camera cut (a key flagged `cut`) resets the history: the first frame after it is the
+/// jittered native frame itself (current-sample filter off), with no trace of the previous shot.
+#[test]
+fn a_camera_cut_resets_the_history() {
+    let gpu = gpu();
+    let (w, h) = (48u32, 27u32);
+    let mut s = demo(w, h);
+    let fps = s.settings.fps;
+    let mut cut = s.camera.keys[0].clone();
+    cut.time = 4.0 / fps;
+    cut.cut = true;
+    cut.position[0] += 3.0;
+    s.camera.keys.retain(|k| k.time < cut.time);
+    s.camera.keys.push(cut);
+    // Without the current-sample filter, a reset frame is the jittered native frame itself.
+    let taa = "native+taa:without-filter";
+    let outs = render(&gpu, &s, spec(w, h, taa), &(0..6).collect::<Vec<_>>());
+    let native4 = jittered_native(&gpu, &s, w, h, 8, 4);
+    assert!(
+        outs[4].color == native4.color,
+        "frame 4 (the cut) is not the fresh native frame"
+    );
+    assert!(
+        outs[3].color != jittered_native(&gpu, &s, w, h, 8, 3).color,
+        "frame 3 blends history"
+    );
+    assert!(
+        outs[5].color != jittered_native(&gpu, &s, w, h, 8, 5).color,
+        "frame 5 blends again"
+    );
+    assert_clean(&gpu);
+}
+
+/// TAA runs after every technique with a full frame, including msaa:4 and checkerboard with a
+/// prepass, with no validation message; a technique without geometry is a clear error.
+#[test]
+fn taa_chains_after_every_technique_with_a_full_frame() {
+    let gpu = gpu();
+    let (w, h) = (40u32, 24u32);
+    let s = demo(w, h);
+    for t in [
+        "msaa:4+taa",
+        "upscale:bicubic+taa",
+        "checkerboard:rotated:ours+taa",
+        "checkerboard:split:ours:prepass+taa:inside",
+        "checkerboard:masked:pq4k+fxaa+taa",
+        "native+taa+fxaa",
+        "interlaced+taa",
+    ] {
+        let outs = render(&gpu, &s, spec(w, h, t), &[0, 1, 2, 3]);
+        assert!(
+            outs.iter()
+                .all(|o| o.color.iter().all(|c| c.to_f32().is_finite())),
+            "{t}"
+        );
+    }
+    let shaders = cbr_render::shader_library();
+    let err = Renderer::new(&gpu, &shaders, &s, spec(w, h, "ssaa:2+taa"))
+        .err()
+        .expect("ssaa gives no geometry")
+        .to_string();
+    assert!(err.contains("geometry") && err.contains("ssaa:2"), "{err}");
+    let err = Renderer::new(&gpu, &shaders, &s, spec(w, h, "native+taa+taa"))
+        .err()
+        .expect("two jitters")
+        .to_string();
+    assert!(err.contains("jitters"), "{err}");
+    assert_clean(&gpu);
+}
+
+/// Checkerboard under TAA, chained (two histories) and fused (one), on every layout this device
+/// runs (msaa2x needs 2x MSAA: GPUs), with and without the prepass.
+#[test]
+fn checkerboard_with_taa_chained_and_fused_runs_on_every_layout() {
+    let gpu = gpu();
+    let (w, h) = (40u32, 24u32);
+    let s = demo(w, h);
+    for layout in cbr_gpu::Layout::ALL {
+        if let Some(missing) = gpu.caps().layout_unsupported(layout) {
+            eprintln!("skipped: the {} layout needs {missing}", layout.name());
+            continue;
+        }
+        for t in [
+            "ours+taa",
+            "ours:prepass+taa:inside",
+            "fused",
+            "fused:prepass+fxaa",
+        ] {
+            let spec_text = format!("checkerboard:{}:{t}", layout.name());
+            let outs = render(&gpu, &s, spec(w, h, &spec_text), &[0, 1, 2, 3]);
+            assert!(
+                outs.iter()
+                    .all(|o| o.color.iter().all(|c| c.to_f32().is_finite())),
+                "{spec_text}"
+            );
+        }
+    }
+    assert_clean(&gpu);
+}
+
+/// `fused` on a static scene: the jitter advances every second frame, rendered pixels accumulate
+/// into the one history, missing pixels take it as it is; after four cycles the output changes
+/// from frame to frame by a small fraction of what the raw jittered checkerboard frames change,
+/// and it is nearer the mean of the 8 jittered native frames than one native frame is.
+#[test]
+fn fused_converges_on_a_static_scene() {
+    let gpu = gpu();
+    let (w, h) = (48u32, 28u32);
+    let s = static_demo(w, h);
+    let frames: Vec<u32> = (0..40).collect();
+    let outs: Vec<Vec<[f32; 3]>> =
+        render(&gpu, &s, spec(w, h, "checkerboard:masked:fused"), &frames)
+            .iter()
+            .map(rgb)
+            .collect();
+    let plain: Vec<Vec<[f32; 3]>> = render(
+        &gpu,
+        &s,
+        spec(w, h, "checkerboard:masked:ours"),
+        &frames[..8],
+    )
+    .iter()
+    .map(rgb)
+    .collect();
+    let mean_abs = |a: &[[f32; 3]], b: &[[f32; 3]]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (0..3).map(|c| (x[c] - y[c]).abs()).sum::<f32>() / 3.0)
+            .sum::<f32>()
+            / a.len() as f32
+    };
+    let natives: Vec<Vec<[f32; 3]>> = (0..8)
+        .map(|f| {
+            let settings = RenderSettings {
+                jitter: taa::jitter(8, f),
+                lod_bias: Some(TaaConfig::OURS.lod_bias),
+                ..spec(w, h, "native")
+            };
+            rgb(&render(&gpu, &s, settings, &[0]).remove(0))
+        })
+        .collect();
+    let native_change = (1..8)
+        .map(|f| mean_abs(&natives[f], &natives[f - 1]))
+        .sum::<f32>()
+        / 7.0;
+    let fused_change = (33..40)
+        .map(|f| mean_abs(&outs[f], &outs[f - 1]))
+        .sum::<f32>()
+        / 7.0;
+    let mean: Vec<[f32; 3]> = (0..(w * h) as usize)
+        .map(|i| [0, 1, 2].map(|c| natives.iter().map(|f| f[i][c]).sum::<f32>() / 8.0))
+        .collect();
+    let fused_off = mean_abs(&outs[39], &mean);
+    let native_off = natives.iter().map(|n| mean_abs(n, &mean)).sum::<f32>() / 8.0;
+    let plain_off = mean_abs(&plain[7], &mean);
+    eprintln!(
+        "change: fused {fused_change:.5}, jittered native {native_change:.5}; distance to the \
+         8-sample mean: fused {fused_off:.5}, native {native_off:.5}, unjittered ours {plain_off:.5}"
+    );
+    assert!(
+        fused_change < 0.25 * native_change,
+        "{fused_change} vs {native_change}"
+    );
+    assert!(fused_off < 0.75 * native_off, "{fused_off} vs {native_off}");
+    assert_clean(&gpu);
+}

@@ -1,0 +1,289 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// `+taa`: temporal anti-aliasing as a post pass (docs/post-aa.md). One pixel per invocation.
+// The CPU reference is crates/cbr-render/src/post/taa.rs (`reference`): keep the two in step,
+// operation for operation.
+//
+// MODE 0 (`+taa`, after Karis 2014): 3x3 closest-depth velocity dilation, 5-tap Catmull-Rom
+// history (Jimenez's bilinear form), YCoCg variance clipping (Salvi) of the history towards the
+// neighbourhood mean, luminance-weighted blend; plus the object-ID and depth disocclusion tests of
+// the checkerboard resolve. MODE 1 (`+taa:inside`, Pedersen 2016): 3x3 closest-depth dilation,
+// bilinear history, rounded 3x3 min-max box with YCoCg chroma shrink, clip towards the clamped
+// neighbourhood mean, feedback from the unbiased luminance difference.
+//
+// Colours are compared in "perceptual" space: exposure-scaled, Reinhard-tonemapped on luminance,
+// YCoCg. History and output are linear HDR. A non-finite current sample never enters the history.
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 0, binding = BINDING_CUR) uniform sampler2D cur;
+layout(set = 0, binding = BINDING_VELOCITY) uniform sampler2D velocity;
+#if !PACKED
+layout(set = 0, binding = BINDING_DEPTH) uniform sampler2D depth;
+#endif
+layout(set = 0, binding = BINDING_IDS) uniform usampler2D ids;
+layout(set = 0, binding = BINDING_HIST) uniform sampler2D hist;  // bilinear, clamped
+layout(set = 0, binding = BINDING_HIST_GEOM) uniform usampler2D hist_geom;
+layout(set = 0, binding = BINDING_OUT_HIST, rgba16f) uniform writeonly image2D out_hist;
+layout(set = 0, binding = BINDING_OUT_GEOM, rg32ui) uniform writeonly uimage2D out_geom;
+layout(set = 0, binding = BINDING_OUT_COLOR, rgba16f) uniform writeonly image2D out_color;
+
+#define F_RESET 1u
+#define F_DILATION 2u
+#define F_CLIP 4u
+#define F_IDS 8u
+#define F_DEPTH 16u
+#define F_CATMULL 32u
+#define F_MEAN 64u
+#define F_FILTER 128u  // reconstruct the current sample at the pixel centre (Karis' filter)
+// History geometry: x = object ID | MOVED where the pixel moved more than the still threshold.
+#define MOVED 0x80000000u
+#define ID_MASK 0x7fffffffu  // blend weight 1 / (n + 1): the running mean (known-answer tests)
+
+layout(push_constant) uniform Push {
+    ivec4 size;    // W, H, geometry W, geometry H
+    uvec4 flags;   // x: F_*, y: n (frames accumulated since the reset)
+    vec4 params;   // alpha (current-frame weight), gamma, depth tolerance, exposure scale
+    vec4 inside;   // feedback min, feedback max, still threshold (pixels), 0
+    vec4 speed;    // x: current-frame weight at and above speed y (pixels per frame); 0: off;
+                   // zw: the frame's jitter (pixels)
+} pc;
+
+bool has(uint f) { return (pc.flags.x & f) != 0u; }
+
+const vec3 LUMA = vec3(0.2126, 0.7152, 0.0722);
+float luma(vec3 c) { return dot(c, LUMA); }
+
+// Linear HDR -> perceptual YCoCg, and back.
+vec3 to_p(vec3 c) {
+    vec3 e = c * pc.params.w;
+    vec3 t = e / (1.0 + max(luma(e), 0.0));
+    return vec3(0.25 * t.r + 0.5 * t.g + 0.25 * t.b, 0.5 * t.r - 0.5 * t.b,
+                -0.25 * t.r + 0.5 * t.g - 0.25 * t.b);
+}
+// Clipping in YCoCg can leave the RGB gamut: negative components are clamped to 0.
+vec3 from_p(vec3 y) {
+    vec3 t = max(vec3(y.x + y.y - y.z, y.x + y.z, y.x - y.y - y.z), vec3(0.0));
+    return t / max(1.0 - luma(t), 1e-3) / pc.params.w;
+}
+
+bool finite3(vec3 c) { return !any(isnan(c)) && !any(isinf(c)); }
+
+// The geometry texel's reverse-Z depth and object ID (PACKED: the checkerboard resolve's history
+// geometry, (object ID | moved bit, depth bits), in the IDs image).
+#if PACKED
+float geom_depth(ivec2 t) { return uintBitsToFloat(texelFetch(ids, t, 0).y); }
+uint geom_id(ivec2 t) { return texelFetch(ids, t, 0).x & ID_MASK; }
+#else
+float geom_depth(ivec2 t) { return texelFetch(depth, t, 0).r; }
+uint geom_id(ivec2 t) { return texelFetch(ids, t, 0).x; }
+#endif
+
+ivec2 clamp_px(ivec2 q) { return clamp(q, ivec2(0), pc.size.xy - 1); }
+// The geometry texel of output pixel p (geometry may be coarser: `upscale`).
+ivec2 geom_px(ivec2 p) { return (p * pc.size.zw) / pc.size.xy; }
+
+// |a - b| / max(a, b) of linear depths from reverse-Z (the resolve's `depth_rel_diff`).
+float depth_rel_diff(float a, float b) {
+    float m = max(a, b);
+    return m > 0.0 ? abs(a - b) / m : 0.0;
+}
+
+// Catmull-Rom weights of the taps at -1, 0, 1, 2 for fractional position f.
+vec4 catmull_rom(float f) {
+    float f2 = f * f;
+    float f3 = f2 * f;
+    return vec4(-0.5 * f3 + f2 - 0.5 * f, 1.5 * f3 - 2.5 * f2 + 1.0,
+                -1.5 * f3 + 2.0 * f2 + 0.5 * f, 0.5 * f3 - 0.5 * f2);
+}
+
+// History at continuous pixel position q: Catmull-Rom in 5 bilinear taps (the 4x4 footprint less
+// its corners, the middle 2x2 in one tap), renormalised over the taps' weights.
+vec3 history_catmull(vec2 q) {
+    vec2 g = q - 0.5;
+    vec2 b = floor(g);
+    vec2 f = g - b;
+    vec4 wx = catmull_rom(f.x);
+    vec4 wy = catmull_rom(f.y);
+    vec2 w12 = vec2(wx.y + wx.z, wy.y + wy.z);
+    // Tap k of -1..2 is centred at b + k + 0.5; the middle pair in one bilinear tap between them.
+    vec2 c12 = b + 0.5 + vec2(wx.z, wy.z) / w12;
+    vec2 c0 = b - 0.5;
+    vec2 c3 = b + 2.5;
+    vec2 inv = 1.0 / vec2(pc.size.xy);
+    float w[5] = float[5](w12.x * wy.x, wx.x * w12.y, w12.x * w12.y, wx.w * w12.y, w12.x * wy.w);
+    vec2 at[5] = vec2[5](vec2(c12.x, c0.y), vec2(c0.x, c12.y), c12, vec2(c3.x, c12.y),
+                         vec2(c12.x, c3.y));
+    vec3 acc = vec3(0.0);
+    float ws = 0.0;
+    for (int k = 0; k < 5; k++) {
+        acc += w[k] * textureLod(hist, at[k] * inv, 0.0).rgb;
+        ws += w[k];
+    }
+    return max(acc / ws, vec3(0.0));
+}
+
+vec3 history_bilinear(vec2 q) { return textureLod(hist, q / vec2(pc.size.xy), 0.0).rgb; }
+
+// Moves h towards p until it lies in the box [lo, hi] (p inside the box).
+vec3 clip_towards(vec3 p, vec3 h, vec3 lo, vec3 hi) {
+    vec3 r = h - p;
+    float t = 1.0;
+    for (int i = 0; i < 3; i++) {
+        if (r[i] > 1e-7) t = min(t, (hi[i] - p[i]) / r[i]);
+        else if (r[i] < -1e-7) t = min(t, (lo[i] - p[i]) / r[i]);
+    }
+    return p + r * max(t, 0.0);
+}
+
+const ivec2 OFF[9] = ivec2[9](ivec2(-1, -1), ivec2(0, -1), ivec2(1, -1), ivec2(-1, 0), ivec2(0, 0),
+                              ivec2(1, 0), ivec2(-1, 1), ivec2(0, 1), ivec2(1, 1));
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(p, pc.size.xy))) return;
+
+    // The current 3x3 neighbourhood; non-finite samples take no part.
+    vec3 c[9];
+    bool ok[9];
+    vec3 sum = vec3(0.0);
+    float n_ok = 0.0;
+    for (int k = 0; k < 9; k++) {
+        c[k] = texelFetch(cur, clamp_px(p + OFF[k]), 0).rgb;
+        ok[k] = finite3(c[k]);
+        if (ok[k]) {
+            sum += c[k];
+            n_ok += 1.0;
+        }
+    }
+    // A non-finite centre is replaced by the mean of the finite neighbours (0 when none).
+    vec3 c0 = ok[4] ? c[4] : (n_ok > 0.0 ? sum / n_ok : vec3(0.0));
+    if (has(F_FILTER)) {
+        // The current frame at the pixel centre: the 3x3's samples (at offset o - jitter from
+        // it) weighted by a Gaussian fit of Blackman-Harris (Karis 2014), exp(-2.29 d^2).
+        vec3 acc = vec3(0.0);
+        float ws = 0.0;
+        for (int k = 0; k < 9; k++) {
+            if (!ok[k]) continue;
+            vec2 d = vec2(OFF[k]) - pc.speed.zw;
+            float w = exp(-2.29 * dot(d, d));
+            acc += w * c[k];
+            ws += w;
+        }
+        if (ws > 0.0) c0 = acc / ws;
+    }
+    vec3 y0 = to_p(c0);
+
+    // Geometry: the nearest (largest reverse-Z) texel of the 3x3 gives the velocity (dilation);
+    // the neighbourhood's object IDs and depth span validate the history.
+    ivec2 gp = geom_px(p);
+    ivec2 gsize = pc.size.zw;
+    float d_best = -1.0;
+    ivec2 g_best = gp;
+    float lo = 1e30, hi = -1e30;
+    uint nid[9];
+    for (int k = 0; k < 9; k++) {
+        ivec2 t = clamp(gp + OFF[k], ivec2(0), gsize - 1);
+        float d = geom_depth(t);
+        nid[k] = geom_id(t);
+        lo = min(lo, d);
+        hi = max(hi, d);
+        if (d > d_best) {
+            d_best = d;
+            g_best = t;
+        }
+    }
+    vec2 v = texelFetch(velocity, has(F_DILATION) ? g_best : gp, 0).xy;
+    v *= vec2(pc.size.xy) / vec2(gsize);
+    vec2 q = vec2(p) + 0.5 - v;
+
+    bool use = !has(F_RESET) && all(greaterThanEqual(q, vec2(0.0))) &&
+               all(lessThan(q, vec2(pc.size.xy)));
+    // Still: this pixel and its history texel did not move (the checkerboard resolve's rule):
+    // nothing can have been disoccluded, and the tests would only reject jittered sub-pixel
+    // features (a wire that one jitter sees and the next misses).
+    bool moving = length(v) > pc.inside.z;
+    uvec2 g = uvec2(0u);
+    if (use) g = texelFetch(hist_geom, ivec2(floor(q)), 0).xy;
+    bool still = !moving && (g.x & MOVED) == 0u;
+    if (use && !still && (has(F_IDS) || has(F_DEPTH))) {
+        if (has(F_IDS)) {
+            bool seen = false;
+            for (int k = 0; k < 9; k++) seen = seen || nid[k] == (g.x & ID_MASK);
+            use = use && seen;
+        }
+        if (has(F_DEPTH)) {
+            float hd = uintBitsToFloat(g.y);
+            use = use && ((hd >= lo && hd <= hi) || depth_rel_diff(hd, lo) <= pc.params.z ||
+                          depth_rel_diff(hd, hi) <= pc.params.z);
+        }
+    }
+    vec3 h = vec3(0.0);
+    if (use) {
+        h = has(F_CATMULL) ? history_catmull(q) : history_bilinear(q);
+        use = finite3(h);
+    }
+
+    vec3 result = c0;
+    if (use) {
+#if MODE == 0
+        if (has(F_CLIP)) {
+            // Variance box (mean +- gamma sigma) of the finite neighbours in perceptual YCoCg.
+            vec3 m1 = vec3(0.0), m2 = vec3(0.0);
+            for (int k = 0; k < 9; k++) {
+                vec3 y = ok[k] ? to_p(c[k]) : y0;
+                m1 += y;
+                m2 += y * y;
+            }
+            vec3 mu = m1 / 9.0;
+            vec3 sigma = sqrt(max(m2 / 9.0 - mu * mu, vec3(0.0)));
+            vec3 yh = clip_towards(mu, to_p(h), mu - pc.params.y * sigma, mu + pc.params.y * sigma);
+            h = from_p(yh);
+        }
+        if (has(F_MEAN)) {
+            float w = 1.0 / float(pc.flags.y + 1u);
+            result = mix(h, c0, w);
+        } else {
+            // Each reprojection resamples the history and softens it: the faster the pixel moves,
+            // the more the current frame weighs (alpha rises linearly to speed.x at speed.y px).
+            float a = pc.params.x;
+            if (pc.speed.y > 0.0) a = mix(a, pc.speed.x, min(length(v) / pc.speed.y, 1.0));
+            float wc = a / (1.0 + luma(c0 * pc.params.w));
+            float wh = (1.0 - a) / (1.0 + luma(h * pc.params.w));
+            result = (wc * c0 + wh * h) / (wc + wh);
+        }
+#else
+        // INSIDE: rounded min-max (the 3x3 box averaged with the cross's), chroma shrunk around
+        // the centre's, history clipped towards the clamped mean, unbiased-luminance feedback.
+        vec3 mn = vec3(1e30), mx = vec3(-1e30), avg = vec3(0.0);
+        vec3 mn5 = vec3(1e30), mx5 = vec3(-1e30), avg5 = vec3(0.0);
+        for (int k = 0; k < 9; k++) {
+            vec3 y = ok[k] ? to_p(c[k]) : y0;
+            mn = min(mn, y);
+            mx = max(mx, y);
+            avg += y;
+            if (k == 1 || k == 3 || k == 4 || k == 5 || k == 7) {
+                mn5 = min(mn5, y);
+                mx5 = max(mx5, y);
+                avg5 += y;
+            }
+        }
+        mn = 0.5 * (mn + mn5);
+        mx = 0.5 * (mx + mx5);
+        avg = 0.5 * (avg / 9.0 + avg5 / 5.0);
+        float ext = 0.125 * (mx.x - mn.x);
+        mn.yz = y0.yz - ext;
+        mx.yz = y0.yz + ext;
+        avg.yz = y0.yz;
+        vec3 yh = to_p(h);
+        if (has(F_CLIP)) yh = clip_towards(clamp(avg, mn, mx), yh, mn, mx);
+        float l0 = y0.x, l1 = yh.x;
+        float diff = abs(l0 - l1) / max(l0, max(l1, 0.2));
+        float wgt = (1.0 - diff) * (1.0 - diff);
+        float feedback = mix(pc.inside.x, pc.inside.y, wgt);
+        result = from_p(mix(y0, yh, feedback));
+#endif
+    }
+    imageStore(out_hist, p, vec4(result, 1.0));
+    imageStore(out_color, p, vec4(result, 1.0));
+    imageStore(out_geom, p, uvec4(nid[4] | (moving ? MOVED : 0u), floatBitsToUint(geom_depth(clamp(gp, ivec2(0), gsize - 1))), 0u, 0u));
+}
