@@ -120,8 +120,8 @@ pub struct RenderArgs {
     #[arg(long)]
     frames: Option<u32>,
     /// Technique spec: native, ssaa:N, msaa:N, checkerboard[:LAYOUT[:MODE...]],
-    /// upscale[:FILTER], then post passes (+sharpen); `cbr info` lists them all. The flags
-    /// below are shorthand that edits the spec; run.json records the result.
+    /// upscale[:FILTER], interlaced[:OPTION...], then post passes (+sharpen); `cbr info` lists
+    /// them all. The flags below are shorthand that edits the spec; run.json records the result.
     #[arg(long, default_value = "native")]
     technique: String,
     /// Device index or name substring (see `cbr info`).

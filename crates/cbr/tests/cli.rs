@@ -948,3 +948,74 @@ fn shorthand_flags_edit_the_spec_and_contradictions_are_refused() {
         assert!(e.contains(says) && !e.contains("panicked"), "{args:?}: {e}");
     }
 }
+
+#[test]
+fn interlaced_writes_its_mask_and_debug_views() {
+    let d = tempfile::tempdir().expect("tempdir");
+    let out = d.path().join("il");
+    let o = cbr(
+        &[
+            "render",
+            "builtin:demo",
+            "-o",
+            out.to_str().expect("utf8"),
+            "--width",
+            "64",
+            "--height",
+            "36",
+            "--frames",
+            "3",
+            "--validation",
+            "--technique",
+            "interlaced:debug",
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json"))
+            .expect("json");
+    assert_eq!(run["validation"]["messages"], 0, "{}", run["validation"]);
+    assert_eq!(run["settings"]["technique"], "interlaced:debug");
+    for (f, parity, reset) in [(0, 0, true), (1, 1, false), (2, 0, false)] {
+        assert_eq!(run["frames"][f]["parity"], parity);
+        assert_eq!(run["frames"][f]["resolve_reset"], reset);
+    }
+    // Frame 1 rendered the odd rows: `mask` says so, and the missing view is its complement.
+    let layer = |name: &str| {
+        cbr_metrics::input::load(
+            &out.join("frame_0001.exr"),
+            Some(name),
+            Some(&["Y".to_string()]),
+        )
+        .unwrap_or_else(|e| panic!("layer {name}: {e}"))
+        .rgb
+        .c[0]
+            .data
+            .clone()
+    };
+    let (mask, missing) = (layer("mask"), layer("resolve_missing"));
+    for (i, (m, g)) in mask.iter().zip(&missing).enumerate() {
+        let odd = (i / 64) % 2 == 1;
+        assert_eq!(
+            (*m, *g),
+            if odd { (1.0, 0.0) } else { (0.0, 1.0) },
+            "pixel {i}"
+        );
+    }
+    for view in ["parity", "reprojected", "spatial", "still", "ids"] {
+        let f = out.join(format!("debug/frame_0001_{view}.png"));
+        assert!(f.is_file(), "{}", f.display());
+    }
+    // A parameter it does not read: one error naming it and what it reads.
+    let o = cbr(
+        &["render", "builtin:demo", "--technique", "interlaced:fields"],
+        &[],
+    );
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(
+        err.contains("`fields`") && err.contains("without-clamp"),
+        "{err}"
+    );
+}
