@@ -73,6 +73,7 @@ def main():
     p.add_argument("--cost-frames", type=int, default=10)
     p.add_argument("--extra", default="", help="more specs, comma-separated (e.g. interlaced+taa)")
     p.add_argument("--reuse", action="store_true")
+    p.add_argument("--no-cost", action="store_true", help="skip the 1280x720 cost run")
     a = p.parse_args()
     frames = dict(kv.split("=") for kv in a.frames.split(","))
     quality = QUALITY + [t for t in a.extra.split(",") if t]
@@ -112,6 +113,16 @@ def main():
         goals.append((name, taa / nat, best, err(rows[best], "flip_mean") / taa, taa / inside,
                       (err(rows["native+taa"], "flip_disocc_mean"),
                        err(rows["native+taa:inside"], "flip_disocc_mean"))))
+    print("\n".join(out))
+    print("\n**Goals**:\n")
+    for name, r_taa, best, r_cb, r_inside, ghost in goals:
+        print(f"- {name}: native+taa / native FLIP = {r_taa:.3f} (goal <= 0.7); best checkerboard "
+              f"under TAA `{best}`: {r_cb:.3f}x native+taa's FLIP (goal <= 1.15); ours / INSIDE "
+              f"= {r_inside:.3f} (goal <= 0.85); disocclusion FLIP ours {f(ghost[0])}, INSIDE "
+              f"{f(ghost[1])}")
+    if a.no_cost:
+        return
+    out = []
     # Cost at 1280x720 on the demo.
     c = run(a.cbr, "builtin:demo", os.path.join(a.out, "cost"), COST, a, None, 1280, 720, 3,
             a.cost_frames)
@@ -129,12 +140,6 @@ def main():
                          if k.startswith("taa") or k.startswith("fxaa"))
         out.append(f"| `{t}` | {ms:.1f} | {ms / native_ms:.3f} | {ms / taa_ms:.3f} | {post or '–'} |")
     print("\n".join(out))
-    print("\n**Goals**:\n")
-    for name, r_taa, best, r_cb, r_inside, ghost in goals:
-        print(f"- {name}: native+taa / native FLIP = {r_taa:.3f} (goal <= 0.7); best checkerboard "
-              f"under TAA `{best}`: {r_cb:.3f}x native+taa's FLIP (goal <= 1.15); ours / INSIDE "
-              f"= {r_inside:.3f} (goal <= 0.85); disocclusion FLIP ours {f(ghost[0])}, INSIDE "
-              f"{f(ghost[1])}")
     for t in COST[1:]:
         if "+" in t:
             r = crow[t]
