@@ -19,7 +19,7 @@ QUALITY = [
     "native", "native+fxaa", "native+taa", "native+taa:inside",
     "native+taa:without-dilation", "native+taa:without-clip", "native+taa:without-ids",
     "native+taa:without-depth", "native+taa:without-catmull",
-    "native+taa:without-ids:without-depth",
+    "native+taa:without-ids:without-depth", "native+taa:without-speed", "native+taa:filter",
     "checkerboard:rotated:ours", "checkerboard:rotated:ours+taa", "checkerboard:split:ours+taa",
     "checkerboard:rotated:ours:prepass+taa", "checkerboard:rotated:fused",
     "checkerboard:split:fused", "checkerboard:rotated:fused:prepass",
