@@ -6,6 +6,7 @@
 #![cfg_attr(not(test), deny(clippy::unwrap_used))]
 
 pub mod cache;
+mod cpu_math;
 pub mod gpu_scene;
 pub mod gpu_types;
 pub mod layouts;

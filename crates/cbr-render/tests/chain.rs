@@ -8,14 +8,8 @@ mod common;
 use cbr_render::post::sharpen;
 use cbr_render::{FrameOutput, RenderSettings, Renderer, Spec};
 use cbr_scene::{CameraKey, CameraPath, LoadStats, Material, Object, Scene, Settings, Vertex};
-use common::{assert_clean, gpu};
+use common::{assert_clean, demo, gpu};
 use glam::{DVec3, DVec4};
-
-fn demo(w: u32, h: u32) -> Scene {
-    let mut s = cbr_scene::builtin("demo").expect("demo");
-    (s.settings.width, s.settings.height) = (w, h);
-    s
-}
 
 fn frames(gpu: &cbr_gpu::Gpu, s: &Scene, settings: RenderSettings, f: &[u32]) -> Vec<FrameOutput> {
     let shaders = cbr_render::shader_library();

@@ -17,22 +17,8 @@ use cbr_render::techniques::interlaced::reference::{self, HistoryRef, Inputs};
 use cbr_render::techniques::interlaced::{self, InterlacedFrame, InterlacedResolve};
 use cbr_render::{FrameOutput, RenderSettings, Renderer};
 use cbr_scene::Scene;
-use common::{assert_clean, gpu};
+use common::{assert_clean, demo, gpu, static_demo};
 use half::f16;
-
-fn demo(w: u32, h: u32) -> Scene {
-    let mut s = cbr_scene::builtin("demo").expect("demo");
-    (s.settings.width, s.settings.height) = (w, h);
-    s
-}
-
-/// The demo with a still camera (its first key) and nothing moving.
-fn static_demo(w: u32, h: u32) -> Scene {
-    let mut s = demo(w, h);
-    s.motions.clear();
-    s.camera.keys.truncate(1);
-    s
-}
 
 fn render(gpu: &Gpu, s: &Scene, settings: RenderSettings, frames: &[u32]) -> Vec<FrameOutput> {
     let shaders = cbr_render::shader_library();

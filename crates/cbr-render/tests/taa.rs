@@ -9,21 +9,7 @@ mod common;
 use cbr_render::post::taa::{self, RefInputs, TaaConfig};
 use cbr_render::{FrameOutput, RenderSettings, Renderer};
 use cbr_scene::Scene;
-use common::{assert_clean, gpu};
-
-fn demo(w: u32, h: u32) -> Scene {
-    let mut s = cbr_scene::builtin("demo").expect("demo");
-    (s.settings.width, s.settings.height) = (w, h);
-    s
-}
-
-/// The demo with a still camera (its first key) and nothing moving.
-fn static_demo(w: u32, h: u32) -> Scene {
-    let mut s = demo(w, h);
-    s.motions.clear();
-    s.camera.keys.truncate(1);
-    s
-}
+use common::{assert_clean, demo, gpu, static_demo};
 
 fn render(gpu: &cbr_gpu::Gpu, s: &Scene, settings: RenderSettings, f: &[u32]) -> Vec<FrameOutput> {
     let shaders = cbr_render::shader_library();
@@ -40,6 +26,32 @@ fn rgb(o: &FrameOutput) -> Vec<[f32; 3]> {
         .chunks(4)
         .map(|c| [c[0].to_f32(), c[1].to_f32(), c[2].to_f32()])
         .collect()
+}
+
+/// Mean over pixels and channels of |a - b|.
+fn mean_abs(a: &[[f32; 3]], b: &[[f32; 3]]) -> f32 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (0..3).map(|c| (x[c] - y[c]).abs()).sum::<f32>() / 3.0)
+        .sum::<f32>()
+        / a.len() as f32
+}
+
+/// The native frames 0..8 of a static scene rendered with TAA's jitters and LOD bias, and their
+/// per-pixel mean (8 samples per pixel).
+fn jittered_cycle(
+    gpu: &cbr_gpu::Gpu,
+    s: &Scene,
+    w: u32,
+    h: u32,
+) -> (Vec<Vec<[f32; 3]>>, Vec<[f32; 3]>) {
+    let natives: Vec<Vec<[f32; 3]>> = (0..8)
+        .map(|f| rgb(&jittered_native(gpu, s, w, h, 8, f)))
+        .collect();
+    let mean = (0..(w * h) as usize)
+        .map(|i| [0, 1, 2].map(|c| natives.iter().map(|f| f[i][c]).sum::<f32>() / 8.0))
+        .collect();
+    (natives, mean)
 }
 
 /// Native frame `f` rendered with TAA's jitter for it (what `native+taa` blends in).
@@ -211,16 +223,7 @@ fn with_clipping_a_static_scene_converges() {
         .iter()
         .map(rgb)
         .collect();
-    let natives: Vec<Vec<[f32; 3]>> = (0..8)
-        .map(|f| rgb(&jittered_native(&gpu, &s, w, h, 8, f)))
-        .collect();
-    let mean_abs = |a: &[[f32; 3]], b: &[[f32; 3]]| {
-        a.iter()
-            .zip(b)
-            .map(|(x, y)| (0..3).map(|c| (x[c] - y[c]).abs()).sum::<f32>() / 3.0)
-            .sum::<f32>()
-            / a.len() as f32
-    };
+    let (natives, mean) = jittered_cycle(&gpu, &s, w, h);
     let taa_change = (24..32)
         .map(|f| mean_abs(&outs[f], &outs[f - 1]))
         .sum::<f32>()
@@ -229,9 +232,6 @@ fn with_clipping_a_static_scene_converges() {
         .map(|f| mean_abs(&natives[f], &natives[f - 1]))
         .sum::<f32>()
         / 7.0;
-    let mean: Vec<[f32; 3]> = (0..(w * h) as usize)
-        .map(|i| [0, 1, 2].map(|c| natives.iter().map(|f| f[i][c]).sum::<f32>() / 8.0))
-        .collect();
     let taa_off = mean_abs(&outs[31], &mean);
     let native_off = natives.iter().map(|n| mean_abs(n, &mean)).sum::<f32>() / 8.0;
     eprintln!(
@@ -417,23 +417,7 @@ fn fused_converges_on_a_static_scene() {
     .iter()
     .map(rgb)
     .collect();
-    let mean_abs = |a: &[[f32; 3]], b: &[[f32; 3]]| {
-        a.iter()
-            .zip(b)
-            .map(|(x, y)| (0..3).map(|c| (x[c] - y[c]).abs()).sum::<f32>() / 3.0)
-            .sum::<f32>()
-            / a.len() as f32
-    };
-    let natives: Vec<Vec<[f32; 3]>> = (0..8)
-        .map(|f| {
-            let settings = RenderSettings {
-                jitter: taa::jitter(8, f),
-                lod_bias: Some(TaaConfig::OURS.lod_bias),
-                ..spec(w, h, "native")
-            };
-            rgb(&render(&gpu, &s, settings, &[0]).remove(0))
-        })
-        .collect();
+    let (natives, mean) = jittered_cycle(&gpu, &s, w, h);
     let native_change = (1..8)
         .map(|f| mean_abs(&natives[f], &natives[f - 1]))
         .sum::<f32>()
@@ -442,9 +426,6 @@ fn fused_converges_on_a_static_scene() {
         .map(|f| mean_abs(&outs[f], &outs[f - 1]))
         .sum::<f32>()
         / 7.0;
-    let mean: Vec<[f32; 3]> = (0..(w * h) as usize)
-        .map(|i| [0, 1, 2].map(|c| natives.iter().map(|f| f[i][c]).sum::<f32>() / 8.0))
-        .collect();
     let fused_off = mean_abs(&outs[39], &mean);
     let native_off = natives.iter().map(|n| mean_abs(n, &mean)).sum::<f32>() / 8.0;
     let plain_off = mean_abs(&plain[7], &mean);

@@ -470,7 +470,7 @@ const OFF: [[i32; 2]; 9] = [
     [1, 1],
 ];
 
-type V3 = [f32; 3];
+use crate::cpu_math::{V3, catmull_rom};
 
 fn dot(a: V3, b: V3) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
@@ -496,16 +496,6 @@ pub fn from_p(y: V3, e: f32) -> V3 {
     let t = [y[0] + y[1] - y[2], y[0] + y[2], y[0] - y[1] - y[2]].map(|v| v.max(0.0));
     let k = (1.0 - dot(t, LUMA)).max(1e-3);
     map3(t, |v| v / k / e)
-}
-
-fn catmull_rom(f: f32) -> [f32; 4] {
-    let (f2, f3) = (f * f, f * f * f);
-    [
-        -0.5 * f3 + f2 - 0.5 * f,
-        1.5 * f3 - 2.5 * f2 + 1.0,
-        -1.5 * f3 + 2.0 * f2 + 0.5 * f,
-        0.5 * f3 - 0.5 * f2,
-    ]
 }
 
 /// Moves h towards p until it lies in [lo, hi] (`clip_towards`).

@@ -48,7 +48,7 @@ pub struct Output {
     pub velocity: Vec<[f32; 2]>,
 }
 
-type V3 = [f32; 3];
+use crate::cpu_math::{V3, catmull_rom, depth_rel_diff, from_ycocg, length, luma, to_ycocg};
 
 fn add(a: V3, b: V3) -> V3 {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
@@ -59,43 +59,11 @@ fn scale(a: V3, s: f32) -> V3 {
 fn div(a: V3, s: f32) -> V3 {
     [a[0] / s, a[1] / s, a[2] / s]
 }
-fn luma(c: V3) -> f32 {
-    c[0] * 0.2126 + c[1] * 0.7152 + c[2] * 0.0722
-}
 pub fn tonemap(c: V3) -> V3 {
     div(c, 1.0 + luma(c).max(0.0))
 }
 pub fn untonemap(t: V3) -> V3 {
     div(t, (1.0 - luma(t)).max(1e-3))
-}
-fn to_ycocg(c: V3) -> V3 {
-    [
-        0.25 * c[0] + 0.5 * c[1] + 0.25 * c[2],
-        0.5 * c[0] - 0.5 * c[2],
-        -0.25 * c[0] + 0.5 * c[1] - 0.25 * c[2],
-    ]
-}
-fn from_ycocg(y: V3) -> V3 {
-    [y[0] + y[1] - y[2], y[0] + y[2], y[0] - y[1] - y[2]]
-}
-fn depth_rel_diff(a: f32, b: f32) -> f32 {
-    let m = a.max(b);
-    if m > 0.0 { (a - b).abs() / m } else { 0.0 }
-}
-fn length(v: [f32; 2]) -> f32 {
-    (v[0] * v[0] + v[1] * v[1]).sqrt()
-}
-
-/// Catmull-Rom weights of the taps at -1, 0, 1, 2 for fractional position f.
-fn catmull_rom(f: f32) -> [f32; 4] {
-    let f2 = f * f;
-    let f3 = f2 * f;
-    [
-        -0.5 * f3 + f2 - 0.5 * f,
-        1.5 * f3 - 2.5 * f2 + 1.0,
-        -1.5 * f3 + 2.0 * f2 + 0.5 * f,
-        0.5 * f3 - 0.5 * f2,
-    ]
 }
 
 /// The differential blend's weight offset (BLEND_EPS in resolve.comp).

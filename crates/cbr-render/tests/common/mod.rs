@@ -32,3 +32,18 @@ pub fn strip_textures(s: &mut cbr_scene::Scene) {
         m.bump_tex = None;
     }
 }
+
+/// The built-in demo at w x h.
+pub fn demo(w: u32, h: u32) -> cbr_scene::Scene {
+    let mut s = cbr_scene::builtin("demo").expect("demo");
+    (s.settings.width, s.settings.height) = (w, h);
+    s
+}
+
+/// The demo with a still camera (its first key) and nothing moving.
+pub fn static_demo(w: u32, h: u32) -> cbr_scene::Scene {
+    let mut s = demo(w, h);
+    s.motions.clear();
+    s.camera.keys.truncate(1);
+    s
+}

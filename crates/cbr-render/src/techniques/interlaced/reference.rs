@@ -37,38 +37,12 @@ pub struct Output {
     pub debug: Vec<u32>,
 }
 
-type V3 = [f32; 3];
+use crate::cpu_math::{V3, catmull_rom, depth_rel_diff, from_ycocg, luma, to_ycocg};
 
-fn luma(c: V3) -> f32 {
-    c[0] * 0.2126 + c[1] * 0.7152 + c[2] * 0.0722
-}
-fn to_ycocg(c: V3) -> V3 {
-    [
-        0.25 * c[0] + 0.5 * c[1] + 0.25 * c[2],
-        0.5 * c[0] - 0.5 * c[2],
-        -0.25 * c[0] + 0.5 * c[1] - 0.25 * c[2],
-    ]
-}
-fn from_ycocg(y: V3) -> V3 {
-    [y[0] + y[1] - y[2], y[0] + y[2], y[0] - y[1] - y[2]]
-}
-fn depth_rel_diff(a: f32, b: f32) -> f32 {
-    let m = a.max(b);
-    if m > 0.0 { (a - b).abs() / m } else { 0.0 }
-}
 fn speed(v: [f32; 2]) -> f32 {
-    (v[0] * v[0] + v[1] * v[1]).sqrt()
+    crate::cpu_math::length(v)
 }
-fn catmull_rom(f: f32) -> [f32; 4] {
-    let f2 = f * f;
-    let f3 = f2 * f;
-    [
-        -0.5 * f3 + f2 - 0.5 * f,
-        1.5 * f3 - 2.5 * f2 + 1.0,
-        -1.5 * f3 + 2.0 * f2 + 0.5 * f,
-        0.5 * f3 - 0.5 * f2,
-    ]
-}
+
 fn mad(acc: V3, w: f32, c: V3) -> V3 {
     [acc[0] + w * c[0], acc[1] + w * c[1], acc[2] + w * c[2]]
 }
