@@ -584,7 +584,8 @@ Result rendered_result(ivec2 p, Sample s) {
         r.dbg |= DBG_CLAMPED;
         h = untonemap(from_ycocg(mu + d * t));
     }
-    real a = real(pc.params.w);
+    // The sample's weight rises with speed like `+taa`'s (FUSED_ALPHA_MAX at FUSED_SPEED px).
+    real a = real(mix(pc.params.w, FUSED_ALPHA_MAX, min(length(s.v) / FUSED_SPEED, 1.0)));
     real wc = a / (real(1.0) + max(luma(s.c), real(0.0)));
     real wh = (real(1.0) - a) / (real(1.0) + max(luma(h), real(0.0)));
     r.c = (wc * s.c + wh * h) / (wc + wh);

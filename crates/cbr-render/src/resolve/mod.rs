@@ -142,6 +142,10 @@ impl Default for ResolveSettings {
 /// `fused`: the weight of a rendered pixel's fresh sample against its history (each pixel is
 /// rendered every second frame: twice `+taa`'s 0.1 per frame).
 pub const FUSED_ALPHA: f32 = 0.2;
+/// `fused`: the sample's weight rises linearly with the pixel's speed to FUSED_ALPHA_MAX at
+/// FUSED_SPEED pixels per frame (`+taa`'s speed term and values).
+pub const FUSED_ALPHA_MAX: f32 = 0.5;
+pub const FUSED_SPEED: f32 = 2.0;
 
 /// `fused`: the frame's jitter (pixels): Halton(2, 3) of length 8 advancing every second frame, so
 /// each parity's pixels see the whole sequence.
@@ -345,6 +349,8 @@ impl ResolvePass {
             ("OUT_FORMAT", out_format.to_string()),
             ("DEBUG", u32::from(settings.debug).to_string()),
             ("FUSED", u32::from(settings.fused).to_string()),
+            ("FUSED_ALPHA_MAX", format!("{FUSED_ALPHA_MAX:?}")),
+            ("FUSED_SPEED", format!("{FUSED_SPEED:?}")),
             (
                 "OUT_VELOCITY",
                 u32::from(settings.debug || settings.velocity).to_string(),

@@ -248,7 +248,8 @@ impl Ctx<'_> {
             r.dbg |= DBG_CLAMPED;
             h = untonemap(from_ycocg(add(mu, scale(d, t))));
         }
-        let a = super::FUSED_ALPHA;
+        let t = (length(s.v) / super::FUSED_SPEED).min(1.0);
+        let a = super::FUSED_ALPHA + (super::FUSED_ALPHA_MAX - super::FUSED_ALPHA) * t;
         let wc = a / (1.0 + luma(s.c).max(0.0));
         let wh = (1.0 - a) / (1.0 + luma(h).max(0.0));
         r.c = [0, 1, 2].map(|k| (wc * s.c[k] + wh * h[k]) / (wc + wh));
