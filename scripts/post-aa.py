@@ -31,7 +31,8 @@ COST = ["native", "native+fxaa", "native+taa", "native+taa:inside",
         "checkerboard:rotated:ours", "checkerboard:rotated:ours+taa",
         "checkerboard:split:ours+taa", "checkerboard:rotated:fused", "checkerboard:split:fused",
         "checkerboard:split:pq4k+taa", "checkerboard:split:spatial+taa", "interlaced",
-        "interlaced+taa"]
+        "interlaced+taa", "checkerboard:rotated:ours:prepass+taa",
+        "checkerboard:split:ours:prepass+taa"]
 SCENES = {"builtin:demo": "demo", "scenes/sibenik.toml": "sibenik", "scenes/foliage.toml": "foliage"}
 
 
