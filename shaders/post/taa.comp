@@ -25,7 +25,6 @@ layout(set = 0, binding = BINDING_HIST) uniform sampler2D hist;  // bilinear, cl
 layout(set = 0, binding = BINDING_HIST_GEOM) uniform usampler2D hist_geom;
 layout(set = 0, binding = BINDING_OUT_HIST, rgba16f) uniform writeonly image2D out_hist;
 layout(set = 0, binding = BINDING_OUT_GEOM, rg32ui) uniform writeonly uimage2D out_geom;
-layout(set = 0, binding = BINDING_OUT_COLOR, rgba16f) uniform writeonly image2D out_color;
 
 #define F_RESET 1u
 #define F_DILATION 2u
@@ -284,6 +283,5 @@ void main() {
 #endif
     }
     imageStore(out_hist, p, vec4(result, 1.0));
-    imageStore(out_color, p, vec4(result, 1.0));
     imageStore(out_geom, p, uvec4(nid[4] | (moving ? MOVED : 0u), floatBitsToUint(geom_depth(clamp(gp, ivec2(0), gsize - 1))), 0u, 0u));
 }

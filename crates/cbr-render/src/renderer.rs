@@ -230,7 +230,7 @@ impl Renderer {
         let mut post: Vec<Box<dyn PostPass>> = Vec::new();
         for (pr, part) in post_regs {
             let inputs: Vec<&cbr_gpu::Image> = match post.last() {
-                Some(p) => vec![p.output()],
+                Some(p) => vec![p.output(0), p.output(1)],
                 None => (0..2)
                     .map(|f| technique.color(f))
                     .collect::<Option<Vec<_>>>()
@@ -260,7 +260,7 @@ impl Renderer {
         }
         drop(geometries);
         let post_rb = match post.last() {
-            Some(p) => Some(Readback::for_image(gpu, "readback.post", p.output())?),
+            Some(p) => Some(Readback::for_image(gpu, "readback.post", p.output(0))?),
             None => None,
         };
         let cache = match (&settings.cache, technique.cacheable()) {
@@ -409,11 +409,11 @@ impl Renderer {
                     if let Some(i) = input {
                         p.record(cmd, profiler, &pf, i);
                     }
-                    input = Some(p.output());
+                    input = Some(p.output(frame));
                 }
                 if let (Some(last), Some(rb)) = (post.last(), rb) {
                     let scope = profiler.begin(cmd, "readback.post", PassKind::Transfer);
-                    cmd.read_image(last.output(), rb);
+                    cmd.read_image(last.output(frame), rb);
                     profiler.end(cmd, scope);
                 }
                 Ok(())

@@ -349,6 +349,17 @@ fn taa_chains_after_every_technique_with_a_full_frame() {
             "{t}"
         );
     }
+    // The next link reads the history slot TAA wrote this frame: `+sharpen:0` passes it through
+    // unchanged, frame after frame.
+    let taa = render(&gpu, &s, spec(w, h, "native+taa"), &[0, 1, 2, 3]);
+    let then = render(&gpu, &s, spec(w, h, "native+taa+sharpen:0"), &[0, 1, 2, 3]);
+    for (a, b) in taa.iter().zip(&then) {
+        assert!(
+            a.color == b.color,
+            "frame {}: the link after taa reads another slot",
+            a.index
+        );
+    }
     let shaders = cbr_render::shader_library();
     let err = Renderer::new(&gpu, &shaders, &s, spec(w, h, "ssaa:2+taa"))
         .err()

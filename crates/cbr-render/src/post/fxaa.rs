@@ -240,7 +240,7 @@ impl PostPass for Fxaa {
         profiler.end(cmd, scope);
     }
 
-    fn output(&self) -> &Image {
+    fn output(&self, _frame: u32) -> &Image {
         &self.out
     }
 }

@@ -1,7 +1,7 @@
 //! Post passes: a full-resolution HDR frame in, one out, chained after any technique that gives
 //! a full frame (`SPEC+sharpen+...`). One module and shader folder each, one line in
-//! [`POST_PASSES`]. A post pass built for the first link of the chain gets one input per frame
-//! parity (techniques with ping-pong histories alternate their output image).
+//! [`POST_PASSES`]. Every link gets one input per frame parity (techniques and passes with
+//! ping-pong histories alternate their output image).
 
 pub mod fxaa;
 pub mod sharpen;
@@ -82,8 +82,9 @@ pub struct PostFrame<'a> {
 pub trait PostPass {
     /// Records the pass over `input`: input `frame % n` of the n it was built with.
     fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler, frame: &PostFrame, input: &Image);
-    /// Its full-resolution RGBA16F output (sampled by the next link, read back after the last).
-    fn output(&self) -> &Image;
+    /// Its full-resolution RGBA16F output for frame `frame` (sampled by the next link, read back
+    /// after the last): passes with a ping-pong history give the history slot they just wrote.
+    fn output(&self, frame: u32) -> &Image;
     /// The sub-pixel jitter (pixels) the pass wants frame `frame` rendered with (TAA's Halton
     /// sequence); at most one pass of a chain jitters.
     fn jitter(&self, _frame: u32) -> Option<[f32; 2]> {

@@ -97,7 +97,7 @@ impl PostPass for Sharpen {
         profiler.end(cmd, scope);
     }
 
-    fn output(&self) -> &Image {
+    fn output(&self, _frame: u32) -> &Image {
         &self.out
     }
 }

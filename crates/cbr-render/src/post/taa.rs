@@ -251,7 +251,7 @@ pub fn jitter(length: u32, frame: u32) -> [f32; 2] {
     [halton(i, 2) - 0.5, halton(i, 3) - 0.5]
 }
 
-pub const BINDINGS: [BindingDesc; 9] = [
+pub const BINDINGS: [BindingDesc; 8] = [
     BindingDesc::one("cur", 0, DescriptorKind::CombinedImageSampler),
     BindingDesc::one("velocity", 1, DescriptorKind::CombinedImageSampler),
     BindingDesc::one("depth", 2, DescriptorKind::CombinedImageSampler),
@@ -260,7 +260,6 @@ pub const BINDINGS: [BindingDesc; 9] = [
     BindingDesc::one("hist_geom", 5, DescriptorKind::CombinedImageSampler),
     BindingDesc::one("out_hist", 6, DescriptorKind::StorageImage),
     BindingDesc::one("out_geom", 7, DescriptorKind::StorageImage),
-    BindingDesc::one("out_color", 8, DescriptorKind::StorageImage),
 ];
 
 /// Push constants (shaders/post/taa.comp `Push`).
@@ -283,7 +282,6 @@ pub struct Taa {
     sets: Vec<DescriptorSet>,
     history: [Image; 2],
     history_geom: [Image; 2],
-    out: Image,
     push: Push,
     /// Frames accumulated since the last reset (the `mean` weight).
     accumulated: Cell<u32>,
@@ -326,7 +324,6 @@ impl Taa {
             ctx.image("taa.history_geom[0]", vk::Format::R32G32_UINT)?,
             ctx.image("taa.history_geom[1]", vk::Format::R32G32_UINT)?,
         ];
-        let out = ctx.output("taa.out")?;
         let sets = (0..2)
             .map(|f: usize| {
                 let g = &geo[f % geo.len()];
@@ -344,7 +341,6 @@ impl Taa {
                         Write::Sampled(5, vec![(&history_geom[read], &nearest)]),
                         Write::Storage(6, &history[write]),
                         Write::Storage(7, &history_geom[write]),
-                        Write::Storage(8, &out),
                     ],
                 )
             })
@@ -375,7 +371,6 @@ impl Taa {
             sets,
             history,
             history_geom,
-            out,
             push,
             accumulated: Cell::new(0),
         })
@@ -406,17 +401,18 @@ impl PostPass for Taa {
         cmd.use_image(&self.history_geom[(f + 1) % 2], Access::ComputeSampled);
         cmd.use_image(&self.history[f], Access::ComputeStorageWrite);
         cmd.use_image(&self.history_geom[f], Access::ComputeStorageWrite);
-        cmd.use_image(&self.out, Access::ComputeStorageWrite);
         let scope = profiler.begin(cmd, "taa", PassKind::Compute);
         cmd.bind_pipeline(&self.pipeline);
         cmd.bind_set(&self.pipeline, 0, &self.sets[f]);
         cmd.push_constants(&self.pipeline, bytemuck::bytes_of(&push));
-        cmd.dispatch(self.out.width.div_ceil(8), self.out.height.div_ceil(8), 1);
+        let out = &self.history[f];
+        cmd.dispatch(out.width.div_ceil(8), out.height.div_ceil(8), 1);
         profiler.end(cmd, scope);
     }
 
-    fn output(&self) -> &Image {
-        &self.out
+    /// The history slot written this frame is the output.
+    fn output(&self, frame: u32) -> &Image {
+        &self.history[frame as usize % 2]
     }
 
     fn jitter(&self, frame: u32) -> Option<[f32; 2]> {
