@@ -6,7 +6,7 @@
 
 mod common;
 
-use cbr_gpu::{Access, Buffer, Gpu, LevelCopy, Location, Profiler, vk};
+use cbr_gpu::{Gpu, Profiler};
 use cbr_render::resolve::reference::Sample;
 use cbr_render::resolve::{
     DBG_CLAMPED, DBG_REJECT_DEPTH, DBG_REJECT_ID, DBG_RENDERED, DBG_REPROJECTED, DBG_SPATIAL,
@@ -127,35 +127,8 @@ fn upload(gpu: &Gpu, targets: &FrameTargets, parts: [Vec<u8>; 4]) {
         &targets.ids,
         &targets.depth,
     ];
-    let mut bytes = Vec::new();
-    let mut offsets = Vec::new();
-    for b in &parts {
-        bytes.resize(bytes.len().next_multiple_of(16), 0);
-        offsets.push(bytes.len() as u64);
-        bytes.extend_from_slice(b);
-    }
-    let mut staging = Buffer::new(
-        gpu,
-        "test.staging",
-        bytes.len() as u64,
-        vk::BufferUsageFlags::TRANSFER_SRC,
-        Location::CpuToGpu,
-    )
-    .expect("staging");
-    staging.write(0, &bytes).expect("write");
-    gpu.submit("test.upload", |cmd| {
-        for (img, off) in images.iter().zip(&offsets) {
-            let l = [LevelCopy {
-                buffer_offset: *off,
-                level: 0,
-                width: img.width,
-                height: img.height,
-            }];
-            cmd.upload_levels(&staging, img, &l, Access::ComputeSampled);
-        }
-        Ok(())
-    })
-    .expect("upload");
+    let parts: Vec<_> = images.into_iter().zip(parts).collect();
+    common::upload(gpu, &parts).expect("upload");
 }
 
 /// A native frame as the raster samples of `parity` (reverse-Z depth from the view distance).

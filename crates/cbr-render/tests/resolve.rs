@@ -6,9 +6,7 @@
 
 mod common;
 
-use cbr_gpu::{
-    Access, Buffer, Gpu, Image, ImageDesc, Layout, LevelCopy, Location, Profiler, Result, vk,
-};
+use cbr_gpu::{Gpu, Image, ImageDesc, Layout, Profiler, vk};
 use cbr_render::layouts::LayoutPlan;
 use cbr_render::resolve::reference::{self, HistoryRef, Inputs, Sample};
 use cbr_render::resolve::{
@@ -143,36 +141,6 @@ struct GpuResult {
     velocity: Vec<[f32; 2]>,
 }
 
-fn upload(gpu: &Gpu, parts: &[(&Image, Vec<u8>)]) -> Result<()> {
-    let mut bytes = Vec::new();
-    let mut offsets = Vec::new();
-    for (_, b) in parts {
-        bytes.resize(bytes.len().next_multiple_of(16), 0);
-        offsets.push(bytes.len() as u64);
-        bytes.extend_from_slice(b);
-    }
-    let mut staging = Buffer::new(
-        gpu,
-        "test.staging",
-        bytes.len() as u64,
-        vk::BufferUsageFlags::TRANSFER_SRC,
-        Location::CpuToGpu,
-    )?;
-    staging.write(0, &bytes)?;
-    gpu.submit("test.upload", |cmd| {
-        for ((img, _), off) in parts.iter().zip(&offsets) {
-            let l = [LevelCopy {
-                buffer_offset: *off,
-                level: 0,
-                width: img.width,
-                height: img.height,
-            }];
-            cmd.upload_levels(&staging, img, &l, Access::ComputeSampled);
-        }
-        Ok(())
-    })
-}
-
 struct Bench {
     gpu: Gpu,
     shaders: cbr_gpu::Shaders,
@@ -206,7 +174,7 @@ impl Bench {
         let ids: Vec<u32> = s.current.iter().flat_map(|p| p.ids).collect();
         let depth: Vec<f32> = s.current.iter().map(|p| p.d).collect();
         let pre_id_words: Vec<u32> = s.pre_ids.iter().flat_map(|i| *i).collect();
-        upload(
+        common::upload(
             &gpu,
             &[
                 (&targets.color, bytemuck::cast_slice(&color).to_vec()),

@@ -47,3 +47,36 @@ pub fn static_demo(w: u32, h: u32) -> cbr_scene::Scene {
     s.camera.keys.truncate(1);
     s
 }
+
+/// Uploads bytes into images (level 0, each left in ComputeSampled) through one staging buffer:
+/// synthetic inputs for the resolves' CPU-reference tests.
+pub fn upload(gpu: &Gpu, parts: &[(&cbr_gpu::Image, Vec<u8>)]) -> cbr_gpu::Result<()> {
+    use cbr_gpu::{Access, Buffer, LevelCopy, Location, vk};
+    let mut bytes = Vec::new();
+    let mut offsets = Vec::new();
+    for (_, b) in parts {
+        bytes.resize(bytes.len().next_multiple_of(16), 0);
+        offsets.push(bytes.len() as u64);
+        bytes.extend_from_slice(b);
+    }
+    let mut staging = Buffer::new(
+        gpu,
+        "test.staging",
+        bytes.len() as u64,
+        vk::BufferUsageFlags::TRANSFER_SRC,
+        Location::CpuToGpu,
+    )?;
+    staging.write(0, &bytes)?;
+    gpu.submit("test.upload", |cmd| {
+        for ((img, _), off) in parts.iter().zip(&offsets) {
+            let l = [LevelCopy {
+                buffer_offset: *off,
+                level: 0,
+                width: img.width,
+                height: img.height,
+            }];
+            cmd.upload_levels(&staging, img, &l, Access::ComputeSampled);
+        }
+        Ok(())
+    })
+}
