@@ -543,7 +543,7 @@ const ivec2 DIAGONAL[4] = ivec2[4](ivec2(-1, -1), ivec2(1, -1), ivec2(-1, 1), iv
 // reprojected and validated against the sample's object and depth like a missing pixel's; then
 // clipped towards the mean of the variance box (mean +- sigma, tonemapped YCoCg) of the sample
 // and its four diagonal neighbours (rendered this frame too) and blended with a luminance-weighted
-// weight params.w for the sample.
+// weight FUSED_ALPHA for the sample (rising with speed).
 Result rendered_result(ivec2 p, Sample s) {
     Result r = pass_through(s);
     if (has(F_RESET)) return r;
@@ -585,7 +585,7 @@ Result rendered_result(ivec2 p, Sample s) {
         h = untonemap(from_ycocg(mu + d * t));
     }
     // The sample's weight rises with speed like `+taa`'s (FUSED_ALPHA_MAX at FUSED_SPEED px).
-    real a = real(mix(pc.params.w, FUSED_ALPHA_MAX, min(length(s.v) / FUSED_SPEED, 1.0)));
+    real a = real(mix(FUSED_ALPHA, FUSED_ALPHA_MAX, min(length(s.v) / FUSED_SPEED, 1.0)));
     real wc = a / (real(1.0) + max(luma(s.c), real(0.0)));
     real wh = (real(1.0) - a) / (real(1.0) + max(luma(h), real(0.0)));
     r.c = (wc * s.c + wh * h) / (wc + wh);

@@ -253,9 +253,12 @@ impl Renderer {
                 .map_err(|e| GpuError::Other(format!("`+{part}`: {e}")))?;
             post.push(p);
         }
-        if post.iter().filter(|p| p.jitter(0).is_some()).count() > 1 {
+        let jittering = post.iter().filter(|p| p.jitter(0).is_some()).count();
+        if jittering + usize::from(technique.jitters()) > 1 {
             return Err(GpuError::Other(format!(
-                "`{spec}`: more than one post pass jitters the frame"
+                "`{spec}`: more than one pass jitters the frame (`{}` jitters its own: use it \
+                 without +taa, or the technique's plain mode with +taa)",
+                spec.technique
             )));
         }
         drop(geometries);

@@ -127,6 +127,11 @@ pub trait Technique {
     }
     /// Bytes of the technique's raster targets (what it costs in memory).
     fn target_bytes(&self) -> u64;
+    /// It jitters its own frames (checkerboard `fused`): a jittering post pass after it would
+    /// add a second jitter, so the sequencer refuses the pair.
+    fn jitters(&self) -> bool {
+        false
+    }
     /// Frames of this technique are worth caching on disk (expensive references).
     fn cacheable(&self) -> bool {
         false

@@ -371,6 +371,16 @@ fn taa_chains_after_every_technique_with_a_full_frame() {
         .expect("two jitters")
         .to_string();
     assert!(err.contains("jitters"), "{err}");
+    let err = Renderer::new(
+        &gpu,
+        &shaders,
+        &s,
+        spec(w, h, "checkerboard:rotated:fused+taa"),
+    )
+    .err()
+    .expect("fused jitters already")
+    .to_string();
+    assert!(err.contains("jitters"), "{err}");
     assert_clean(&gpu);
 }
 

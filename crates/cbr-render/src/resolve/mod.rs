@@ -217,7 +217,7 @@ impl ResolveSettings {
             self.depth_tolerance,
             self.static_threshold,
             self.motion_threshold,
-            if self.fused { FUSED_ALPHA } else { 0.0 },
+            0.0,
         ]
     }
 
@@ -349,6 +349,7 @@ impl ResolvePass {
             ("OUT_FORMAT", out_format.to_string()),
             ("DEBUG", u32::from(settings.debug).to_string()),
             ("FUSED", u32::from(settings.fused).to_string()),
+            ("FUSED_ALPHA", format!("{FUSED_ALPHA:?}")),
             ("FUSED_ALPHA_MAX", format!("{FUSED_ALPHA_MAX:?}")),
             ("FUSED_SPEED", format!("{FUSED_SPEED:?}")),
             (

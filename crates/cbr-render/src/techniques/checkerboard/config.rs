@@ -171,9 +171,8 @@ impl CheckerboardConfig {
     }
 
     /// The mip bias that matches the layout's sample spacing: 2 px (split, msaa2x) is one level,
-    /// sqrt(2) px (rotated) half a level.
-    /// The layout's matching bias; `fused` (jittered, accumulated) looks up one level finer, as
-    /// `+taa` does.
+    /// sqrt(2) px (rotated) half a level; `fused` (jittered, accumulated) looks up one level
+    /// finer, as `+taa` does.
     pub fn default_lod_bias(&self) -> f32 {
         let layout = match self.layout {
             Layout::Masked => 0.0,

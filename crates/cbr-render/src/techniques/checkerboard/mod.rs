@@ -264,6 +264,10 @@ impl Technique for Checkerboard {
         Ok(out)
     }
 
+    fn jitters(&self) -> bool {
+        self.config.resolve.is_some_and(|r| r.fused)
+    }
+
     fn default_lod_bias(&self) -> f32 {
         self.config.default_lod_bias()
     }
