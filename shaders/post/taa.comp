@@ -39,11 +39,11 @@ layout(set = 0, binding = BINDING_OUT_GEOM, rg32ui) uniform writeonly uimage2D o
 #define ID_MASK 0x7fffffffu  // blend weight 1 / (n + 1): the running mean (known-answer tests)
 
 layout(push_constant) uniform Push {
-    ivec4 size;    // W, H, geometry W, geometry H
+    ivec4 size;    // W, H (of the output and the geometry), 0, 0
     uvec4 flags;   // x: F_*, y: n (frames accumulated since the reset)
     vec4 params;   // alpha (current-frame weight), gamma, depth tolerance, exposure scale
-    vec4 inside;   // feedback min, feedback max, still threshold (pixels), 0
-    vec4 speed;    // x: current-frame weight at and above speed y (pixels per frame); 0: off;
+    vec4 feedback_still;  // INSIDE feedback min, max; still threshold (pixels); 0
+    vec4 speed_jitter;    // x: current-frame weight at and above speed y (pixels per frame); 0: off;
                    // zw: the frame's jitter (pixels)
 } pc;
 
@@ -78,8 +78,6 @@ uint geom_id(ivec2 t) { return texelFetch(ids, t, 0).x; }
 #endif
 
 ivec2 clamp_px(ivec2 q) { return clamp(q, ivec2(0), pc.size.xy - 1); }
-// The geometry texel of output pixel p (geometry may be coarser: `upscale`).
-ivec2 geom_px(ivec2 p) { return (p * pc.size.zw) / pc.size.xy; }
 
 // |a - b| / max(a, b) of linear depths from reverse-Z (the resolve's `depth_rel_diff`).
 float depth_rel_diff(float a, float b) {
@@ -163,7 +161,7 @@ void main() {
         float ws = 0.0;
         for (int k = 0; k < 9; k++) {
             if (!ok[k]) continue;
-            vec2 d = vec2(OFF[k]) - pc.speed.zw;
+            vec2 d = vec2(OFF[k]) - pc.speed_jitter.zw;
             float w = exp(-2.29 * dot(d, d));
             acc += w * c[k];
             ws += w;
@@ -174,14 +172,12 @@ void main() {
 
     // Geometry: the nearest (largest reverse-Z) texel of the 3x3 gives the velocity (dilation);
     // the neighbourhood's object IDs and depth span validate the history.
-    ivec2 gp = geom_px(p);
-    ivec2 gsize = pc.size.zw;
     float d_best = -1.0;
-    ivec2 g_best = gp;
+    ivec2 g_best = p;
     float lo = 1e30, hi = -1e30;
     uint nid[9];
     for (int k = 0; k < 9; k++) {
-        ivec2 t = clamp(gp + OFF[k], ivec2(0), gsize - 1);
+        ivec2 t = clamp_px(p + OFF[k]);
         float d = geom_depth(t);
         nid[k] = geom_id(t);
         lo = min(lo, d);
@@ -191,8 +187,7 @@ void main() {
             g_best = t;
         }
     }
-    vec2 v = texelFetch(velocity, has(F_DILATION) ? g_best : gp, 0).xy;
-    v *= vec2(pc.size.xy) / vec2(gsize);
+    vec2 v = texelFetch(velocity, has(F_DILATION) ? g_best : p, 0).xy;
     vec2 q = vec2(p) + 0.5 - v;
 
     bool use = !has(F_RESET) && all(greaterThanEqual(q, vec2(0.0))) &&
@@ -200,7 +195,7 @@ void main() {
     // Still: this pixel and its history texel did not move (the checkerboard resolve's rule):
     // nothing can have been disoccluded, and the tests would only reject jittered sub-pixel
     // features (a wire that one jitter sees and the next misses).
-    bool moving = length(v) > pc.inside.z;
+    bool moving = length(v) > pc.feedback_still.z;
     uvec2 g = uvec2(0u);
     if (use) g = texelFetch(hist_geom, ivec2(floor(q)), 0).xy;
     bool still = !moving && (g.x & MOVED) == 0u;
@@ -245,7 +240,7 @@ void main() {
             // Each reprojection resamples the history and softens it: the faster the pixel moves,
             // the more the current frame weighs (alpha rises linearly to speed.x at speed.y px).
             float a = pc.params.x;
-            if (pc.speed.y > 0.0) a = mix(a, pc.speed.x, min(length(v) / pc.speed.y, 1.0));
+            if (pc.speed_jitter.y > 0.0) a = mix(a, pc.speed_jitter.x, min(length(v) / pc.speed_jitter.y, 1.0));
             float wc = a / (1.0 + luma(c0 * pc.params.w));
             float wh = (1.0 - a) / (1.0 + luma(h * pc.params.w));
             result = (wc * c0 + wh * h) / (wc + wh);
@@ -278,10 +273,10 @@ void main() {
         float l0 = y0.x, l1 = yh.x;
         float diff = abs(l0 - l1) / max(l0, max(l1, 0.2));
         float wgt = (1.0 - diff) * (1.0 - diff);
-        float feedback = mix(pc.inside.x, pc.inside.y, wgt);
+        float feedback = mix(pc.feedback_still.x, pc.feedback_still.y, wgt);
         result = from_p(mix(y0, yh, feedback));
 #endif
     }
     imageStore(out_hist, p, vec4(result, 1.0));
-    imageStore(out_geom, p, uvec4(nid[4] | (moving ? MOVED : 0u), floatBitsToUint(geom_depth(clamp(gp, ivec2(0), gsize - 1))), 0u, 0u));
+    imageStore(out_geom, p, uvec4(nid[4] | (moving ? MOVED : 0u), floatBitsToUint(geom_depth(p)), 0u, 0u));
 }

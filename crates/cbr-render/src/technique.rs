@@ -27,8 +27,8 @@ pub struct BuildCtx<'a> {
     pub geometry: bool,
 }
 
-/// A frame's geometry at full resolution (or, for `upscale`, at its raster's resolution: readers
-/// scale by the image sizes), sampled by temporal post passes.
+/// A frame's geometry at the output resolution (`upscale` gives its upscaled layers), sampled by
+/// temporal post passes.
 pub struct Geometry<'a> {
     /// RG32F: screen motion since the previous frame in pixels of this image (current - previous),
     /// without the frame's jitter.

@@ -269,8 +269,8 @@ struct Push {
     size: [i32; 4],
     flags: [u32; 4],
     params: [f32; 4],
-    inside: [f32; 4],
-    speed: [f32; 4],
+    feedback_still: [f32; 4],
+    speed_jitter: [f32; 4],
 }
 
 pub struct Taa {
@@ -346,13 +346,14 @@ impl Taa {
             })
             .collect::<Result<Vec<_>>>()?;
         let g0 = geo[0].velocity;
+        if (g0.width, g0.height) != (ctx.width, ctx.height) {
+            return Err(GpuError::Other(format!(
+                "taa needs the geometry at the output resolution {}x{} (it is {}x{})",
+                ctx.width, ctx.height, g0.width, g0.height
+            )));
+        }
         let push = Push {
-            size: [
-                ctx.width as i32,
-                ctx.height as i32,
-                g0.width as i32,
-                g0.height as i32,
-            ],
+            size: [ctx.width as i32, ctx.height as i32, 0, 0],
             flags: [c.flags(), 0, 0, 0],
             params: [
                 c.alpha,
@@ -360,8 +361,8 @@ impl Taa {
                 c.depth_tolerance,
                 ctx.exposure_stops.exp2(),
             ],
-            inside: [INSIDE_FEEDBACK[0], INSIDE_FEEDBACK[1], STILL_THRESHOLD, 0.0],
-            speed: [c.alpha_max, c.speed, 0.0, 0.0],
+            feedback_still: [INSIDE_FEEDBACK[0], INSIDE_FEEDBACK[1], STILL_THRESHOLD, 0.0],
+            speed_jitter: [c.alpha_max, c.speed, 0.0, 0.0],
         };
         Ok(Taa {
             config: c,
@@ -389,8 +390,8 @@ impl PostPass for Taa {
         let mut push = self.push;
         push.flags[0] |= if frame.reset { F_RESET } else { 0 };
         push.flags[1] = n;
-        push.speed[2] = frame.jitter[0];
-        push.speed[3] = frame.jitter[1];
+        push.speed_jitter[2] = frame.jitter[0];
+        push.speed_jitter[3] = frame.jitter[1];
         cmd.use_image(input, Access::ComputeSampled);
         if let Some(g) = &frame.geometry {
             for image in [g.velocity, g.depth, g.ids] {
