@@ -35,6 +35,9 @@ pub struct Caps {
     pub sub_pixel_precision_bits: u32,
     /// float16 arithmetic in shaders (the resolve's `--resolve-fp16`).
     pub shader_float16: bool,
+    /// Largest storage buffer range one descriptor can bind (lavapipe: 128 MiB).
+    pub max_storage_buffer_range: u32,
+    pub fragment_stores_and_atomics: bool,
 }
 
 /// The checkerboard raster layouts of DESIGN.md.
@@ -140,6 +143,8 @@ mod tests {
     fn lavapipe_like() -> Caps {
         Caps {
             shader_float16: true,
+            max_storage_buffer_range: 1 << 27,
+            fragment_stores_and_atomics: true,
             sample_rate_shading: true,
             sample_counts: vec![1, 4],
             integer_color_sample_counts: vec![1],

@@ -117,6 +117,17 @@ impl Cmd {
         unsafe { self.dev().cmd_pipeline_barrier2(self.cb, &dep) };
     }
 
+    /// Fills the whole of `buffer` with the 32-bit `value` (vkCmdFillBuffer): clearing per-pixel
+    /// heads and counters.
+    pub fn fill_buffer(&mut self, buffer: &Buffer, value: u32) {
+        self.use_buffer(buffer, Access::TransferDst);
+        // SAFETY: recording state; the whole buffer, its size a multiple of 4 (Buffer::new).
+        unsafe {
+            self.dev()
+                .cmd_fill_buffer(self.cb, buffer.raw(), 0, vk::WHOLE_SIZE, value)
+        };
+    }
+
     pub fn copy_buffer(&mut self, src: &Buffer, dst: &Buffer, size: u64) {
         self.use_buffer(src, Access::TransferSrc);
         self.use_buffer(dst, Access::TransferDst);

@@ -290,6 +290,8 @@ fn caps_of(instance: &ash::Instance, pd: vk::PhysicalDevice, p: &Probe) -> Caps 
         viewport_sub_pixel_bits: l.viewport_sub_pixel_bits,
         sub_pixel_precision_bits: l.sub_pixel_precision_bits,
         shader_float16: p.f12.shader_float16 != 0,
+        max_storage_buffer_range: l.max_storage_buffer_range,
+        fragment_stores_and_atomics: p.f10.fragment_stores_and_atomics != 0,
     }
 }
 

@@ -19,7 +19,9 @@ pub mod targets;
 pub mod technique;
 pub mod techniques;
 
-pub use renderer::{Coverage, FrameOutput, RenderSettings, Renderer, ResolveOutput};
+pub use renderer::{
+    AnalyticLayers, Coverage, FrameOutput, RenderSettings, Renderer, ResolveOutput,
+};
 pub use resolve::{Mapping, ResolveMode, ResolveSettings};
 pub use spec::Spec;
 pub use techniques::checkerboard::{self, CheckerboardConfig, LodMode};

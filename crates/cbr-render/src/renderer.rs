@@ -92,6 +92,8 @@ pub struct FrameOutput {
     pub resolve: Option<ResolveOutput>,
     /// Supersampled frames: the per-pixel edge mask and the fraction of samples on geometry.
     pub coverage: Option<Coverage>,
+    /// `analytic` frames: the fragment lists' statistics per pixel.
+    pub analytic: Option<AnalyticLayers>,
     /// Where the frame came from when it was not rendered now (a cache file).
     pub cached: Option<std::path::PathBuf>,
     pub timings: Vec<PassTiming>,
@@ -114,6 +116,20 @@ pub struct Coverage {
     pub edge: Vec<u8>,
     /// Fraction of the pixel's samples that hit geometry.
     pub fraction: Vec<f32>,
+}
+
+/// What `analytic` adds to a frame: per pixel, the fragments listed (including those that found
+/// no room), the overflow (fragments not composited: beyond the resolve's 16 nearest, or lost
+/// when the pool was full), the fragments that contributed, and with `analytic:seed` whether a
+/// visible fragment's shortcut area is off the exact area by more than 1e-3.
+#[derive(Clone, Debug, Default)]
+pub struct AnalyticLayers {
+    pub fragments: Vec<u32>,
+    pub overflow: Vec<u32>,
+    pub visible: Vec<u32>,
+    pub seed_differs: Vec<u8>,
+    /// Fragment-pool slots per pixel this frame was built with.
+    pub pool_per_pixel: u32,
 }
 
 impl FrameOutput {

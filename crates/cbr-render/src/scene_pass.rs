@@ -189,43 +189,8 @@ impl ScenePass {
                 sample_locations: config.sample_locations.is_some(),
             },
         )?;
-        let set = DescriptorSet::new(
-            gpu,
-            &format!("{name}.set"),
-            &layout,
-            &[
-                Write::Buffer(binding("frame"), &scene.frame),
-                Write::Buffer(binding("objects"), &scene.objects),
-                Write::Buffer(binding("vertices"), &scene.vertices),
-                Write::Buffer(binding("materials"), &scene.materials),
-                Write::Buffer(binding("lights"), &scene.lights),
-                Write::Buffer(binding("counter"), counter),
-            ],
-        )?;
-        let material_sets = scene
-            .material_textures
-            .iter()
-            .enumerate()
-            .map(|(i, slots)| {
-                let tex = |slot: Option<u32>| {
-                    (
-                        slot.map(|t| &scene.textures[t as usize])
-                            .unwrap_or(&scene.white),
-                        &scene.sampler,
-                    )
-                };
-                DescriptorSet::new(
-                    gpu,
-                    &format!("{name}.material[{i}]"),
-                    &material_layout,
-                    &[
-                        Write::Sampled(binding("albedo"), vec![tex(slots[0])]),
-                        Write::Sampled(binding("mask"), vec![tex(slots[1])]),
-                        Write::Sampled(binding("bump"), vec![tex(slots[2])]),
-                    ],
-                )
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let set = scene_set(gpu, name, &layout, scene, counter)?;
+        let material_sets = material_sets(gpu, name, &material_layout, scene)?;
         Ok(ScenePass {
             pipeline,
             _layouts: [layout, material_layout],
@@ -318,16 +283,91 @@ impl ScenePass {
             cmd.set_sample_locations(depth, l);
         }
         cmd.bind_set(&self.pipeline, 0, &self.set);
-        cmd.bind_index_buffer(&scene.indices);
-        for d in &scene.draws {
-            cmd.bind_set(&self.pipeline, 1, &self.material_sets[d.material as usize]);
-            let push = ScenePush {
-                object_index: d.object,
-            };
-            cmd.push_constants(&self.pipeline, bytemuck::bytes_of(&push));
-            cmd.draw_indexed(d.index_count, config.instances, d.first_index, 0);
-        }
+        draw_scene(
+            cmd,
+            &self.pipeline,
+            scene,
+            &self.material_sets,
+            config.instances,
+        );
         cmd.end_rendering();
         profiler.end(cmd, scope);
+    }
+}
+
+/// The scene pass's set 0 ([`BINDINGS`]) over `scene`'s buffers.
+pub fn scene_set(
+    gpu: &Gpu,
+    name: &str,
+    layout: &SetLayout,
+    scene: &GpuScene,
+    counter: &Buffer,
+) -> Result<DescriptorSet> {
+    DescriptorSet::new(
+        gpu,
+        &format!("{name}.set"),
+        layout,
+        &[
+            Write::Buffer(binding("frame"), &scene.frame),
+            Write::Buffer(binding("objects"), &scene.objects),
+            Write::Buffer(binding("vertices"), &scene.vertices),
+            Write::Buffer(binding("materials"), &scene.materials),
+            Write::Buffer(binding("lights"), &scene.lights),
+            Write::Buffer(binding("counter"), counter),
+        ],
+    )
+}
+
+/// One set 1 ([`MATERIAL_BINDINGS`]) per material; slots a material does not use hold the 1x1
+/// white texture.
+pub fn material_sets(
+    gpu: &Gpu,
+    name: &str,
+    layout: &SetLayout,
+    scene: &GpuScene,
+) -> Result<Vec<DescriptorSet>> {
+    scene
+        .material_textures
+        .iter()
+        .enumerate()
+        .map(|(i, slots)| {
+            let tex = |slot: Option<u32>| {
+                (
+                    slot.map(|t| &scene.textures[t as usize])
+                        .unwrap_or(&scene.white),
+                    &scene.sampler,
+                )
+            };
+            DescriptorSet::new(
+                gpu,
+                &format!("{name}.material[{i}]"),
+                layout,
+                &[
+                    Write::Sampled(binding("albedo"), vec![tex(slots[0])]),
+                    Write::Sampled(binding("mask"), vec![tex(slots[1])]),
+                    Write::Sampled(binding("bump"), vec![tex(slots[2])]),
+                ],
+            )
+        })
+        .collect()
+}
+
+/// Draws every object of `scene` with `pipeline` (set 0 bound by the caller; set 1 per material,
+/// the object index as push constant), `instances` instances each.
+pub fn draw_scene(
+    cmd: &mut Cmd,
+    pipeline: &Pipeline,
+    scene: &GpuScene,
+    material_sets: &[DescriptorSet],
+    instances: u32,
+) {
+    cmd.bind_index_buffer(&scene.indices);
+    for d in &scene.draws {
+        cmd.bind_set(pipeline, 1, &material_sets[d.material as usize]);
+        let push = ScenePush {
+            object_index: d.object,
+        };
+        cmd.push_constants(pipeline, bytemuck::bytes_of(&push));
+        cmd.draw_indexed(d.index_count, instances, d.first_index, 0);
     }
 }

@@ -164,6 +164,7 @@ pub const TECHNIQUES: &[Registration] = &[
     techniques::checkerboard::REGISTRATION,
     techniques::upscale::REGISTRATION,
     techniques::interlaced::REGISTRATION,
+    techniques::analytic::REGISTRATION,
 ];
 
 pub fn find(name: &str) -> Option<&'static Registration> {

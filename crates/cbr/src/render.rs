@@ -565,6 +565,23 @@ fn debug_layers(out: &FrameOutput) -> Vec<cbr_metrics::io::ExtraLayer> {
             ],
         ));
     }
+    if let Some(a) = &out.analytic {
+        // `analytic`: per pixel the fragments listed, those not composited (overflow), those
+        // that contributed, and (analytic:seed) where the shortcut is off by more than 1e-3.
+        let f = |v: &[u32]| v.iter().map(|&x| x as f32).collect();
+        layers.push((
+            "analytic".to_string(),
+            vec![
+                ("fragments".to_string(), f(&a.fragments)),
+                ("overflow".to_string(), f(&a.overflow)),
+                ("visible".to_string(), f(&a.visible)),
+                (
+                    "seed_differs".to_string(),
+                    a.seed_differs.iter().map(|&x| f32::from(x)).collect(),
+                ),
+            ],
+        ));
+    }
     let Some(r) = &out.resolve else {
         return layers;
     };

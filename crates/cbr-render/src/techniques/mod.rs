@@ -1,6 +1,7 @@
 //! The registered techniques (crate::technique::TECHNIQUES), one module each, and what several
 //! of them share: reading the four common layers back.
 
+pub mod analytic;
 pub mod checkerboard;
 pub mod interlaced;
 pub mod msaa;

@@ -1,0 +1,192 @@
+// Exact pixel coverage of a convex polygon (a triangle, or the quadrilateral the near plane cuts
+// from one), its centroid, the seed's column shortcut and a 32-sample visibility mask. Shared by
+// the analytic raster (raster.frag) and the coverage test kernel (coverage_test.comp); the CPU
+// f64 reference is crates/cbr-render/src/techniques/analytic/reference.rs.
+//
+// Everything is in pixel-local coordinates: the polygon's vertices minus the pixel's top-left
+// corner, so the pixel is the unit square [0,1]^2 whatever the screen position. The subtraction of
+// an integer corner from an f32 vertex is exact for |x| < 2^23 px when both are within a factor of
+// two, and otherwise rounds no worse than the vertex itself is already rounded; every later
+// quantity is then formed from numbers of the size of the polygon near the pixel, not of the
+// screen. Where a long edge's far endpoint is large, its crossing of the pixel's sides is formed
+// from a cross product evaluated with Kahan's fma difference of products (accurate to ~1 ulp of
+// the result), never as `x0 + (y - y0) * slope` (which cancels the digits that matter).
+//
+// Area by edges (the winding-number form of Green's theorem): the polygon's indicator is the sum
+// over its edges of +-1 where the edge crosses the horizontal ray from the point towards +x. So
+//     area(P n S) = | sum_e  s_e * integral_{y in [0,1] n e} clamp(x_e(y), 0, 1) dy |,
+// one term per edge that depends only on that edge and the square (s_e: +1 if the edge runs
+// towards +y). The first moments (for the centroid) come the same way:
+//     Mx = sum_e s_e * integral clamp(x_e)^2 / 2 dy,   My = sum_e s_e * integral y clamp(x_e) dy.
+// Each edge is evaluated from its endpoints in a canonical order (lower y first), so the two
+// triangles sharing an edge evaluate the same numbers: their coverages add up to the pixel to
+// rounding (no conflation seam).
+#ifndef ANALYTIC_COVERAGE_GLSL
+#define ANALYTIC_COVERAGE_GLSL
+
+#define MAX_POLY 4
+#define MASK_SAMPLES 32
+
+// a * b - c * d to ~1 ulp (Kahan): the fused products keep the low halves cancellation exposes.
+float diff_products(float a, float b, float c, float d) {
+    precise float w = c * d;
+    precise float e = fma(-c, d, w);
+    precise float f = fma(a, b, -w);
+    precise float r = f + e;
+    return r;
+}
+
+// Area and first moments of the part of the unit square left of the edge a -> b (a.y < b.y),
+// within the edge's y range: x(y) clamped to [0, 1], integrated over y.
+vec3 edge_integrals(vec2 a, vec2 b) {
+    precise float y0 = max(a.y, 0.0);
+    precise float y1 = min(b.y, 1.0);
+    if (!(y0 < y1)) return vec3(0.0);
+    precise float dx = b.x - a.x;
+    precise float dy = b.y - a.y;
+    // x on the edge's line at the square's top (y = 0) and bottom (y = 1) when the edge crosses
+    // them: x(y) = (a.x b.y - a.y b.x + y dx) / dy.
+    precise float c = diff_products(a.x, b.y, a.y, b.x);
+    precise float x0 = y0 == a.y ? a.x : c / dy;
+    precise float x1 = y1 == b.y ? b.x : (c + dx) / dy;
+    precise float len = y1 - y0;
+    precise float c0 = clamp(x0, 0.0, 1.0);
+    precise float c1 = clamp(x1, 0.0, 1.0);
+    // Up to three pieces where clamp(x) is linear: split where x crosses 0 and 1.
+    float ta = 0.0;
+    float tb = 0.0;
+    float va = c0;
+    float vb = c0;
+    if (x1 != x0) {
+        precise float tz = (0.0 - x0) / (x1 - x0);
+        precise float to = (1.0 - x0) / (x1 - x0);
+        ta = clamp(min(tz, to), 0.0, 1.0);
+        tb = clamp(max(tz, to), 0.0, 1.0);
+        va = ta <= 0.0 ? c0 : (ta >= 1.0 ? c1 : (tz < to ? 0.0 : 1.0));
+        vb = tb <= 0.0 ? c0 : (tb >= 1.0 ? c1 : (tz < to ? 1.0 : 0.0));
+    }
+    float ts[4] = float[4](0.0, ta, tb, 1.0);
+    float vs[4] = float[4](c0, va, vb, c1);
+    precise vec3 r = vec3(0.0);
+    for (int i = 0; i < 3; ++i) {
+        precise float l = len * (ts[i + 1] - ts[i]);
+        if (l <= 0.0) continue;
+        precise float u = vs[i];
+        precise float v = vs[i + 1];
+        precise float ya = y0 + len * ts[i];
+        precise float yb = y0 + len * ts[i + 1];
+        r.x += l * (u + v) * 0.5;
+        r.y += l * (u * u + u * v + v * v) * (1.0 / 6.0);
+        r.z += l * (ya * (2.0 * u + v) + yb * (u + 2.0 * v)) * (1.0 / 6.0);
+    }
+    return r;
+}
+
+struct PixelCoverage {
+    float area;     // exact area of the polygon inside the pixel, [0, 1]
+    vec2 mean_point;  // centroid of that part (pixel-local); the pixel centre when area is 0
+};
+
+// Exact coverage of the pixel-local convex polygon p[0..n) (either winding).
+PixelCoverage exact_coverage(vec2 p[MAX_POLY], int n) {
+    precise vec3 sum = vec3(0.0);
+    for (int i = 0; i < n; ++i) {
+        vec2 a = p[i];
+        vec2 b = p[(i + 1) % n];
+        if (a.y == b.y) continue;  // horizontal edges bound no y range
+        precise vec3 e = a.y < b.y ? edge_integrals(a, b) : -edge_integrals(b, a);
+        sum += e;
+    }
+    PixelCoverage c;
+    c.area = min(abs(sum.x), 1.0);
+    c.mean_point = vec2(0.5);
+    if (abs(sum.x) > 0.0) {
+        c.mean_point = clamp(sum.yz / sum.x, vec2(0.0), vec2(1.0));
+    }
+    return c;
+}
+
+// The seed's shortcut (analytic:seed): the polygon's vertical extent on the pixel column's
+// centre line, clipped to the pixel (exact when every edge crossing the column crosses one pixel
+// of it); columns holding a vertex take the supersampled mask instead, as the seed prescribes
+// for "the triangle's vertex pixels".
+float seed_coverage(vec2 p[MAX_POLY], int n, uint mask) {
+    float ylo = 1e30;
+    float yhi = -1e30;
+    bool vertex_column = false;
+    for (int i = 0; i < n; ++i) {
+        vec2 a = p[i];
+        vec2 b = p[(i + 1) % n];
+        if (a.x >= 0.0 && a.x <= 1.0) vertex_column = true;
+        if ((a.x - 0.5) * (b.x - 0.5) > 0.0 || a.x == b.x) continue;
+        float y = a.y + (0.5 - a.x) * (b.y - a.y) / (b.x - a.x);
+        ylo = min(ylo, y);
+        yhi = max(yhi, y);
+    }
+    if (vertex_column) return float(bitCount(mask)) / float(MASK_SAMPLES);
+    return max(min(yhi, 1.0) - max(ylo, 0.0), 0.0);
+}
+
+// The visibility mask's sample k: a rank-1 lattice (every row and column of a 32 x 32 grid holds
+// one sample), so near-horizontal and near-vertical edges still sweep through samples one by one.
+vec2 mask_sample(int k) {
+    return (vec2(float(k), float((k * 13) & 31)) + 0.5) / 32.0;
+}
+
+// Which of the mask samples lie in the polygon. A sample exactly on an edge goes to the polygon
+// on the positive side of the edge in its canonical direction (lower y, then lower x, first), so
+// of two polygons sharing an edge exactly one takes it, whatever their windings. `orient` is the
+// sign of the polygon's signed area (the sum of the area integrals before abs).
+bool inside(vec2 p[MAX_POLY], int n, float orient, vec2 q) {
+    for (int i = 0; i < n; ++i) {
+        vec2 a = p[i];
+        vec2 b = p[(i + 1) % n];
+        bool canonical = a.y < b.y || (a.y == b.y && a.x < b.x);
+        vec2 lo = canonical ? a : b;
+        vec2 hi = canonical ? b : a;
+        // The canonical edge function (the 2D cross product (hi - lo) x (q - lo), negated).
+        float e = diff_products(hi.y - lo.y, q.x - lo.x, hi.x - lo.x, q.y - lo.y);
+        // A polygon of positive orientation traversing the edge canonically lies where e < 0.
+        float side = (canonical ? -1.0 : 1.0) * orient;
+        if (e * side < 0.0) return false;
+        if (e == 0.0 && side < 0.0) return false;
+    }
+    return true;
+}
+
+// The signed area's sign of a polygon (its winding in the area integrals' convention).
+float orientation(vec2 p[MAX_POLY], int n) {
+    precise float s = 0.0;
+    for (int i = 0; i < n; ++i) {
+        vec2 a = p[i];
+        vec2 b = p[(i + 1) % n];
+        s += diff_products(a.x, b.y, b.x, a.y);
+    }
+    return s < 0.0 ? -1.0 : 1.0;
+}
+
+uint sample_mask(vec2 p[MAX_POLY], int n, float orient) {
+    uint m = 0u;
+    for (int k = 0; k < MASK_SAMPLES; ++k) {
+        if (inside(p, n, orient, mask_sample(k))) m |= 1u << uint(k);
+    }
+    return m;
+}
+
+// A covered part too small to hold a sample still needs one bit for the visibility test: the
+// sample nearest its centroid.
+uint nearest_sample_bit(vec2 q) {
+    int best = 0;
+    float bd = 1e30;
+    for (int k = 0; k < MASK_SAMPLES; ++k) {
+        vec2 d = mask_sample(k) - q;
+        float dd = dot(d, d);
+        if (dd < bd) {
+            bd = dd;
+            best = k;
+        }
+    }
+    return 1u << uint(best);
+}
+
+#endif

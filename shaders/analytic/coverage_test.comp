@@ -1,0 +1,40 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Test kernel: coverage.glsl on listed (polygon, pixel) cases, for the comparison with the f64
+// reference (crates/cbr-render/tests/analytic.rs). Polygons are in screen pixels, as the raster
+// passes them; the pixel-local subtraction is the fragment stage's.
+#include "coverage.glsl"
+
+layout(local_size_x = 64) in;
+
+struct Case {
+    vec4 p01;    // vertices 0 and 1, screen pixels
+    vec4 p23;    // vertices 2 and 3 (3: a quadrilateral only)
+    ivec4 info;  // vertex count, pixel x, pixel y, 0
+};
+struct Result {
+    vec4 area_centroid_seed;  // exact area, centroid (pixel-local), seed area
+    uvec4 mask;               // sample mask, nearest-sample bit, centre inside, 0
+};
+layout(std430, set = 0, binding = 0) readonly buffer Cases { Case cases[]; };
+layout(std430, set = 0, binding = 1) writeonly buffer Results { Result results[]; };
+layout(push_constant) uniform Push { uint count; } pc;
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pc.count) return;
+    Case c = cases[i];
+    vec2 corner = vec2(c.info.yz);
+    vec2 p[MAX_POLY];
+    p[0] = c.p01.xy - corner;
+    p[1] = c.p01.zw - corner;
+    p[2] = c.p23.xy - corner;
+    p[3] = c.p23.zw - corner;
+    int n = c.info.x;
+    PixelCoverage cov = exact_coverage(p, n);
+    float o = orientation(p, n);
+    uint mask = sample_mask(p, n, o);
+    results[i].area_centroid_seed = vec4(cov.area, cov.mean_point, seed_coverage(p, n, mask));
+    results[i].mask = uvec4(mask, nearest_sample_bit(cov.mean_point),
+                            inside(p, n, o, vec2(0.5)) ? 1u : 0u, 0u);
+}

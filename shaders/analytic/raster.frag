@@ -1,0 +1,169 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// `analytic`, fragment stage: one invocation per (triangle, pixel it may touch). Computes the
+// exact area of the pixel the triangle covers; with CULL_PASS, records for pixels a triangle
+// covers entirely the farthest depth of that triangle over the pixel (a bound behind which
+// nothing in the pixel can be seen); otherwise drops fragments wholly behind that bound, shades
+// the rest once at the centroid of the covered part, and appends (depth, coverage, colour,
+// sample mask) to the pixel's fragment list. Fragments whose triangle holds the pixel centre
+// also write native's depth, velocity and IDs through the depth test.
+#include "../inc/scene_types.glsl"
+
+layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
+layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
+layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
+layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
+layout(set = 1, binding = BINDING_ALBEDO) uniform sampler2D albedo_tex;
+layout(set = 1, binding = BINDING_MASK) uniform sampler2D mask_tex;
+layout(set = 1, binding = BINDING_BUMP) uniform sampler2D bump_tex;
+layout(std430, set = 2, binding = BINDING_HEADS) buffer Heads { uint heads[]; };
+layout(std430, set = 2, binding = BINDING_NODES) buffer Nodes { uint nodes[]; };
+layout(std430, set = 2, binding = BINDING_BOUND) buffer Bound { uint bound[]; };
+layout(std430, set = 2, binding = BINDING_LOST) buffer Lost { uint lost[]; };
+layout(std430, set = 2, binding = BINDING_STATS) buffer Stats { uint allocated; } stats;
+layout(push_constant) uniform Push { uint object_index; } pc;
+
+#include "../inc/shading.glsl"
+#include "coverage.glsl"
+#define RASTER_IO in
+#include "raster_io.glsl"
+
+#ifndef CULL_PASS
+layout(location = 0) out vec2 o_velocity;
+layout(location = 1) out uvec2 o_ids;
+#endif
+
+// Perspective-correct barycentrics of the triangle at screen point s (pixels): the homogeneous
+// 2D rasteriser's form (Olano & Greer 1997), valid whatever the vertices' w signs.
+mat3 inv_clip;  // inverse of the matrix of the vertices' clip (x, y, w), set once in main
+
+vec3 barycentrics(vec2 s) {
+    vec2 ndc = s * frame.output_size.zw * 2.0 - 1.0;
+    vec3 b = inv_clip * vec3(ndc, 1.0);
+    return b / (b.x + b.y + b.z);
+}
+
+float depth_at(vec2 s) {
+    vec3 b = barycentrics(s);
+    vec3 z = vec3(g_clip[0].z, g_clip[1].z, g_clip[2].z);
+    vec3 w = vec3(g_clip[0].w, g_clip[1].w, g_clip[2].w);
+    return dot(b, z) / dot(b, w);
+}
+
+vec2 uv_at(vec3 b) {
+    return b.x * g_uv01.xy + b.y * g_uv01.zw + b.z * g_uv2;
+}
+
+vec3 world_at(vec3 b) {
+    return b.x * g_world[0] + b.y * g_world[1] + b.z * g_world[2];
+}
+
+// Bump mapping without tangents (Mikkelsen 2010) from the exact screen derivatives of position
+// and height (the raster's quads are not neighbouring pixels of one triangle here).
+vec3 bump_from(vec3 n, vec3 dpdx, vec3 dpdy, float dhdx, float dhdy) {
+    vec3 r1 = cross(dpdy, n);
+    vec3 r2 = cross(n, dpdx);
+    float det = dot(dpdx, r1);
+    if (abs(det) < 1e-20) return n;
+    vec3 grad = sign(det) * (dhdx * r1 + dhdy * r2);
+    return normalize(abs(det) * n - grad);
+}
+
+void main() {
+    ivec2 pix = ivec2(gl_FragCoord.xy);
+    vec2 corner = vec2(pix);
+    int n = int(g_info.x);
+    vec2 p[MAX_POLY];
+    p[0] = g_poly01.xy - corner;
+    p[1] = g_poly01.zw - corner;
+    p[2] = g_poly23.xy - corner;
+    p[3] = g_poly23.zw - corner;
+    PixelCoverage cov = exact_coverage(p, n);
+    if (!(cov.area > 0.0)) discard;
+    inv_clip = inverse(mat3(g_clip[0].xyw, g_clip[1].xyw, g_clip[2].xyw));
+    uint pixel = uint(pix.y) * uint(frame.output_size.x) + uint(pix.x);
+    ObjectData o = objects[pc.object_index];
+    MaterialData mat = materials[o.ids.y];
+    float z00 = depth_at(corner);
+    float z10 = depth_at(corner + vec2(1.0, 0.0));
+    float z01 = depth_at(corner + vec2(0.0, 1.0));
+    float z11 = depth_at(corner + vec2(1.0, 1.0));
+#ifdef CULL_PASS
+    // Reverse-Z: nearer is larger. The bound is the largest "farthest point over the pixel" of
+    // the opaque triangles covering the whole pixel.
+    if (cov.area >= 1.0 - 1e-6 && mat.tex.y < 0) {
+        float zfar = max(min(min(z00, z10), min(z01, z11)), 0.0);
+        atomicMax(bound[pixel], floatBitsToUint(zfar));
+    }
+    discard;
+#else
+    float znear = max(max(z00, z10), max(z01, z11));
+    if (znear < uintBitsToFloat(bound[pixel])) discard;
+
+    // Shading at the covered part's centroid: for attributes affine in the screen, their mean
+    // over the covered part; and always a point of the triangle (no extrapolated normals or UVs).
+    vec2 sp = corner + cov.mean_point;
+    vec3 b = barycentrics(sp);
+    vec3 bx = barycentrics(sp + vec2(1.0, 0.0));
+    vec3 by = barycentrics(sp + vec2(0.0, 1.0));
+    vec2 uv = uv_at(b);
+    // Texture footprint: the exact screen derivatives of the UV map at the shading point (one
+    // pixel step), scaled by the LOD bias.
+    float lod_scale = exp2(frame.ambient.w);
+    vec2 gx = (uv_at(bx) - uv) * lod_scale;
+    vec2 gy = (uv_at(by) - uv) * lod_scale;
+    if (mat.tex.y >= 0) {
+        float a = textureGrad(mask_tex, uv, gx, gy)[mat.tex.z];
+        if (a < 0.5) discard;
+    }
+    vec3 albedo = mat.kd.rgb;
+    if (mat.tex.x >= 0) albedo *= textureGrad(albedo_tex, uv, gx, gy).rgb;
+    vec3 world = world_at(b);
+    vec3 nrm = normalize(b.x * g_normal[0] + b.y * g_normal[1] + b.z * g_normal[2]);
+    if (dot(nrm, -world) < 0.0) nrm = -nrm;
+    if (mat.tex.w >= 0) {
+        float h = textureGrad(bump_tex, uv, gx, gy).r * mat.ke.w;
+        float hx = textureGrad(bump_tex, uv + gx, gx, gy).r * mat.ke.w;
+        float hy = textureGrad(bump_tex, uv + gy, gx, gy).r * mat.ke.w;
+        nrm = bump_from(nrm, world_at(bx) - world, world_at(by) - world, hx - h, hy - h);
+    }
+    vec3 color = shade(world, nrm, albedo, mat, frame);
+
+    float orient = orientation(p, n);
+    uint mask = sample_mask(p, n, orient);
+    float coverage = cov.area;
+    uint flags = 0u;
+#ifdef SEED
+    coverage = seed_coverage(p, n, mask);
+    if (abs(coverage - cov.area) > 1e-3) flags |= 1u;
+#endif
+    if (mask == 0u) mask = nearest_sample_bit(cov.mean_point);
+    float z = depth_at(sp);
+    if (coverage > 0.0) {
+        uint idx = atomicAdd(stats.allocated, 1u);
+        if (idx < NODE_CAPACITY) {
+            uint tie = (o.ids.x * 7919u + g_info.y) & 0x7FFFu;
+            uint base = idx * 6u;
+            nodes[base + 1u] = floatBitsToUint(z);
+            nodes[base + 2u] = floatBitsToUint(coverage);
+            nodes[base + 3u] = mask;
+            nodes[base + 4u] = packHalf2x16(color.rg);
+            nodes[base + 5u] = (packHalf2x16(vec2(color.b, 0.0)) & 0xFFFFu) | ((flags | (tie << 1u)) << 16u);
+            nodes[base] = atomicExchange(heads[pixel], idx);
+        } else {
+            atomicAdd(lost[pixel], 1u);
+        }
+    }
+
+    // Native's layers: the triangle holding the pixel centre, nearest through the depth test.
+    if (!inside(p, n, orient, vec2(0.5))) discard;
+    vec2 centre = corner + 0.5;
+    vec3 bc = barycentrics(centre);
+    gl_FragDepth = depth_at(centre);
+    vec3 prev = bc.x * g_prev[0] + bc.y * g_prev[1] + bc.z * g_prev[2];
+    vec2 prev_px = (prev.xy / prev.z * 0.5 + 0.5) * frame.output_size.xy;
+    // The velocity excludes the frame's jitter (the triangle's positions carry it).
+    o_velocity = (centre - frame.screen_jitter.xy) - prev_px;
+    o_ids = uvec2(o.ids.x, g_info.y);
+#endif
+}
