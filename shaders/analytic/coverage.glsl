@@ -9,8 +9,8 @@
 // two, and otherwise rounds no worse than the vertex itself is already rounded; every later
 // quantity is then formed from numbers of the size of the polygon near the pixel, not of the
 // screen. Where a long edge's far endpoint is large, its crossing of the pixel's sides is formed
-// from a cross product evaluated with Kahan's fma difference of products (accurate to ~1 ulp of
-// the result), never as `x0 + (y - y0) * slope` (which cancels the digits that matter).
+// from a cross product evaluated with exact (Dekker) products (accurate to ~1 ulp of the result),
+// never as `x0 + (y - y0) * slope` (which cancels the digits that matter).
 //
 // Area by edges (the winding-number form of Green's theorem): the polygon's indicator is the sum
 // over its edges of +-1 where the edge crosses the horizontal ray from the point towards +x. So
@@ -27,28 +27,48 @@
 #define MAX_POLY 4
 #define MASK_SAMPLES 32
 
-// a * b - c * d to ~1 ulp (Kahan): the fused products keep the low halves cancellation exposes.
+// Dekker's exact product: a * b == p + e (Veltkamp's split; no reliance on a fused multiply-add,
+// which a driver may lower to a separate multiply and add).
+void two_product(float a, float b, out float p, out float e) {
+    precise float ca = 4097.0 * a;
+    precise float ah = ca - (ca - a);
+    precise float al = a - ah;
+    precise float cb = 4097.0 * b;
+    precise float bh = cb - (cb - b);
+    precise float bl = b - bh;
+    precise float pp = a * b;
+    p = pp;
+    precise float ee = ((ah * bh - pp) + ah * bl + al * bh) + al * bl;
+    e = ee;
+}
+
+// a * b - c * d to ~1 ulp of the result: where the products cancel, their difference is exact
+// (Sterbenz) and the products' rounding errors carry the digits that are left.
 float diff_products(float a, float b, float c, float d) {
-    precise float w = c * d;
-    precise float e = fma(-c, d, w);
-    precise float f = fma(a, b, -w);
-    precise float r = f + e;
+    float p1, e1, p2, e2;
+    two_product(a, b, p1, e1);
+    two_product(c, d, p2, e2);
+    precise float r = (p1 - p2) + (e1 - e2);
     return r;
 }
 
 // Area and first moments of the part of the unit square left of the edge a -> b (a.y < b.y),
-// within the edge's y range: x(y) clamped to [0, 1], integrated over y.
-vec3 edge_integrals(vec2 a, vec2 b) {
+// within the edge's y range: x(y) clamped to [0, 1], integrated over y. Endpoints come as
+// double-f32 pairs (hi, lo: the exact pixel-local coordinate is hi + lo), since a far vertex's
+// local coordinate may not fit one f32 exactly.
+vec3 edge_integrals(vec2 a, vec2 al, vec2 b, vec2 bl) {
     precise float y0 = max(a.y, 0.0);
     precise float y1 = min(b.y, 1.0);
     if (!(y0 < y1)) return vec3(0.0);
-    precise float dx = b.x - a.x;
-    precise float dy = b.y - a.y;
+    precise float dx = (b.x - a.x) + (bl.x - al.x);
+    precise float dy = (b.y - a.y) + (bl.y - al.y);
     // x on the edge's line at the square's top (y = 0) and bottom (y = 1) when the edge crosses
-    // them: x(y) = (a.x b.y - a.y b.x + y dx) / dy.
-    precise float c = diff_products(a.x, b.y, a.y, b.x);
-    precise float x0 = y0 == a.y ? a.x : c / dy;
-    precise float x1 = y1 == b.y ? b.x : (c + dx) / dy;
+    // them: x(y) = (a.x b.y - a.y b.x + y dx) / dy, the cross product to ~1 ulp plus the
+    // first-order terms of the low parts.
+    precise float c = diff_products(a.x, b.y, a.y, b.x)
+        + ((a.x * bl.y + al.x * b.y) - (a.y * bl.x + al.y * b.x));
+    precise float x0 = y0 == a.y ? a.x + al.x : c / dy;
+    precise float x1 = y1 == b.y ? b.x + bl.x : (c + dx) / dy;
     precise float len = y1 - y0;
     precise float c0 = clamp(x0, 0.0, 1.0);
     precise float c1 = clamp(x1, 0.0, 1.0);
@@ -87,14 +107,19 @@ struct PixelCoverage {
     vec2 mean_point;  // centroid of that part (pixel-local); the pixel centre when area is 0
 };
 
-// Exact coverage of the pixel-local convex polygon p[0..n) (either winding).
-PixelCoverage exact_coverage(vec2 p[MAX_POLY], int n) {
+// Exact coverage of the convex polygon p[0..n) (either winding), pixel-local: p is the screen
+// polygon minus the pixel corner rounded to f32, lo what that rounding dropped (0 unless a vertex
+// lies in a larger binade relative to the pixel than on the screen).
+PixelCoverage exact_coverage(vec2 p[MAX_POLY], vec2 lo[MAX_POLY], int n) {
     precise vec3 sum = vec3(0.0);
     for (int i = 0; i < n; ++i) {
+        int j = (i + 1) % n;
         vec2 a = p[i];
-        vec2 b = p[(i + 1) % n];
-        if (a.y == b.y) continue;  // horizontal edges bound no y range
-        precise vec3 e = a.y < b.y ? edge_integrals(a, b) : -edge_integrals(b, a);
+        vec2 b = p[j];
+        if (a.y == b.y && lo[i].y == lo[j].y) continue;  // horizontal edges bound no y range
+        precise vec3 e = (a.y < b.y || (a.y == b.y && lo[i].y < lo[j].y))
+            ? edge_integrals(a, lo[i], b, lo[j])
+            : -edge_integrals(b, lo[j], a, lo[i]);
         sum += e;
     }
     PixelCoverage c;
@@ -104,6 +129,18 @@ PixelCoverage exact_coverage(vec2 p[MAX_POLY], int n) {
         c.mean_point = clamp(sum.yz / sum.x, vec2(0.0), vec2(1.0));
     }
     return c;
+}
+
+// Screen polygon -> pixel-local hi + lo pairs (Knuth's TwoSum: hi + lo == v - corner exactly).
+void to_local(vec2 screen[MAX_POLY], vec2 corner, out vec2 p[MAX_POLY], out vec2 lo[MAX_POLY]) {
+    for (int i = 0; i < MAX_POLY; ++i) {
+        precise vec2 v = screen[i];
+        precise vec2 s = v - corner;
+        precise vec2 bb = s - v;
+        precise vec2 err = (v - (s - bb)) + (-corner - bb);
+        p[i] = s;
+        lo[i] = err;
+    }
 }
 
 // The seed's shortcut (analytic:seed): the polygon's vertical extent on the pixel column's

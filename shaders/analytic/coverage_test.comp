@@ -25,13 +25,12 @@ void main() {
     if (i >= pc.count) return;
     Case c = cases[i];
     vec2 corner = vec2(c.info.yz);
+    vec2 screen[MAX_POLY] = vec2[MAX_POLY](c.p01.xy, c.p01.zw, c.p23.xy, c.p23.zw);
     vec2 p[MAX_POLY];
-    p[0] = c.p01.xy - corner;
-    p[1] = c.p01.zw - corner;
-    p[2] = c.p23.xy - corner;
-    p[3] = c.p23.zw - corner;
+    vec2 lo[MAX_POLY];
+    to_local(screen, corner, p, lo);
     int n = c.info.x;
-    PixelCoverage cov = exact_coverage(p, n);
+    PixelCoverage cov = exact_coverage(p, lo, n);
     float o = orientation(p, n);
     uint mask = sample_mask(p, n, o);
     results[i].area_centroid_seed = vec4(cov.area, cov.mean_point, seed_coverage(p, n, mask));

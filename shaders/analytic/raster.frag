@@ -73,12 +73,11 @@ void main() {
     ivec2 pix = ivec2(gl_FragCoord.xy);
     vec2 corner = vec2(pix);
     int n = int(g_info.x);
+    vec2 screen[MAX_POLY] = vec2[MAX_POLY](g_poly01.xy, g_poly01.zw, g_poly23.xy, g_poly23.zw);
     vec2 p[MAX_POLY];
-    p[0] = g_poly01.xy - corner;
-    p[1] = g_poly01.zw - corner;
-    p[2] = g_poly23.xy - corner;
-    p[3] = g_poly23.zw - corner;
-    PixelCoverage cov = exact_coverage(p, n);
+    vec2 lo[MAX_POLY];
+    to_local(screen, corner, p, lo);
+    PixelCoverage cov = exact_coverage(p, lo, n);
     if (!(cov.area > 0.0)) discard;
     inv_clip = inverse(mat3(g_clip[0].xyw, g_clip[1].xyw, g_clip[2].xyw));
     uint pixel = uint(pix.y) * uint(frame.output_size.x) + uint(pix.x);
@@ -137,22 +136,23 @@ void main() {
     coverage = seed_coverage(p, n, mask);
     if (abs(coverage - cov.area) > 1e-3) flags |= 1u;
 #endif
-    if (mask == 0u) mask = nearest_sample_bit(cov.mean_point);
+    if (mask == 0u) {
+        mask = nearest_sample_bit(cov.mean_point);
+        flags |= 2u;  // a stand-in bit: never used to hide this fragment
+    }
     float z = depth_at(sp);
-    if (coverage > 0.0) {
-        uint idx = atomicAdd(stats.allocated, 1u);
-        if (idx < NODE_CAPACITY) {
-            uint tie = (o.ids.x * 7919u + g_info.y) & 0x7FFFu;
-            uint base = idx * 6u;
-            nodes[base + 1u] = floatBitsToUint(z);
-            nodes[base + 2u] = floatBitsToUint(coverage);
-            nodes[base + 3u] = mask;
-            nodes[base + 4u] = packHalf2x16(color.rg);
-            nodes[base + 5u] = (packHalf2x16(vec2(color.b, 0.0)) & 0xFFFFu) | ((flags | (tie << 1u)) << 16u);
-            nodes[base] = atomicExchange(heads[pixel], idx);
-        } else {
-            atomicAdd(lost[pixel], 1u);
-        }
+    uint idx = atomicAdd(stats.allocated, 1u);
+    if (idx < NODE_CAPACITY) {
+        uint base = idx * NODE_WORDS;
+        nodes[base + 1u] = floatBitsToUint(z);
+        nodes[base + 2u] = floatBitsToUint(coverage);
+        nodes[base + 3u] = mask;
+        nodes[base + 4u] = packHalf2x16(color.rg);
+        nodes[base + 5u] = (packHalf2x16(vec2(color.b, 0.0)) & 0xFFFFu) | ((flags | (min(o.ids.x, 0x3FFFu) << 2u)) << 16u);
+        nodes[base + 6u] = g_info.y;
+        nodes[base] = atomicExchange(heads[pixel], idx);
+    } else {
+        atomicAdd(lost[pixel], 1u);
     }
 
     // Native's layers: the triangle holding the pixel centre, nearest through the depth test.

@@ -42,8 +42,9 @@ pub const REGISTRATION: Registration = Registration {
     },
 };
 
-/// Bytes of one fragment in the pool: next, depth, coverage, mask, colour (3 x f16) + key.
-pub const NODE_BYTES: u64 = 24;
+/// Bytes of one fragment in the pool: next, depth, coverage, mask, colour (3 x f16) + flags and
+/// object ID, primitive ID.
+pub const NODE_BYTES: u64 = 28;
 /// Fragment-pool slots per pixel unless `frags=N` says otherwise.
 pub const DEFAULT_FRAGS: u32 = 8;
 
@@ -202,6 +203,7 @@ impl Analytic {
         let mut defines = scene_pass::shader_defines(scene_pass::LAYOUT_NATIVE);
         defines.extend(RASTER_BINDINGS.iter().map(BindingDesc::define));
         defines.push(("NODE_CAPACITY".into(), format!("{capacity}u")));
+        defines.push(("NODE_WORDS".into(), format!("{}u", NODE_BYTES / 4)));
         if c.seed {
             defines.push(("SEED".into(), "1".into()));
         }
@@ -245,8 +247,9 @@ impl Analytic {
             None
         };
 
-        let rdefines: Vec<(String, String)> =
+        let mut rdefines: Vec<(String, String)> =
             RESOLVE_BINDINGS.iter().map(BindingDesc::define).collect();
+        rdefines.push(("NODE_WORDS".into(), format!("{}u", NODE_BYTES / 4)));
         let cs = ctx.shaders.compile("analytic/resolve.comp", &rdefines)?;
         let resolve = Pipeline::compute(
             gpu,

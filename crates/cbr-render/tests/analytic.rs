@@ -1,0 +1,714 @@
+//! `analytic` against its f64 reference (techniques::analytic::reference): the coverage kernel on
+//! 10,000 random triangles, then whole frames with known answers (one triangle over a
+//! background, a mesh of abutting triangles, an opaque mesh in front of another), the seed's
+//! shortcut and where it breaks, every touched pixel reached, overflow counted, and a pool that
+//! cannot fit refused. On the test device with validation on.
+
+mod common;
+
+use cbr_gpu::{
+    Access, BindingDesc, Buffer, ComputeDesc, DescriptorKind, DescriptorSet, Gpu, Location,
+    Pipeline, SetLayout, Write, vk,
+};
+use cbr_render::techniques::analytic::reference::{self, Poly};
+use cbr_render::{FrameOutput, RenderSettings, Renderer, Spec};
+use cbr_scene::{CameraKey, CameraPath, LoadStats, Material, Object, Scene, Settings, Vertex};
+use common::{assert_clean, gpu};
+use glam::{DVec3, DVec4};
+
+/// A small deterministic generator (xorshift64*).
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, a: f64, b: f64) -> f64 {
+        a + (b - a) * self.next()
+    }
+}
+
+/// A random triangle of one of the hard kinds, its vertices rounded to f32 (what the GPU gets).
+fn random_triangle(rng: &mut Rng, kind: usize) -> [[f32; 2]; 3] {
+    let p = |rng: &mut Rng, s: f64| [rng.range(0.0, s), rng.range(0.0, s)];
+    let t: [[f64; 2]; 3] = match kind {
+        // Ordinary, a few pixels across.
+        0 => [p(rng, 24.0), p(rng, 24.0), p(rng, 24.0)],
+        // Sub-pixel.
+        1 => {
+            let a = p(rng, 24.0);
+            let d = |rng: &mut Rng| rng.range(-0.6, 0.6);
+            [
+                a,
+                [a[0] + d(rng), a[1] + d(rng)],
+                [a[0] + d(rng), a[1] + d(rng)],
+            ]
+        }
+        // Sliver: long and thin (width 1e-3 to 0.3 px).
+        2 => {
+            let (a, b) = (p(rng, 40.0), p(rng, 40.0));
+            let w = 10f64.powf(rng.range(-3.0, -0.5));
+            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+            let l = (dx * dx + dy * dy).sqrt().max(1e-9);
+            let t = rng.next();
+            [
+                a,
+                b,
+                [a[0] + t * dx - dy / l * w, a[1] + t * dy + dx / l * w],
+            ]
+        }
+        // Near-degenerate: almost collinear (1e-5 px off the line).
+        3 => {
+            let (a, b) = (p(rng, 30.0), p(rng, 30.0));
+            let t = rng.next();
+            [
+                a,
+                b,
+                [
+                    a[0] + t * (b[0] - a[0]) + 1e-5,
+                    a[1] + t * (b[1] - a[1]) - 1e-5,
+                ],
+            ]
+        }
+        // Huge: vertices thousands of pixels away, crossing the region near the origin.
+        4 => {
+            let f = |rng: &mut Rng| rng.range(-6000.0, 6000.0);
+            [[f(rng), f(rng)], [f(rng), f(rng)], [f(rng), f(rng)]]
+        }
+        // Vertices exactly on pixel corners, edges and centres.
+        _ => {
+            let q = |rng: &mut Rng| (rng.range(0.0, 24.0) * 2.0).round() / 2.0;
+            [[q(rng), q(rng)], [q(rng), q(rng)], [q(rng), q(rng)]]
+        }
+    };
+    t.map(|v| v.map(|c| c as f32))
+}
+
+/// The pixels to test for a triangle: all of its box when small, else those holding each
+/// vertex and its neighbours, along each edge, and random ones in the box near the origin.
+fn pixels_of(rng: &mut Rng, poly: &Poly) -> Vec<(i64, i64)> {
+    let (x0, y0, x1, y1) = reference::bbox_pixels(poly);
+    if (x1 - x0 + 1) * (y1 - y0 + 1) <= 64 {
+        return (y0..=y1)
+            .flat_map(|y| (x0..=x1).map(move |x| (x, y)))
+            .collect();
+    }
+    let mut px = Vec::new();
+    for (i, v) in poly.iter().enumerate() {
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                px.push((v[0].floor() as i64 + dx, v[1].floor() as i64 + dy));
+            }
+        }
+        let w = poly[(i + 1) % poly.len()];
+        for k in 0..24 {
+            let t = rng.next();
+            let (x, y) = (v[0] + t * (w[0] - v[0]), v[1] + t * (w[1] - v[1]));
+            if x.abs() < 1e6 && y.abs() < 1e6 && (k < 8 || (x.abs() < 64.0 && y.abs() < 64.0)) {
+                px.push((x.floor() as i64, y.floor() as i64));
+            }
+        }
+    }
+    for _ in 0..16 {
+        let x = rng
+            .range(x0.max(-64) as f64, x1.min(64) as f64 + 1.0)
+            .floor() as i64;
+        let y = rng
+            .range(y0.max(-64) as f64, y1.min(64) as f64 + 1.0)
+            .floor() as i64;
+        px.push((x, y));
+    }
+    px
+}
+
+/// Runs shaders/analytic/coverage_test.comp on the cases: (area, centroid x, y, seed, mask,
+/// nearest bit, centre inside).
+fn run_kernel(gpu: &Gpu, cases: &[[f32; 12]]) -> Vec<([f32; 4], [u32; 4])> {
+    let shaders = cbr_render::shader_library();
+    let bindings = [
+        BindingDesc::one("cases", 0, DescriptorKind::StorageBuffer),
+        BindingDesc::one("results", 1, DescriptorKind::StorageBuffer),
+    ];
+    let layout = SetLayout::new(gpu, "coverage_test.layout", &bindings).unwrap();
+    let cs = shaders
+        .compile("analytic/coverage_test.comp", &[])
+        .expect("coverage_test.comp");
+    let pipeline = Pipeline::compute(
+        gpu,
+        &ComputeDesc {
+            name: "coverage_test",
+            shader: &cs,
+            set_layouts: &[&layout],
+            push_constant_bytes: 4,
+        },
+    )
+    .unwrap();
+    let bytes: &[u8] = bytemuck::cast_slice(cases);
+    let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    let mut input = Buffer::new(
+        gpu,
+        "coverage_test.cases",
+        bytes.len() as u64,
+        storage,
+        Location::CpuToGpu,
+    )
+    .unwrap();
+    input.write(0, bytes).unwrap();
+    let output = Buffer::new(
+        gpu,
+        "coverage_test.results",
+        cases.len() as u64 * 32,
+        storage,
+        Location::GpuToCpu,
+    )
+    .unwrap();
+    let set = DescriptorSet::new(
+        gpu,
+        "coverage_test.set",
+        &layout,
+        &[Write::Buffer(0, &input), Write::Buffer(1, &output)],
+    )
+    .unwrap();
+    gpu.submit("coverage_test", |cmd| {
+        cmd.use_buffer(&input, Access::ComputeSampled);
+        cmd.use_buffer(&output, Access::ComputeStorageWrite);
+        cmd.bind_pipeline(&pipeline);
+        cmd.bind_set(&pipeline, 0, &set);
+        cmd.push_constants(&pipeline, bytemuck::bytes_of(&(cases.len() as u32)));
+        cmd.dispatch((cases.len() as u32).div_ceil(64), 1, 1);
+        cmd.use_buffer(&output, Access::HostRead);
+        Ok(())
+    })
+    .unwrap();
+    let raw: &[u32] = bytemuck::cast_slice(output.bytes().unwrap());
+    raw.chunks_exact(8)
+        .map(|c| {
+            (
+                [c[0], c[1], c[2], c[3]].map(f32::from_bits),
+                [c[4], c[5], c[6], c[7]],
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn coverage_kernel_is_within_1e5_of_the_f64_area_on_10000_random_triangles() {
+    let gpu = gpu();
+    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    let mut cases = Vec::new();
+    let mut polys = Vec::new();
+    for i in 0..10_000 {
+        let t = random_triangle(&mut rng, i % 6);
+        let poly: Poly = t
+            .iter()
+            .map(|v| [f64::from(v[0]), f64::from(v[1])])
+            .collect();
+        for (x, y) in pixels_of(&mut rng, &poly) {
+            let mut c = [0f32; 12];
+            c[..6].copy_from_slice(&[t[0][0], t[0][1], t[1][0], t[1][1], t[2][0], t[2][1]]);
+            c[8] = f32::from_bits(3);
+            c[9] = f32::from_bits(x as i32 as u32);
+            c[10] = f32::from_bits(y as i32 as u32);
+            cases.push(c);
+            polys.push((i % 6, poly.clone(), x, y));
+        }
+    }
+    let results = run_kernel(&gpu, &cases);
+    let (mut worst, mut worst_case) = (0.0f64, String::new());
+    let (mut mask_mismatch, mut centre_mismatch, mut seed_bad) = (0usize, 0usize, 0usize);
+    let mut touched = 0usize;
+    for ((kind, poly, x, y), (f, m)) in polys.iter().zip(&results) {
+        let (area, cen) = reference::coverage(poly, *x, *y);
+        let err = (f64::from(f[0]) - area).abs();
+        if err > worst {
+            worst = err;
+            worst_case = format!("kind {kind} pixel ({x}, {y}) {poly:?}: {} vs {area}", f[0]);
+        }
+        if area > 0.0 {
+            touched += 1;
+        }
+        if let Some(c) = cen.filter(|_| area > 0.05) {
+            let d = (f64::from(f[1]) - c[0])
+                .abs()
+                .max((f64::from(f[2]) - c[1]).abs());
+            assert!(
+                d < 1e-3,
+                "centroid {f:?} vs {c:?} ({area}) of {poly:?} at {x},{y}"
+            );
+        }
+        if m[0] != reference::sample_mask(poly, *x, *y) {
+            mask_mismatch += 1;
+        }
+        let local: Poly = poly
+            .iter()
+            .map(|p| [p[0] - *x as f64, p[1] - *y as f64])
+            .collect();
+        if (m[2] == 1) != reference::inside(&local, [0.5, 0.5]) {
+            centre_mismatch += 1;
+        }
+        // The seed's own arithmetic (x0 + t dy) is not made robust for far vertices: huge
+        // triangles (kind 4) are left out of this comparison.
+        if *kind != 4 && (f64::from(f[3]) - reference::seed_coverage(poly, *x, *y)).abs() > 1e-4 {
+            seed_bad += 1;
+        }
+    }
+    println!(
+        "{} cases ({touched} touched): worst area error {worst:e}; mask mismatches {mask_mismatch}, \
+         centre {centre_mismatch}, seed {seed_bad}",
+        results.len()
+    );
+    assert!(worst <= 1e-5, "worst area error {worst:e}: {worst_case}");
+    assert!(touched > 50_000, "{touched}");
+    // Samples within f32 rounding of an edge may fall either way (the test is in f32 on the GPU).
+    let n = results.len();
+    assert!(
+        mask_mismatch * 1000 <= n,
+        "{mask_mismatch} of {n} masks differ"
+    );
+    assert!(
+        centre_mismatch * 1000 <= n,
+        "{centre_mismatch} of {n} centre tests differ"
+    );
+    assert!(seed_bad * 1000 <= n, "{seed_bad} of {n} seed areas differ");
+    assert_clean(&gpu);
+}
+
+// ---- Whole frames -------------------------------------------------------------------------
+
+const W: u32 = 64;
+const H: u32 = 48;
+
+fn emissive(name: &str, ke: [f32; 3]) -> Material {
+    let mut m = Material::named(name);
+    m.kd = [0.0; 3];
+    m.ke = ke;
+    m
+}
+
+fn mesh(name: &str, verts: &[[f32; 3]], indices: Vec<u32>, material: u32) -> Object {
+    Object {
+        name: name.into(),
+        vertices: verts
+            .iter()
+            .map(|&pos| Vertex {
+                pos,
+                normal: [0.0, 0.0, 1.0],
+                uv: [0.0, 0.0],
+            })
+            .collect(),
+        indices,
+        material,
+    }
+}
+
+fn scene(objects: Vec<Object>, materials: Vec<Material>, background: [f32; 3]) -> Scene {
+    Scene {
+        name: "analytic-test".into(),
+        source: "test".into(),
+        objects,
+        materials,
+        textures: vec![],
+        camera: CameraPath {
+            keys: vec![CameraKey {
+                time: 0.0,
+                position: [0.0, 0.0, 5.0],
+                target: [0.0, 0.0, 0.0],
+                fov_y_deg: 60.0,
+                cut: false,
+            }],
+            near: 0.1,
+        },
+        directional: vec![],
+        points: vec![],
+        motions: vec![],
+        settings: Settings {
+            width: W,
+            height: H,
+            frames: 1,
+            fps: 10.0,
+            seed: 0,
+            exposure: 0.0,
+            ambient: [0.0; 3],
+            background,
+            bump: false,
+        },
+        stats: LoadStats::default(),
+    }
+}
+
+/// Screen position (pixels) of world point `p`, in f64.
+fn project(s: &Scene, p: [f32; 3]) -> [f64; 2] {
+    let cam = s.camera.at(0.0);
+    let (w, h) = (f64::from(W), f64::from(H));
+    let p = DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
+    let clip = cam.projection(w / h) * cam.rotation() * DVec4::from((p - cam.position, 1.0));
+    let ndc = clip.truncate() / clip.w;
+    [(ndc.x * 0.5 + 0.5) * w, (ndc.y * 0.5 + 0.5) * h]
+}
+
+fn screen_poly(s: &Scene, o: &Object, tri: usize) -> Poly {
+    (0..3)
+        .map(|k| project(s, o.vertices[o.indices[tri * 3 + k] as usize].pos))
+        .collect()
+}
+
+fn render(gpu: &Gpu, s: &Scene, spec: &str) -> FrameOutput {
+    let shaders = cbr_render::shader_library();
+    let settings = RenderSettings::new(W, H, Spec::parse(spec).unwrap());
+    let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
+    r.render(s, 0).expect("frame")
+}
+
+fn rgb(out: &FrameOutput, i: usize) -> [f64; 3] {
+    [0, 1, 2].map(|c| f64::from(out.color[i * 4 + c].to_f32()))
+}
+
+fn coverage_of(out: &FrameOutput) -> &[f32] {
+    &out.coverage.as_ref().expect("coverage layer").fraction
+}
+
+/// Asserts colour = a c + (1 - a) bg within f16 rounding.
+fn assert_blend(out: &FrameOutput, i: usize, a: f64, c: [f32; 3], bg: [f32; 3], what: &str) {
+    let got = rgb(out, i);
+    for k in 0..3 {
+        let want = a * f64::from(c[k]) + (1.0 - a) * f64::from(bg[k]);
+        assert!(
+            (got[k] - want).abs() <= 2e-3 * want.abs().max(1.0) + 5e-4,
+            "{what}: pixel {i} channel {k}: {} vs {want} (coverage {a})",
+            got[k]
+        );
+    }
+}
+
+#[test]
+fn one_triangle_over_a_background_has_the_exact_coverage() {
+    let gpu = gpu();
+    let tri = mesh(
+        "tri",
+        &[[-2.1, -1.3, 0.0], [1.7, -0.2, 0.0], [-0.4, 2.05, 0.0]],
+        vec![0, 1, 2],
+        0,
+    );
+    let (c, bg) = ([2.0, 1.0, 0.5], [0.1, 0.2, 0.3]);
+    let s = scene(vec![tri], vec![emissive("e", c)], bg);
+    let poly = screen_poly(&s, &s.objects[0], 0);
+    for spec in ["analytic", "analytic:nocull"] {
+        let out = render(&gpu, &s, spec);
+        let cov = coverage_of(&out);
+        let mut edge = 0;
+        for y in 0..H as i64 {
+            for x in 0..W as i64 {
+                let i = (y * W as i64 + x) as usize;
+                let (a, _) = reference::coverage(&poly, x, y);
+                assert!(
+                    (f64::from(cov[i]) - a).abs() < 2e-4,
+                    "{spec} ({x}, {y}): {} vs {a}",
+                    cov[i]
+                );
+                assert_blend(&out, i, a, c, bg, spec);
+                if a > 0.0 && a < 1.0 {
+                    edge += 1;
+                }
+            }
+        }
+        assert!(edge > 50, "{edge} edge pixels");
+        // Native's layers where the triangle holds the pixel centre.
+        let ids_on = out.ids.iter().filter(|i| i[0] == 1).count();
+        let inside = (0..(W * H) as i64)
+            .filter(|i| {
+                let (x, y) = (i % W as i64, i / W as i64);
+                let local: Poly = poly
+                    .iter()
+                    .map(|p| [p[0] - x as f64, p[1] - y as f64])
+                    .collect();
+                reference::inside(&local, [0.5, 0.5])
+            })
+            .count();
+        assert!(ids_on.abs_diff(inside) <= 2, "{ids_on} vs {inside}");
+        assert!(
+            out.depth
+                .iter()
+                .filter(|d| d.is_finite())
+                .all(|&d| (d - 5.0).abs() < 1e-4)
+        );
+    }
+    assert_clean(&gpu);
+}
+
+/// A quad cut into a grid of triangles around jittered interior vertices, with mixed windings.
+fn jittered_grid(rng: &mut Rng, n: usize, x0: f32, x1: f32, y0: f32, y1: f32, z: f32) -> Object {
+    let mut verts = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let mut u = i as f32 / n as f32;
+            let mut v = j as f32 / n as f32;
+            if i > 0 && i < n && j > 0 && j < n {
+                u += (rng.next() as f32 - 0.5) * 0.6 / n as f32;
+                v += (rng.next() as f32 - 0.5) * 0.6 / n as f32;
+            }
+            verts.push([x0 + u * (x1 - x0), y0 + v * (y1 - y0), z]);
+        }
+    }
+    let mut idx = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let a = (j * (n + 1) + i) as u32;
+            let (b, c, d) = (a + 1, a + n as u32 + 1, a + n as u32 + 2);
+            let (t1, t2) = if (i + j) % 2 == 0 {
+                ([a, b, d], [a, d, c])
+            } else {
+                ([a, d, b], [a, c, d])
+            };
+            idx.extend_from_slice(&t1);
+            idx.extend_from_slice(&t2);
+        }
+    }
+    mesh("grid", &verts, idx, 0)
+}
+
+#[test]
+fn abutting_triangles_add_up_to_the_pixel_without_a_seam() {
+    let gpu = gpu();
+    let mut rng = Rng(7);
+    let grid = jittered_grid(&mut rng, 9, -2.3, 2.1, -1.7, 1.9, 0.0);
+    let (c, bg) = ([0.25, 0.5, 1.0], [1.0, 0.0, 0.0]);
+    let s = scene(vec![grid], vec![emissive("e", c)], bg);
+    // The union's outline: the quad's corners.
+    let o = &s.objects[0];
+    let n = 9usize;
+    let corner = |i: usize, j: usize| project(&s, o.vertices[j * (n + 1) + i].pos);
+    let outline: Poly = vec![corner(0, 0), corner(n, 0), corner(n, n), corner(0, n)];
+    let out = render(&gpu, &s, "analytic");
+    let cov = coverage_of(&out);
+    let (mut interior, mut seams) = (0, 0);
+    for y in 0..H as i64 {
+        for x in 0..W as i64 {
+            let i = (y * W as i64 + x) as usize;
+            let (a, _) = reference::coverage(&outline, x, y);
+            assert!(
+                (f64::from(cov[i]) - a).abs() < 2e-4,
+                "({x}, {y}): {} vs {a}",
+                cov[i]
+            );
+            assert_blend(&out, i, a, c, bg, "grid");
+            if a == 1.0 {
+                interior += 1;
+                // Inside the mesh the triangles' coverages add up to 1 to rounding.
+                if (f64::from(cov[i]) - 1.0).abs() > 1e-5 {
+                    seams += 1;
+                }
+            }
+        }
+    }
+    assert!(interior > 500, "{interior}");
+    assert_eq!(seams, 0, "interior pixels whose coverage is not 1");
+    assert_clean(&gpu);
+}
+
+#[test]
+fn an_opaque_mesh_in_front_of_another_hides_it_exactly() {
+    let gpu = gpu();
+    let back = mesh(
+        "back",
+        &[
+            [-9.0, -9.0, -1.0],
+            [9.0, -9.0, -1.0],
+            [9.0, 9.0, -1.0],
+            [-9.0, 9.0, -1.0],
+        ],
+        vec![0, 1, 2, 0, 2, 3],
+        1,
+    );
+    // A tilted quad in front: fully covers some pixels, partly covers others.
+    let front = mesh(
+        "front",
+        &[
+            [-1.7, -0.9, 0.5],
+            [1.2, -1.4, 0.5],
+            [1.9, 1.1, 0.5],
+            [-1.1, 1.6, 0.5],
+        ],
+        vec![0, 1, 2, 0, 2, 3],
+        0,
+    );
+    let (cf, cb) = ([3.0, 0.5, 0.25], [0.125, 1.0, 0.5]);
+    let s = scene(
+        vec![back, front],
+        vec![emissive("f", cf), emissive("b", cb)],
+        [0.0; 3],
+    );
+    let o = &s.objects[1];
+    let outline: Poly = (0..4).map(|k| project(&s, o.vertices[k].pos)).collect();
+    let out = render(&gpu, &s, "analytic");
+    let cov = coverage_of(&out);
+    let (mut full, mut partial) = (0, 0);
+    for y in 0..H as i64 {
+        for x in 0..W as i64 {
+            let i = (y * W as i64 + x) as usize;
+            let (a, _) = reference::coverage(&outline, x, y);
+            assert!(
+                (cov[i] - 1.0).abs() < 1e-5,
+                "({x}, {y}) coverage {}",
+                cov[i]
+            );
+            // The back quad fills exactly what the front one leaves.
+            assert_blend(&out, i, a, cf, cb, "front over back");
+            if a == 1.0 {
+                full += 1;
+            } else if a > 0.0 {
+                partial += 1;
+            }
+        }
+    }
+    assert!(full > 200 && partial > 40, "{full} full, {partial} partial");
+    assert_clean(&gpu);
+}
+
+#[test]
+fn the_seed_shortcut_is_flagged_exactly_where_it_is_off() {
+    let gpu = gpu();
+    // Steep and shallow edges.
+    let tri = mesh(
+        "tri",
+        &[[-2.4, -1.6, 0.0], [-1.9, 2.1, 0.0], [2.6, 0.3, 0.0]],
+        vec![0, 1, 2],
+        0,
+    );
+    let s = scene(vec![tri], vec![emissive("e", [1.0; 3])], [0.0; 3]);
+    let poly = screen_poly(&s, &s.objects[0], 0);
+    let out = render(&gpu, &s, "analytic:seed");
+    let flags = &out.analytic.as_ref().expect("analytic layers").seed_differs;
+    let cov = coverage_of(&out);
+    let (mut off, mut flagged) = (0, 0);
+    for y in 0..H as i64 {
+        for x in 0..W as i64 {
+            let i = (y * W as i64 + x) as usize;
+            let exact = reference::coverage(&poly, x, y).0;
+            let seed = reference::seed_coverage(&poly, x, y);
+            let d = (seed - exact).abs();
+            // Around the 1e-3 threshold the GPU's f32 and this f64 may disagree.
+            if d > 2e-3 {
+                off += 1;
+                assert_eq!(flags[i], 1, "({x}, {y}) off by {d} but not flagged");
+            } else if d < 5e-4 {
+                assert_eq!(flags[i], 0, "({x}, {y}) off by {d} but flagged");
+            }
+            flagged += usize::from(flags[i]);
+            // The seed mode composites the shortcut's area.
+            if seed > 0.0 {
+                assert!(
+                    (f64::from(cov[i]) - seed.min(1.0)).abs() < 2e-3,
+                    "({x}, {y}): {} vs seed {seed}",
+                    cov[i]
+                );
+            }
+        }
+    }
+    assert!(off > 10 && flagged >= off, "{off} off, {flagged} flagged");
+    assert_clean(&gpu);
+}
+
+#[test]
+fn every_touched_pixel_is_reached_by_slivers_and_subpixel_triangles() {
+    let gpu = gpu();
+    let mut rng = Rng(99);
+    // Many tiny and thin triangles at distinct depths; without the cull pass each pixel lists one
+    // fragment per triangle that covers any of it.
+    let mut verts = Vec::new();
+    let mut idx = Vec::new();
+    for k in 0..400 {
+        let z = -(k as f32) * 0.001;
+        let (cx, cy) = (rng.range(-2.5, 2.5) as f32, rng.range(-1.8, 1.8) as f32);
+        let tri: [[f32; 3]; 3] = if k % 2 == 0 {
+            // Sub-pixel: ~0.01 world units (a pixel is ~0.09 at this distance).
+            let mut r = || (rng.next() as f32 - 0.5) * 0.02;
+            [
+                [cx, cy, z],
+                [cx + r(), cy + r(), z],
+                [cx + r(), cy + r(), z],
+            ]
+        } else {
+            // Slivers ~1e-4 wide.
+            let (dx, dy) = (rng.range(-0.8, 0.8) as f32, rng.range(-0.8, 0.8) as f32);
+            [
+                [cx, cy, z],
+                [cx + dx, cy + dy, z],
+                [cx + dx * 0.5 + 1e-4, cy + dy * 0.5, z],
+            ]
+        };
+        for v in tri {
+            verts.push(v);
+        }
+        idx.extend_from_slice(&[3 * k, 3 * k + 1, 3 * k + 2]);
+    }
+    let obj = mesh("dust", &verts, idx, 0);
+    let s = scene(vec![obj], vec![emissive("e", [1.0; 3])], [0.0; 3]);
+    let out = render(&gpu, &s, "analytic:nocull:frags=64");
+    let a = out.analytic.as_ref().unwrap();
+    let o = &s.objects[0];
+    let mut checked = 0;
+    for y in 0..H as i64 {
+        for x in 0..W as i64 {
+            let i = (y * W as i64 + x) as usize;
+            let areas: Vec<f64> = (0..o.indices.len() / 3)
+                .map(|t| reference::coverage(&screen_poly(&s, o, t), x, y).0)
+                .collect();
+            let sure = areas.iter().filter(|&&a| a > 1e-4).count() as u32;
+            let maybe = areas.iter().filter(|&&a| a > 0.0).count() as u32;
+            assert!(
+                a.fragments[i] >= sure && a.fragments[i] <= maybe + 1,
+                "({x}, {y}): {} fragments, {sure} to {maybe} triangles touch it",
+                a.fragments[i]
+            );
+            checked += usize::from(sure > 0);
+        }
+    }
+    assert!(checked > 300, "{checked}");
+    assert!(a.overflow.iter().all(|&o| o == 0));
+    assert_clean(&gpu);
+}
+
+#[test]
+fn a_full_pool_is_counted_as_overflow_and_a_pool_that_cannot_fit_is_refused() {
+    let gpu = gpu();
+    let mut rng = Rng(5);
+    // Twelve overlapping jittered grids at different depths: several fragments per pixel.
+    let objects: Vec<Object> = (0..12)
+        .map(|k| {
+            let z = -0.1 * k as f32;
+            let mut g = jittered_grid(&mut rng, 6, -2.0, 2.0, -1.5, 1.5, z);
+            // Shift each so that its triangles' edges fall inside other grids' pixels.
+            for v in &mut g.vertices {
+                v.pos[0] += 0.013 * k as f32;
+            }
+            g
+        })
+        .collect();
+    let s = scene(objects, vec![emissive("e", [1.0; 3])], [0.0; 3]);
+    let out = render(&gpu, &s, "analytic:nocull:frags=1");
+    let a = out.analytic.as_ref().unwrap();
+    let over: u32 = a.overflow.iter().sum();
+    assert!(over > 0, "no overflow with one slot per pixel");
+    assert!(out.color.iter().all(|h| h.to_f32().is_finite()));
+    // Overflowing pixels are flagged, not silently dropped: fragments listed > those in the pool.
+    let listed: u64 = a.fragments.iter().map(|&f| u64::from(f)).sum();
+    assert!(listed > u64::from(W * H), "{listed}");
+    assert_clean(&gpu);
+
+    // 8192 x 8192 x 8 fragments x 24 bytes: refused with the estimate, before the pool exists.
+    let shaders = cbr_render::shader_library();
+    let mut big = s.clone();
+    (big.settings.width, big.settings.height) = (8192, 8192);
+    let settings = RenderSettings::new(8192, 8192, Spec::parse("analytic:frags=8").unwrap());
+    let err = match Renderer::new(&gpu, &shaders, &big, settings) {
+        Ok(_) => panic!("an 12.9 GB fragment pool was accepted"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        err.contains("15032385536 bytes") && err.contains("maxStorageBufferRange"),
+        "{err}"
+    );
+}
