@@ -44,6 +44,15 @@ bench: setup
     python3 scripts/antialiasing.py --cbr ./target/release/cbr -o {{out}}/bench/aa
     @echo "[bench] temporal anti-aliasing: FXAA, TAA, checkerboard + TAA against ssaa:16, cost at 1280x720 -> docs/post-aa.md"
     python3 scripts/post-aa.py --cbr ./target/release/cbr -o {{out}}/bench/post-aa
+    @echo "[bench] analytic coverage AA against ssaa:32 (demo 320x180, Sibenik 160x90) -> docs/analytic.md"
+    just bench-analytic
+
+# analytic coverage AA, its seed shortcut and the sample-based techniques against the 1024-sample
+# ground truth (ssaa:32: ~3 min a frame of the demo at 320x180 on lavapipe, cached in out/cache).
+bench-analytic: setup
+    CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench builtin:demo --width 320 --height 180 --warmup 1 --frames 2 --reference ssaa:32 --techniques native,msaa:4,ssaa:16,analytic,analytic:seed,analytic:nocull -o {{out}}/bench/analytic/demo
+    CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench scenes/sibenik.toml --width 160 --height 90 --warmup 0 --frames 1 --reference ssaa:32 --techniques native,msaa:4,ssaa:16,analytic,analytic:seed,analytic:nocull -o {{out}}/bench/analytic/sibenik
+    python3 scripts/analytic-table.py {{out}}/bench/analytic/demo/bench.json {{out}}/bench/analytic/sibenik/bench.json
 
 # Format check, clippy, then the whole test suite on lavapipe with validation on.
 test: lint

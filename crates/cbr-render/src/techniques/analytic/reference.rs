@@ -170,9 +170,18 @@ mod tests {
 
     #[test]
     fn the_seed_is_exact_for_shallow_edges_and_not_for_steep_ones() {
-        // A shallow edge (slope 0.2) across columns without vertices: exact.
+        // A shallow edge (slope 0.2) across columns without vertices: exact in the columns where
+        // the edge stays within one pixel; off where it crosses a row boundary inside the column.
         let shallow = vec![[-10.0, 0.3], [20.0, 6.3], [-10.0, 20.0]];
-        for x in 0..8 {
+        for x in 0..8i64 {
+            let yl = 0.3 + (x as f64 + 10.0) * 0.2;
+            if yl.floor() != (yl + 0.2).floor() {
+                let off = (0..8)
+                    .map(|y| (seed_coverage(&shallow, x, y) - coverage(&shallow, x, y).0).abs())
+                    .fold(0.0, f64::max);
+                assert!(off > 1e-4, "column {x}: {off}");
+                continue;
+            }
             for y in 0..4 {
                 let e = coverage(&shallow, x, y).0;
                 assert!((seed_coverage(&shallow, x, y) - e).abs() < 1e-12, "{x} {y}");
