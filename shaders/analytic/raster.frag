@@ -111,9 +111,17 @@ void main() {
     float lod_scale = exp2(frame.ambient.w);
     vec2 gx = (uv_at(bx) - uv) * lod_scale;
     vec2 gy = (uv_at(by) - uv) * lod_scale;
+    // Alpha-tested materials: the fraction of the covered part that passes the test, from the
+    // alpha at the shading point and its change over one pixel (alpha taken as linear across the
+    // pixel); such a fragment has holes, so its mask neither hides nor is hidden.
+    float alpha_pass = 1.0;
     if (mat.tex.y >= 0) {
         float a = textureGrad(mask_tex, uv, gx, gy)[mat.tex.z];
-        if (a < 0.5) discard;
+        float ax = textureGrad(mask_tex, uv + gx, gx, gy)[mat.tex.z];
+        float ay = textureGrad(mask_tex, uv + gy, gx, gy)[mat.tex.z];
+        float width = abs(ax - a) + abs(ay - a);
+        alpha_pass = clamp((a - 0.5) / max(width, 1e-4) + 0.5, 0.0, 1.0);
+        if (alpha_pass <= 0.0) discard;
     }
     vec3 albedo = mat.kd.rgb;
     if (mat.tex.x >= 0) albedo *= textureGrad(albedo_tex, uv, gx, gy).rgb;
@@ -136,6 +144,8 @@ void main() {
     coverage = seed_coverage(p, n, mask);
     if (abs(coverage - cov.area) > 1e-3) flags |= 1u;
 #endif
+    coverage *= alpha_pass;
+    if (mat.tex.y >= 0) flags |= 2u;
     if (mask == 0u) {
         mask = nearest_sample_bit(cov.mean_point);
         flags |= 2u;  // a stand-in bit: never used to hide this fragment
