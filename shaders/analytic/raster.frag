@@ -1,12 +1,17 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_ARB_gpu_shader_int64 : require
+#define EMPTY_KEY 0xFFFFFFFFFFFFFFFFul  // a slot no fragment took
+#extension GL_EXT_shader_atomic_int64 : require
 // `analytic`, fragment stage: one invocation per (triangle, pixel it may touch). Computes the
-// exact area of the pixel the triangle covers; with CULL_PASS, records for pixels a triangle
-// covers entirely the farthest depth of that triangle over the pixel (a bound behind which
-// nothing in the pixel can be seen); otherwise drops fragments wholly behind that bound, shades
-// the rest once at the centroid of the covered part, and appends (depth, coverage, colour,
-// sample mask) to the pixel's fragment list. Fragments whose triangle holds the pixel centre
-// also write native's depth, velocity and IDs through the depth test.
+// exact area of the pixel the triangle covers and the fragment's sort key (depth at the pixel
+// centre, then object and primitive). SELECT_PASS: inserts the key into the pixel's K nearest
+// (a 64-bit atomicMin chain: each slot keeps the smaller key and passes the larger on, so the
+// slots end sorted and hold the K nearest whatever the order of arrival) and counts the
+// fragment. Otherwise: a fragment whose key is among its pixel's K is shaded once, at the
+// centroid of its covered part, and writes (coverage, sample mask, colour) into that slot.
+// Fragments whose triangle holds the pixel centre also write native's depth, velocity and IDs
+// through the depth test.
 #include "../inc/scene_types.glsl"
 
 layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
@@ -16,11 +21,9 @@ layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer Lights { Light
 layout(set = 1, binding = BINDING_ALBEDO) uniform sampler2D albedo_tex;
 layout(set = 1, binding = BINDING_MASK) uniform sampler2D mask_tex;
 layout(set = 1, binding = BINDING_BUMP) uniform sampler2D bump_tex;
-layout(std430, set = 2, binding = BINDING_HEADS) buffer Heads { uint heads[]; };
-layout(std430, set = 2, binding = BINDING_NODES) buffer Nodes { uint nodes[]; };
-layout(std430, set = 2, binding = BINDING_BOUND) buffer Bound { uint bound[]; };
-layout(std430, set = 2, binding = BINDING_LOST) buffer Lost { uint lost[]; };
-layout(std430, set = 2, binding = BINDING_STATS) buffer Stats { uint allocated; } stats;
+layout(std430, set = 2, binding = BINDING_KEYS) buffer Keys { uint64_t keys[]; };
+layout(std430, set = 2, binding = BINDING_SLOTS) buffer Slots { uvec4 slots[]; };
+layout(std430, set = 2, binding = BINDING_COUNTS) buffer Counts { uint counts[]; };
 layout(push_constant) uniform Push { uint object_index; } pc;
 
 #include "../inc/shading.glsl"
@@ -28,7 +31,7 @@ layout(push_constant) uniform Push { uint object_index; } pc;
 #define RASTER_IO in
 #include "raster_io.glsl"
 
-#ifndef CULL_PASS
+#ifndef SELECT_PASS
 layout(location = 0) out vec2 o_velocity;
 layout(location = 1) out uvec2 o_ids;
 #endif
@@ -83,21 +86,22 @@ void main() {
     uint pixel = uint(pix.y) * uint(frame.output_size.x) + uint(pix.x);
     ObjectData o = objects[pc.object_index];
     MaterialData mat = materials[o.ids.y];
-    float z00 = depth_at(corner);
-    float z10 = depth_at(corner + vec2(1.0, 0.0));
-    float z01 = depth_at(corner + vec2(0.0, 1.0));
-    float z11 = depth_at(corner + vec2(1.0, 1.0));
-#ifdef CULL_PASS
-    // Reverse-Z: nearer is larger. The bound is the largest "farthest point over the pixel" of
-    // the opaque triangles covering the whole pixel.
-    if (cov.area >= 1.0 - 1e-6 && mat.tex.y < 0) {
-        float zfar = max(min(min(z00, z10), min(z01, z11)), 0.0);
-        atomicMax(bound[pixel], floatBitsToUint(zfar));
+    // The sort depth: the plane's depth at the pixel centre (a point common to every fragment of
+    // the pixel, so coplanar surfaces compare equal there, as in a depth buffer), clamped to the
+    // depths the polygon spans so that a sliver's plane is not extrapolated far; without its 4
+    // lowest mantissa bits (surfaces within ~1e-6 count as coplanar, and the first drawn wins).
+    float zlo = 1e30;
+    float zhi = -1e30;
+    for (int i = 0; i < n; ++i) {
+        float zi = depth_at(screen[i]);
+        zlo = min(zlo, zi);
+        zhi = max(zhi, zi);
     }
-    discard;
-#else
-    float znear = max(max(z00, z10), max(z01, z11));
-    if (znear < uintBitsToFloat(bound[pixel])) discard;
+    float z = clamp(depth_at(corner + 0.5), zlo, zhi);
+    // Reverse-Z: nearer is larger, and the smaller key must be the nearer.
+    uint zkey = 0xFFFFFFFu - (floatBitsToUint(max(z, 0.0)) >> 4u);
+    uint64_t key = (uint64_t(zkey) << 32) | uint64_t((o.ids.x << 20u) | (g_info.y & 0xFFFFFu));
+    uint base = pixel * uint(K_SLOTS);
 
     // Shading at the covered part's centroid: for attributes affine in the screen, their mean
     // over the covered part; and always a point of the triangle (no extrapolated normals or UVs).
@@ -123,6 +127,23 @@ void main() {
         alpha_pass = clamp((a - 0.5) / max(width, 1e-4) + 0.5, 0.0, 1.0);
         if (alpha_pass <= 0.0) discard;
     }
+#ifdef SELECT_PASS
+    atomicAdd(counts[pixel], 1u);
+    uint64_t cand = key;
+    for (int i = 0; i < K_SLOTS; ++i) {
+        uint64_t old = atomicMin(keys[base + uint(i)], cand);
+        if (old == EMPTY_KEY) break;
+        cand = max(old, cand);
+    }
+    discard;
+#else
+    float orient = orientation(p, n);
+    int slot = -1;
+    for (int i = 0; i < K_SLOTS; ++i) {
+        if (keys[base + uint(i)] == key) slot = i;
+    }
+    if (slot >= 0) {
+    // (the payload block is not indented: it is the whole shading path)
     vec3 albedo = mat.kd.rgb;
     if (mat.tex.x >= 0) albedo *= textureGrad(albedo_tex, uv, gx, gy).rgb;
     vec3 world = world_at(b);
@@ -136,7 +157,6 @@ void main() {
     }
     vec3 color = shade(world, nrm, albedo, mat, frame);
 
-    float orient = orientation(p, n);
     uint mask = sample_mask(p, n, orient);
     float coverage = cov.area;
     uint flags = 0u;
@@ -150,19 +170,8 @@ void main() {
         mask = nearest_sample_bit(cov.mean_point);
         flags |= 2u;  // a stand-in bit: never used to hide this fragment
     }
-    float z = depth_at(sp);
-    uint idx = atomicAdd(stats.allocated, 1u);
-    if (idx < NODE_CAPACITY) {
-        uint base = idx * NODE_WORDS;
-        nodes[base + 1u] = floatBitsToUint(z);
-        nodes[base + 2u] = floatBitsToUint(coverage);
-        nodes[base + 3u] = mask;
-        nodes[base + 4u] = packHalf2x16(color.rg);
-        nodes[base + 5u] = (packHalf2x16(vec2(color.b, 0.0)) & 0xFFFFu) | ((flags | (min(o.ids.x, 0x3FFFu) << 2u)) << 16u);
-        nodes[base + 6u] = g_info.y;
-        nodes[base] = atomicExchange(heads[pixel], idx);
-    } else {
-        atomicAdd(lost[pixel], 1u);
+    slots[base + uint(slot)] = uvec4(floatBitsToUint(coverage), mask, packHalf2x16(color.rg),
+                                     (packHalf2x16(vec2(color.b, 0.0)) & 0xFFFFu) | (flags << 16u));
     }
 
     // Native's layers: the triangle holding the pixel centre, nearest through the depth test.

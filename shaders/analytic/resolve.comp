@@ -1,8 +1,8 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// `analytic`, resolve: per pixel, the fragment list front to back. The visibility model:
-// fragments sorted by depth at their shading point (nearer first; ties by object, then
-// primitive, so the order never depends on the order of the atomics). A fragment whose sample
+// `analytic`, resolve: per pixel, its K nearest fragments front to back. The visibility model:
+// fragments sorted by depth at the pixel centre (nearer first; ties by object, then primitive,
+// so the order never depends on the order of the atomics). A fragment whose sample
 // mask lies wholly under the masks of nearer fragments of the same object is hidden: the back
 // faces of a closed mesh at its silhouette, the far side of a mesh folded over itself. Every
 // other fragment adds its exact coverage clamped to what nearer ones left, v = min(a, 1 - sum),
@@ -12,17 +12,18 @@
 // what the near one leaves); approximate where two partial surfaces overlap in one pixel
 // (docs/analytic.md measures it against ssaa:32). A fragment too small to hold a mask sample
 // carries a stand-in bit that neither hides nor is hidden (either would open seams in meshes).
-// Lists longer than MAX_FRAGS keep the nearest MAX_FRAGS; those dropped and those that found no
-// room in the pool count as overflow, and an overflowing pixel's listed surfaces are
-// renormalised over their coverage instead of letting the background show through where a
-// surface was lost.
+// Only the K nearest fragments of a pixel are kept (the select pass); those beyond count as
+// overflow, and an overflowing pixel's listed surfaces are renormalised over their coverage
+// instead of letting the background show through where a dropped surface would have been.
+#extension GL_ARB_gpu_shader_int64 : require
+#define EMPTY_KEY 0xFFFFFFFFFFFFFFFFul  // a slot no fragment took
 #include "../inc/scene_types.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(std430, set = 0, binding = BINDING_HEADS) readonly buffer Heads { uint heads[]; };
-layout(std430, set = 0, binding = BINDING_NODES) readonly buffer Nodes { uint nodes[]; };
-layout(std430, set = 0, binding = BINDING_LOST) readonly buffer Lost { uint lost[]; };
+layout(std430, set = 0, binding = BINDING_KEYS) readonly buffer Keys { uint64_t keys[]; };
+layout(std430, set = 0, binding = BINDING_SLOTS) readonly buffer Slots { uvec4 slots[]; };
+layout(std430, set = 0, binding = BINDING_COUNTS) readonly buffer Counts { uint counts[]; };
 layout(set = 0, binding = BINDING_OUT_COLOR, rgba16f) uniform writeonly image2D out_color;
 layout(set = 0, binding = BINDING_OUT_COVERAGE, r32f) uniform writeonly image2D out_coverage;
 layout(set = 0, binding = BINDING_OUT_COUNTS, rgba32ui) uniform writeonly uimage2D out_counts;
@@ -31,57 +32,26 @@ layout(push_constant) uniform Push {
     uvec4 size;       // width, height
 } pc;
 
-#define MAX_FRAGS 16
-#define END 0xFFFFFFFFu
-
-// Counts' channels: fragments in the list, overflow (dropped + lost), flags, visible fragments.
+// Counts' channels: fragments that touched the pixel, overflow (beyond the K nearest), flags,
+// visible fragments.
 #define FLAG_EDGE 1u      // a visible fragment covers the pixel partly, or the background shows
 #define FLAG_SEED 2u      // analytic:seed: a visible fragment's shortcut area is off by > 1e-3
 #define FLAG_OVERFLOW 4u
-
-// Sort order: larger is nearer (reverse-Z depth), then the smaller object, then primitive.
-bool nearer(float za, uint oa, uint pa, float zb, uint ob, uint pb) {
-    return za > zb || (za == zb && (oa < ob || (oa == ob && pa < pb)));
-}
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (px.x >= int(pc.size.x) || px.y >= int(pc.size.y)) return;
     uint pixel = uint(px.y) * pc.size.x + uint(px.x);
+    uint base = pixel * uint(K_SLOTS);
 
-    uint idx[MAX_FRAGS];
-    float zs[MAX_FRAGS];
-    uint objs[MAX_FRAGS];
-    uint prims[MAX_FRAGS];
+    // The slots hold the K nearest keys in order (the select pass's insertion).
+    uint objs[K_SLOTS];
     int count = 0;
-    uint listed = 0u;
-    uint dropped = 0u;
-    for (uint i = heads[pixel]; i != END; i = nodes[i * NODE_WORDS]) {
-        ++listed;
-        float z = uintBitsToFloat(nodes[i * NODE_WORDS + 1u]);
-        uint obj = nodes[i * NODE_WORDS + 5u] >> 18u;
-        uint prim = nodes[i * NODE_WORDS + 6u];
-        if (count == MAX_FRAGS) {
-            // Full: keep the nearest; the farthest goes.
-            ++dropped;
-            int l = MAX_FRAGS - 1;
-            if (!nearer(z, obj, prim, zs[l], objs[l], prims[l])) continue;
-            --count;
-        }
-        int j = count;
-        while (j > 0 && nearer(z, obj, prim, zs[j - 1], objs[j - 1], prims[j - 1])) {
-            idx[j] = idx[j - 1];
-            zs[j] = zs[j - 1];
-            objs[j] = objs[j - 1];
-            prims[j] = prims[j - 1];
-            --j;
-        }
-        idx[j] = i;
-        zs[j] = z;
-        objs[j] = obj;
-        prims[j] = prim;
+    for (int k = 0; k < K_SLOTS; ++k) {
+        uint64_t key = keys[base + uint(k)];
+        if (key == EMPTY_KEY) break;
+        objs[k] = uint(key & 0xFFFFFFFFul) >> 20u;
         ++count;
-        if (listed > 1u << 20) break;  // a cycle would be a bug; never spin forever
     }
 
     float sum = 0.0;
@@ -89,38 +59,42 @@ void main() {
     uint flags = 0u;
     uint visible = 0u;
     for (int k = 0; k < count; ++k) {
-        uint b = idx[k] * NODE_WORDS;
-        uint mask = nodes[b + 3u];
-        uint w5 = nodes[b + 5u];
-        if (((w5 >> 17u) & 1u) == 0u) {
+        uvec4 s = slots[base + uint(k)];
+        uint mask = s.y;
+        uint fflags = s.w >> 16u;
+        if ((fflags & 2u) == 0u) {
             // Hidden under nearer fragments of the same object?
             uint under = 0u;
             for (int m = 0; m < k; ++m) {
-                uint bm = idx[m] * NODE_WORDS;
-                bool stand_in = ((nodes[bm + 5u] >> 17u) & 1u) != 0u;
-                if (objs[m] == objs[k] && !stand_in) under |= nodes[bm + 3u];
+                uvec4 t = slots[base + uint(m)];
+                bool stand_in = ((t.w >> 17u) & 1u) != 0u;
+                if (objs[m] == objs[k] && !stand_in) under |= t.y;
             }
             if ((mask & ~under) == 0u) continue;
         }
-        float a = uintBitsToFloat(nodes[b + 2u]);
-        if (((w5 >> 16u) & 1u) != 0u) flags |= FLAG_SEED;
+        float a = uintBitsToFloat(s.x);
+        if ((fflags & 1u) != 0u) flags |= FLAG_SEED;
         float v = min(a, 1.0 - sum);
         if (v <= 0.0) continue;
-        vec3 c = vec3(unpackHalf2x16(nodes[b + 4u]), unpackHalf2x16(w5 & 0xFFFFu).x);
+        vec3 c = vec3(unpackHalf2x16(s.z), unpackHalf2x16(s.w & 0xFFFFu).x);
         color += v * c;
         sum += v;
         ++visible;
         if (a < 1.0 - 1e-6) flags |= FLAG_EDGE;
     }
-    uint overflow = dropped + lost[pixel];
+    uint seen = counts[pixel];
+    uint overflow = seen - uint(count);
     if (overflow > 0u) flags |= FLAG_OVERFLOW;
     if (sum < 1.0 - 1e-6 && visible > 0u) flags |= FLAG_EDGE;
-    if (overflow > 0u && sum > 0.0) {
+    if (overflow > 0u && sum > 0.0 && sum < 1.0) {
+        // Surfaces beyond the K nearest were dropped: spread the listed ones over the pixel
+        // rather than letting the background show where a dropped surface would have been.
         color /= sum;
+        sum = 1.0;
     } else {
         color += max(1.0 - sum, 0.0) * pc.background.rgb;
     }
     imageStore(out_color, px, vec4(color, 1.0));
     imageStore(out_coverage, px, vec4(sum));
-    imageStore(out_counts, px, uvec4(listed + lost[pixel], overflow, flags, visible));
+    imageStore(out_counts, px, uvec4(seen, overflow, flags, visible));
 }

@@ -72,6 +72,8 @@ pub struct BenchOptions {
     pub reference: String,
     /// Render cacheable references afresh instead of reading the frame cache.
     pub no_cache: bool,
+    /// Render and time cacheable techniques among the rows instead of reading the frame cache.
+    pub time_cached_rows: bool,
     /// k of the disocclusion FLIP: a pixel counts when its reference object ID differs from its
     /// ID in any of the k frames before (default 4).
     pub disocclusion_frames: Option<u32>,
@@ -281,9 +283,14 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
         let mut all = vec![(ref_config, rm)];
         for c in configs {
             bar.set_message(format!("{} {w}x{h}", c.name));
-            // Cacheable techniques (ssaa) among the rows share the reference's cache.
+            // Cacheable techniques (ssaa) among the rows share the reference's cache, unless
+            // their time is wanted (--time-cached-rows).
             let mut c = c.clone();
-            c.settings.cache = cache.clone();
+            c.settings.cache = if a.time_cached_rows {
+                None
+            } else {
+                cache.clone()
+            };
             let role = Role::Against {
                 name: &reference,
                 frames: &ref_frames,

@@ -38,6 +38,8 @@ pub struct Caps {
     /// Largest storage buffer range one descriptor can bind (lavapipe: 128 MiB).
     pub max_storage_buffer_range: u32,
     pub fragment_stores_and_atomics: bool,
+    /// 64-bit integer atomics on storage buffers (shaderInt64 + shaderBufferInt64Atomics).
+    pub int64_atomics: bool,
 }
 
 /// The checkerboard raster layouts of DESIGN.md.
@@ -145,6 +147,7 @@ mod tests {
             shader_float16: true,
             max_storage_buffer_range: 1 << 27,
             fragment_stores_and_atomics: true,
+            int64_atomics: true,
             sample_rate_shading: true,
             sample_counts: vec![1, 4],
             integer_color_sample_counts: vec![1],

@@ -292,6 +292,7 @@ fn caps_of(instance: &ash::Instance, pd: vk::PhysicalDevice, p: &Probe) -> Caps 
         shader_float16: p.f12.shader_float16 != 0,
         max_storage_buffer_range: l.max_storage_buffer_range,
         fragment_stores_and_atomics: p.f10.fragment_stores_and_atomics != 0,
+        int64_atomics: p.f10.shader_int64 != 0 && p.f12.shader_buffer_int64_atomics != 0,
     }
 }
 
@@ -448,6 +449,7 @@ impl Gpu {
             .sample_rate_shading(caps.sample_rate_shading)
             .shader_clip_distance(caps.clip_distance)
             .geometry_shader(caps.geometry_shader)
+            .shader_int64(caps.int64_atomics)
             .pipeline_statistics_query(caps.pipeline_statistics)
             .fragment_stores_and_atomics(true)
             .shader_storage_image_write_without_format(
@@ -458,7 +460,8 @@ impl Gpu {
             .host_query_reset(true)
             .shader_output_layer(caps.shader_output_layer)
             .scalar_block_layout(p.f12.scalar_block_layout != 0)
-            .shader_float16(p.f12.shader_float16 != 0);
+            .shader_float16(p.f12.shader_float16 != 0)
+            .shader_buffer_int64_atomics(caps.int64_atomics);
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
             .dynamic_rendering(true)
             .synchronization2(true)

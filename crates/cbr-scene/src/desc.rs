@@ -52,6 +52,9 @@ pub struct SceneDesc {
     pub ambient: Option<[f32; 3]>,
     pub background: Option<[f32; 3]>,
     pub bump: Option<bool>,
+    /// `false`: drop every material's textures (albedo, alpha mask, bump): geometry and flat
+    /// materials only, to tell geometric aliasing from shading aliasing.
+    pub textures: Option<bool>,
     pub camera: Option<CameraDesc>,
     pub lights: Option<LightsDesc>,
     #[serde(default)]

@@ -213,6 +213,13 @@ fn apply_settings(scene: &mut Scene, d: &desc::SceneDesc, path: &Path) -> Result
     s.ambient = d.ambient.unwrap_or(s.ambient);
     s.background = d.background.unwrap_or(s.background);
     s.bump = d.bump.unwrap_or(s.bump);
+    if d.textures == Some(false) {
+        for m in &mut scene.materials {
+            m.kd_tex = None;
+            m.alpha = AlphaSource::Opaque;
+            m.bump_tex = None;
+        }
+    }
     Ok(())
 }
 

@@ -54,6 +54,10 @@ pub struct BenchArgs {
     /// Render cacheable references afresh instead of reading the frame cache.
     #[arg(long)]
     no_cache: bool,
+    /// Render and time cacheable techniques among the rows (ssaa:N) instead of reading their
+    /// frames from the cache; the reference still comes from the cache.
+    #[arg(long)]
+    time_cached_rows: bool,
     /// k of the disocclusion FLIP: the error over pixels whose reference object ID differs from
     /// their ID in any of the k frames before [default: 4].
     #[arg(long, value_name = "K")]
@@ -86,6 +90,7 @@ impl BenchArgs {
             crops: self.crops.clone(),
             reference: self.reference.clone(),
             no_cache: self.no_cache,
+            time_cached_rows: self.time_cached_rows,
             disocclusion_frames: self.disocclusion_frames,
             device: self.device.clone(),
             validation: self.validation,

@@ -1,17 +1,17 @@
-//! `analytic[:seed][:nocull][:frags=N]`: anti-aliasing from the exact area of each pixel each
-//! triangle covers, instead of from samples (docs/analytic.md).
+//! `analytic[:seed][:frags=K]`: anti-aliasing from the exact area of each pixel each triangle
+//! covers, instead of from samples (docs/analytic.md).
 //!
-//! Passes per frame: (1) `analytic.cull`: the conservative raster (shaders/analytic/raster.geom
-//! grows each near-clipped triangle by the pixel square, so every touched pixel is reached
-//! without conservative rasterisation) records per pixel the farthest depth of the opaque
-//! triangles that cover it entirely; (2) `analytic.raster`: the same raster computes each
-//! fragment's exact coverage (shaders/analytic/coverage.glsl), drops what lies wholly behind the
-//! bound, shades at the covered part's centroid and appends to the pixel's linked fragment list
-//! in a fixed pool; fragments holding the pixel centre also write native's depth, velocity and
-//! IDs; (3) `analytic.resolve`: front to back per pixel (resolve.comp states the model).
-//! `:seed` replaces the exact area by the seed's column shortcut and flags where it is off;
-//! `:nocull` skips pass 1 (for measuring what it saves); `:frags=N` sizes the pool at N
-//! fragments per pixel (default 8, lowered to what the device's largest storage buffer holds).
+//! Passes per frame, both through the conservative raster (shaders/analytic/raster.geom grows
+//! each near-clipped triangle by the pixel square, so every touched pixel is reached without
+//! conservative rasterisation): (1) `analytic.select`: each fragment's exact coverage
+//! (shaders/analytic/coverage.glsl) and sort key; the pixel keeps its K nearest keys (a 64-bit
+//! atomicMin chain, sorted and independent of the order of arrival) and counts every fragment;
+//! (2) `analytic.raster`: the fragments among their pixel's K are shaded once, at the centroid of
+//! the covered part, into their slot; fragments holding the pixel centre also write native's
+//! depth, velocity and IDs; (3) `analytic.resolve`: front to back per pixel (resolve.comp
+//! states the model). `:seed` replaces the exact area by the seed's column shortcut and flags
+//! where it is off; `:frags=K` keeps K fragments per pixel (default 8, lowered to what the
+//! device's largest storage buffer holds).
 
 pub mod reference;
 
@@ -30,7 +30,7 @@ use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, un
 
 pub const REGISTRATION: Registration = Registration {
     name: "analytic",
-    grammar: "analytic[:seed][:nocull][:frags=N]",
+    grammar: "analytic[:seed][:frags=K]",
     about: "exact area of each pixel covered by each triangle, per-pixel fragment lists resolved \
             front to back; `seed`: the seed's column shortcut",
     layers: &["coverage", "analytic"],
@@ -42,40 +42,41 @@ pub const REGISTRATION: Registration = Registration {
     },
 };
 
-/// Bytes of one fragment in the pool: next, depth, coverage, mask, colour (3 x f16) + flags and
-/// object ID, primitive ID.
-pub const NODE_BYTES: u64 = 28;
-/// Fragment-pool slots per pixel unless `frags=N` says otherwise.
+/// Bytes of one kept fragment: its 64-bit key (depth, object, primitive) and its slot (coverage,
+/// mask, colour as 3 x f16, flags).
+pub const KEY_BYTES: u64 = 8;
+pub const SLOT_BYTES: u64 = 16;
+/// Fragments kept per pixel unless `frags=K` says otherwise.
 pub const DEFAULT_FRAGS: u32 = 8;
+/// The key's identity field: object IDs below 2^12, primitive IDs below 2^20.
+pub const MAX_OBJECTS: usize = (1 << 12) - 1;
+pub const MAX_PRIMITIVES: usize = 1 << 20;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct AnalyticConfig {
     pub seed: bool,
-    pub cull: bool,
-    /// Pool slots per pixel asked for (`None`: the default, fitted to the device).
+    /// Fragments kept per pixel asked for (`None`: the default, fitted to the device).
     pub frags: Option<u32>,
 }
 
 pub fn parse(params: &[&str]) -> std::result::Result<AnalyticConfig, String> {
     let mut c = AnalyticConfig {
         seed: false,
-        cull: true,
         frags: None,
     };
     for p in params {
         match *p {
             "seed" => c.seed = true,
-            "nocull" => c.cull = false,
             _ => match p.strip_prefix("frags=") {
                 Some(n) => {
                     let n: u32 = n
                         .parse()
                         .ok()
-                        .filter(|&n| (1..=256).contains(&n))
-                        .ok_or_else(|| format!("analytic frags=`{n}` (1 to 256)"))?;
+                        .filter(|&n| (1..=16).contains(&n))
+                        .ok_or_else(|| format!("analytic frags=`{n}` (1 to 16)"))?;
                     c.frags = Some(n);
                 }
-                None => return Err(unknown_param("analytic", p, "seed, nocull, frags=N")),
+                None => return Err(unknown_param("analytic", p, "seed, frags=K")),
             },
         }
     }
@@ -86,13 +87,19 @@ fn needs(_: &[&str], caps: &Caps) -> Option<String> {
     if !caps.geometry_shader {
         return Some("the geometryShader feature (the conservative raster)".into());
     }
+    if !caps.int64_atomics {
+        return Some(
+            "64-bit storage-buffer atomics (shaderInt64, shaderBufferInt64Atomics: the K nearest)"
+                .into(),
+        );
+    }
     (!caps.fragment_stores_and_atomics)
         .then(|| "the fragmentStoresAndAtomics feature (fragment lists)".into())
 }
 
-/// The fragment pool for `width` x `height`: slots per pixel, or the refusal (before anything is
-/// allocated) with the bytes it would take and the device's limit. The pool is one storage
-/// buffer, so it must fit `maxStorageBufferRange`.
+/// Fragments kept per pixel at `width` x `height`, or the refusal (before anything is allocated)
+/// with the bytes it would take and the device's limit: the slots are one storage buffer of
+/// `K x 16` bytes per pixel, which must fit `maxStorageBufferRange`.
 pub fn plan_pool(
     width: u32,
     height: u32,
@@ -100,43 +107,42 @@ pub fn plan_pool(
     max_range: u32,
 ) -> std::result::Result<u32, String> {
     let px = u64::from(width) * u64::from(height);
-    let fit = (u64::from(max_range) / (px * NODE_BYTES).max(1)).min(u64::from(u32::MAX)) as u32;
-    let want = frags.unwrap_or(DEFAULT_FRAGS);
-    let refuse = |f: u32| {
+    let fit = (u64::from(max_range) / (px * SLOT_BYTES).max(1)).min(16) as u32;
+    let refuse = |k: u32| {
         format!(
-            "analytic at {width}x{height} with {f} fragments per pixel needs a fragment pool of \
-             {} bytes ({f} x {NODE_BYTES} bytes per pixel); this device binds at most {max_range} \
-             bytes in one storage buffer (maxStorageBufferRange): lower the resolution or \
-             frags=N (at most {fit} fits)",
-            px * u64::from(f) * NODE_BYTES
+            "analytic at {width}x{height} with {k} fragments per pixel needs {} bytes of fragment \
+             lists ({k} x {} bytes per pixel), the largest buffer {} bytes; this device binds at \
+             most {max_range} bytes in one storage buffer (maxStorageBufferRange): lower the \
+             resolution or frags=K (at most {fit} fits)",
+            px * u64::from(k) * (KEY_BYTES + SLOT_BYTES),
+            KEY_BYTES + SLOT_BYTES,
+            px * u64::from(k) * SLOT_BYTES
         )
     };
     match frags {
-        Some(f) if f > fit => Err(refuse(f)),
-        Some(f) => Ok(f),
-        None if fit >= 2 => Ok(want.min(fit)),
+        Some(k) if k > fit => Err(refuse(k)),
+        Some(k) => Ok(k),
+        None if fit >= 2 => Ok(DEFAULT_FRAGS.min(fit)),
         None => Err(refuse(2)),
     }
 }
 
 /// Set 2 of the raster passes (set 0: the scene's, set 1: the material's).
-pub const RASTER_BINDINGS: [BindingDesc; 5] = {
+pub const RASTER_BINDINGS: [BindingDesc; 3] = {
     use DescriptorKind::StorageBuffer as B;
     [
-        BindingDesc::one("heads", 0, B),
-        BindingDesc::one("nodes", 1, B),
-        BindingDesc::one("bound", 2, B),
-        BindingDesc::one("lost", 3, B),
-        BindingDesc::one("stats", 4, B),
+        BindingDesc::one("keys", 0, B),
+        BindingDesc::one("slots", 1, B),
+        BindingDesc::one("counts", 2, B),
     ]
 };
 
 pub const RESOLVE_BINDINGS: [BindingDesc; 6] = {
     use DescriptorKind::{StorageBuffer as B, StorageImage as I};
     [
-        BindingDesc::one("heads", 0, B),
-        BindingDesc::one("nodes", 1, B),
-        BindingDesc::one("lost", 2, B),
+        BindingDesc::one("keys", 0, B),
+        BindingDesc::one("slots", 1, B),
+        BindingDesc::one("counts", 2, B),
         BindingDesc::one("out_color", 3, I),
         BindingDesc::one("out_coverage", 4, I),
         BindingDesc::one("out_counts", 5, I),
@@ -166,7 +172,7 @@ struct Raster {
 pub struct Analytic {
     c: AnalyticConfig,
     frags: u32,
-    cull: Option<Raster>,
+    select: Raster,
     raster: Raster,
     _layouts: Vec<SetLayout>,
     scene_set: DescriptorSet,
@@ -174,12 +180,9 @@ pub struct Analytic {
     raster_set: DescriptorSet,
     resolve: Pipeline,
     resolve_set: DescriptorSet,
-    heads: Buffer,
-    nodes: Buffer,
-    bound: Buffer,
-    lost: Buffer,
-    stats: Buffer,
-    stats_rb: Buffer,
+    keys: Buffer,
+    slots: Buffer,
+    counts_buf: Buffer,
     targets: Targets,
     color: Image,
     coverage: Image,
@@ -194,7 +197,26 @@ impl Analytic {
         let frags = plan_pool(w, h, c.frags, gpu.caps().max_storage_buffer_range)
             .map_err(GpuError::Other)?;
         let px = u64::from(w) * u64::from(h);
-        let capacity = px * u64::from(frags);
+        if ctx.scene.draws.len() > MAX_OBJECTS
+            || ctx
+                .scene
+                .draws
+                .iter()
+                .any(|d| d.index_count as usize / 3 > MAX_PRIMITIVES)
+        {
+            return Err(GpuError::Other(format!(
+                "analytic keys fragments by object (< {}) and primitive (< {MAX_PRIMITIVES}); this \
+                 scene has {} objects, the largest with {} triangles",
+                MAX_OBJECTS + 1,
+                ctx.scene.draws.len(),
+                ctx.scene
+                    .draws
+                    .iter()
+                    .map(|d| d.index_count / 3)
+                    .max()
+                    .unwrap_or(0)
+            )));
+        }
         let scene_layout = SetLayout::new(gpu, "analytic.scene_layout", &SCENE_BINDINGS)?;
         let material_layout = SetLayout::new(gpu, "analytic.material_layout", &MATERIAL_BINDINGS)?;
         let raster_layout = SetLayout::new(gpu, "analytic.raster_layout", &RASTER_BINDINGS)?;
@@ -202,8 +224,8 @@ impl Analytic {
 
         let mut defines = scene_pass::shader_defines(scene_pass::LAYOUT_NATIVE);
         defines.extend(RASTER_BINDINGS.iter().map(BindingDesc::define));
-        defines.push(("NODE_CAPACITY".into(), format!("{capacity}u")));
-        defines.push(("NODE_WORDS".into(), format!("{}u", NODE_BYTES / 4)));
+        let common = [("K_SLOTS".to_string(), frags.to_string())];
+        defines.extend(common.iter().cloned());
         if c.seed {
             defines.push(("SEED".into(), "1".into()));
         }
@@ -238,18 +260,16 @@ impl Analytic {
             Ok(Raster { pipeline, name })
         };
         let raster = graphics("analytic.raster", &fs, true)?;
-        let cull = if c.cull {
+        let select = {
             let mut d = defines.clone();
-            d.push(("CULL_PASS".into(), "1".into()));
+            d.push(("SELECT_PASS".into(), "1".into()));
             let fs = ctx.shaders.compile("analytic/raster.frag", &d)?;
-            Some(graphics("analytic.cull", &fs, false)?)
-        } else {
-            None
+            graphics("analytic.select", &fs, false)?
         };
 
         let mut rdefines: Vec<(String, String)> =
             RESOLVE_BINDINGS.iter().map(BindingDesc::define).collect();
-        rdefines.push(("NODE_WORDS".into(), format!("{}u", NODE_BYTES / 4)));
+        rdefines.extend(common.iter().cloned());
         let cs = ctx.shaders.compile("analytic/resolve.comp", &rdefines)?;
         let resolve = Pipeline::compute(
             gpu,
@@ -264,22 +284,10 @@ impl Analytic {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let buffer =
             |name: &str, bytes: u64, usage| Buffer::new(gpu, name, bytes, usage, Location::GpuOnly);
-        let heads = buffer("analytic.heads", px * 4, storage)?;
-        let nodes = buffer("analytic.nodes", capacity * NODE_BYTES, storage)?;
-        let bound = buffer("analytic.bound", px * 4, storage)?;
-        let lost = buffer("analytic.lost", px * 4, storage)?;
-        let stats = buffer(
-            "analytic.stats",
-            16,
-            storage | vk::BufferUsageFlags::TRANSFER_SRC,
-        )?;
-        let stats_rb = Buffer::new(
-            gpu,
-            "analytic.stats_readback",
-            16,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            Location::GpuToCpu,
-        )?;
+        let kept = px * u64::from(frags);
+        let keys = buffer("analytic.keys", kept * KEY_BYTES, storage)?;
+        let slots = buffer("analytic.slots", kept * SLOT_BYTES, storage)?;
+        let counts_buf = buffer("analytic.counts_buffer", px * 4, storage)?;
         // Native's colour target is not drawn (the resolve writes the colour).
         let FrameTargets {
             velocity,
@@ -311,11 +319,9 @@ impl Analytic {
             "analytic.raster_set",
             &raster_layout,
             &[
-                Write::Buffer(0, &heads),
-                Write::Buffer(1, &nodes),
-                Write::Buffer(2, &bound),
-                Write::Buffer(3, &lost),
-                Write::Buffer(4, &stats),
+                Write::Buffer(0, &keys),
+                Write::Buffer(1, &slots),
+                Write::Buffer(2, &counts_buf),
             ],
         )?;
         let resolve_set = DescriptorSet::new(
@@ -323,9 +329,9 @@ impl Analytic {
             "analytic.resolve_set",
             &resolve_layout,
             &[
-                Write::Buffer(0, &heads),
-                Write::Buffer(1, &nodes),
-                Write::Buffer(2, &lost),
+                Write::Buffer(0, &keys),
+                Write::Buffer(1, &slots),
+                Write::Buffer(2, &counts_buf),
                 Write::Storage(3, &color),
                 Write::Storage(4, &coverage),
                 Write::Storage(5, &counts),
@@ -343,7 +349,7 @@ impl Analytic {
         Ok(Analytic {
             c,
             frags,
-            cull,
+            select,
             raster,
             _layouts: vec![scene_layout, material_layout, raster_layout, resolve_layout],
             scene_set,
@@ -351,12 +357,9 @@ impl Analytic {
             raster_set,
             resolve,
             resolve_set,
-            heads,
-            nodes,
-            bound,
-            lost,
-            stats,
-            stats_rb,
+            keys,
+            slots,
+            counts_buf,
             targets,
             color,
             coverage,
@@ -366,7 +369,7 @@ impl Analytic {
         })
     }
 
-    /// Fragment-pool slots per pixel this technique was built with.
+    /// Fragments kept per pixel this technique was built with.
     pub fn pool_per_pixel(&self) -> u32 {
         self.frags
     }
@@ -390,13 +393,7 @@ impl Analytic {
         ] {
             cmd.use_buffer(buf, Access::GraphicsRead);
         }
-        for buf in [
-            &self.heads,
-            &self.nodes,
-            &self.bound,
-            &self.lost,
-            &self.stats,
-        ] {
+        for buf in [&self.keys, &self.slots, &self.counts_buf] {
             cmd.use_buffer(buf, Access::FragmentStorageWrite);
         }
         let t = &self.targets;
@@ -450,20 +447,16 @@ impl Technique for Analytic {
         let counter = ctx.counter;
         ctx.submit("frame", |cmd, profiler, scene| {
             let scope = profiler.begin(cmd, "analytic.clear", PassKind::Transfer);
-            cmd.fill_buffer(&this.heads, u32::MAX);
-            cmd.fill_buffer(&this.bound, 0);
-            cmd.fill_buffer(&this.lost, 0);
-            cmd.fill_buffer(&this.stats, 0);
+            cmd.fill_buffer(&this.keys, u32::MAX);
+            cmd.fill_buffer(&this.counts_buf, 0);
             profiler.end(cmd, scope);
             cmd.use_buffer(counter, Access::FragmentStorageWrite);
-            // The cull pass writes no attachment (its fragments all discard); the list pass
+            // The select pass writes no attachment (its fragments all discard); the second pass
             // clears and writes them.
-            if let Some(cull) = &this.cull {
-                this.record_raster(cmd, profiler, scene, cull, false);
-            }
+            this.record_raster(cmd, profiler, scene, &this.select, false);
             this.record_raster(cmd, profiler, scene, &this.raster, true);
 
-            for buf in [&this.heads, &this.nodes, &this.lost] {
+            for buf in [&this.keys, &this.slots, &this.counts_buf] {
                 cmd.use_buffer(buf, Access::ComputeSampled);
             }
             for img in [&this.color, &this.coverage, &this.counts] {
@@ -490,8 +483,6 @@ impl Technique for Analytic {
             cmd.read_image(&this.targets.depth, d);
             cmd.read_image(&this.targets.velocity, v);
             cmd.read_image(&this.targets.ids, ids);
-            cmd.copy_buffer(&this.stats, &this.stats_rb, 16);
-            cmd.use_buffer(&this.stats_rb, Access::HostRead);
             profiler.end(cmd, scope);
             cmd.use_buffer(counter, Access::HostRead);
             Ok(())
@@ -545,8 +536,8 @@ impl Technique for Analytic {
 
     fn target_bytes(&self) -> u64 {
         let px = u64::from(self.color.width) * u64::from(self.color.height);
-        // Pool + heads, bound, lost (4 each) + colour (8), coverage (4), counts (16), depth (4),
-        // velocity (8), IDs (8).
-        px * (u64::from(self.frags) * NODE_BYTES + 12 + 8 + 4 + 16 + 4 + 8 + 8)
+        // K x (key + slot) + the fragment count (4) + colour (8), coverage (4), counts (16),
+        // depth (4), velocity (8), IDs (8).
+        px * (u64::from(self.frags) * (KEY_BYTES + SLOT_BYTES) + 4 + 8 + 4 + 16 + 4 + 8 + 8)
     }
 }
