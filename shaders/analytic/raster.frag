@@ -9,7 +9,8 @@
 // (a 64-bit atomicMin chain: each slot keeps the smaller key and passes the larger on, so the
 // slots end sorted and hold the K nearest whatever the order of arrival) and counts the
 // fragment. Otherwise: a fragment whose key is among its pixel's K is shaded once, at the
-// centroid of its covered part, and writes (coverage, sample mask, colour) into that slot.
+// centroid of its covered part, and writes (coverage, sample mask, colour) into that slot; in a
+// pixel with more than K fragments the others are shaded too and summed into the pixel's tail.
 // Fragments whose triangle holds the pixel centre also write native's depth, velocity and IDs
 // through the depth test.
 #include "../inc/scene_types.glsl"
@@ -24,6 +25,9 @@ layout(set = 1, binding = BINDING_BUMP) uniform sampler2D bump_tex;
 layout(std430, set = 2, binding = BINDING_KEYS) buffer Keys { uint64_t keys[]; };
 layout(std430, set = 2, binding = BINDING_SLOTS) buffer Slots { uvec4 slots[]; };
 layout(std430, set = 2, binding = BINDING_COUNTS) buffer Counts { uint counts[]; };
+// Per pixel, the fixed-point sums (2^-24 units) of coverage x colour and of coverage of the
+// fragments beyond the K nearest: integers, so the sums do not depend on the order of arrival.
+layout(std430, set = 2, binding = BINDING_TAIL) buffer Tail { uint64_t tail[]; };
 layout(push_constant) uniform Push { uint object_index; } pc;
 
 #include "../inc/shading.glsl"
@@ -44,6 +48,15 @@ vec3 barycentrics(vec2 s) {
     vec2 ndc = s * frame.output_size.zw * 2.0 - 1.0;
     vec3 b = inv_clip * vec3(ndc, 1.0);
     return b / (b.x + b.y + b.z);
+}
+
+// The barycentrics of a point of the triangle (the shading point): rounding in a nearly singular
+// clip matrix (tiny or distant triangles) may push them outside [0, 1] or make them non-finite;
+// clamped and renormalised they keep the attributes within the triangle's.
+vec3 point_barycentrics(vec2 s) {
+    vec3 b = clamp(barycentrics(s), 0.0, 1.0);
+    float sum = b.x + b.y + b.z;
+    return sum > 0.0 ? b / sum : vec3(1.0 / 3.0);
 }
 
 float depth_at(vec2 s) {
@@ -86,10 +99,12 @@ void main() {
     uint pixel = uint(pix.y) * uint(frame.output_size.x) + uint(pix.x);
     ObjectData o = objects[pc.object_index];
     MaterialData mat = materials[o.ids.y];
-    // The sort depth: the plane's depth at the pixel centre (a point common to every fragment of
-    // the pixel, so coplanar surfaces compare equal there, as in a depth buffer), clamped to the
-    // depths the polygon spans so that a sliver's plane is not extrapolated far; without its 4
-    // lowest mantissa bits (surfaces within ~1e-6 count as coplanar, and the first drawn wins).
+    // The sort depth: where the triangle holds the pixel centre, its depth there (a point common
+    // to every such fragment, so coplanar surfaces compare equal, as in a depth buffer); else its
+    // depth at the covered part's centroid (extrapolating the plane to a centre it misses can put
+    // a far surface in front: a ground plane's plane above its horizon). Clamped to the depths
+    // the polygon spans, without the 4 lowest mantissa bits (within ~1e-6: coplanar, first
+    // drawn wins).
     float zlo = 1e30;
     float zhi = -1e30;
     for (int i = 0; i < n; ++i) {
@@ -97,7 +112,9 @@ void main() {
         zlo = min(zlo, zi);
         zhi = max(zhi, zi);
     }
-    float z = clamp(depth_at(corner + 0.5), zlo, zhi);
+    bool holds_centre = inside(p, n, orientation(p, n), vec2(0.5));
+    float zc = depth_at(holds_centre ? corner + 0.5 : corner + cov.mean_point);
+    float z = isnan(zc) ? zlo : clamp(zc, zlo, zhi);
     // Reverse-Z: nearer is larger, and the smaller key must be the nearer.
     uint zkey = 0xFFFFFFFu - (floatBitsToUint(max(z, 0.0)) >> 4u);
     uint64_t key = (uint64_t(zkey) << 32) | uint64_t((o.ids.x << 20u) | (g_info.y & 0xFFFFFu));
@@ -106,7 +123,7 @@ void main() {
     // Shading at the covered part's centroid: for attributes affine in the screen, their mean
     // over the covered part; and always a point of the triangle (no extrapolated normals or UVs).
     vec2 sp = corner + cov.mean_point;
-    vec3 b = barycentrics(sp);
+    vec3 b = point_barycentrics(sp);
     vec3 bx = barycentrics(sp + vec2(1.0, 0.0));
     vec3 by = barycentrics(sp + vec2(0.0, 1.0));
     vec2 uv = uv_at(b);
@@ -142,7 +159,8 @@ void main() {
     for (int i = 0; i < K_SLOTS; ++i) {
         if (keys[base + uint(i)] == key) slot = i;
     }
-    if (slot >= 0) {
+    // Fragments beyond their pixel's K nearest are shaded too, into the pixel's tail sums.
+    if (slot >= 0 || counts[pixel] > uint(K_SLOTS)) {
     // (the payload block is not indented: it is the whole shading path)
     vec3 albedo = mat.kd.rgb;
     if (mat.tex.x >= 0) albedo *= textureGrad(albedo_tex, uv, gx, gy).rgb;
@@ -156,6 +174,7 @@ void main() {
         nrm = bump_from(nrm, world_at(bx) - world, world_at(by) - world, hx - h, hy - h);
     }
     vec3 color = shade(world, nrm, albedo, mat, frame);
+    bool finite = !any(isnan(color)) && !any(isinf(color));
 
     uint mask = sample_mask(p, n, orient);
     float coverage = cov.area;
@@ -166,12 +185,28 @@ void main() {
 #endif
     coverage *= alpha_pass;
     if (mat.tex.y >= 0) flags |= 2u;
+    if (!finite) {
+        // Never let a non-finite colour into the pixel: the fragment covers nothing, flagged.
+        color = vec3(0.0);
+        coverage = 0.0;
+        flags |= 6u;
+    }
     if (mask == 0u) {
         mask = nearest_sample_bit(cov.mean_point);
         flags |= 2u;  // a stand-in bit: never used to hide this fragment
     }
-    slots[base + uint(slot)] = uvec4(floatBitsToUint(coverage), mask, packHalf2x16(color.rg),
-                                     (packHalf2x16(vec2(color.b, 0.0)) & 0xFFFFu) | (flags << 16u));
+    if (slot >= 0) {
+        slots[base + uint(slot)] = uvec4(floatBitsToUint(coverage), mask, packHalf2x16(color.rg),
+                                         (packHalf2x16(vec2(color.b, 0.0)) & 0xFFFFu) | (flags << 16u));
+    } else if (coverage > 0.0) {
+        const float unit = 16777216.0;  // 2^24
+        vec3 ac = clamp(color, 0.0, 65504.0) * coverage * unit;
+        uint t = pixel * 4u;
+        atomicAdd(tail[t], uint64_t(ac.r));
+        atomicAdd(tail[t + 1u], uint64_t(ac.g));
+        atomicAdd(tail[t + 2u], uint64_t(ac.b));
+        atomicAdd(tail[t + 3u], uint64_t(coverage * unit));
+    }
     }
 
     // Native's layers: the triangle holding the pixel centre, nearest through the depth test.

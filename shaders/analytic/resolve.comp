@@ -13,8 +13,8 @@
 // (docs/analytic.md measures it against ssaa:32). A fragment too small to hold a mask sample
 // carries a stand-in bit that neither hides nor is hidden (either would open seams in meshes).
 // Only the K nearest fragments of a pixel are kept (the select pass); those beyond count as
-// overflow, and an overflowing pixel's listed surfaces are renormalised over their coverage
-// instead of letting the background show through where a dropped surface would have been.
+// overflow and are merged into one tail fragment (coverage-weighted mean colour, summed
+// coverage) composited after the K, so no surface is dropped, only its order within the tail.
 #extension GL_ARB_gpu_shader_int64 : require
 #define EMPTY_KEY 0xFFFFFFFFFFFFFFFFul  // a slot no fragment took
 #include "../inc/scene_types.glsl"
@@ -24,6 +24,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(std430, set = 0, binding = BINDING_KEYS) readonly buffer Keys { uint64_t keys[]; };
 layout(std430, set = 0, binding = BINDING_SLOTS) readonly buffer Slots { uvec4 slots[]; };
 layout(std430, set = 0, binding = BINDING_COUNTS) readonly buffer Counts { uint counts[]; };
+layout(std430, set = 0, binding = BINDING_TAIL) readonly buffer Tail { uint64_t tail[]; };
 layout(set = 0, binding = BINDING_OUT_COLOR, rgba16f) uniform writeonly image2D out_color;
 layout(set = 0, binding = BINDING_OUT_COVERAGE, r32f) uniform writeonly image2D out_coverage;
 layout(set = 0, binding = BINDING_OUT_COUNTS, rgba32ui) uniform writeonly uimage2D out_counts;
@@ -37,6 +38,7 @@ layout(push_constant) uniform Push {
 #define FLAG_EDGE 1u      // a visible fragment covers the pixel partly, or the background shows
 #define FLAG_SEED 2u      // analytic:seed: a visible fragment's shortcut area is off by > 1e-3
 #define FLAG_OVERFLOW 4u
+#define FLAG_NONFINITE 8u  // a kept fragment's shading was not finite (dropped)
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -74,6 +76,7 @@ void main() {
         }
         float a = uintBitsToFloat(s.x);
         if ((fflags & 1u) != 0u) flags |= FLAG_SEED;
+        if ((fflags & 4u) != 0u) flags |= FLAG_NONFINITE;
         float v = min(a, 1.0 - sum);
         if (v <= 0.0) continue;
         vec3 c = vec3(unpackHalf2x16(s.z), unpackHalf2x16(s.w & 0xFFFFu).x);
@@ -86,14 +89,20 @@ void main() {
     uint overflow = seen - uint(count);
     if (overflow > 0u) flags |= FLAG_OVERFLOW;
     if (sum < 1.0 - 1e-6 && visible > 0u) flags |= FLAG_EDGE;
-    if (overflow > 0u && sum > 0.0 && sum < 1.0) {
-        // Surfaces beyond the K nearest were dropped: spread the listed ones over the pixel
-        // rather than letting the background show where a dropped surface would have been.
-        color /= sum;
-        sum = 1.0;
-    } else {
-        color += max(1.0 - sum, 0.0) * pc.background.rgb;
+    if (overflow > 0u && sum < 1.0) {
+        // The fragments beyond the K nearest, merged into one (their coverage-weighted mean
+        // colour, their summed coverage), fill what the nearest left, as one more fragment.
+        uint t = pixel * 4u;
+        const float unit = 1.0 / 16777216.0;
+        float ta = float(tail[t + 3u]) * unit;
+        if (ta > 0.0) {
+            vec3 tc = vec3(float(tail[t]), float(tail[t + 1u]), float(tail[t + 2u])) * unit / ta;
+            float v = min(ta, 1.0 - sum);
+            color += v * tc;
+            sum += v;
+        }
     }
+    color += max(1.0 - sum, 0.0) * pc.background.rgb;
     imageStore(out_color, px, vec4(color, 1.0));
     imageStore(out_coverage, px, vec4(sum));
     imageStore(out_counts, px, uvec4(seen, overflow, flags, visible));

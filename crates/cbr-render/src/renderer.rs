@@ -118,9 +118,8 @@ pub struct Coverage {
     pub fraction: Vec<f32>,
 }
 
-/// What `analytic` adds to a frame: per pixel, the fragments listed (including those that found
-/// no room), the overflow (fragments not composited: beyond the resolve's 16 nearest, or lost
-/// when the pool was full), the fragments that contributed, and with `analytic:seed` whether a
+/// What `analytic` adds to a frame: per pixel, the fragments that touched it, the overflow (those
+/// beyond the K nearest, not composited), the fragments that contributed, and with `analytic:seed` whether a
 /// visible fragment's shortcut area is off the exact area by more than 1e-3.
 #[derive(Clone, Debug, Default)]
 pub struct AnalyticLayers {
@@ -128,7 +127,9 @@ pub struct AnalyticLayers {
     pub overflow: Vec<u32>,
     pub visible: Vec<u32>,
     pub seed_differs: Vec<u8>,
-    /// Fragment-pool slots per pixel this frame was built with.
+    /// 1 where a kept fragment's shading was not finite (it was dropped, not composited).
+    pub nonfinite: Vec<u8>,
+    /// Fragments kept per pixel (K) this frame was built with.
     pub pool_per_pixel: u32,
 }
 

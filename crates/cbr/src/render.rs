@@ -566,8 +566,9 @@ fn debug_layers(out: &FrameOutput) -> Vec<cbr_metrics::io::ExtraLayer> {
         ));
     }
     if let Some(a) = &out.analytic {
-        // `analytic`: per pixel the fragments listed, those not composited (overflow), those
-        // that contributed, and (analytic:seed) where the shortcut is off by more than 1e-3.
+        // `analytic`: per pixel the fragments that touched it, those beyond the K kept
+        // (overflow), those that contributed, (analytic:seed) where the shortcut is off by more
+        // than 1e-3, and where a kept fragment's shading was not finite.
         let f = |v: &[u32]| v.iter().map(|&x| x as f32).collect();
         layers.push((
             "analytic".to_string(),
@@ -578,6 +579,10 @@ fn debug_layers(out: &FrameOutput) -> Vec<cbr_metrics::io::ExtraLayer> {
                 (
                     "seed_differs".to_string(),
                     a.seed_differs.iter().map(|&x| f32::from(x)).collect(),
+                ),
+                (
+                    "nonfinite".to_string(),
+                    a.nonfinite.iter().map(|&x| f32::from(x)).collect(),
                 ),
             ],
         ));

@@ -46,6 +46,8 @@ pub const REGISTRATION: Registration = Registration {
 /// mask, colour as 3 x f16, flags).
 pub const KEY_BYTES: u64 = 8;
 pub const SLOT_BYTES: u64 = 16;
+/// Per pixel, the fixed-point tail sums of the fragments beyond the K nearest (4 x u64).
+pub const TAIL_BYTES: u64 = 32;
 /// Fragments kept per pixel unless `frags=K` says otherwise.
 pub const DEFAULT_FRAGS: u32 = 8;
 /// The key's identity field: object IDs below 2^12, primitive IDs below 2^20.
@@ -128,16 +130,17 @@ pub fn plan_pool(
 }
 
 /// Set 2 of the raster passes (set 0: the scene's, set 1: the material's).
-pub const RASTER_BINDINGS: [BindingDesc; 3] = {
+pub const RASTER_BINDINGS: [BindingDesc; 4] = {
     use DescriptorKind::StorageBuffer as B;
     [
         BindingDesc::one("keys", 0, B),
         BindingDesc::one("slots", 1, B),
         BindingDesc::one("counts", 2, B),
+        BindingDesc::one("tail", 3, B),
     ]
 };
 
-pub const RESOLVE_BINDINGS: [BindingDesc; 6] = {
+pub const RESOLVE_BINDINGS: [BindingDesc; 7] = {
     use DescriptorKind::{StorageBuffer as B, StorageImage as I};
     [
         BindingDesc::one("keys", 0, B),
@@ -146,6 +149,7 @@ pub const RESOLVE_BINDINGS: [BindingDesc; 6] = {
         BindingDesc::one("out_color", 3, I),
         BindingDesc::one("out_coverage", 4, I),
         BindingDesc::one("out_counts", 5, I),
+        BindingDesc::one("tail", 6, B),
     ]
 };
 
@@ -153,6 +157,7 @@ pub const RESOLVE_BINDINGS: [BindingDesc; 6] = {
 pub const FLAG_EDGE: u32 = 1;
 pub const FLAG_SEED: u32 = 2;
 pub const FLAG_OVERFLOW: u32 = 4;
+pub const FLAG_NONFINITE: u32 = 8;
 
 const COVERAGE_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
 const COUNTS_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
@@ -183,6 +188,7 @@ pub struct Analytic {
     keys: Buffer,
     slots: Buffer,
     counts_buf: Buffer,
+    tail: Buffer,
     targets: Targets,
     color: Image,
     coverage: Image,
@@ -288,6 +294,7 @@ impl Analytic {
         let keys = buffer("analytic.keys", kept * KEY_BYTES, storage)?;
         let slots = buffer("analytic.slots", kept * SLOT_BYTES, storage)?;
         let counts_buf = buffer("analytic.counts_buffer", px * 4, storage)?;
+        let tail = buffer("analytic.tail", px * TAIL_BYTES, storage)?;
         // Native's colour target is not drawn (the resolve writes the colour).
         let FrameTargets {
             velocity,
@@ -322,6 +329,7 @@ impl Analytic {
                 Write::Buffer(0, &keys),
                 Write::Buffer(1, &slots),
                 Write::Buffer(2, &counts_buf),
+                Write::Buffer(3, &tail),
             ],
         )?;
         let resolve_set = DescriptorSet::new(
@@ -335,6 +343,7 @@ impl Analytic {
                 Write::Storage(3, &color),
                 Write::Storage(4, &coverage),
                 Write::Storage(5, &counts),
+                Write::Buffer(6, &tail),
             ],
         )?;
         let rb = |name: &str, image: &Image| Readback::for_image(gpu, name, image);
@@ -360,6 +369,7 @@ impl Analytic {
             keys,
             slots,
             counts_buf,
+            tail,
             targets,
             color,
             coverage,
@@ -393,7 +403,7 @@ impl Analytic {
         ] {
             cmd.use_buffer(buf, Access::GraphicsRead);
         }
-        for buf in [&self.keys, &self.slots, &self.counts_buf] {
+        for buf in [&self.keys, &self.slots, &self.counts_buf, &self.tail] {
             cmd.use_buffer(buf, Access::FragmentStorageWrite);
         }
         let t = &self.targets;
@@ -449,6 +459,7 @@ impl Technique for Analytic {
             let scope = profiler.begin(cmd, "analytic.clear", PassKind::Transfer);
             cmd.fill_buffer(&this.keys, u32::MAX);
             cmd.fill_buffer(&this.counts_buf, 0);
+            cmd.fill_buffer(&this.tail, 0);
             profiler.end(cmd, scope);
             cmd.use_buffer(counter, Access::FragmentStorageWrite);
             // The select pass writes no attachment (its fragments all discard); the second pass
@@ -456,7 +467,7 @@ impl Technique for Analytic {
             this.record_raster(cmd, profiler, scene, &this.select, false);
             this.record_raster(cmd, profiler, scene, &this.raster, true);
 
-            for buf in [&this.keys, &this.slots, &this.counts_buf] {
+            for buf in [&this.keys, &this.slots, &this.counts_buf, &this.tail] {
                 cmd.use_buffer(buf, Access::ComputeSampled);
             }
             for img in [&this.color, &this.coverage, &this.counts] {
@@ -529,6 +540,10 @@ impl Technique for Analytic {
                 .iter()
                 .map(|c| u8::from(self.c.seed && c[2] & FLAG_SEED != 0))
                 .collect(),
+            nonfinite: counts
+                .iter()
+                .map(|c| u8::from(c[2] & FLAG_NONFINITE != 0))
+                .collect(),
             pool_per_pixel: self.frags,
         });
         Ok(out)
@@ -536,8 +551,16 @@ impl Technique for Analytic {
 
     fn target_bytes(&self) -> u64 {
         let px = u64::from(self.color.width) * u64::from(self.color.height);
-        // K x (key + slot) + the fragment count (4) + colour (8), coverage (4), counts (16),
-        // depth (4), velocity (8), IDs (8).
-        px * (u64::from(self.frags) * (KEY_BYTES + SLOT_BYTES) + 4 + 8 + 4 + 16 + 4 + 8 + 8)
+        // K x (key + slot) + the fragment count (4) and tail (32) + colour (8), coverage (4),
+        // counts (16), depth (4), velocity (8), IDs (8).
+        px * (u64::from(self.frags) * (KEY_BYTES + SLOT_BYTES)
+            + 4
+            + TAIL_BYTES
+            + 8
+            + 4
+            + 16
+            + 4
+            + 8
+            + 8)
     }
 }
