@@ -130,7 +130,7 @@ pub struct AnalyticLayers {
     /// 1 where a kept fragment's shading was not finite (it was dropped, not composited).
     pub nonfinite: Vec<u8>,
     /// Fragments kept per pixel (K) this frame was built with.
-    pub pool_per_pixel: u32,
+    pub kept_per_pixel: u32,
 }
 
 impl FrameOutput {

@@ -1,8 +1,8 @@
 //! `analytic` against its f64 reference (techniques::analytic::reference): the coverage kernel on
 //! 10,000 random triangles, then whole frames with known answers (one triangle over a
 //! background, a mesh of abutting triangles, an opaque mesh in front of another), the seed's
-//! shortcut and where it breaks, every touched pixel reached, overflow counted, and a pool that
-//! cannot fit refused. On the test device with validation on.
+//! shortcut and where it breaks, every touched pixel reached, fragments beyond the K nearest
+//! merged and counted, and lists that cannot fit refused. On the test device with validation on.
 
 mod common;
 
@@ -671,7 +671,7 @@ fn every_touched_pixel_is_reached_by_slivers_and_subpixel_triangles() {
 }
 
 #[test]
-fn a_full_pool_is_counted_as_overflow_and_a_pool_that_cannot_fit_is_refused() {
+fn fragments_beyond_k_are_counted_as_overflow_and_lists_that_cannot_fit_are_refused() {
     let gpu = gpu();
     let mut rng = Rng(5);
     // Twelve overlapping jittered grids at different depths: several fragments per pixel.
@@ -695,6 +695,16 @@ fn a_full_pool_is_counted_as_overflow_and_a_pool_that_cannot_fit_is_refused() {
     // Overflowing pixels are flagged, not silently dropped: more fragments counted than kept.
     let listed: u64 = a.fragments.iter().map(|&f| u64::from(f)).sum();
     assert!(listed > u64::from(W * H), "{listed}");
+    // The fragments beyond the one kept are merged into the tail: with one white material the
+    // frame matches the one that keeps 16 (the merge changes only the order within the tail).
+    let wide = render(&gpu, &s, "analytic:frags=16");
+    let worst = out
+        .color
+        .iter()
+        .zip(&wide.color)
+        .map(|(a, b)| (a.to_f32() - b.to_f32()).abs())
+        .fold(0.0f32, f32::max);
+    assert!(worst < 1e-2, "K = 1 and K = 16 differ by {worst}");
     assert_clean(&gpu);
 
     // 8192 x 8192 x 8 fragments x 24 bytes: refused with the estimate, before the lists exist.

@@ -148,7 +148,9 @@ fn load_toml(path: &Path, opts: &LoadOptions) -> Result<Scene> {
             k.target = up(k.target);
         }
         scene.camera = cam;
-    } else if d.width.is_some() || d.height.is_some() {
+    } else if d.obj.is_some() && (d.width.is_some() || d.height.is_some()) {
+        // An OBJ's automatic framing depends on the aspect; a procedural scene keeps its own
+        // camera path (its projection follows the resolution anyway).
         let aspect = f64::from(scene.settings.width) / f64::from(scene.settings.height);
         scene.camera = CameraPath::framing(&scene.bounds(), aspect);
     }

@@ -102,7 +102,7 @@ fn needs(_: &[&str], caps: &Caps) -> Option<String> {
 /// Fragments kept per pixel at `width` x `height`, or the refusal (before anything is allocated)
 /// with the bytes it would take and the device's limit: the slots are one storage buffer of
 /// `K x 16` bytes per pixel, which must fit `maxStorageBufferRange`.
-pub fn plan_pool(
+pub fn plan_lists(
     width: u32,
     height: u32,
     frags: Option<u32>,
@@ -200,7 +200,7 @@ pub struct Analytic {
 impl Analytic {
     pub fn new(ctx: &BuildCtx, c: AnalyticConfig) -> Result<Analytic> {
         let (gpu, w, h) = (ctx.gpu, ctx.width, ctx.height);
-        let frags = plan_pool(w, h, c.frags, gpu.caps().max_storage_buffer_range)
+        let frags = plan_lists(w, h, c.frags, gpu.caps().max_storage_buffer_range)
             .map_err(GpuError::Other)?;
         let px = u64::from(w) * u64::from(h);
         if ctx.scene.draws.len() > MAX_OBJECTS
@@ -380,7 +380,7 @@ impl Analytic {
     }
 
     /// Fragments kept per pixel this technique was built with.
-    pub fn pool_per_pixel(&self) -> u32 {
+    pub fn kept_per_pixel(&self) -> u32 {
         self.frags
     }
 
@@ -544,7 +544,7 @@ impl Technique for Analytic {
                 .iter()
                 .map(|c| u8::from(c[2] & FLAG_NONFINITE != 0))
                 .collect(),
-            pool_per_pixel: self.frags,
+            kept_per_pixel: self.frags,
         });
         Ok(out)
     }
