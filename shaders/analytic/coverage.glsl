@@ -203,9 +203,26 @@ float orientation(vec2 p[MAX_POLY], int n) {
 }
 
 uint sample_mask(vec2 p[MAX_POLY], int n, float orient) {
-    uint m = 0u;
-    for (int k = 0; k < MASK_SAMPLES; ++k) {
-        if (inside(p, n, orient, mask_sample(k))) m |= 1u << uint(k);
+    // Each edge's function once, e(q) = ex q.x - ey q.y + c (c to ~1 ulp), then 32 evaluations:
+    // the same numbers for the two polygons sharing the edge, so the tie rule stays exact.
+    uint m = 0xFFFFFFFFu;
+    for (int i = 0; i < n; ++i) {
+        vec2 a = p[i];
+        vec2 b = p[(i + 1) % n];
+        bool canonical = a.y < b.y || (a.y == b.y && a.x < b.x);
+        vec2 lo = canonical ? a : b;
+        vec2 hi = canonical ? b : a;
+        float ex = hi.y - lo.y;
+        float ey = hi.x - lo.x;
+        float c = diff_products(ey, lo.y, ex, lo.x);
+        float side = (canonical ? -1.0 : 1.0) * orient;
+        uint em = 0u;
+        for (int k = 0; k < MASK_SAMPLES; ++k) {
+            vec2 q = mask_sample(k);
+            precise float e = ex * q.x - ey * q.y + c;
+            if (e * side > 0.0 || (e == 0.0 && side > 0.0)) em |= 1u << uint(k);
+        }
+        m &= em;
     }
     return m;
 }

@@ -176,7 +176,13 @@ void main() {
     vec3 color = shade(world, nrm, albedo, mat, frame);
     bool finite = !any(isnan(color)) && !any(isinf(color));
 
-    uint mask = sample_mask(p, n, orient);
+    // The mask only matters in a slot (and to the seed's vertex columns).
+    uint mask = 0u;
+#ifdef SEED
+    mask = sample_mask(p, n, orient);
+#else
+    if (slot >= 0) mask = sample_mask(p, n, orient);
+#endif
     float coverage = cov.area;
     uint flags = 0u;
 #ifdef SEED
@@ -191,7 +197,7 @@ void main() {
         coverage = 0.0;
         flags |= 6u;
     }
-    if (mask == 0u) {
+    if (slot >= 0 && mask == 0u) {
         mask = nearest_sample_bit(cov.mean_point);
         flags |= 2u;  // a stand-in bit: never used to hide this fragment
     }
