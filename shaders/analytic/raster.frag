@@ -23,7 +23,10 @@ layout(set = 1, binding = BINDING_ALBEDO) uniform sampler2D albedo_tex;
 layout(set = 1, binding = BINDING_MASK) uniform sampler2D mask_tex;
 layout(set = 1, binding = BINDING_BUMP) uniform sampler2D bump_tex;
 layout(std430, set = 2, binding = BINDING_KEYS) buffer Keys { uint64_t keys[]; };
-layout(std430, set = 2, binding = BINDING_SLOTS) buffer Slots { uvec4 slots[]; };
+// A kept fragment's slot, in two buffers (each must fit maxStorageBufferRange): coverage and
+// sample mask; colour (3 x f16) and flags.
+layout(std430, set = 2, binding = BINDING_SLOTS) buffer Slots { uvec2 slots[]; };
+layout(std430, set = 2, binding = BINDING_COLORS) buffer Colors { uvec2 colors[]; };
 layout(std430, set = 2, binding = BINDING_COUNTS) buffer Counts { uint counts[]; };
 // Per pixel, the fixed-point sums (2^-24 units) of coverage x colour and of coverage of the
 // fragments beyond the K nearest: integers, so the sums do not depend on the order of arrival.
@@ -202,8 +205,9 @@ void main() {
         flags |= 2u;  // a stand-in bit: never used to hide this fragment
     }
     if (slot >= 0) {
-        slots[base + uint(slot)] = uvec4(floatBitsToUint(coverage), mask, packHalf2x16(color.rg),
-                                         (packHalf2x16(vec2(color.b, 0.0)) & 0xFFFFu) | (flags << 16u));
+        slots[base + uint(slot)] = uvec2(floatBitsToUint(coverage), mask);
+        colors[base + uint(slot)] = uvec2(packHalf2x16(color.rg),
+                                          (packHalf2x16(vec2(color.b, 0.0)) & 0xFFFFu) | (flags << 16u));
     } else if (coverage > 0.0) {
         const float unit = 16777216.0;  // 2^24
         vec3 ac = clamp(color, 0.0, 65504.0) * coverage * unit;

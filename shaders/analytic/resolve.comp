@@ -22,7 +22,8 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(std430, set = 0, binding = BINDING_KEYS) readonly buffer Keys { uint64_t keys[]; };
-layout(std430, set = 0, binding = BINDING_SLOTS) readonly buffer Slots { uvec4 slots[]; };
+layout(std430, set = 0, binding = BINDING_SLOTS) readonly buffer Slots { uvec2 slots[]; };
+layout(std430, set = 0, binding = BINDING_COLORS) readonly buffer Colors { uvec2 colors[]; };
 layout(std430, set = 0, binding = BINDING_COUNTS) readonly buffer Counts { uint counts[]; };
 layout(std430, set = 0, binding = BINDING_TAIL) readonly buffer Tail { uint64_t tail[]; };
 layout(set = 0, binding = BINDING_OUT_COLOR, rgba16f) uniform writeonly image2D out_color;
@@ -61,16 +62,17 @@ void main() {
     uint flags = 0u;
     uint visible = 0u;
     for (int k = 0; k < count; ++k) {
-        uvec4 s = slots[base + uint(k)];
+        uvec2 sl = slots[base + uint(k)];
+        uvec2 cl = colors[base + uint(k)];
+        uvec4 s = uvec4(sl, cl);
         uint mask = s.y;
         uint fflags = s.w >> 16u;
         if ((fflags & 2u) == 0u) {
             // Hidden under nearer fragments of the same object?
             uint under = 0u;
             for (int m = 0; m < k; ++m) {
-                uvec4 t = slots[base + uint(m)];
-                bool stand_in = ((t.w >> 17u) & 1u) != 0u;
-                if (objs[m] == objs[k] && !stand_in) under |= t.y;
+                bool stand_in = ((colors[base + uint(m)].y >> 17u) & 1u) != 0u;
+                if (objs[m] == objs[k] && !stand_in) under |= slots[base + uint(m)].y;
             }
             if ((mask & ~under) == 0u) continue;
         }

@@ -27,9 +27,15 @@ fn a_procedural_scene_keeps_its_camera_at_another_resolution() {
 fn textures_false_drops_every_texture() {
     let demo = builtin("demo").unwrap();
     assert!(demo.materials.iter().any(|m| m.kd_tex.is_some()));
-    assert!(demo.materials.iter().any(|m| m.alpha != AlphaSource::Opaque));
+    assert!(
+        demo.materials
+            .iter()
+            .any(|m| m.alpha != AlphaSource::Opaque)
+    );
     let s = load_toml("procedural = \"demo\"\ntextures = false\n");
-    assert!(s.materials.iter().all(|m| m.kd_tex.is_none()
-        && m.bump_tex.is_none()
-        && m.alpha == AlphaSource::Opaque));
+    assert!(
+        s.materials
+            .iter()
+            .all(|m| m.kd_tex.is_none() && m.bump_tex.is_none() && m.alpha == AlphaSource::Opaque)
+    );
 }

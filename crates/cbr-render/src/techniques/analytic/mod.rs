@@ -10,7 +10,7 @@
 //! the covered part, into their slot; fragments holding the pixel centre also write native's
 //! depth, velocity and IDs; (3) `analytic.resolve`: front to back per pixel (resolve.comp
 //! states the model). `:seed` replaces the exact area by the seed's column shortcut and flags
-//! where it is off; `:frags=K` keeps K fragments per pixel (default 8, lowered to what the
+//! where it is off; `:frags=K` keeps K fragments per pixel (default 16, lowered to what the
 //! device's largest storage buffer holds).
 
 pub mod reference;
@@ -45,11 +45,14 @@ pub const REGISTRATION: Registration = Registration {
 /// Bytes of one kept fragment: its 64-bit key (depth, object, primitive) and its slot (coverage,
 /// mask, colour as 3 x f16, flags).
 pub const KEY_BYTES: u64 = 8;
+/// A slot is two 8-byte halves in two buffers (coverage + mask; colour + flags), so that each
+/// buffer holds K x 8 bytes per pixel under `maxStorageBufferRange`.
 pub const SLOT_BYTES: u64 = 16;
+const HALF_SLOT_BYTES: u64 = SLOT_BYTES / 2;
 /// Per pixel, the fixed-point tail sums of the fragments beyond the K nearest (4 x u64).
 pub const TAIL_BYTES: u64 = 32;
-/// Fragments kept per pixel unless `frags=K` says otherwise.
-pub const DEFAULT_FRAGS: u32 = 8;
+/// Fragments kept per pixel unless `frags=K` says otherwise (lowered to what fits).
+pub const DEFAULT_FRAGS: u32 = 16;
 /// The key's identity field: object IDs below 2^12, primitive IDs below 2^20.
 pub const MAX_OBJECTS: usize = (1 << 12) - 1;
 pub const MAX_PRIMITIVES: usize = 1 << 20;
@@ -100,8 +103,8 @@ fn needs(_: &[&str], caps: &Caps) -> Option<String> {
 }
 
 /// Fragments kept per pixel at `width` x `height`, or the refusal (before anything is allocated)
-/// with the bytes it would take and the device's limit: the slots are one storage buffer of
-/// `K x 16` bytes per pixel, which must fit `maxStorageBufferRange`.
+/// with the bytes it would take and the device's limit: the keys and the two halves of the slots
+/// are storage buffers of `K x 8` bytes per pixel each, which must fit `maxStorageBufferRange`.
 pub fn plan_lists(
     width: u32,
     height: u32,
@@ -109,7 +112,7 @@ pub fn plan_lists(
     max_range: u32,
 ) -> std::result::Result<u32, String> {
     let px = u64::from(width) * u64::from(height);
-    let fit = (u64::from(max_range) / (px * SLOT_BYTES).max(1)).min(16) as u32;
+    let fit = (u64::from(max_range) / (px * KEY_BYTES.max(HALF_SLOT_BYTES)).max(1)).min(16) as u32;
     let refuse = |k: u32| {
         format!(
             "analytic at {width}x{height} with {k} fragments per pixel needs {} bytes of fragment \
@@ -118,7 +121,7 @@ pub fn plan_lists(
              resolution or frags=K (at most {fit} fits)",
             px * u64::from(k) * (KEY_BYTES + SLOT_BYTES),
             KEY_BYTES + SLOT_BYTES,
-            px * u64::from(k) * SLOT_BYTES
+            px * u64::from(k) * KEY_BYTES.max(HALF_SLOT_BYTES)
         )
     };
     match frags {
@@ -130,17 +133,18 @@ pub fn plan_lists(
 }
 
 /// Set 2 of the raster passes (set 0: the scene's, set 1: the material's).
-pub const RASTER_BINDINGS: [BindingDesc; 4] = {
+pub const RASTER_BINDINGS: [BindingDesc; 5] = {
     use DescriptorKind::StorageBuffer as B;
     [
         BindingDesc::one("keys", 0, B),
         BindingDesc::one("slots", 1, B),
         BindingDesc::one("counts", 2, B),
         BindingDesc::one("tail", 3, B),
+        BindingDesc::one("colors", 4, B),
     ]
 };
 
-pub const RESOLVE_BINDINGS: [BindingDesc; 7] = {
+pub const RESOLVE_BINDINGS: [BindingDesc; 8] = {
     use DescriptorKind::{StorageBuffer as B, StorageImage as I};
     [
         BindingDesc::one("keys", 0, B),
@@ -150,6 +154,7 @@ pub const RESOLVE_BINDINGS: [BindingDesc; 7] = {
         BindingDesc::one("out_coverage", 4, I),
         BindingDesc::one("out_counts", 5, I),
         BindingDesc::one("tail", 6, B),
+        BindingDesc::one("colors", 7, B),
     ]
 };
 
@@ -189,6 +194,7 @@ pub struct Analytic {
     slots: Buffer,
     counts_buf: Buffer,
     tail: Buffer,
+    colors: Buffer,
     targets: Targets,
     color: Image,
     coverage: Image,
@@ -292,7 +298,8 @@ impl Analytic {
             |name: &str, bytes: u64, usage| Buffer::new(gpu, name, bytes, usage, Location::GpuOnly);
         let kept = px * u64::from(frags);
         let keys = buffer("analytic.keys", kept * KEY_BYTES, storage)?;
-        let slots = buffer("analytic.slots", kept * SLOT_BYTES, storage)?;
+        let slots = buffer("analytic.slots", kept * HALF_SLOT_BYTES, storage)?;
+        let colors = buffer("analytic.colors", kept * HALF_SLOT_BYTES, storage)?;
         let counts_buf = buffer("analytic.counts_buffer", px * 4, storage)?;
         let tail = buffer("analytic.tail", px * TAIL_BYTES, storage)?;
         // Native's colour target is not drawn (the resolve writes the colour).
@@ -330,6 +337,7 @@ impl Analytic {
                 Write::Buffer(1, &slots),
                 Write::Buffer(2, &counts_buf),
                 Write::Buffer(3, &tail),
+                Write::Buffer(4, &colors),
             ],
         )?;
         let resolve_set = DescriptorSet::new(
@@ -344,6 +352,7 @@ impl Analytic {
                 Write::Storage(4, &coverage),
                 Write::Storage(5, &counts),
                 Write::Buffer(6, &tail),
+                Write::Buffer(7, &colors),
             ],
         )?;
         let rb = |name: &str, image: &Image| Readback::for_image(gpu, name, image);
@@ -370,6 +379,7 @@ impl Analytic {
             slots,
             counts_buf,
             tail,
+            colors,
             targets,
             color,
             coverage,
@@ -403,7 +413,13 @@ impl Analytic {
         ] {
             cmd.use_buffer(buf, Access::GraphicsRead);
         }
-        for buf in [&self.keys, &self.slots, &self.counts_buf, &self.tail] {
+        for buf in [
+            &self.keys,
+            &self.slots,
+            &self.colors,
+            &self.counts_buf,
+            &self.tail,
+        ] {
             cmd.use_buffer(buf, Access::FragmentStorageWrite);
         }
         let t = &self.targets;
@@ -467,7 +483,13 @@ impl Technique for Analytic {
             this.record_raster(cmd, profiler, scene, &this.select, false);
             this.record_raster(cmd, profiler, scene, &this.raster, true);
 
-            for buf in [&this.keys, &this.slots, &this.counts_buf, &this.tail] {
+            for buf in [
+                &this.keys,
+                &this.slots,
+                &this.colors,
+                &this.counts_buf,
+                &this.tail,
+            ] {
                 cmd.use_buffer(buf, Access::ComputeSampled);
             }
             for img in [&this.color, &this.coverage, &this.counts] {
