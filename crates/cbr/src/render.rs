@@ -307,6 +307,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         )?;
         write_png_rgba8(&png, out.width, out.height, &display.to_rgba8(&out.color))?;
         write_debug_pngs(&a.out, f, &out)?;
+        write_seed_figure(&a.out, f, &out, &display.to_rgba8(&out.color))?;
         for t in &out.timings {
             pass_times.entry(t.name.clone()).or_default().push(t.gpu_ms);
         }
@@ -320,6 +321,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             "resolve_reset": out.resolve.as_ref().map(|r| r.reset),
             "cached": out.cached,
             "shaded_fragments": out.shaded_fragments,
+            "analytic": analytic_summary(&out),
         }));
         bar.inc(1);
     }
@@ -609,6 +611,65 @@ fn debug_layers(out: &FrameOutput) -> Vec<cbr_metrics::io::ExtraLayer> {
         ));
     }
     layers
+}
+
+/// `analytic` frames in run.json: fragments kept per pixel (K), fragments that touched pixels,
+/// and pixel counts: edge pixels (a visible fragment covers part of the pixel or the background
+/// shows), overflow (more fragments than K), non-finite shading, and with `analytic:seed` where
+/// the shortcut's area is off by more than 1e-3 and that count's share of the edge pixels.
+fn analytic_summary(out: &FrameOutput) -> serde_json::Value {
+    let (Some(a), Some(c)) = (&out.analytic, &out.coverage) else {
+        return json!(null);
+    };
+    let count = |v: &[u8]| v.iter().filter(|&&x| x != 0).count();
+    let edge = count(&c.edge);
+    let seed = a
+        .seed_differs
+        .iter()
+        .zip(&c.edge)
+        .filter(|&(&s, &e)| s != 0 && e != 0)
+        .count();
+    json!({
+        "kept_per_pixel": a.kept_per_pixel,
+        "fragments": a.fragments.iter().map(|&f| u64::from(f)).sum::<u64>(),
+        "edge_pixels": edge,
+        "overflow_pixels": a.overflow.iter().filter(|&&o| o > 0).count(),
+        "nonfinite_pixels": count(&a.nonfinite),
+        "seed_differs_pixels": count(&a.seed_differs),
+        "seed_differs_edge_fraction": if edge > 0 { seed as f64 / edge as f64 } else { 0.0 },
+    })
+}
+
+/// `analytic:seed`: debug/frame_NNNN_seed_differs.png, the frame with the pixels where the seed's
+/// shortcut is off the exact area by more than 1e-3 in red (docs/analytic.md's figure).
+fn write_seed_figure(dir: &Path, f: u32, out: &FrameOutput, rgba: &[u8]) -> Result<()> {
+    let Some(a) = &out.analytic else {
+        return Ok(());
+    };
+    if !a.seed_differs.iter().any(|&s| s != 0) {
+        return Ok(());
+    }
+    let dbg = dir.join("debug");
+    std::fs::create_dir_all(&dbg).with_context(|| format!("cannot create {}", dbg.display()))?;
+    let marked: Vec<u8> = rgba
+        .chunks_exact(4)
+        .zip(&a.seed_differs)
+        .flat_map(|(p, &s)| {
+            if s != 0 {
+                [255, 0, 0, 255]
+            } else {
+                // The rest dimmed, so the marks stand out.
+                [p[0] / 3, p[1] / 3, p[2] / 3, 255]
+            }
+        })
+        .collect();
+    write_png_rgba8(
+        &dbg.join(format!("frame_{f:04}_seed_differs.png")),
+        out.width,
+        out.height,
+        &marked,
+    )?;
+    Ok(())
 }
 
 /// PNGs of the debug views: debug/frame_NNNN_<view>.png (white where the bit is set), the
