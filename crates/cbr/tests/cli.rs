@@ -1019,3 +1019,38 @@ fn interlaced_writes_its_mask_and_debug_views() {
         "{err}"
     );
 }
+
+#[test]
+fn analytic_seed_counts_its_errors_in_run_json_and_draws_them() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out");
+    let o = cbr(
+        &[
+            "render",
+            "builtin:demo",
+            "--technique",
+            "analytic:seed",
+            "--width",
+            "96",
+            "--height",
+            "54",
+            "--frames",
+            "1",
+            "-o",
+            out.to_str().expect("utf8"),
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json"))
+            .expect("json");
+    let a = &run["frames"][0]["analytic"];
+    let edge = a["edge_pixels"].as_u64().expect("edge pixels");
+    let off = a["seed_differs_pixels"].as_u64().expect("seed pixels");
+    let share = a["seed_differs_edge_fraction"].as_f64().expect("share");
+    assert!(edge > 100 && off > 0 && share > 0.0 && share <= 1.0, "{a}");
+    assert_eq!(a["kept_per_pixel"], 16, "{a}");
+    assert_eq!(a["nonfinite_pixels"], 0, "{a}");
+    assert!(out.join("debug/frame_0000_seed_differs.png").is_file());
+}
