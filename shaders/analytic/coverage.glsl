@@ -174,19 +174,38 @@ vec2 mask_sample(int k) {
 // on the positive side of the edge in its canonical direction (lower y, then lower x, first), so
 // of two polygons sharing an edge exactly one takes it, whatever their windings. `orient` is the
 // sign of the polygon's signed area (the sum of the area integrals before abs).
+// Edge i's function in canonical form, e(q) = ex q.x - ey q.y + c (c to ~1 ulp), and the sign
+// `side` of e on the polygon's inside: the same numbers for the two polygons sharing the edge.
+struct CanonicalEdge {
+    float ex;
+    float ey;
+    float c;
+    float side;
+};
+
+CanonicalEdge canonical_edge(vec2 p[MAX_POLY], int n, int i, float orient) {
+    vec2 a = p[i];
+    vec2 b = p[(i + 1) % n];
+    bool canonical = a.y < b.y || (a.y == b.y && a.x < b.x);
+    vec2 lo = canonical ? a : b;
+    vec2 hi = canonical ? b : a;
+    CanonicalEdge e;
+    e.ex = hi.y - lo.y;
+    e.ey = hi.x - lo.x;
+    e.c = diff_products(e.ey, lo.y, e.ex, lo.x);
+    // A polygon of positive orientation traversing the edge canonically lies where e < 0.
+    e.side = (canonical ? -1.0 : 1.0) * orient;
+    return e;
+}
+
+bool on_inside(CanonicalEdge e, vec2 q) {
+    precise float v = e.ex * q.x - e.ey * q.y + e.c;
+    return v * e.side > 0.0 || (v == 0.0 && e.side > 0.0);
+}
+
 bool inside(vec2 p[MAX_POLY], int n, float orient, vec2 q) {
     for (int i = 0; i < n; ++i) {
-        vec2 a = p[i];
-        vec2 b = p[(i + 1) % n];
-        bool canonical = a.y < b.y || (a.y == b.y && a.x < b.x);
-        vec2 lo = canonical ? a : b;
-        vec2 hi = canonical ? b : a;
-        // The canonical edge function (the 2D cross product (hi - lo) x (q - lo), negated).
-        float e = diff_products(hi.y - lo.y, q.x - lo.x, hi.x - lo.x, q.y - lo.y);
-        // A polygon of positive orientation traversing the edge canonically lies where e < 0.
-        float side = (canonical ? -1.0 : 1.0) * orient;
-        if (e * side < 0.0) return false;
-        if (e == 0.0 && side < 0.0) return false;
+        if (!on_inside(canonical_edge(p, n, i, orient), q)) return false;
     }
     return true;
 }
@@ -203,24 +222,12 @@ float orientation(vec2 p[MAX_POLY], int n) {
 }
 
 uint sample_mask(vec2 p[MAX_POLY], int n, float orient) {
-    // Each edge's function once, e(q) = ex q.x - ey q.y + c (c to ~1 ulp), then 32 evaluations:
-    // the same numbers for the two polygons sharing the edge, so the tie rule stays exact.
     uint m = 0xFFFFFFFFu;
     for (int i = 0; i < n; ++i) {
-        vec2 a = p[i];
-        vec2 b = p[(i + 1) % n];
-        bool canonical = a.y < b.y || (a.y == b.y && a.x < b.x);
-        vec2 lo = canonical ? a : b;
-        vec2 hi = canonical ? b : a;
-        float ex = hi.y - lo.y;
-        float ey = hi.x - lo.x;
-        float c = diff_products(ey, lo.y, ex, lo.x);
-        float side = (canonical ? -1.0 : 1.0) * orient;
+        CanonicalEdge e = canonical_edge(p, n, i, orient);
         uint em = 0u;
         for (int k = 0; k < MASK_SAMPLES; ++k) {
-            vec2 q = mask_sample(k);
-            precise float e = ex * q.x - ey * q.y + c;
-            if (e * side > 0.0 || (e == 0.0 && side > 0.0)) em |= 1u << uint(k);
+            if (on_inside(e, mask_sample(k))) em |= 1u << uint(k);
         }
         m &= em;
     }

@@ -229,16 +229,7 @@ impl ScenePass {
         config: &RasterConfig,
     ) {
         let scope = profiler.begin(cmd, &self.name, PassKind::Graphics);
-        for buf in [
-            &scene.frame,
-            &scene.objects,
-            &scene.vertices,
-            &scene.materials,
-            &scene.lights,
-            &scene.indices,
-        ] {
-            cmd.use_buffer(buf, cbr_gpu::Access::GraphicsRead);
-        }
+        use_scene_buffers(cmd, scene);
         cmd.use_buffer(counter, cbr_gpu::Access::FragmentStorageWrite);
         let bg = scene.background;
         let alpha = if config.layout == LAYOUT_NATIVE {
@@ -292,6 +283,20 @@ impl ScenePass {
         );
         cmd.end_rendering();
         profiler.end(cmd, scope);
+    }
+}
+
+/// Declares the raster's reads of the scene's buffers (before rendering begins).
+pub fn use_scene_buffers(cmd: &mut Cmd, scene: &GpuScene) {
+    for buf in [
+        &scene.frame,
+        &scene.objects,
+        &scene.vertices,
+        &scene.materials,
+        &scene.lights,
+        &scene.indices,
+    ] {
+        cmd.use_buffer(buf, cbr_gpu::Access::GraphicsRead);
     }
 }
 

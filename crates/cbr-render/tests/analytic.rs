@@ -370,6 +370,29 @@ fn coverage_of(out: &FrameOutput) -> &[f32] {
     &out.coverage.as_ref().expect("coverage layer").fraction
 }
 
+/// Asserts that the coverage layer is `poly`'s f64 area in every pixel (within 2e-4: the GPU
+/// projects the vertices in f32), then calls `each(pixel index, area, coverage)`.
+fn check_coverage(
+    out: &FrameOutput,
+    poly: &Poly,
+    what: &str,
+    mut each: impl FnMut(usize, f64, f32),
+) {
+    let cov = coverage_of(out);
+    for y in 0..H as i64 {
+        for x in 0..W as i64 {
+            let i = (y * W as i64 + x) as usize;
+            let (a, _) = reference::coverage(poly, x, y);
+            assert!(
+                (f64::from(cov[i]) - a).abs() < 2e-4,
+                "{what} ({x}, {y}): {} vs {a}",
+                cov[i]
+            );
+            each(i, a, cov[i]);
+        }
+    }
+}
+
 /// Asserts colour = a c + (1 - a) bg within f16 rounding.
 fn assert_blend(out: &FrameOutput, i: usize, a: f64, c: [f32; 3], bg: [f32; 3], what: &str) {
     let got = rgb(out, i);
@@ -397,23 +420,13 @@ fn one_triangle_over_a_background_has_the_exact_coverage() {
     let poly = screen_poly(&s, &s.objects[0], 0);
     for spec in ["analytic", "analytic:frags=1"] {
         let out = render(&gpu, &s, spec);
-        let cov = coverage_of(&out);
         let mut edge = 0;
-        for y in 0..H as i64 {
-            for x in 0..W as i64 {
-                let i = (y * W as i64 + x) as usize;
-                let (a, _) = reference::coverage(&poly, x, y);
-                assert!(
-                    (f64::from(cov[i]) - a).abs() < 2e-4,
-                    "{spec} ({x}, {y}): {} vs {a}",
-                    cov[i]
-                );
-                assert_blend(&out, i, a, c, bg, spec);
-                if a > 0.0 && a < 1.0 {
-                    edge += 1;
-                }
+        check_coverage(&out, &poly, spec, |i, a, _| {
+            assert_blend(&out, i, a, c, bg, spec);
+            if a > 0.0 && a < 1.0 {
+                edge += 1;
             }
-        }
+        });
         assert!(edge > 50, "{edge} edge pixels");
         // Native's layers where the triangle holds the pixel centre.
         let ids_on = out.ids.iter().filter(|i| i[0] == 1).count();
@@ -482,27 +495,17 @@ fn abutting_triangles_add_up_to_the_pixel_without_a_seam() {
     let corner = |i: usize, j: usize| project(&s, o.vertices[j * (n + 1) + i].pos);
     let outline: Poly = vec![corner(0, 0), corner(n, 0), corner(n, n), corner(0, n)];
     let out = render(&gpu, &s, "analytic");
-    let cov = coverage_of(&out);
     let (mut interior, mut seams) = (0, 0);
-    for y in 0..H as i64 {
-        for x in 0..W as i64 {
-            let i = (y * W as i64 + x) as usize;
-            let (a, _) = reference::coverage(&outline, x, y);
-            assert!(
-                (f64::from(cov[i]) - a).abs() < 2e-4,
-                "({x}, {y}): {} vs {a}",
-                cov[i]
-            );
-            assert_blend(&out, i, a, c, bg, "grid");
-            if a == 1.0 {
-                interior += 1;
-                // Inside the mesh the triangles' coverages add up to 1 to rounding.
-                if (f64::from(cov[i]) - 1.0).abs() > 1e-5 {
-                    seams += 1;
-                }
+    check_coverage(&out, &outline, "grid", |i, a, got| {
+        assert_blend(&out, i, a, c, bg, "grid");
+        if a == 1.0 {
+            interior += 1;
+            // Inside the mesh the triangles' coverages add up to 1 to rounding.
+            if (f64::from(got) - 1.0).abs() > 1e-5 {
+                seams += 1;
             }
         }
-    }
+    });
     assert!(interior > 500, "{interior}");
     assert_eq!(seams, 0, "interior pixels whose coverage is not 1");
     assert_clean(&gpu);

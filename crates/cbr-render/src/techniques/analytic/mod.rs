@@ -403,16 +403,7 @@ impl Analytic {
         clear: bool,
     ) {
         let scope = profiler.begin(cmd, r.name, PassKind::Graphics);
-        for buf in [
-            &scene.frame,
-            &scene.objects,
-            &scene.vertices,
-            &scene.materials,
-            &scene.lights,
-            &scene.indices,
-        ] {
-            cmd.use_buffer(buf, Access::GraphicsRead);
-        }
+        scene_pass::use_scene_buffers(cmd, scene);
         for buf in [
             &self.keys,
             &self.slots,
