@@ -6,6 +6,7 @@
 pub mod camera;
 pub mod desc;
 pub mod error;
+pub mod files;
 pub mod obj;
 pub mod procedural;
 pub mod rng;
@@ -18,6 +19,7 @@ use glam::DVec3;
 
 pub use camera::{Camera, CameraKey, CameraPath};
 pub use error::{Result, SceneError};
+pub use files::{Disk, Files, MemoryFiles};
 pub use obj::{MissingTextures, ObjOptions};
 pub use scene::{
     AlphaSource, Bounds, DirLight, LoadStats, MAX_RESOLUTION, Material, Motion, Object, PointLight,

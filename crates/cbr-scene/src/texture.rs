@@ -79,6 +79,15 @@ fn downsample(src: &Level, srgb: bool, lut: &[f32; 256]) -> Level {
     }
 }
 
+/// A texture file that cannot be read: "is a directory" rather than the OS's wording.
+pub(crate) fn read_error(path: &Path, e: &std::io::Error) -> SceneError {
+    if e.kind() == std::io::ErrorKind::IsADirectory || path.is_dir() {
+        SceneError::file(path, "cannot read texture: is a directory")
+    } else {
+        SceneError::file(path, format!("cannot read texture: {e}"))
+    }
+}
+
 impl Texture {
     /// A texture from level-0 RGBA8 texels; builds the full mip chain down to 1x1.
     pub fn from_rgba8(name: &str, width: u32, height: u32, rgba: Vec<u8>, srgb: bool) -> Texture {
@@ -109,14 +118,24 @@ impl Texture {
         }
     }
 
-    /// Decodes an image file (PNG, JPEG, TGA, BMP). Errors name the file.
+    /// Decodes an image file (PNG, JPEG, TGA, BMP). Errors name the file once.
     pub fn load(path: &Path, srgb: bool) -> Result<Texture> {
-        let img = image::open(path).map_err(|e| match e {
-            image::ImageError::IoError(io) => {
-                SceneError::file(path, format!("cannot read texture: {io}"))
-            }
-            other => SceneError::file(path, format!("cannot decode texture: {other}")),
-        })?;
+        let bytes = std::fs::read(path).map_err(|e| read_error(path, &e))?;
+        Texture::decode(path, &bytes, srgb)
+    }
+
+    /// Decodes an image held in memory; `path` names it in errors and in [`Texture::name`]. The
+    /// format is found from the contents (the extension when they say nothing).
+    pub fn decode(path: &Path, bytes: &[u8], srgb: bool) -> Result<Texture> {
+        let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes));
+        if let Ok(format) = image::ImageFormat::from_path(path) {
+            reader.set_format(format);
+        }
+        let img = reader
+            .with_guessed_format()
+            .map_err(|e| read_error(path, &e))?
+            .decode()
+            .map_err(|e| SceneError::file(path, format!("cannot decode texture: {e}")))?;
         let rgba = img.to_rgba8();
         let (w, h) = rgba.dimensions();
         if w == 0 || h == 0 {
