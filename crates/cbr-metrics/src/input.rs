@@ -1,6 +1,7 @@
 //! Loading the images to compare: EXR (a chosen layer and channels, linear HDR) or PNG/JPEG/...
 //! (sRGB-encoded LDR).
 
+use std::io::{BufRead, BufReader, Seek};
 use std::path::{Path, PathBuf};
 
 use exr::prelude::*;
@@ -35,30 +36,60 @@ fn err(path: &Path, msg: impl Into<String>) -> MetricsError {
     }
 }
 
+/// The first four bytes of every OpenEXR file.
+const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+
 /// Loads `path`. For EXR, `layer` defaults to `color` (else the first layer with R, G and B, else
 /// the first layer) and `channels` to R,G,B (else the layer's first channel); one channel is
-/// replicated to grey.
+/// replicated to grey. The format is found from the contents (see [`read`]).
 pub fn load(
     path: &Path,
     layer: Option<&str>,
     channels: Option<&[String]>,
 ) -> Result<InputImage, MetricsError> {
-    let is_exr = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if path.is_dir() {
+        return Err(err(path, "is a directory, not an image"));
+    }
     if !path.is_file() {
         return Err(err(path, "no such file"));
     }
-    if is_exr {
-        load_exr(path, layer, channels)
+    let file = std::fs::File::open(path).map_err(|e| err(path, format!("cannot read: {e}")))?;
+    read(path, BufReader::new(file), layer, channels)
+}
+
+/// Reads an image from `reader`; `path` names it in errors and in [`InputImage::path`]. EXR is
+/// recognised by its magic number or the `.exr` extension; anything else goes to the `image` crate (PNG, JPEG, TGA, BMP),
+/// which guesses from the contents, else from the extension.
+pub fn read(
+    path: &Path,
+    mut reader: impl BufRead + Seek,
+    layer: Option<&str>,
+    channels: Option<&[String]>,
+) -> Result<InputImage, MetricsError> {
+    let head = reader
+        .fill_buf()
+        .map_err(|e| err(path, format!("cannot read: {e}")))?;
+    let exr_name = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if head.starts_with(&EXR_MAGIC) || exr_name {
+        read_exr(path, reader, layer, channels)
     } else {
-        load_ldr(path)
+        read_ldr(path, reader)
     }
 }
 
-fn load_ldr(path: &Path) -> Result<InputImage, MetricsError> {
-    let img = image::open(path).map_err(|e| err(path, format!("cannot decode: {e}")))?;
+fn read_ldr(path: &Path, reader: impl BufRead + Seek) -> Result<InputImage, MetricsError> {
+    let mut r = image::ImageReader::new(reader);
+    if let Ok(format) = image::ImageFormat::from_path(path) {
+        r.set_format(format);
+    }
+    let img = r
+        .with_guessed_format()
+        .map_err(|e| err(path, format!("cannot read: {e}")))?
+        .decode()
+        .map_err(|e| err(path, format!("cannot decode: {e}")))?;
     let rgb = img.to_rgb32f();
     let (w, h) = rgb.dimensions();
     Ok(InputImage {
@@ -70,12 +101,19 @@ fn load_ldr(path: &Path) -> Result<InputImage, MetricsError> {
     })
 }
 
-fn load_exr(
+fn read_exr(
     path: &Path,
+    reader: impl BufRead + Seek,
     layer: Option<&str>,
     channels: Option<&[String]>,
 ) -> Result<InputImage, MetricsError> {
-    let img = read_all_flat_layers_from_file(path)
+    let img = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_buffered(reader)
         .map_err(|e| err(path, format!("cannot read EXR: {e}")))?;
     let name_of = |l: &Layer<FlatSamples2>| {
         l.attributes
