@@ -38,6 +38,11 @@ pub struct LoadOptions {
 
 /// Loads `builtin:NAME`, a scene TOML, or a bare OBJ (framed by an automatic camera).
 pub fn load(spec: &str, opts: &LoadOptions) -> Result<Scene> {
+    load_from(&Disk, spec, opts)
+}
+
+/// [`load`], reading every file (TOML, OBJ, MTL, textures) from `files`.
+pub fn load_from(files: &dyn Files, spec: &str, opts: &LoadOptions) -> Result<Scene> {
     if let Some(name) = spec.strip_prefix("builtin:") {
         return builtin(name);
     }
@@ -48,8 +53,8 @@ pub fn load(spec: &str, opts: &LoadOptions) -> Result<Scene> {
         .map(str::to_ascii_lowercase)
         .as_deref()
     {
-        Some("toml") => load_toml(path, opts),
-        Some("obj") => load_bare_obj(path, opts),
+        Some("toml") => load_toml(files, path, opts),
+        Some("obj") => load_bare_obj(files, path, opts),
         _ => Err(SceneError::file(
             path,
             "expected a .toml scene, an .obj file, or builtin:NAME (builtin:demo)",
@@ -76,8 +81,8 @@ fn default_lights(scene: &mut Scene) {
     scene.settings.ambient = [0.15; 3];
 }
 
-fn scene_from_obj(path: &Path, obj_opts: &ObjOptions) -> Result<Scene> {
-    let data = obj::load_obj(path, obj_opts)?;
+fn scene_from_obj(files: &dyn Files, path: &Path, obj_opts: &ObjOptions) -> Result<Scene> {
+    let data = obj::load_obj_from(files, path, obj_opts)?;
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -102,17 +107,20 @@ fn scene_from_obj(path: &Path, obj_opts: &ObjOptions) -> Result<Scene> {
     Ok(s)
 }
 
-fn load_bare_obj(path: &Path, opts: &LoadOptions) -> Result<Scene> {
+fn load_bare_obj(files: &dyn Files, path: &Path, opts: &LoadOptions) -> Result<Scene> {
     let o = ObjOptions {
         missing_textures: opts.missing_textures.unwrap_or_default(),
         ..Default::default()
     };
-    scene_from_obj(path, &o)
+    scene_from_obj(files, path, &o)
 }
 
-fn load_toml(path: &Path, opts: &LoadOptions) -> Result<Scene> {
-    let text = std::fs::read_to_string(path)
+fn load_toml(files: &dyn Files, path: &Path, opts: &LoadOptions) -> Result<Scene> {
+    let bytes = files
+        .read(path)
         .map_err(|e| SceneError::file(path, format!("cannot read: {e}")))?;
+    let text = String::from_utf8(bytes)
+        .map_err(|e| SceneError::file(path, format!("cannot read: not UTF-8 text ({e})")))?;
     let d = desc::SceneDesc::parse(&text, path)?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut scene = match (&d.obj, &d.procedural) {
@@ -126,7 +134,7 @@ fn load_toml(path: &Path, opts: &LoadOptions) -> Result<Scene> {
                     .unwrap_or_default(),
                 up: d.up,
             };
-            scene_from_obj(&dir.join(obj), &o)?
+            scene_from_obj(files, &dir.join(obj), &o)?
         }
         (None, Some(name)) => builtin(name).map_err(|e| SceneError::file(path, e.to_string()))?,
         _ => {
