@@ -6,6 +6,7 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use crate::error::{Result, SceneError};
+use crate::scene::MAX_RESOLUTION;
 
 #[derive(Clone, Debug)]
 pub struct Level {
@@ -125,17 +126,25 @@ impl Texture {
     }
 
     /// Decodes an image held in memory; `path` names it in errors and in [`Texture::name`]. The
-    /// format is found from the contents (the extension when they say nothing).
+    /// format is found from the contents (the extension when they say nothing). Images over
+    /// [`MAX_RESOLUTION`] per side are refused from their header, before any texel is decoded.
     pub fn decode(path: &Path, bytes: &[u8], srgb: bool) -> Result<Texture> {
-        let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes));
-        if let Ok(format) = image::ImageFormat::from_path(path) {
-            reader.set_format(format);
+        let reader = || -> Result<image::ImageReader<std::io::Cursor<&[u8]>>> {
+            let mut r = image::ImageReader::new(std::io::Cursor::new(bytes));
+            if let Ok(format) = image::ImageFormat::from_path(path) {
+                r.set_format(format);
+            }
+            r.with_guessed_format().map_err(|e| read_error(path, &e))
+        };
+        let decode_err = |e| SceneError::file(path, format!("cannot decode texture: {e}"));
+        let (w, h) = reader()?.into_dimensions().map_err(decode_err)?;
+        if w > MAX_RESOLUTION || h > MAX_RESOLUTION {
+            return Err(SceneError::file(
+                path,
+                format!("texture is {w}x{h} texels; at most {MAX_RESOLUTION} per side"),
+            ));
         }
-        let img = reader
-            .with_guessed_format()
-            .map_err(|e| read_error(path, &e))?
-            .decode()
-            .map_err(|e| SceneError::file(path, format!("cannot decode texture: {e}")))?;
+        let img = reader()?.decode().map_err(decode_err)?;
         let rgba = img.to_rgba8();
         let (w, h) = rgba.dimensions();
         if w == 0 || h == 0 {
