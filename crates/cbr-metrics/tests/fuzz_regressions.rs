@@ -13,6 +13,9 @@ const EXPECTED: &[(&str, Result<(), &str>)] = &[
     // exr 1.74's B44 decoder subtracts past zero on a corrupt block: with overflow checks (debug
     // builds) a decoder thread panicked and rayon aborted the process.
     ("exr-b44-overflow.bin", Ok(())),
+    // A 0.5 kB EXR whose header declares a layer of 1.4 TB: the decoder allocated it up front
+    // and the allocation failure aborted the process.
+    ("exr-huge-layer.bin", Err("at most 16384 per side")),
 ];
 
 fn replay(data: &[u8]) -> Result<(), String> {
