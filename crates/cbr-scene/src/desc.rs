@@ -26,8 +26,9 @@
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
+use toml::Spanned;
 
-use crate::camera::{CameraKey, CameraPath};
+use crate::camera::{CameraKey, CameraPath, check_direction, check_finite, check_fov, check_near};
 use crate::error::{Result, SceneError};
 use crate::obj::MissingTextures;
 use crate::scene::Up;
@@ -61,8 +62,8 @@ pub struct SceneDesc {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraDesc {
-    pub near: Option<f64>,
-    pub fov_y_deg: Option<f64>,
+    pub near: Option<Spanned<f64>>,
+    pub fov_y_deg: Option<Spanned<f64>>,
     #[serde(default)]
     pub keys: Vec<KeyDesc>,
 }
@@ -70,10 +71,10 @@ pub struct CameraDesc {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct KeyDesc {
-    pub time: f64,
-    pub position: [f64; 3],
-    pub target: [f64; 3],
-    pub fov_y_deg: Option<f64>,
+    pub time: Spanned<f64>,
+    pub position: Spanned<[f64; 3]>,
+    pub target: Spanned<[f64; 3]>,
+    pub fov_y_deg: Option<Spanned<f64>>,
     /// A camera cut: the camera jumps to this key (histories reset).
     #[serde(default)]
     pub cut: bool,
@@ -159,12 +160,47 @@ impl SceneDesc {
             let line = e.span().map(|s| line_of(text, s.start)).unwrap_or(1);
             SceneError::syntax(file, line, e.message().to_string())
         })?;
-        serde_path_to_error::deserialize(de).map_err(|e| {
+        let desc: SceneDesc = serde_path_to_error::deserialize(de).map_err(|e| {
             let path = e.path().to_string();
             let inner = e.into_inner();
             let line = inner.span().map(|s| line_of(text, s.start)).unwrap_or(1);
             SceneError::syntax(file, line, format!("`{path}`: {}", inner.message()))
-        })
+        })?;
+        desc.check_camera(text, file)?;
+        Ok(desc)
+    }
+
+    /// Refuses cameras that cannot make a picture (a field of view outside (0, 180) degrees, a
+    /// target equal to the position, a near plane that is not positive, non-finite numbers),
+    /// naming the key and its line.
+    fn check_camera(&self, text: &str, file: &Path) -> Result<()> {
+        let Some(c) = &self.camera else {
+            return Ok(());
+        };
+        let at = |key: String, span: std::ops::Range<usize>, e: String| {
+            SceneError::syntax(file, line_of(text, span.start), format!("`{key}`: {e}"))
+        };
+        if let Some(near) = &c.near {
+            check_near(*near.get_ref()).map_err(|e| at("camera.near".into(), near.span(), e))?;
+        }
+        if let Some(fov) = &c.fov_y_deg {
+            check_fov(*fov.get_ref()).map_err(|e| at("camera.fov_y_deg".into(), fov.span(), e))?;
+        }
+        for (i, k) in c.keys.iter().enumerate() {
+            let key = |field: &str| format!("camera.keys[{i}].{field}");
+            if !k.time.get_ref().is_finite() {
+                let e = format!("the time {} is not a finite number", k.time.get_ref());
+                return Err(at(key("time"), k.time.span(), e));
+            }
+            if let Some(fov) = &k.fov_y_deg {
+                check_fov(*fov.get_ref()).map_err(|e| at(key("fov_y_deg"), fov.span(), e))?;
+            }
+            check_finite(*k.position.get_ref())
+                .map_err(|e| at(key("position"), k.position.span(), e))?;
+            check_direction(*k.position.get_ref(), *k.target.get_ref())
+                .map_err(|e| at(key("target"), k.target.span(), e))?;
+        }
+        Ok(())
     }
 }
 
@@ -173,22 +209,22 @@ pub(crate) fn camera_path(desc: Option<&CameraDesc>) -> Option<CameraPath> {
     if c.keys.is_empty() {
         return None;
     }
-    let fov = c.fov_y_deg.unwrap_or(50.0);
+    let fov = c.fov_y_deg.as_ref().map_or(50.0, |f| *f.get_ref());
     let mut keys: Vec<CameraKey> = c
         .keys
         .iter()
         .map(|k| CameraKey {
-            time: k.time,
-            position: k.position,
-            target: k.target,
-            fov_y_deg: k.fov_y_deg.unwrap_or(fov),
+            time: *k.time.get_ref(),
+            position: *k.position.get_ref(),
+            target: *k.target.get_ref(),
+            fov_y_deg: k.fov_y_deg.as_ref().map_or(fov, |f| *f.get_ref()),
             cut: k.cut,
         })
         .collect();
     keys.sort_by(|a, b| a.time.total_cmp(&b.time));
     Some(CameraPath {
         keys,
-        near: c.near.unwrap_or(0.05),
+        near: c.near.as_ref().map_or(0.05, |n| *n.get_ref()),
     })
 }
 
@@ -225,6 +261,49 @@ mod tests {
     fn syntax_errors_name_the_line() {
         let err = parse("width = 3\nheight = = 4\n").unwrap_err().to_string();
         assert!(err.starts_with("s.toml:2:"), "{err}");
+    }
+
+    #[test]
+    fn degenerate_cameras_name_the_key_and_line() {
+        let key = |extra: &str| {
+            format!(
+                "obj = \"a.obj\"\n[camera]\n[[camera.keys]]\ntime = 0\nposition = [0, 0, 0]\ntarget = [0, 0, -1]\n[[camera.keys]]\ntime = 1\n{extra}"
+            )
+        };
+        let err = |text: &str| parse(text).expect_err(text).to_string();
+        let ok = key("position = [0, 1, 0]\ntarget = [0, 0, 0]\nfov_y_deg = 179\n");
+        assert!(parse(&ok).is_ok());
+        for fov in ["180", "0", "-45", "nan", "inf"] {
+            let e = err(&key(&format!(
+                "position = [0, 1, 0]\ntarget = [0, 0, 0]\nfov_y_deg = {fov}\n"
+            )));
+            assert!(
+                e.starts_with("s.toml:11: `camera.keys[1].fov_y_deg`: a vertical field of view of"),
+                "{e}"
+            );
+        }
+        let e = err(&key("position = [1, 2, 3]\ntarget = [1, 2, 3]\n"));
+        assert!(
+            e.starts_with("s.toml:10: `camera.keys[1].target`: the target [1.0, 2.0, 3.0] is the camera's position"),
+            "{e}"
+        );
+        let e = err(&key("position = [nan, 0, 0]\ntarget = [1, 2, 3]\n"));
+        assert!(
+            e.starts_with("s.toml:9: `camera.keys[1].position`: the coordinate NaN"),
+            "{e}"
+        );
+        let e = err(
+            &key("position = [0, 0, 0]\ntarget = [1, 2, 3]\ntime = inf\n")
+                .replace("time = 1\n", ""),
+        );
+        assert!(e.contains("`camera.keys[1].time`: the time inf"), "{e}");
+        let e = err("obj = \"a.obj\"\n[camera]\nfov_y_deg = 180\n");
+        assert!(e.starts_with("s.toml:3: `camera.fov_y_deg`"), "{e}");
+        let e = err("obj = \"a.obj\"\n[camera]\nnear = 0\n");
+        assert!(
+            e.starts_with("s.toml:3: `camera.near`: a near plane at 0"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -47,29 +47,44 @@ pub fn load_from(files: &dyn Files, spec: &str, opts: &LoadOptions) -> Result<Sc
         return builtin(name);
     }
     let path = Path::new(spec);
-    match path
+    let scene = match path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
         .as_deref()
     {
-        Some("toml") => load_toml(files, path, opts),
-        Some("obj") => load_bare_obj(files, path, opts),
-        _ => Err(SceneError::file(
-            path,
-            "expected a .toml scene, an .obj file, or builtin:NAME (builtin:demo)",
-        )),
-    }
+        Some("toml") => load_toml(files, path, opts)?,
+        Some("obj") => load_bare_obj(files, path, opts)?,
+        _ => {
+            return Err(SceneError::file(
+                path,
+                "expected a .toml scene, an .obj file, or builtin:NAME (builtin:demo)",
+            ));
+        }
+    };
+    // TOML keys are checked with their lines when parsed; this catches a framing camera.
+    scene
+        .camera
+        .check()
+        .map_err(|e| SceneError::file(path, e))?;
+    Ok(scene)
 }
 
 pub fn builtin(name: &str) -> Result<Scene> {
-    match name {
-        "demo" => Ok(procedural::demo()),
-        other => Err(SceneError::Invalid(format!(
-            "no built-in scene `{other}`; built-ins: {}",
-            BUILTINS.join(", ")
-        ))),
-    }
+    let scene = match name {
+        "demo" => procedural::demo(),
+        other => {
+            return Err(SceneError::Invalid(format!(
+                "no built-in scene `{other}`; built-ins: {}",
+                BUILTINS.join(", ")
+            )));
+        }
+    };
+    scene
+        .camera
+        .check()
+        .map_err(|e| SceneError::Invalid(format!("builtin:{name}: {e}")))?;
+    Ok(scene)
 }
 
 fn default_lights(scene: &mut Scene) {
@@ -269,5 +284,35 @@ fn apply_lights(scene: &mut Scene, l: &desc::LightsDesc, up_axis: Up) {
                 range,
             });
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_builtin_has_a_usable_camera() {
+        for name in BUILTINS {
+            let scene = builtin(name).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(scene.camera.check(), Ok(()), "builtin:{name}");
+        }
+    }
+
+    #[test]
+    fn a_toml_camera_looking_nowhere_fails_the_load_naming_the_line() {
+        let mut files = MemoryFiles::new();
+        files.insert(
+            "s/t.toml",
+            "procedural = \"demo\"\n[camera]\n[[camera.keys]]\ntime = 0\nposition = [1, 1, 1]\ntarget = [1, 1, 1]\n",
+        );
+        let err = load_from(&files, "s/t.toml", &LoadOptions::default())
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(
+            err.starts_with("s/t.toml:6: `camera.keys[0].target`: the target"),
+            "{err}"
+        );
     }
 }
