@@ -111,12 +111,15 @@ pub struct PointDesc {
     pub range: Option<f32>,
 }
 
+/// The most random point lights a scene may ask for (each fragment loops over every light).
+pub const MAX_RANDOM_LIGHTS: u32 = 1 << 20;
+
 /// `count` point lights placed uniformly in a box (default: the scene bounds) with random hues:
 /// the knob that scales shading cost.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RandomPointsDesc {
-    pub count: u32,
+    pub count: Spanned<u32>,
     #[serde(default = "one")]
     pub intensity: f32,
     pub range: Option<f32>,
@@ -160,6 +163,11 @@ impl SceneDesc {
             let line = e.span().map(|s| line_of(text, s.start)).unwrap_or(1);
             SceneError::syntax(file, line, e.message().to_string())
         })?;
+        if let Ok(table) = toml::de::DeTable::parse(text) {
+            let span = table.span();
+            let root = toml::de::DeValue::Table(table.into_inner());
+            check_finite_floats(&root, "", span, text, file)?;
+        }
         let desc: SceneDesc = serde_path_to_error::deserialize(de).map_err(|e| {
             let path = e.path().to_string();
             let inner = e.into_inner();
@@ -167,6 +175,18 @@ impl SceneDesc {
             SceneError::syntax(file, line, format!("`{path}`: {}", inner.message()))
         })?;
         desc.check_camera(text, file)?;
+        if let Some(r) = desc.lights.as_ref().and_then(|l| l.random_points.as_ref())
+            && *r.count.get_ref() > MAX_RANDOM_LIGHTS
+        {
+            return Err(SceneError::syntax(
+                file,
+                line_of(text, r.count.span().start),
+                format!(
+                    "`lights.random_points.count`: {} lights; at most {MAX_RANDOM_LIGHTS}",
+                    r.count.get_ref()
+                ),
+            ));
+        }
         Ok(desc)
     }
 
@@ -201,6 +221,45 @@ impl SceneDesc {
                 .map_err(|e| at(key("target"), k.target.span(), e))?;
         }
         Ok(())
+    }
+}
+
+/// Refuses `nan` and `inf` anywhere in a scene TOML (no key means anything by them), naming the
+/// key and its line.
+fn check_finite_floats(
+    value: &toml::de::DeValue,
+    key: &str,
+    span: std::ops::Range<usize>,
+    text: &str,
+    file: &Path,
+) -> Result<()> {
+    use toml::de::DeValue;
+    match value {
+        DeValue::Float(f) if f.as_str().contains("nan") || f.as_str().contains("inf") => {
+            Err(SceneError::syntax(
+                file,
+                line_of(text, span.start),
+                format!("`{key}`: {} is not a finite number", f.as_str()),
+            ))
+        }
+        DeValue::Table(t) => {
+            for (k, v) in t {
+                let sub = if key.is_empty() {
+                    k.get_ref().to_string()
+                } else {
+                    format!("{key}.{}", k.get_ref())
+                };
+                check_finite_floats(v.get_ref(), &sub, v.span(), text, file)?;
+            }
+            Ok(())
+        }
+        DeValue::Array(a) => {
+            for (i, v) in a.iter().enumerate() {
+                check_finite_floats(v.get_ref(), &format!("{key}[{i}]"), v.span(), text, file)?;
+            }
+            Ok(())
+        }
+        _ => Ok(()),
     }
 }
 
@@ -273,12 +332,18 @@ mod tests {
         let err = |text: &str| parse(text).expect_err(text).to_string();
         let ok = key("position = [0, 1, 0]\ntarget = [0, 0, 0]\nfov_y_deg = 179\n");
         assert!(parse(&ok).is_ok());
-        for fov in ["180", "0", "-45", "nan", "inf"] {
+        for (fov, why) in [
+            ("180", "a vertical field of view of 180 degrees"),
+            ("0", "a vertical field of view of 0 degrees"),
+            ("-45", "a vertical field of view of -45 degrees"),
+            ("nan", "nan is not a finite number"),
+            ("inf", "inf is not a finite number"),
+        ] {
             let e = err(&key(&format!(
                 "position = [0, 1, 0]\ntarget = [0, 0, 0]\nfov_y_deg = {fov}\n"
             )));
             assert!(
-                e.starts_with("s.toml:11: `camera.keys[1].fov_y_deg`: a vertical field of view of"),
+                e.starts_with(&format!("s.toml:11: `camera.keys[1].fov_y_deg`: {why}")),
                 "{e}"
             );
         }
@@ -289,20 +354,51 @@ mod tests {
         );
         let e = err(&key("position = [nan, 0, 0]\ntarget = [1, 2, 3]\n"));
         assert!(
-            e.starts_with("s.toml:9: `camera.keys[1].position`: the coordinate NaN"),
+            e.starts_with("s.toml:9: `camera.keys[1].position[0]`: nan is not a finite"),
             "{e}"
         );
         let e = err(
             &key("position = [0, 0, 0]\ntarget = [1, 2, 3]\ntime = inf\n")
                 .replace("time = 1\n", ""),
         );
-        assert!(e.contains("`camera.keys[1].time`: the time inf"), "{e}");
+        assert!(
+            e.contains("`camera.keys[1].time`: inf is not a finite number"),
+            "{e}"
+        );
         let e = err("obj = \"a.obj\"\n[camera]\nfov_y_deg = 180\n");
         assert!(e.starts_with("s.toml:3: `camera.fov_y_deg`"), "{e}");
         let e = err("obj = \"a.obj\"\n[camera]\nnear = 0\n");
         assert!(
             e.starts_with("s.toml:3: `camera.near`: a near plane at 0"),
             "{e}"
+        );
+    }
+
+    #[test]
+    fn non_finite_numbers_name_the_key_and_line() {
+        let e = parse("obj = \"a.obj\"\nexposure = nan\n")
+            .expect_err("nan")
+            .to_string();
+        assert_eq!(e, "s.toml:2: `exposure`: nan is not a finite number");
+        let e = parse("obj = \"a.obj\"\n[[lights.point]]\nposition = [0, 0, 0]\n[[lights.point]]\nposition = [0,\n -inf, 0]\n")
+            .expect_err("inf")
+            .to_string();
+        assert_eq!(
+            e,
+            "s.toml:6: `lights.point[1].position[1]`: -inf is not a finite number"
+        );
+    }
+
+    #[test]
+    fn random_light_counts_are_bounded() {
+        let text = |n: u64| format!("obj = \"a.obj\"\n[lights.random_points]\ncount = {n}\n");
+        assert!(parse(&text(1 << 20)).is_ok());
+        let e = parse(&text(4_000_000_000))
+            .expect_err("too many")
+            .to_string();
+        assert_eq!(
+            e,
+            "s.toml:3: `lights.random_points.count`: 4000000000 lights; at most 1048576"
         );
     }
 
@@ -321,7 +417,9 @@ mod tests {
         );
         assert!(path.cut_between(0.5, 1.0));
         assert_eq!(
-            d.lights.and_then(|l| l.random_points).map(|r| r.count),
+            d.lights
+                .and_then(|l| l.random_points)
+                .map(|r| *r.count.get_ref()),
             Some(10)
         );
     }

@@ -275,7 +275,7 @@ fn apply_lights(scene: &mut Scene, l: &desc::LightsDesc, up_axis: Up) {
         let (lo, hi) = (min.min(max), min.max(max));
         let mut rng = rng::SplitMix(r.seed.unwrap_or(scene.settings.seed));
         let range = r.range.unwrap_or(radius * 0.25);
-        for _ in 0..r.count {
+        for _ in 0..*r.count.get_ref() {
             let p = lo + (hi - lo) * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
             scene.points.push(PointLight {
                 position: p.to_array(),
