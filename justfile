@@ -88,3 +88,18 @@ fmt:
 lint:
     cargo fmt --all -- --check
     cargo clippy --workspace --all-targets -- -D warnings
+
+# Fuzz the loaders of untrusted files, each for SECONDS one after the other, one process each:
+# obj (OBJ + MTL + texture, in memory), scene_toml, texture, image_input (`cbr compare`'s EXR/PNG
+# reader). cargo-fuzz (libFuzzer + AddressSanitizer) wants nightly flags; RUSTC_BOOTSTRAP=1 lets
+# stable Rust take them. Seeds: fuzz/seeds/TARGET; new inputs: fuzz/corpus/TARGET; a crash or hang
+# (-timeout=10 s per input) stops the recipe and leaves its input in fuzz/artifacts/TARGET.
+# Needs `cargo install cargo-fuzz`. Numbers of the last long runs: docs/fuzzing.md.
+fuzz SECONDS="60":
+    cd fuzz && for t in obj scene_toml texture image_input; do \
+        mkdir -p corpus/$t; \
+        echo "[fuzz] $t for {{SECONDS}} s"; \
+        RUSTC_BOOTSTRAP=1 cargo fuzz run $t corpus/$t seeds/$t -- \
+            -max_total_time={{SECONDS}} -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 || exit 1; \
+        echo "[fuzz] $t: corpus $(ls corpus/$t | wc -l) files"; \
+    done

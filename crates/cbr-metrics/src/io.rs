@@ -233,9 +233,72 @@ pub fn write_frame_exr(path: &Path, f: &FrameLayers) -> Result<(), IoError> {
         ImageAttributes::new(IntegerBounds::from_dimensions(size)),
         layers,
     );
-    write_atomic(path, |tmp| {
-        image.write().to_file(tmp).map_err(|e| e.to_string())
-    })
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image
+        .write()
+        .to_buffered(&mut bytes)
+        .map_err(|e| IoError::Write {
+            path: path.to_path_buf(),
+            msg: e.to_string(),
+        })?;
+    let mut bytes = bytes.into_inner();
+    sort_header_attributes(&mut bytes).map_err(|msg| IoError::Write {
+        path: path.to_path_buf(),
+        msg,
+    })?;
+    write_bytes(path, &bytes)
+}
+
+/// Sorts the attributes of every header of an OpenEXR file by name, in place, so that the same
+/// image always gives the same bytes: the exr crate writes custom attributes (`cbr.frame`, ...)
+/// in the order of a `HashMap` seeded afresh in every process. OpenEXR gives attribute order no
+/// meaning, and sorting keeps each header's length, so the offset tables after the headers (the
+/// byte positions of the pixel chunks) stay valid.
+fn sort_header_attributes(bytes: &mut [u8]) -> Result<(), String> {
+    const MULTIPART: u32 = 0x1000;
+    let bad = || "the EXR writer's headers could not be read back".to_string();
+    let flags = bytes
+        .get(4..8)
+        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .ok_or_else(bad)?;
+    let nul_after = |bytes: &[u8], at: usize| -> Result<usize, String> {
+        bytes
+            .get(at..)
+            .and_then(|rest| rest.iter().position(|&b| b == 0))
+            .map(|i| at + i)
+            .ok_or_else(bad)
+    };
+    let mut pos = 8;
+    loop {
+        let start = pos;
+        // (name, byte range) of each attribute: name\0 type\0 size (i32 LE) value.
+        let mut attrs: Vec<(Vec<u8>, std::ops::Range<usize>)> = Vec::new();
+        while *bytes.get(pos).ok_or_else(bad)? != 0 {
+            let name_end = nul_after(bytes, pos)?;
+            let type_end = nul_after(bytes, name_end + 1)?;
+            let size = bytes
+                .get(type_end + 1..type_end + 5)
+                .map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .ok_or_else(bad)?;
+            let end = type_end + 5 + usize::try_from(size).map_err(|_| bad())?;
+            if end > bytes.len() {
+                return Err(bad());
+            }
+            attrs.push((bytes[pos..name_end].to_vec(), pos..end));
+            pos = end;
+        }
+        attrs.sort_by(|a, b| a.0.cmp(&b.0));
+        let sorted: Vec<u8> = attrs
+            .iter()
+            .flat_map(|(_, r)| bytes[r.clone()].iter().copied())
+            .collect();
+        bytes[start..pos].copy_from_slice(&sorted);
+        pos += 1; // the header's terminating null byte
+        // A multi-part file ends its header list with an empty header (one null byte).
+        if flags & MULTIPART == 0 || *bytes.get(pos).ok_or_else(bad)? == 0 {
+            return Ok(());
+        }
+    }
 }
 
 #[cfg(test)]
@@ -292,6 +355,58 @@ mod tests {
             .map(|e| e.expect("e").file_name())
             .collect();
         assert_eq!(names.len(), 1, "{names:?}");
+    }
+
+    #[test]
+    fn frame_exrs_are_byte_identical_across_writes() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let (w, h) = (4u32, 3u32);
+        let n = (w * h) as usize;
+        let color: Vec<f16> = (0..n * 4).map(|i| f16::from_f32(i as f32)).collect();
+        let depth = vec![1.0f32; n];
+        let velocity = vec![[0.5f32, -0.5]; n];
+        let ids = vec![[1u32, 2]; n];
+        let mask = vec![1u8; n];
+        let metadata: Vec<(String, String)> = ["scene", "technique", "frame", "time", "device"]
+            .iter()
+            .map(|k| (format!("cbr.{k}"), format!("value of {k}")))
+            .collect();
+        let write = |i: usize| {
+            let path = dir.path().join(format!("f{i}.exr"));
+            let layers = FrameLayers {
+                width: w,
+                height: h,
+                color: &color,
+                depth: &depth,
+                velocity: &velocity,
+                ids: &ids,
+                mask: Some(&mask),
+                prepass: None,
+                extra: vec![("extra".into(), vec![("Y".into(), vec![0.25; n])])],
+                metadata: metadata.clone(),
+            };
+            write_frame_exr(&path, &layers).expect("write");
+            std::fs::read(&path).expect("read")
+        };
+        // Every write builds new attribute maps (new hash seeds): 5! orders per part.
+        let first = write(0);
+        for i in 1..8 {
+            assert!(write(i) == first, "write {i} differs from write 0");
+        }
+        // The sorted file still reads, attributes and pixels.
+        let path = dir.path().join("f0.exr");
+        let img = exr::prelude::read_all_flat_layers_from_file(&path).expect("read back");
+        assert_eq!(img.layer_data.len(), 7);
+        for layer in &img.layer_data {
+            let frame = layer.attributes.other.get(&Text::from("cbr.frame"));
+            assert_eq!(
+                frame,
+                Some(&AttributeValue::Text(Text::from("value of frame")))
+            );
+        }
+        let g =
+            crate::input::load(&path, Some(COLOR_LAYER), Some(&["G".to_string()])).expect("color");
+        assert_eq!(g.rgb.c[0].data[2], 9.0);
     }
 
     #[test]

@@ -57,6 +57,65 @@ impl Camera {
     }
 }
 
+/// Why a vertical field of view (degrees) cannot make a picture: it must be finite and strictly
+/// between 0 and 180 (at 180 the projection's focal length is 0, beyond it the image flips).
+pub fn check_fov(fov_y_deg: f64) -> Result<(), String> {
+    if fov_y_deg.is_finite() && fov_y_deg > 0.0 && fov_y_deg < 180.0 {
+        Ok(())
+    } else {
+        Err(format!(
+            "a vertical field of view of {fov_y_deg} degrees; give one between 0 and 180, exclusive"
+        ))
+    }
+}
+
+/// Why a point cannot be used: a coordinate that is not a finite number.
+pub fn check_finite(point: [f64; 3]) -> Result<(), String> {
+    match point.iter().find(|v| !v.is_finite()) {
+        Some(v) => Err(format!("the coordinate {v} is not a finite number")),
+        None => Ok(()),
+    }
+}
+
+/// Why a camera at `position` looking at `target` has no view direction: a non-finite coordinate,
+/// or a target equal to the position.
+pub fn check_direction(position: [f64; 3], target: [f64; 3]) -> Result<(), String> {
+    check_finite(position)?;
+    check_finite(target)?;
+    let d = DVec3::from(target) - DVec3::from(position);
+    if d == DVec3::ZERO {
+        return Err(format!(
+            "the target {target:?} is the camera's position: the camera looks nowhere"
+        ));
+    }
+    if d.normalize_or_zero() == DVec3::ZERO {
+        return Err(format!(
+            "the target {target:?} and the position {position:?} give no direction (too close or too far apart)"
+        ));
+    }
+    Ok(())
+}
+
+/// Why a near plane distance cannot be used: it must be finite and positive.
+pub fn check_near(near: f64) -> Result<(), String> {
+    if near.is_finite() && near > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("a near plane at {near}; give a positive distance"))
+    }
+}
+
+impl CameraKey {
+    /// Whether this key can make a picture (see [`check_fov`], [`check_direction`]).
+    pub fn check(&self) -> Result<(), String> {
+        if !self.time.is_finite() {
+            return Err(format!("the time {} is not a finite number", self.time));
+        }
+        check_fov(self.fov_y_deg)?;
+        check_direction(self.position, self.target)
+    }
+}
+
 #[derive(Clone, Debug, Serialize)]
 pub struct CameraPath {
     pub keys: Vec<CameraKey>,
@@ -73,6 +132,19 @@ fn catmull_rom(p0: DVec3, p1: DVec3, p2: DVec3, p3: DVec3, s: f64) -> DVec3 {
 }
 
 impl CameraPath {
+    /// Whether every key can make a picture and the near plane is usable; the error names the
+    /// key by index.
+    pub fn check(&self) -> Result<(), String> {
+        if self.keys.is_empty() {
+            return Err("the camera path has no keys".into());
+        }
+        check_near(self.near).map_err(|e| format!("camera: {e}"))?;
+        for (i, k) in self.keys.iter().enumerate() {
+            k.check().map_err(|e| format!("camera key {i}: {e}"))?;
+        }
+        Ok(())
+    }
+
     /// Whether key `i` starts a new shot: flagged `cut`, or at the time of the key before it.
     fn is_cut(&self, i: usize) -> bool {
         i > 0 && (self.keys[i].cut || self.keys[i].time <= self.keys[i - 1].time)
@@ -215,6 +287,54 @@ mod tests {
         assert!((p.at(0.5).fov_y_deg - 41.0).abs() < 1e-12);
         let mid = p.at(0.5).position.x;
         assert!(mid > 0.0 && mid < 2.0, "{mid}");
+    }
+
+    #[test]
+    fn degenerate_cameras_are_refused() {
+        let path = |k: CameraKey| CameraPath {
+            keys: vec![key(0.0, 0.0), k],
+            near: 0.1,
+        };
+        assert!(path(key(1.0, 1.0)).check().is_ok());
+        for fov in [180.0, 0.0, -30.0, 200.0, f64::NAN, f64::INFINITY] {
+            let err = path(CameraKey {
+                fov_y_deg: fov,
+                ..key(1.0, 1.0)
+            })
+            .check()
+            .expect_err("bad field of view");
+            assert!(
+                err.starts_with("camera key 1: a vertical field of view of"),
+                "{err}"
+            );
+        }
+        assert!(check_fov(179.9).is_ok() && check_fov(0.1).is_ok());
+        let err = path(CameraKey {
+            target: [1.0, 0.0, 0.0],
+            ..key(1.0, 1.0)
+        })
+        .check()
+        .expect_err("looks nowhere");
+        assert!(
+            err.contains("camera key 1: the target") && err.contains("looks nowhere"),
+            "{err}"
+        );
+        let err = path(CameraKey {
+            position: [f64::NAN, 0.0, 0.0],
+            ..key(1.0, 1.0)
+        })
+        .check()
+        .expect_err("NaN");
+        assert!(err.contains("NaN is not a finite number"), "{err}");
+        for near in [0.0, -1.0, f64::INFINITY] {
+            let mut p = path(key(1.0, 1.0));
+            p.near = near;
+            assert!(
+                p.check()
+                    .expect_err("near")
+                    .starts_with("camera: a near plane")
+            );
+        }
     }
 
     #[test]

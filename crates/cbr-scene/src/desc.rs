@@ -26,8 +26,9 @@
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
+use toml::Spanned;
 
-use crate::camera::{CameraKey, CameraPath};
+use crate::camera::{CameraKey, CameraPath, check_direction, check_finite, check_fov, check_near};
 use crate::error::{Result, SceneError};
 use crate::obj::MissingTextures;
 use crate::scene::Up;
@@ -64,8 +65,8 @@ pub struct SceneDesc {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraDesc {
-    pub near: Option<f64>,
-    pub fov_y_deg: Option<f64>,
+    pub near: Option<Spanned<f64>>,
+    pub fov_y_deg: Option<Spanned<f64>>,
     #[serde(default)]
     pub keys: Vec<KeyDesc>,
 }
@@ -73,10 +74,10 @@ pub struct CameraDesc {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct KeyDesc {
-    pub time: f64,
-    pub position: [f64; 3],
-    pub target: [f64; 3],
-    pub fov_y_deg: Option<f64>,
+    pub time: Spanned<f64>,
+    pub position: Spanned<[f64; 3]>,
+    pub target: Spanned<[f64; 3]>,
+    pub fov_y_deg: Option<Spanned<f64>>,
     /// A camera cut: the camera jumps to this key (histories reset).
     #[serde(default)]
     pub cut: bool,
@@ -113,12 +114,15 @@ pub struct PointDesc {
     pub range: Option<f32>,
 }
 
+/// The most random point lights a scene may ask for (each fragment loops over every light).
+pub const MAX_RANDOM_LIGHTS: u32 = 1 << 20;
+
 /// `count` point lights placed uniformly in a box (default: the scene bounds) with random hues:
 /// the knob that scales shading cost.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RandomPointsDesc {
-    pub count: u32,
+    pub count: Spanned<u32>,
     #[serde(default = "one")]
     pub intensity: f32,
     pub range: Option<f32>,
@@ -162,12 +166,103 @@ impl SceneDesc {
             let line = e.span().map(|s| line_of(text, s.start)).unwrap_or(1);
             SceneError::syntax(file, line, e.message().to_string())
         })?;
-        serde_path_to_error::deserialize(de).map_err(|e| {
+        if let Ok(table) = toml::de::DeTable::parse(text) {
+            let span = table.span();
+            let root = toml::de::DeValue::Table(table.into_inner());
+            check_finite_floats(&root, "", span, text, file)?;
+        }
+        let desc: SceneDesc = serde_path_to_error::deserialize(de).map_err(|e| {
             let path = e.path().to_string();
             let inner = e.into_inner();
             let line = inner.span().map(|s| line_of(text, s.start)).unwrap_or(1);
             SceneError::syntax(file, line, format!("`{path}`: {}", inner.message()))
-        })
+        })?;
+        desc.check_camera(text, file)?;
+        if let Some(r) = desc.lights.as_ref().and_then(|l| l.random_points.as_ref())
+            && *r.count.get_ref() > MAX_RANDOM_LIGHTS
+        {
+            return Err(SceneError::syntax(
+                file,
+                line_of(text, r.count.span().start),
+                format!(
+                    "`lights.random_points.count`: {} lights; at most {MAX_RANDOM_LIGHTS}",
+                    r.count.get_ref()
+                ),
+            ));
+        }
+        Ok(desc)
+    }
+
+    /// Refuses cameras that cannot make a picture (a field of view outside (0, 180) degrees, a
+    /// target equal to the position, a near plane that is not positive, non-finite numbers),
+    /// naming the key and its line.
+    fn check_camera(&self, text: &str, file: &Path) -> Result<()> {
+        let Some(c) = &self.camera else {
+            return Ok(());
+        };
+        let at = |key: String, span: std::ops::Range<usize>, e: String| {
+            SceneError::syntax(file, line_of(text, span.start), format!("`{key}`: {e}"))
+        };
+        if let Some(near) = &c.near {
+            check_near(*near.get_ref()).map_err(|e| at("camera.near".into(), near.span(), e))?;
+        }
+        if let Some(fov) = &c.fov_y_deg {
+            check_fov(*fov.get_ref()).map_err(|e| at("camera.fov_y_deg".into(), fov.span(), e))?;
+        }
+        for (i, k) in c.keys.iter().enumerate() {
+            let key = |field: &str| format!("camera.keys[{i}].{field}");
+            if !k.time.get_ref().is_finite() {
+                let e = format!("the time {} is not a finite number", k.time.get_ref());
+                return Err(at(key("time"), k.time.span(), e));
+            }
+            if let Some(fov) = &k.fov_y_deg {
+                check_fov(*fov.get_ref()).map_err(|e| at(key("fov_y_deg"), fov.span(), e))?;
+            }
+            check_finite(*k.position.get_ref())
+                .map_err(|e| at(key("position"), k.position.span(), e))?;
+            check_direction(*k.position.get_ref(), *k.target.get_ref())
+                .map_err(|e| at(key("target"), k.target.span(), e))?;
+        }
+        Ok(())
+    }
+}
+
+/// Refuses `nan` and `inf` anywhere in a scene TOML (no key means anything by them), naming the
+/// key and its line.
+fn check_finite_floats(
+    value: &toml::de::DeValue,
+    key: &str,
+    span: std::ops::Range<usize>,
+    text: &str,
+    file: &Path,
+) -> Result<()> {
+    use toml::de::DeValue;
+    match value {
+        DeValue::Float(f) if f.as_str().contains("nan") || f.as_str().contains("inf") => {
+            Err(SceneError::syntax(
+                file,
+                line_of(text, span.start),
+                format!("`{key}`: {} is not a finite number", f.as_str()),
+            ))
+        }
+        DeValue::Table(t) => {
+            for (k, v) in t {
+                let sub = if key.is_empty() {
+                    k.get_ref().to_string()
+                } else {
+                    format!("{key}.{}", k.get_ref())
+                };
+                check_finite_floats(v.get_ref(), &sub, v.span(), text, file)?;
+            }
+            Ok(())
+        }
+        DeValue::Array(a) => {
+            for (i, v) in a.iter().enumerate() {
+                check_finite_floats(v.get_ref(), &format!("{key}[{i}]"), v.span(), text, file)?;
+            }
+            Ok(())
+        }
+        _ => Ok(()),
     }
 }
 
@@ -176,22 +271,22 @@ pub(crate) fn camera_path(desc: Option<&CameraDesc>) -> Option<CameraPath> {
     if c.keys.is_empty() {
         return None;
     }
-    let fov = c.fov_y_deg.unwrap_or(50.0);
+    let fov = c.fov_y_deg.as_ref().map_or(50.0, |f| *f.get_ref());
     let mut keys: Vec<CameraKey> = c
         .keys
         .iter()
         .map(|k| CameraKey {
-            time: k.time,
-            position: k.position,
-            target: k.target,
-            fov_y_deg: k.fov_y_deg.unwrap_or(fov),
+            time: *k.time.get_ref(),
+            position: *k.position.get_ref(),
+            target: *k.target.get_ref(),
+            fov_y_deg: k.fov_y_deg.as_ref().map_or(fov, |f| *f.get_ref()),
             cut: k.cut,
         })
         .collect();
     keys.sort_by(|a, b| a.time.total_cmp(&b.time));
     Some(CameraPath {
         keys,
-        near: c.near.unwrap_or(0.05),
+        near: c.near.as_ref().map_or(0.05, |n| *n.get_ref()),
     })
 }
 
@@ -231,6 +326,86 @@ mod tests {
     }
 
     #[test]
+    fn degenerate_cameras_name_the_key_and_line() {
+        let key = |extra: &str| {
+            format!(
+                "obj = \"a.obj\"\n[camera]\n[[camera.keys]]\ntime = 0\nposition = [0, 0, 0]\ntarget = [0, 0, -1]\n[[camera.keys]]\ntime = 1\n{extra}"
+            )
+        };
+        let err = |text: &str| parse(text).expect_err(text).to_string();
+        let ok = key("position = [0, 1, 0]\ntarget = [0, 0, 0]\nfov_y_deg = 179\n");
+        assert!(parse(&ok).is_ok());
+        for (fov, why) in [
+            ("180", "a vertical field of view of 180 degrees"),
+            ("0", "a vertical field of view of 0 degrees"),
+            ("-45", "a vertical field of view of -45 degrees"),
+            ("nan", "nan is not a finite number"),
+            ("inf", "inf is not a finite number"),
+        ] {
+            let e = err(&key(&format!(
+                "position = [0, 1, 0]\ntarget = [0, 0, 0]\nfov_y_deg = {fov}\n"
+            )));
+            assert!(
+                e.starts_with(&format!("s.toml:11: `camera.keys[1].fov_y_deg`: {why}")),
+                "{e}"
+            );
+        }
+        let e = err(&key("position = [1, 2, 3]\ntarget = [1, 2, 3]\n"));
+        assert!(
+            e.starts_with("s.toml:10: `camera.keys[1].target`: the target [1.0, 2.0, 3.0] is the camera's position"),
+            "{e}"
+        );
+        let e = err(&key("position = [nan, 0, 0]\ntarget = [1, 2, 3]\n"));
+        assert!(
+            e.starts_with("s.toml:9: `camera.keys[1].position[0]`: nan is not a finite"),
+            "{e}"
+        );
+        let e = err(
+            &key("position = [0, 0, 0]\ntarget = [1, 2, 3]\ntime = inf\n")
+                .replace("time = 1\n", ""),
+        );
+        assert!(
+            e.contains("`camera.keys[1].time`: inf is not a finite number"),
+            "{e}"
+        );
+        let e = err("obj = \"a.obj\"\n[camera]\nfov_y_deg = 180\n");
+        assert!(e.starts_with("s.toml:3: `camera.fov_y_deg`"), "{e}");
+        let e = err("obj = \"a.obj\"\n[camera]\nnear = 0\n");
+        assert!(
+            e.starts_with("s.toml:3: `camera.near`: a near plane at 0"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn non_finite_numbers_name_the_key_and_line() {
+        let e = parse("obj = \"a.obj\"\nexposure = nan\n")
+            .expect_err("nan")
+            .to_string();
+        assert_eq!(e, "s.toml:2: `exposure`: nan is not a finite number");
+        let e = parse("obj = \"a.obj\"\n[[lights.point]]\nposition = [0, 0, 0]\n[[lights.point]]\nposition = [0,\n -inf, 0]\n")
+            .expect_err("inf")
+            .to_string();
+        assert_eq!(
+            e,
+            "s.toml:6: `lights.point[1].position[1]`: -inf is not a finite number"
+        );
+    }
+
+    #[test]
+    fn random_light_counts_are_bounded() {
+        let text = |n: u64| format!("obj = \"a.obj\"\n[lights.random_points]\ncount = {n}\n");
+        assert!(parse(&text(1 << 20)).is_ok());
+        let e = parse(&text(4_000_000_000))
+            .expect_err("too many")
+            .to_string();
+        assert_eq!(
+            e,
+            "s.toml:3: `lights.random_points.count`: 4000000000 lights; at most 1048576"
+        );
+    }
+
+    #[test]
     fn full_description_parses() {
         let d = parse(
             "procedural = \"demo\"\nwidth = 64\nheight = 32\nframes = 3\n[camera]\n[[camera.keys]]\ntime = 1\nposition = [0,1,2]\ntarget = [0,0,0]\ncut = true\n[[camera.keys]]\ntime = 0\nposition = [0,1,3]\ntarget = [0,0,0]\n[lights.random_points]\ncount = 10\n[[animate]]\nobject = \"x\"\nspin_deg_per_s = 90\n",
@@ -245,7 +420,9 @@ mod tests {
         );
         assert!(path.cut_between(0.5, 1.0));
         assert_eq!(
-            d.lights.and_then(|l| l.random_points).map(|r| r.count),
+            d.lights
+                .and_then(|l| l.random_points)
+                .map(|r| *r.count.get_ref()),
             Some(10)
         );
     }

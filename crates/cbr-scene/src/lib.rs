@@ -6,6 +6,7 @@
 pub mod camera;
 pub mod desc;
 pub mod error;
+pub mod files;
 pub mod obj;
 pub mod procedural;
 pub mod rng;
@@ -18,6 +19,7 @@ use glam::DVec3;
 
 pub use camera::{Camera, CameraKey, CameraPath};
 pub use error::{Result, SceneError};
+pub use files::{Disk, Files, MemoryFiles};
 pub use obj::{MissingTextures, ObjOptions};
 pub use scene::{
     AlphaSource, Bounds, DirLight, LoadStats, MAX_RESOLUTION, Material, Motion, Object, PointLight,
@@ -36,33 +38,53 @@ pub struct LoadOptions {
 
 /// Loads `builtin:NAME`, a scene TOML, or a bare OBJ (framed by an automatic camera).
 pub fn load(spec: &str, opts: &LoadOptions) -> Result<Scene> {
+    load_from(&Disk, spec, opts)
+}
+
+/// [`load`], reading every file (TOML, OBJ, MTL, textures) from `files`.
+pub fn load_from(files: &dyn Files, spec: &str, opts: &LoadOptions) -> Result<Scene> {
     if let Some(name) = spec.strip_prefix("builtin:") {
         return builtin(name);
     }
     let path = Path::new(spec);
-    match path
+    let scene = match path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
         .as_deref()
     {
-        Some("toml") => load_toml(path, opts),
-        Some("obj") => load_bare_obj(path, opts),
-        _ => Err(SceneError::file(
-            path,
-            "expected a .toml scene, an .obj file, or builtin:NAME (builtin:demo)",
-        )),
-    }
+        Some("toml") => load_toml(files, path, opts)?,
+        Some("obj") => load_bare_obj(files, path, opts)?,
+        _ => {
+            return Err(SceneError::file(
+                path,
+                "expected a .toml scene, an .obj file, or builtin:NAME (builtin:demo)",
+            ));
+        }
+    };
+    // TOML keys are checked with their lines when parsed; this catches a framing camera.
+    scene
+        .camera
+        .check()
+        .map_err(|e| SceneError::file(path, e))?;
+    Ok(scene)
 }
 
 pub fn builtin(name: &str) -> Result<Scene> {
-    match name {
-        "demo" => Ok(procedural::demo()),
-        other => Err(SceneError::Invalid(format!(
-            "no built-in scene `{other}`; built-ins: {}",
-            BUILTINS.join(", ")
-        ))),
-    }
+    let scene = match name {
+        "demo" => procedural::demo(),
+        other => {
+            return Err(SceneError::Invalid(format!(
+                "no built-in scene `{other}`; built-ins: {}",
+                BUILTINS.join(", ")
+            )));
+        }
+    };
+    scene
+        .camera
+        .check()
+        .map_err(|e| SceneError::Invalid(format!("builtin:{name}: {e}")))?;
+    Ok(scene)
 }
 
 fn default_lights(scene: &mut Scene) {
@@ -74,8 +96,8 @@ fn default_lights(scene: &mut Scene) {
     scene.settings.ambient = [0.15; 3];
 }
 
-fn scene_from_obj(path: &Path, obj_opts: &ObjOptions) -> Result<Scene> {
-    let data = obj::load_obj(path, obj_opts)?;
+fn scene_from_obj(files: &dyn Files, path: &Path, obj_opts: &ObjOptions) -> Result<Scene> {
+    let data = obj::load_obj_from(files, path, obj_opts)?;
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -100,17 +122,20 @@ fn scene_from_obj(path: &Path, obj_opts: &ObjOptions) -> Result<Scene> {
     Ok(s)
 }
 
-fn load_bare_obj(path: &Path, opts: &LoadOptions) -> Result<Scene> {
+fn load_bare_obj(files: &dyn Files, path: &Path, opts: &LoadOptions) -> Result<Scene> {
     let o = ObjOptions {
         missing_textures: opts.missing_textures.unwrap_or_default(),
         ..Default::default()
     };
-    scene_from_obj(path, &o)
+    scene_from_obj(files, path, &o)
 }
 
-fn load_toml(path: &Path, opts: &LoadOptions) -> Result<Scene> {
-    let text = std::fs::read_to_string(path)
+fn load_toml(files: &dyn Files, path: &Path, opts: &LoadOptions) -> Result<Scene> {
+    let bytes = files
+        .read(path)
         .map_err(|e| SceneError::file(path, format!("cannot read: {e}")))?;
+    let text = String::from_utf8(bytes)
+        .map_err(|e| SceneError::file(path, format!("cannot read: not UTF-8 text ({e})")))?;
     let d = desc::SceneDesc::parse(&text, path)?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut scene = match (&d.obj, &d.procedural) {
@@ -124,7 +149,7 @@ fn load_toml(path: &Path, opts: &LoadOptions) -> Result<Scene> {
                     .unwrap_or_default(),
                 up: d.up,
             };
-            scene_from_obj(&dir.join(obj), &o)?
+            scene_from_obj(files, &dir.join(obj), &o)?
         }
         (None, Some(name)) => builtin(name).map_err(|e| SceneError::file(path, e.to_string()))?,
         _ => {
@@ -259,7 +284,7 @@ fn apply_lights(scene: &mut Scene, l: &desc::LightsDesc, up_axis: Up) {
         let (lo, hi) = (min.min(max), min.max(max));
         let mut rng = rng::SplitMix(r.seed.unwrap_or(scene.settings.seed));
         let range = r.range.unwrap_or(radius * 0.25);
-        for _ in 0..r.count {
+        for _ in 0..*r.count.get_ref() {
             let p = lo + (hi - lo) * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
             scene.points.push(PointLight {
                 position: p.to_array(),
@@ -268,5 +293,35 @@ fn apply_lights(scene: &mut Scene, l: &desc::LightsDesc, up_axis: Up) {
                 range,
             });
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_builtin_has_a_usable_camera() {
+        for name in BUILTINS {
+            let scene = builtin(name).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(scene.camera.check(), Ok(()), "builtin:{name}");
+        }
+    }
+
+    #[test]
+    fn a_toml_camera_looking_nowhere_fails_the_load_naming_the_line() {
+        let mut files = MemoryFiles::new();
+        files.insert(
+            "s/t.toml",
+            "procedural = \"demo\"\n[camera]\n[[camera.keys]]\ntime = 0\nposition = [1, 1, 1]\ntarget = [1, 1, 1]\n",
+        );
+        let err = load_from(&files, "s/t.toml", &LoadOptions::default())
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(
+            err.starts_with("s/t.toml:6: `camera.keys[0].target`: the target"),
+            "{err}"
+        );
     }
 }

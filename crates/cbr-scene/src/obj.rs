@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 
 use crate::error::{Result, SceneError};
+use crate::files::{Disk, Files};
 use crate::scene::{AlphaSource, LoadStats, Material, Object, Up, Vertex};
 use crate::texture::Texture;
 
@@ -44,9 +45,10 @@ pub struct ObjData {
     pub stats: LoadStats,
 }
 
-fn read_text(path: &Path) -> Result<String> {
-    let bytes =
-        std::fs::read(path).map_err(|e| SceneError::file(path, format!("cannot read: {e}")))?;
+fn read_text(files: &dyn Files, path: &Path) -> Result<String> {
+    let bytes = files
+        .read(path)
+        .map_err(|e| SceneError::file(path, format!("cannot read: {e}")))?;
     // Real files carry Latin-1 names; decode lossily and normalise line ends.
     Ok(String::from_utf8_lossy(&bytes)
         .replace("\r\n", "\n")
@@ -260,6 +262,7 @@ fn texture_ref(spec: &str) -> (String, Option<f32>) {
 }
 
 struct TextureCache<'a> {
+    files: &'a dyn Files,
     textures: Vec<Texture>,
     index: HashMap<(PathBuf, bool), u32>,
     missing: MissingTextures,
@@ -272,7 +275,12 @@ impl TextureCache<'_> {
         if let Some(&i) = self.index.get(&key) {
             return Ok(i);
         }
-        let tex = match Texture::load(path, srgb) {
+        let loaded = self
+            .files
+            .read(path)
+            .map_err(|e| crate::texture::read_error(path, &e))
+            .and_then(|bytes| Texture::decode(path, &bytes, srgb));
+        let tex = match loaded {
             Ok(t) => t,
             Err(e) if self.missing == MissingTextures::Fallback => {
                 self.stats.warnings.push(format!(
@@ -283,10 +291,15 @@ impl TextureCache<'_> {
                 Texture::fallback(&path.to_string_lossy())
             }
             Err(e) => {
+                // `e` names the texture already: add where it was named, not the path again.
+                let why = match e {
+                    SceneError::File { msg, .. } => msg,
+                    other => other.to_string(),
+                };
                 return Err(SceneError::file(
                     path,
                     format!(
-                        "{e} (named by material `{material}` in {}); pass --missing-textures fallback to render anyway",
+                        "{why} (named by material `{material}` in {}); pass --missing-textures fallback to render anyway",
                         mtl.display()
                     ),
                 ));
@@ -350,15 +363,21 @@ fn convert_material(m: &tobj::Material, mtl: &Path, cache: &mut TextureCache) ->
 
 type MtlLib = <tobj::MTLLoadResult as IntoIterator>::Item;
 
-fn load_mtl(path: &Path) -> Result<MtlLib> {
-    let text = validate_mtl(&read_text(path)?, path)?;
+fn load_mtl(files: &dyn Files, path: &Path) -> Result<MtlLib> {
+    let text = validate_mtl(&read_text(files, path)?, path)?;
     tobj::load_mtl_buf(&mut Cursor::new(text.as_bytes()))
         .map_err(|e| SceneError::file(path, format!("cannot parse MTL: {e}")))
 }
 
-/// Loads an OBJ with its materials and textures.
+/// Loads an OBJ with its materials and textures from the file system.
 pub fn load_obj(path: &Path, opts: &ObjOptions) -> Result<ObjData> {
-    let text = read_text(path)?;
+    load_obj_from(&Disk, path, opts)
+}
+
+/// Loads an OBJ with its materials and textures from `files` (the file system is [`Disk`]; tests
+/// and the fuzzer pass [`crate::files::MemoryFiles`]).
+pub fn load_obj_from(files: &dyn Files, path: &Path, opts: &ObjOptions) -> Result<ObjData> {
+    let text = read_text(files, path)?;
     let (text, counts) = validate_obj(&text, path)?;
     let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     let mut stats = LoadStats {
@@ -384,11 +403,11 @@ pub fn load_obj(path: &Path, opts: &ObjOptions) -> Result<ObjData> {
                 return Ok((Vec::new(), Default::default()));
             }
             o.clone()
-        } else if named.is_file() {
+        } else if files.is_file(&named) {
             named
         } else {
             let guess = path.with_extension("mtl");
-            if guess.is_file() {
+            if files.is_file(&guess) {
                 warnings.borrow_mut().push(format!(
                     "{}: mtllib `{}` not found; using {} instead",
                     path.display(),
@@ -405,7 +424,7 @@ pub fn load_obj(path: &Path, opts: &ObjOptions) -> Result<ObjData> {
                 return Ok((Vec::new(), Default::default()));
             }
         };
-        match load_mtl(&chosen) {
+        match load_mtl(files, &chosen) {
             Ok((mats, names)) => {
                 let mut list = mtls.borrow_mut();
                 list.extend(mats.iter().cloned().map(|m| (m, chosen.clone())));
@@ -428,10 +447,11 @@ pub fn load_obj(path: &Path, opts: &ObjOptions) -> Result<ObjData> {
     if mtls.is_empty()
         && let Some(o) = &opts.mtl_override
     {
-        mtls.extend(load_mtl(o)?.0.into_iter().map(|m| (m, o.clone())));
+        mtls.extend(load_mtl(files, o)?.0.into_iter().map(|m| (m, o.clone())));
     }
 
     let mut cache = TextureCache {
+        files,
         textures: Vec::new(),
         index: HashMap::new(),
         missing: opts.missing_textures,
@@ -678,6 +698,69 @@ mod tests {
             .expect("valid");
         assert!(text.contains("Kd 0.25 0.25 0.25"), "{text}");
         assert!(text.contains("Ka 0.1 0.2 0.3"), "{text}");
+    }
+
+    /// A one-triangle OBJ whose material names `texture` as its map_Kd, in `dir`.
+    fn textured(dir: &Path, texture: &str) -> PathBuf {
+        std::fs::write(dir.join("t.mtl"), format!("newmtl m\nmap_Kd {texture}\n")).expect("mtl");
+        let obj = dir.join("t.obj");
+        std::fs::write(
+            &obj,
+            "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl m\nf 1/1 2/1 3/1\n",
+        )
+        .expect("obj");
+        obj
+    }
+
+    fn load_err(obj: &Path) -> String {
+        match load_obj(obj, &ObjOptions::default()) {
+            Ok(_) => panic!("{} loaded", obj.display()),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    #[test]
+    fn texture_errors_name_the_texture_once() {
+        let d = tempfile::tempdir().expect("tempdir");
+        std::fs::write(d.path().join("bad.png"), b"\x89PNG\r\n\x1a\nnot a png").expect("png");
+        let err = load_err(&textured(d.path(), "bad.png"));
+        assert_eq!(err.matches("bad.png").count(), 1, "{err}");
+        assert!(err.contains("cannot decode texture"), "{err}");
+        assert!(err.contains("material `m` in"), "{err}");
+        let err = load_err(&textured(d.path(), "absent.png"));
+        assert_eq!(err.matches("absent.png").count(), 1, "{err}");
+        assert!(err.contains("cannot read texture"), "{err}");
+    }
+
+    #[test]
+    fn a_directory_as_texture_is_reported_as_one() {
+        let d = tempfile::tempdir().expect("tempdir");
+        for name in ["maps", "maps.png"] {
+            std::fs::create_dir(d.path().join(name)).expect("dir");
+            let err = load_err(&textured(d.path(), name));
+            assert!(err.contains("is a directory"), "{err}");
+            assert!(!err.contains("format could not be determined"), "{err}");
+            assert!(Texture::load(&d.path().join(name), true).is_err());
+        }
+    }
+
+    #[test]
+    fn loads_from_memory_without_touching_the_disk() {
+        let mut files = crate::files::MemoryFiles::new();
+        files.insert(
+            "m/t.obj",
+            "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n",
+        );
+        files.insert("m/t.mtl", "newmtl a\nKd 0.25\n");
+        let data = load_obj_from(&files, Path::new("m/t.obj"), &ObjOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(data.objects.len(), 1);
+        assert_eq!(data.materials[0].kd, [0.25; 3]);
+        let err = load_obj_from(&files, Path::new("m/none.obj"), &ObjOptions::default())
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(err.starts_with("m/none.obj: cannot read"), "{err}");
     }
 
     #[test]

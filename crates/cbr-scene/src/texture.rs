@@ -6,6 +6,7 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use crate::error::{Result, SceneError};
+use crate::scene::MAX_RESOLUTION;
 
 #[derive(Clone, Debug)]
 pub struct Level {
@@ -79,6 +80,15 @@ fn downsample(src: &Level, srgb: bool, lut: &[f32; 256]) -> Level {
     }
 }
 
+/// A texture file that cannot be read: "is a directory" rather than the OS's wording.
+pub(crate) fn read_error(path: &Path, e: &std::io::Error) -> SceneError {
+    if e.kind() == std::io::ErrorKind::IsADirectory || path.is_dir() {
+        SceneError::file(path, "cannot read texture: is a directory")
+    } else {
+        SceneError::file(path, format!("cannot read texture: {e}"))
+    }
+}
+
 impl Texture {
     /// A texture from level-0 RGBA8 texels; builds the full mip chain down to 1x1.
     pub fn from_rgba8(name: &str, width: u32, height: u32, rgba: Vec<u8>, srgb: bool) -> Texture {
@@ -109,14 +119,32 @@ impl Texture {
         }
     }
 
-    /// Decodes an image file (PNG, JPEG, TGA, BMP). Errors name the file.
+    /// Decodes an image file (PNG, JPEG, TGA, BMP). Errors name the file once.
     pub fn load(path: &Path, srgb: bool) -> Result<Texture> {
-        let img = image::open(path).map_err(|e| match e {
-            image::ImageError::IoError(io) => {
-                SceneError::file(path, format!("cannot read texture: {io}"))
+        let bytes = std::fs::read(path).map_err(|e| read_error(path, &e))?;
+        Texture::decode(path, &bytes, srgb)
+    }
+
+    /// Decodes an image held in memory; `path` names it in errors and in [`Texture::name`]. The
+    /// format is found from the contents (the extension when they say nothing). Images over
+    /// [`MAX_RESOLUTION`] per side are refused from their header, before any texel is decoded.
+    pub fn decode(path: &Path, bytes: &[u8], srgb: bool) -> Result<Texture> {
+        let reader = || -> Result<image::ImageReader<std::io::Cursor<&[u8]>>> {
+            let mut r = image::ImageReader::new(std::io::Cursor::new(bytes));
+            if let Ok(format) = image::ImageFormat::from_path(path) {
+                r.set_format(format);
             }
-            other => SceneError::file(path, format!("cannot decode texture: {other}")),
-        })?;
+            r.with_guessed_format().map_err(|e| read_error(path, &e))
+        };
+        let decode_err = |e| SceneError::file(path, format!("cannot decode texture: {e}"));
+        let (w, h) = reader()?.into_dimensions().map_err(decode_err)?;
+        if w > MAX_RESOLUTION || h > MAX_RESOLUTION {
+            return Err(SceneError::file(
+                path,
+                format!("texture is {w}x{h} texels; at most {MAX_RESOLUTION} per side"),
+            ));
+        }
+        let img = reader()?.decode().map_err(decode_err)?;
         let rgba = img.to_rgba8();
         let (w, h) = rgba.dimensions();
         if w == 0 || h == 0 {
