@@ -99,7 +99,7 @@ fuzz SECONDS="60":
     cd fuzz && for t in obj scene_toml texture image_input; do \
         mkdir -p corpus/$t; \
         echo "[fuzz] $t for {{SECONDS}} s"; \
-        RUSTC_BOOTSTRAP=1 cargo fuzz run $t corpus/$t seeds/$t -- \
+        RUSTC_BOOTSTRAP=1 cargo fuzz run -O $t corpus/$t seeds/$t -- \
             -max_total_time={{SECONDS}} -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 || exit 1; \
         echo "[fuzz] $t: corpus $(ls corpus/$t | wc -l) files"; \
     done

@@ -2,6 +2,7 @@
 //! target, then a rename, so an interrupted or failed run never leaves a partial file.
 
 use std::path::{Path, PathBuf};
+use std::sync::{PoisonError, RwLock};
 
 use exr::prelude::*;
 use half::f16;
@@ -13,11 +14,25 @@ pub enum IoError {
     Write { path: PathBuf, msg: String },
 }
 
-/// Runs `write` on a temporary path beside `path`, then renames it into place.
+/// Held (shared) by every atomic write from its first byte to its rename; [`stop_writes`] takes
+/// it exclusively.
+static WRITES: RwLock<()> = RwLock::new(());
+
+/// Waits for the atomic writes in progress to finish (renamed into place, or removed) and holds
+/// every later one back for the rest of the process: for an interrupt handler that exits next,
+/// leaving only complete files and no temporary ones.
+pub fn stop_writes() {
+    let guard = WRITES.write().unwrap_or_else(PoisonError::into_inner);
+    std::mem::forget(guard);
+}
+
+/// Runs `write` on a temporary path beside `path`, then renames it into place. After
+/// [`stop_writes`] it waits forever (the process is exiting).
 pub fn write_atomic(
     path: &Path,
     write: impl FnOnce(&Path) -> Result<(), String>,
 ) -> Result<(), IoError> {
+    let _writing = WRITES.read().unwrap_or_else(PoisonError::into_inner);
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -407,6 +422,68 @@ mod tests {
         let g =
             crate::input::load(&path, Some(COLOR_LAYER), Some(&["G".to_string()])).expect("color");
         assert_eq!(g.rgb.c[0].data[2], 9.0);
+    }
+
+    #[test]
+    fn stop_writes_waits_for_the_write_in_progress_and_holds_back_the_next() {
+        use std::sync::mpsc::channel;
+        use std::time::Duration;
+        // Its own process: stop_writes blocks every later write of the process it runs in.
+        if std::env::var_os("CBR_STOP_WRITES_CHILD").is_none() {
+            let me = std::env::current_exe().expect("test binary");
+            let o = std::process::Command::new(me)
+                .args([
+                    "--exact",
+                    "io::tests::stop_writes_waits_for_the_write_in_progress_and_holds_back_the_next",
+                    "--nocapture",
+                ])
+                .env("CBR_STOP_WRITES_CHILD", "1")
+                .output()
+                .expect("run the child");
+            let text = String::from_utf8_lossy(&o.stdout).into_owned()
+                + &String::from_utf8_lossy(&o.stderr);
+            assert!(o.status.success(), "{text}");
+            assert!(text.contains("1 passed"), "{text}");
+            return;
+        }
+        let dir = tempfile::tempdir().expect("tempdir");
+        let (first, second) = (dir.path().join("a.bin"), dir.path().join("b.bin"));
+        let (started_tx, started) = channel();
+        let (finish, finish_rx) = channel::<()>();
+        let path = first.clone();
+        let writer = std::thread::spawn(move || {
+            write_atomic(&path, |tmp| {
+                std::fs::write(tmp, b"half").map_err(|e| e.to_string())?;
+                started_tx.send(()).map_err(|e| e.to_string())?;
+                finish_rx.recv().map_err(|e| e.to_string())?;
+                std::fs::write(tmp, b"whole").map_err(|e| e.to_string())
+            })
+        });
+        started.recv().expect("the write started");
+        let (stopped_tx, stopped) = channel();
+        std::thread::spawn(move || {
+            stop_writes();
+            let _ = stopped_tx.send(());
+        });
+        std::thread::sleep(Duration::from_millis(200));
+        assert!(
+            stopped.try_recv().is_err(),
+            "stop_writes returned while a write was in progress"
+        );
+        finish.send(()).expect("finish");
+        writer.join().expect("writer").expect("the write completes");
+        stopped
+            .recv_timeout(Duration::from_secs(10))
+            .expect("stop_writes returns once the write is done");
+        assert_eq!(std::fs::read(&first).expect("whole file"), b"whole");
+        // A later write never starts.
+        std::thread::spawn(move || write_bytes(&second, b"late"));
+        std::thread::sleep(Duration::from_millis(200));
+        let names: Vec<_> = std::fs::read_dir(dir.path())
+            .expect("dir")
+            .map(|e| e.expect("entry").file_name())
+            .collect();
+        assert_eq!(names, vec![std::ffi::OsString::from("a.bin")]);
     }
 
     #[test]

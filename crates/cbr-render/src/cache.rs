@@ -154,16 +154,14 @@ impl FrameCache {
         }
     }
 
-    /// Stores a frame; returns its path (a failed write is reported, not fatal).
+    /// Stores a frame; returns its path (a failed write is reported, not fatal). The write is
+    /// cbr's atomic one (temporary name, rename), which an interrupt lets finish.
     pub fn store(&self, key: &FrameKey, out: &FrameOutput) -> Option<PathBuf> {
         let path = self.path(key);
-        let tmp = path.with_extension(format!("tmp{}", std::process::id()));
-        let written = std::fs::write(&tmp, encode(out)).and_then(|()| std::fs::rename(&tmp, &path));
-        match written {
+        match cbr_metrics::io::write_bytes(&path, &encode(out)) {
             Ok(()) => Some(path),
             Err(e) => {
-                let _ = std::fs::remove_file(&tmp);
-                tracing::warn!("cannot write cache entry {}: {e}", path.display());
+                tracing::warn!("cannot write cache entry: {e}");
                 None
             }
         }

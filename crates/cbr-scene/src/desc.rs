@@ -151,8 +151,8 @@ fn one() -> f32 {
     1.0
 }
 
-/// Line (1-based) of a byte offset.
-fn line_of(text: &str, offset: usize) -> usize {
+/// Line (1-based) of a byte offset in `text` (for errors about a parsed TOML's spans).
+pub fn line_of(text: &str, offset: usize) -> usize {
     text[..offset.min(text.len())]
         .bytes()
         .filter(|&b| b == b'\n')
@@ -160,23 +160,29 @@ fn line_of(text: &str, offset: usize) -> usize {
         + 1
 }
 
+/// Reads a TOML document into `T`: syntax errors, unknown keys, wrong types and `nan` or `inf`
+/// anywhere are one error naming the file, the line and the key path.
+pub fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, file: &Path) -> Result<T> {
+    let de = toml::Deserializer::parse(text).map_err(|e| {
+        let line = e.span().map(|s| line_of(text, s.start)).unwrap_or(1);
+        SceneError::syntax(file, line, e.message().to_string())
+    })?;
+    if let Ok(table) = toml::de::DeTable::parse(text) {
+        let span = table.span();
+        let root = toml::de::DeValue::Table(table.into_inner());
+        check_finite_floats(&root, "", span, text, file)?;
+    }
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let inner = e.into_inner();
+        let line = inner.span().map(|s| line_of(text, s.start)).unwrap_or(1);
+        SceneError::syntax(file, line, format!("`{path}`: {}", inner.message()))
+    })
+}
+
 impl SceneDesc {
     pub fn parse(text: &str, file: &Path) -> Result<SceneDesc> {
-        let de = toml::Deserializer::parse(text).map_err(|e| {
-            let line = e.span().map(|s| line_of(text, s.start)).unwrap_or(1);
-            SceneError::syntax(file, line, e.message().to_string())
-        })?;
-        if let Ok(table) = toml::de::DeTable::parse(text) {
-            let span = table.span();
-            let root = toml::de::DeValue::Table(table.into_inner());
-            check_finite_floats(&root, "", span, text, file)?;
-        }
-        let desc: SceneDesc = serde_path_to_error::deserialize(de).map_err(|e| {
-            let path = e.path().to_string();
-            let inner = e.into_inner();
-            let line = inner.span().map(|s| line_of(text, s.start)).unwrap_or(1);
-            SceneError::syntax(file, line, format!("`{path}`: {}", inner.message()))
-        })?;
+        let desc: SceneDesc = parse_toml(text, file)?;
         desc.check_camera(text, file)?;
         if let Some(r) = desc.lights.as_ref().and_then(|l| l.random_points.as_ref())
             && *r.count.get_ref() > MAX_RANDOM_LIGHTS

@@ -2,8 +2,11 @@
 
 use std::path::PathBuf;
 
-use anyhow::Result;
-use cbr_bench::BenchOptions;
+use anyhow::{Result, anyhow, bail};
+use cbr_bench::{BenchOptions, SweepFile, parse_resolution};
+use cbr_render::Spec;
+use cbr_scene::desc::{line_of, parse_toml};
+use toml::Spanned;
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
@@ -36,7 +39,7 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',')]
     groups: Vec<u32>,
     /// Sweep: texture LOD biases for checkerboard configurations (default: each layout's own).
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_parser = crate::finite_f32)]
     lod_biases: Vec<f32>,
     /// A TOML file with any of: techniques, resolutions, mappings, groups, lod_biases, warmup,
     /// frames (command-line values win).
@@ -99,8 +102,127 @@ impl BenchArgs {
     }
 }
 
+/// The values of a sweep file that cbr-bench checks without naming the file, read with their
+/// lines (unknown keys and wrong types are found by reading it as a `cbr_bench::SweepFile`).
+#[derive(serde::Deserialize)]
+struct SweepValues {
+    techniques: Option<Vec<Spanned<String>>>,
+    resolutions: Option<Vec<Spanned<String>>>,
+    mappings: Option<Vec<Spanned<String>>>,
+    groups: Option<Vec<Spanned<u32>>>,
+    frames: Option<Spanned<u32>>,
+    reference: Option<Spanned<String>>,
+}
+
+/// Every bench option and sweep-file value cbr-bench would refuse, refused first with the option
+/// or the file, line and key: one clear error before the scene is loaded or a device opened.
+fn check(a: &BenchArgs) -> Result<()> {
+    for t in &a.techniques {
+        Spec::parse(t).map_err(|e| anyhow!("--techniques `{t}`: {e}"))?;
+    }
+    Spec::parse(&a.reference).map_err(|e| anyhow!("--reference `{}`: {e}", a.reference))?;
+    for r in &a.resolutions {
+        parse_resolution(r).map_err(|e| anyhow!("--resolutions: {e:#}"))?;
+    }
+    if let Some(m) = a
+        .mappings
+        .iter()
+        .find(|m| !["pixel", "quad"].contains(&m.as_str()))
+    {
+        bail!("--mappings `{m}`: the resolve mappings are pixel and quad");
+    }
+    if let Some(g) = a.groups.iter().find(|g| **g != 8 && **g != 16) {
+        bail!("--groups {g}: the resolve groups are 8 and 16");
+    }
+    if a.frames == Some(0) {
+        bail!("--frames must be at least 1");
+    }
+    check_crops(a)?;
+    let Some(path) = &a.sweep else {
+        return Ok(());
+    };
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| anyhow!("{}: cannot read the sweep file: {e}", path.display()))?;
+    parse_toml::<SweepFile>(&text, path)?;
+    let v: SweepValues = parse_toml(&text, path)?;
+    let at = |span: std::ops::Range<usize>, key: &str, msg: String| {
+        anyhow!(
+            "{}:{}: `{key}`: {msg}",
+            path.display(),
+            line_of(&text, span.start)
+        )
+    };
+    for (i, t) in v.techniques.iter().flatten().enumerate() {
+        Spec::parse(t.get_ref()).map_err(|e| at(t.span(), &format!("techniques[{i}]"), e))?;
+    }
+    if let Some(r) = &v.reference {
+        Spec::parse(r.get_ref()).map_err(|e| at(r.span(), "reference", e))?;
+    }
+    for (i, r) in v.resolutions.iter().flatten().enumerate() {
+        parse_resolution(r.get_ref())
+            .map_err(|e| at(r.span(), &format!("resolutions[{i}]"), format!("{e:#}")))?;
+    }
+    for (i, m) in v.mappings.iter().flatten().enumerate() {
+        if !["pixel", "quad"].contains(&m.get_ref().as_str()) {
+            let msg = format!("`{}`: the resolve mappings are pixel and quad", m.get_ref());
+            return Err(at(m.span(), &format!("mappings[{i}]"), msg));
+        }
+    }
+    for (i, g) in v.groups.iter().flatten().enumerate() {
+        if *g.get_ref() != 8 && *g.get_ref() != 16 {
+            let msg = format!("{}: the resolve groups are 8 and 16", g.get_ref());
+            return Err(at(g.span(), &format!("groups[{i}]"), msg));
+        }
+    }
+    if let Some(f) = &v.frames
+        && *f.get_ref() == 0
+    {
+        return Err(at(f.span(), "frames", "must be at least 1".into()));
+    }
+    Ok(())
+}
+
+/// `--crop` windows that cannot fit the resolutions the options name (cbr-bench finds out only
+/// after measuring): refused first. Resolutions that come from the scene or the sweep file are
+/// left to cbr-bench.
+fn check_crops(a: &BenchArgs) -> Result<()> {
+    let resolutions: Vec<(u32, u32)> = match (a.width, a.height) {
+        _ if !a.resolutions.is_empty() => a
+            .resolutions
+            .iter()
+            .map(|r| parse_resolution(r))
+            .collect::<Result<_>>()?,
+        (Some(w), Some(h)) => vec![(w, h)],
+        _ => return Ok(()),
+    };
+    for c in &a.crops {
+        let v: Vec<u64> = c
+            .split(',')
+            .map(|x| x.trim().parse::<u64>())
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|e| anyhow!("--crop {c}: expected X,Y,W,H: {e}"))?;
+        let [x, y, w, h] = v[..] else {
+            bail!("--crop {c}: expected X,Y,W,H");
+        };
+        if let Some((rw, rh)) = resolutions
+            .iter()
+            .find(|(rw, rh)| x + w > u64::from(*rw) || y + h > u64::from(*rh))
+        {
+            bail!("--crop {c} does not fit in {rw}x{rh}");
+        }
+    }
+    Ok(())
+}
+
 pub fn run(a: &BenchArgs) -> Result<()> {
-    let r = cbr_bench::run(&a.options())?;
+    check(a)?;
+    // A failed bench leaves no output folder it made (snapshots of a run without bench.json).
+    let made = !a.out.exists();
+    let r = cbr_bench::run(&a.options()).inspect_err(|_| {
+        if made && a.out.is_dir() {
+            let _ = std::fs::remove_dir_all(&a.out);
+        }
+    })?;
     println!(
         "{} configuration(s) x {} resolution(s) of {}: {}",
         r.configurations,

@@ -49,7 +49,7 @@ pub struct CompareArgs {
     #[arg(long, default_value_t = 0)]
     warmup: usize,
     /// Display exposure in stops for HDR inputs (PSNR, SSIM, LDR-FLIP and the maps).
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true, value_parser = crate::finite_f32)]
     exposure: f32,
     /// FLIP's pixels per degree (default 67.02: a 0.7 m wide 4K display at 0.7 m).
     #[arg(long)]
@@ -68,7 +68,9 @@ fn thresholds(specs: &[String]) -> Result<Vec<(Metric, f64)>> {
             let value: f64 = v
                 .trim()
                 .parse()
-                .map_err(|_| anyhow!("--fail-above `{s}`: `{v}` is not a number"))?;
+                .ok()
+                .filter(|x: &f64| x.is_finite())
+                .ok_or_else(|| anyhow!("--fail-above `{s}`: `{v}` is not a finite number"))?;
             Ok((metric, value))
         })
         .collect()

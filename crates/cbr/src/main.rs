@@ -48,8 +48,50 @@ enum Command {
     Report(report::ReportArgs),
 }
 
+/// A command-line number that must be finite (`nan` and `inf` parse as f32).
+pub fn finite_f32(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(_) => Err("not a finite number".into()),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// Exit status of a run stopped by Ctrl-C (SIGINT) or SIGTERM: 128 + SIGINT, as shells report.
+const INTERRUPTED: i32 = 130;
+
+/// Ctrl-C (and SIGTERM, SIGHUP): wait for the file being written to be complete and renamed into
+/// place (or removed), write nothing more, say so, and exit. Every frame left behind is whole and
+/// no temporary file remains.
+fn exit_cleanly_on_interrupt() {
+    let installed = ctrlc::set_handler(|| {
+        cbr_metrics::io::stop_writes();
+        eprintln!(
+            "\nerror: interrupted; the files already written are complete, nothing else was written"
+        );
+        std::process::exit(INTERRUPTED);
+    });
+    if let Err(e) = installed {
+        tracing::warn!("cannot install the Ctrl-C handler: {e}");
+    }
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        // --help and --version print and succeed; a bad argument is an error like any other
+        // (exit status 1; `compare` uses 2 for errors, 1 for a failed threshold).
+        Err(e) if !e.use_stderr() => e.exit(),
+        Err(e) => {
+            let _ = e.print();
+            let compare = std::env::args()
+                .skip(1)
+                .find(|a| !a.starts_with('-'))
+                .is_some_and(|a| a == "compare");
+            return ExitCode::from(if compare { 2 } else { 1 });
+        }
+    };
+    exit_cleanly_on_interrupt();
     let level = match cli.verbose {
         0 => "warn",
         1 => "info",

@@ -159,7 +159,7 @@ pub struct RenderArgs {
     #[arg(long, value_enum, value_delimiter = ',')]
     resolve_without: Vec<AblationArg>,
     /// Relative linear-depth tolerance of the history validation (default 0.05).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::finite_f32)]
     depth_tolerance: Option<f32>,
     /// Switch parts of the spec's `+taa` off for ablation (comma-separated): adds
     /// `without-X` parameters to it.
@@ -172,7 +172,7 @@ pub struct RenderArgs {
     #[arg(long, value_enum)]
     filter: Option<FilterArg>,
     /// Texture LOD bias added to every lookup (default: the technique's matching bias).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::finite_f32)]
     lod_bias: Option<f32>,
     /// How texture LOD follows the checkerboard layout's sample spacing (default bias).
     #[arg(long, value_enum)]
@@ -185,7 +185,7 @@ pub struct RenderArgs {
     #[arg(long)]
     id_prepass: bool,
     /// Display exposure in stops (PNG only; EXR stays linear). Default: the scene's.
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::finite_f32)]
     exposure: Option<f32>,
     /// msaa: shade every sample (sampleRateShading, minSampleShading = 1, sample-interpolated
     /// inputs); shorthand for `msaa:N:sample`.

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 
 #[derive(clap::Args)]
 pub struct ReportArgs {
@@ -48,7 +48,8 @@ pub fn run(a: &ReportArgs) -> Result<()> {
         .map(|d| cbr_report::BenchDir::load(d))
         .collect::<Result<Vec<_>, _>>()?;
     if let Some(parent) = a.out.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent)?;
+        std::fs::create_dir_all(parent)
+            .with_context(|| format!("cannot create the folder of {}", a.out.display()))?;
     }
     let now = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
@@ -62,7 +63,9 @@ pub fn run(a: &ReportArgs) -> Result<()> {
             .collect(),
         created: utc(now),
     };
-    cbr_report::write(&benches, &opts)?;
+    // cbr's atomic write: a Ctrl-C lets it finish, a failure leaves no partial file.
+    let html = cbr_report::render(&benches, &opts)?;
+    cbr_metrics::io::write_bytes(&a.out, html.as_bytes())?;
     println!("{}", a.out.display());
     Ok(())
 }
