@@ -220,7 +220,12 @@ void main() {
     vec3 result = c0;
     if (use) {
 #if MODE == 0
-        if (has(F_CLIP)) {
+        // Still pixels (this one and its history texel did not move) keep their history
+        // unclipped: the jitter alone changes their 3x3, and clipping towards a box that moves
+        // with the jitter phase is not a contraction, so a static scene never settled (tens of
+        // fp16 ulps of flicker after hundreds of frames; tests/stability.rs, drift). Without it
+        // the history is the running average of the jittered samples and converges.
+        if (has(F_CLIP) && !still) {
             // Variance box (mean +- gamma sigma) of the finite neighbours in perceptual YCoCg.
             vec3 m1 = vec3(0.0), m2 = vec3(0.0);
             for (int k = 0; k < 9; k++) {

@@ -10,7 +10,11 @@ layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; }
 layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
 layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
 layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
-layout(std430, set = 0, binding = BINDING_COUNTER) buffer Counter { uint shaded_fragments; };
+// shaded_fragments: FLAG_COUNT_SHADED only; nonfinite_fragments: always (NaN/Inf containment).
+layout(std430, set = 0, binding = BINDING_COUNTER) buffer Counter {
+    uint shaded_fragments;
+    uint nonfinite_fragments;
+};
 // Per-material set; slots a material does not use hold a 1x1 white texture.
 layout(set = 1, binding = BINDING_ALBEDO) uniform sampler2D albedo_tex;
 layout(set = 1, binding = BINDING_MASK) uniform sampler2D mask_tex;
@@ -133,7 +137,15 @@ void main() {
         float h = tex(bump_tex, v_uv).r * m.ke.w;
         n = bump(n, v_world, h);
     }
-    o_color = vec4(shade(v_world, n, albedo, m, frame), 1.0);
+    vec3 c = shade(v_world, n, albedo, m, frame);
+    // NaN/Inf containment: a fragment whose shading is not finite is written black and counted
+    // (reported per frame), so no history downstream ever holds one. Finite radiance above the
+    // fp16 targets' largest value is clamped to it rather than becoming +inf there.
+    if (any(isnan(c)) || any(isinf(c))) {
+        c = vec3(0.0);
+        atomicAdd(nonfinite_fragments, 1u);
+    }
+    o_color = vec4(min(c, vec3(65504.0)), 1.0);
     if ((frame.counts.w & FLAG_DEBUG_LOD) != 0u) {
         o_color = vec4(m.tex.x >= 0 ? lod_of(albedo_tex, v_uv) : -100.0, 0.0, 0.0, 1.0);
     }

@@ -87,6 +87,10 @@ impl FrameCache {
         }
         for o in &scene.objects {
             put(&o.name, bytemuck::cast_slice(&o.vertices));
+            // Keyed only when set, so the keys of scenes at the origin stay what they were.
+            if o.origin != [0.0; 3] {
+                put("origin", bytemuck::cast_slice(&o.origin));
+            }
             put("indices", bytemuck::cast_slice(&o.indices));
             put("material", &o.material.to_le_bytes());
         }

@@ -85,6 +85,9 @@ pub struct FrameOutput {
     pub parity: Option<u32>,
     /// Shaded (non-helper) fragments, when counted.
     pub shaded_fragments: Option<u64>,
+    /// Fragments whose shading was NaN or infinite (written black, never kept in a history);
+    /// `None` for frames read from the cache.
+    pub nonfinite_fragments: Option<u64>,
     /// The `id_prepass` outputs at full resolution: view depth (+inf where empty) and IDs.
     pub prepass: Option<(Vec<f32>, Vec<[u32; 2]>)>,
     /// Resolved checkerboard frames: whether history was reset, and with `debug` the debug bits
@@ -199,8 +202,8 @@ impl Renderer {
         let gpu_scene = GpuScene::new(gpu, scene)?;
         let counter = Buffer::new(
             gpu,
-            "shaded_fragments",
-            4,
+            "fragment_counters",
+            8,
             vk::BufferUsageFlags::STORAGE_BUFFER,
             Location::GpuToCpu,
         )?;
@@ -392,7 +395,7 @@ impl Renderer {
             self.last_frame = Some(frame);
             return Ok(out);
         }
-        self.counter.write(0, &0u32.to_le_bytes())?;
+        self.counter.write(0, &[0u8; 8])?;
         let mut progress = self.progress.take();
         let mut ctx = FrameCtx {
             gpu: &self.gpu,
@@ -451,10 +454,11 @@ impl Renderer {
         if let Some(rb) = &self.post_rb {
             out.color = bytemuck::cast_slice::<u8, f16>(rb.bytes()?).to_vec();
         }
+        let b = self.counter.bytes()?;
         if self.settings.count_shaded {
-            let b = self.counter.bytes()?;
             out.shaded_fragments = Some(u64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])));
         }
+        out.nonfinite_fragments = Some(u64::from(u32::from_le_bytes([b[4], b[5], b[6], b[7]])));
         if let (Some(c), Some(k)) = (&self.cache, &key) {
             out.cached = c.store(k, &out);
         }

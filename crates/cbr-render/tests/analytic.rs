@@ -301,6 +301,7 @@ fn mesh(name: &str, verts: &[[f32; 3]], indices: Vec<u32>, material: u32) -> Obj
             .collect(),
         indices,
         material,
+        origin: [0.0; 3],
     }
 }
 

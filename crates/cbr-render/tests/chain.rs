@@ -66,6 +66,7 @@ fn triangle_scene() -> (Scene, [[f64; 2]; 3]) {
         vertices: world.iter().map(|p| v(p.map(|x| x as f32))).collect(),
         indices: vec![0, 1, 2],
         material: 0,
+        origin: [0.0; 3],
     };
     let mut m = Material::named("emit");
     (m.kd, m.ks, m.ke) = ([0.0; 3], [0.0; 3], [1.0; 3]);

@@ -23,6 +23,7 @@ fn quad(name: &str, x0: f32, x1: f32, y0: f32, y1: f32, z: f32, material: u32) -
         vertices: vec![v(x0, y0), v(x1, y0), v(x1, y1), v(x0, y1)],
         indices: vec![0, 1, 2, 0, 2, 3],
         material,
+        origin: [0.0; 3],
     }
 }
 

@@ -249,8 +249,10 @@ fn with_clipping_a_static_scene_converges() {
     assert_clean(&gpu);
 }
 
-/// A point light of infinite intensity makes frame 3's lit pixels NaN or Inf: native shows them,
-/// TAA's output never does, that frame or the next.
+/// A point light of infinite intensity makes frame 3's lit fragments NaN or Inf: the scene pass
+/// counts them and writes them black (native shows no non-finite pixel), and TAA's output has
+/// none, that frame or the next. (TAA's own guard against a non-finite current sample is checked
+/// against the CPU reference in post::taa's unit tests.)
 #[test]
 fn nan_and_inf_never_enter_the_history() {
     let gpu = gpu();
@@ -277,9 +279,15 @@ fn nan_and_inf_never_enter_the_history() {
     let native = check("native");
     let bad = |o: &FrameOutput| o.color.iter().filter(|c| !c.to_f32().is_finite()).count();
     assert!(
-        bad(&native[3]) > 0,
-        "the injection made no non-finite pixel"
+        native[3].nonfinite_fragments.unwrap_or(0) > 0,
+        "the injection made no non-finite fragment"
     );
+    assert_eq!(
+        bad(&native[3]),
+        0,
+        "a non-finite fragment reached the frame"
+    );
+    assert_eq!(native[4].nonfinite_fragments, Some(0));
     assert_eq!(bad(&native[4]), 0);
     for t in [
         "native+taa",

@@ -4,6 +4,7 @@
 #![cfg_attr(not(test), deny(clippy::unwrap_used))]
 
 pub mod camera;
+pub mod cases;
 pub mod desc;
 pub mod error;
 pub mod files;
@@ -27,8 +28,24 @@ pub use scene::{
 };
 pub use texture::Texture;
 
-/// Scenes compiled into the binary, by name (`builtin:NAME` on the command line).
-pub const BUILTINS: &[&str] = &["demo"];
+/// Scenes compiled into the binary, by name (`builtin:NAME` on the command line): the demo, then
+/// the hard-case gallery ([`cases::CASES`], whose entries say what each one tests).
+pub const BUILTINS: &[&str] = &[
+    "demo",
+    "wires",
+    "horizon",
+    "foliage",
+    "spinner",
+    "texture",
+    "slivers",
+    "far",
+    "specular",
+    "thin-motion",
+    "firefly",
+    "cut",
+    "zfight",
+    "nan",
+];
 
 /// Options the command line can impose on any scene.
 #[derive(Clone, Debug, Default)]
@@ -73,12 +90,16 @@ pub fn load_from(files: &dyn Files, spec: &str, opts: &LoadOptions) -> Result<Sc
 pub fn builtin(name: &str) -> Result<Scene> {
     let scene = match name {
         "demo" => procedural::demo(),
-        other => {
-            return Err(SceneError::Invalid(format!(
-                "no built-in scene `{other}`; built-ins: {}",
-                BUILTINS.join(", ")
-            )));
-        }
+        other => match cases::build(other) {
+            Some(built) => built.map_err(SceneError::Invalid)?,
+            None => {
+                return Err(SceneError::Invalid(format!(
+                    "no built-in scene `{other}`; built-ins: {} (`far:METRES` places `far` \
+                     elsewhere)",
+                    BUILTINS.join(", ")
+                )));
+            }
+        },
     };
     scene
         .camera

@@ -610,6 +610,7 @@ fn build_object(
         vertices,
         indices,
         material,
+        origin: [0.0; 3],
     })
 }
 

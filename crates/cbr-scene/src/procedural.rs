@@ -14,13 +14,13 @@ use crate::texture::Texture;
 
 /// Builds meshes one quad at a time.
 #[derive(Default)]
-struct MeshBuilder {
+pub(crate) struct MeshBuilder {
     vertices: Vec<Vertex>,
     indices: Vec<u32>,
 }
 
 impl MeshBuilder {
-    fn quad(&mut self, corners: [Vec3; 4], uvs: [Vec2; 4]) {
+    pub(crate) fn quad(&mut self, corners: [Vec3; 4], uvs: [Vec2; 4]) {
         let n = (corners[1] - corners[0])
             .cross(corners[3] - corners[0])
             .normalize_or_zero();
@@ -37,7 +37,7 @@ impl MeshBuilder {
     }
 
     /// An axis-aligned box given by its two extreme corners (UVs in metres / `uv_scale`).
-    fn cuboid(&mut self, min: Vec3, max: Vec3, uv_scale: f32) {
+    pub(crate) fn cuboid(&mut self, min: Vec3, max: Vec3, uv_scale: f32) {
         let c = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
         let (a, b) = (min, max);
         let faces = [
@@ -94,7 +94,7 @@ impl MeshBuilder {
     }
 
     /// A thin box from `a` to `b` with square cross-section `thickness`.
-    fn beam(&mut self, a: Vec3, b: Vec3, thickness: f32) {
+    pub(crate) fn beam(&mut self, a: Vec3, b: Vec3, thickness: f32) {
         let dir = (b - a).normalize_or_zero();
         let side = dir.any_orthonormal_vector() * (thickness * 0.5);
         let up = dir.cross(side).normalize_or_zero() * (thickness * 0.5);
@@ -110,7 +110,13 @@ impl MeshBuilder {
     }
 
     /// A parametric surface over [0,1]^2 sampled on an `nu` x `nv` grid.
-    fn surface(&mut self, nu: u32, nv: u32, f: impl Fn(f32, f32) -> (Vec3, Vec3), uv_repeat: Vec2) {
+    pub(crate) fn surface(
+        &mut self,
+        nu: u32,
+        nv: u32,
+        f: impl Fn(f32, f32) -> (Vec3, Vec3),
+        uv_repeat: Vec2,
+    ) {
         let base = self.vertices.len() as u32;
         for j in 0..=nv {
             for i in 0..=nu {
@@ -132,17 +138,51 @@ impl MeshBuilder {
         }
     }
 
-    fn object(self, name: &str, material: u32) -> Object {
+    /// A UV sphere of radius `r` about `c`.
+    pub(crate) fn sphere(&mut self, c: Vec3, r: f32, nu: u32, nv: u32) {
+        self.surface(
+            nu,
+            nv,
+            |u, v| {
+                let (a, b) = (u * std::f32::consts::TAU, (v - 0.5) * std::f32::consts::PI);
+                let n = Vec3::new(b.cos() * a.cos(), b.sin(), b.cos() * a.sin());
+                (c + n * r, n)
+            },
+            Vec2::ONE,
+        );
+    }
+
+    /// One triangle (flat normal).
+    pub(crate) fn triangle(&mut self, p: [Vec3; 3], uv: [Vec2; 3]) {
+        let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or(Vec3::Y);
+        let base = self.vertices.len() as u32;
+        for (p, uv) in p.iter().zip(uv) {
+            self.vertices.push(Vertex {
+                pos: p.to_array(),
+                normal: n.to_array(),
+                uv: uv.to_array(),
+            });
+        }
+        self.indices.extend([base, base + 1, base + 2]);
+    }
+
+    pub(crate) fn object(self, name: &str, material: u32) -> Object {
         Object {
             name: name.to_string(),
             vertices: self.vertices,
             indices: self.indices,
             material,
+            origin: [0.0; 3],
         }
     }
 }
 
-fn texture(name: &str, size: u32, srgb: bool, f: impl Fn(u32, u32) -> [u8; 4]) -> Texture {
+pub(crate) fn texture(
+    name: &str,
+    size: u32,
+    srgb: bool,
+    f: impl Fn(u32, u32) -> [u8; 4],
+) -> Texture {
     let rgba = (0..size * size)
         .flat_map(|i| f(i % size, i / size))
         .collect();
@@ -150,7 +190,7 @@ fn texture(name: &str, size: u32, srgb: bool, f: impl Fn(u32, u32) -> [u8; 4]) -
 }
 
 /// Leaf clusters: overlapping ellipses from a seeded generator, alpha 0 between them.
-fn leaf_texture(seed: u64) -> Texture {
+pub(crate) fn leaf_texture(seed: u64) -> Texture {
     let mut rng = SplitMix(seed);
     let leaves: Vec<(f32, f32, f32, f32, f32)> = (0..70)
         .map(|_| {

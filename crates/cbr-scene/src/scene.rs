@@ -86,6 +86,10 @@ pub struct Object {
     pub vertices: Vec<Vertex>,
     pub indices: Vec<u32>,
     pub material: u32,
+    /// Where the object's local coordinates are centred in the world (f64): vertices are stored
+    /// in f32 relative to it, so geometry far from the world origin keeps its precision (the
+    /// renderer forms camera-relative transforms in f64). Zero for loaded OBJs.
+    pub origin: [f64; 3],
 }
 
 impl Object {
@@ -221,7 +225,7 @@ impl Scene {
 
     /// Object-to-world transform of object `index` at time `t` (seconds).
     pub fn object_transform(&self, index: usize, t: f64) -> DMat4 {
-        let mut m = DMat4::IDENTITY;
+        let mut m = DMat4::from_translation(DVec3::from(self.objects[index].origin));
         for motion in &self.motions {
             if motion.objects.contains(&(index as u32)) {
                 let pivot = DVec3::from(motion.pivot);
@@ -247,12 +251,16 @@ impl Scene {
 pub fn bounds_of(objects: &[Object]) -> Bounds {
     let mut min = DVec3::splat(f64::INFINITY);
     let mut max = DVec3::splat(f64::NEG_INFINITY);
-    for v in objects.iter().flat_map(|o| o.vertices.iter()) {
-        let p = DVec3::new(
-            f64::from(v.pos[0]),
-            f64::from(v.pos[1]),
-            f64::from(v.pos[2]),
-        );
+    for (o, v) in objects
+        .iter()
+        .flat_map(|o| o.vertices.iter().map(move |v| (o, v)))
+    {
+        let p = DVec3::from(o.origin)
+            + DVec3::new(
+                f64::from(v.pos[0]),
+                f64::from(v.pos[1]),
+                f64::from(v.pos[2]),
+            );
         min = min.min(p);
         max = max.max(p);
     }

@@ -10,7 +10,7 @@ use toml::Spanned;
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
-    /// Scene: a .toml description, an .obj file, or builtin:demo.
+    /// Scene: a .toml description, an .obj file, or builtin:NAME (`cbr info` lists them).
     scene: String,
     /// Configurations, comma-separated technique specs (`cbr info` lists the registered ones):
     /// native, ssaa:N, msaa:N[:sample][:hdr], upscale:bilinear|bicubic,

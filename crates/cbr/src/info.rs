@@ -36,7 +36,16 @@ pub fn run(a: &InfoArgs) -> Result<()> {
             .iter()
             .map(|c| serde_json::json!({"index": c.index, "name": c.name, "kind": c.kind, "rejected": c.rejection()}))
             .collect();
-        let v = serde_json::json!({"devices": devices, "chosen": gpu.info(), "caps": caps, "layouts": layouts});
+        let scenes: Vec<serde_json::Value> = std::iter::once(
+            serde_json::json!({"name": "demo", "about": "every hard case in one scene"}),
+        )
+        .chain(
+            cbr_scene::cases::CASES
+                .iter()
+                .map(|c| serde_json::json!({"name": c.name, "about": c.about})),
+        )
+        .collect();
+        let v = serde_json::json!({"devices": devices, "chosen": gpu.info(), "caps": caps, "layouts": layouts, "scenes": scenes});
         println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
@@ -119,6 +128,14 @@ pub fn run(a: &InfoArgs) -> Result<()> {
             "  (msaa2x needs 2x MSAA; on this device use the portable layouts: {})",
             portable.join(", ")
         );
+    }
+    println!("\nbuilt-in scenes (builtin:NAME; docs/hard-cases.md runs every technique on each):");
+    println!(
+        "  {:12} the demo: every hard case below in one scene",
+        "demo"
+    );
+    for c in cbr_scene::cases::CASES {
+        println!("  {:12} {}", c.name, c.about);
     }
     Ok(())
 }

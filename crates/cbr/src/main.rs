@@ -5,6 +5,7 @@
 mod bench;
 mod compare;
 mod info;
+mod montage;
 mod render;
 mod report;
 
@@ -33,7 +34,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render a scene (TOML, OBJ, or builtin:demo) to EXR + PNG per frame and run.json.
+    /// Render a scene (TOML, OBJ, or builtin:NAME, listed by `cbr info`) to EXR + PNG per frame and run.json.
     Render(render::RenderArgs),
     /// List Vulkan devices, the chosen one's limits, and which checkerboard layouts it can run.
     Info(info::InfoArgs),
@@ -46,6 +47,8 @@ enum Command {
     Bench(bench::BenchArgs),
     /// One self-contained HTML report from `cbr bench` folders.
     Report(report::ReportArgs),
+    /// Side-by-side strips of images (optionally one cropped window, enlarged) as one PNG.
+    Montage(montage::MontageArgs),
 }
 
 /// A command-line number that must be finite (`nan` and `inf` parse as f32).
@@ -108,6 +111,7 @@ fn main() -> ExitCode {
         Command::Info(a) => info::run(&a),
         Command::Bench(a) => bench::run(&a),
         Command::Report(a) => report::run(&a),
+        Command::Montage(a) => montage::run(&a),
         Command::Compare(a) => {
             return match compare::run(&a) {
                 Ok(true) => ExitCode::SUCCESS,

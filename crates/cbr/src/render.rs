@@ -107,7 +107,7 @@ pub enum MissingTexturesArg {
 
 #[derive(clap::Args)]
 pub struct RenderArgs {
-    /// Scene: a .toml description, an .obj file (framed automatically), or builtin:demo.
+    /// Scene: a .toml description, an .obj file (framed automatically), or builtin:NAME (`cbr info` lists them).
     scene: String,
     /// Output folder (created if missing).
     #[arg(short, long, default_value = "out/render")]
@@ -306,6 +306,14 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             },
         )?;
         write_png_rgba8(&png, out.width, out.height, &display.to_rgba8(&out.color))?;
+        if let Some(n) = out.nonfinite_fragments.filter(|&n| n > 0) {
+            bar.suspend(|| {
+                eprintln!(
+                    "warning: frame {f}: {n} fragment(s) shaded to NaN or infinity, written black \
+                     (run.json: nonfinite_fragments)"
+                )
+            });
+        }
         write_debug_pngs(&a.out, f, &out)?;
         write_seed_figure(&a.out, f, &out, &display.to_rgba8(&out.color))?;
         for t in &out.timings {
@@ -321,6 +329,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             "resolve_reset": out.resolve.as_ref().map(|r| r.reset),
             "cached": out.cached,
             "shaded_fragments": out.shaded_fragments,
+            "nonfinite_fragments": out.nonfinite_fragments,
             "analytic": analytic_summary(&out),
         }));
         bar.inc(1);

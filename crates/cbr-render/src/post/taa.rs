@@ -663,7 +663,8 @@ pub fn reference(c: &TaaConfig, i: &RefInputs) -> (Vec<V3>, Vec<(u32, f32)>) {
                         .map(|k| if ok[k] { to_p(cs[k], e) } else { y0 })
                         .collect();
                     if !c.inside {
-                        if c.clip {
+                        // Still pixels keep their history unclipped (see the shader).
+                        if c.clip && !still {
                             let (mut m1, mut m2) = ([0.0f32; 3], [0.0f32; 3]);
                             for yv in &yk {
                                 m1 = zip3(m1, *yv, |a, b| a + b);

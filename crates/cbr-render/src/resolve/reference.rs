@@ -214,7 +214,8 @@ impl Ctx<'_> {
         let hist = self.hist();
         let i = self.idx(x, y);
         let mut why = 0;
-        let h = if length(s.v) <= self.s.static_threshold && hist.ids[i] & ID_MOVED == 0 {
+        let still = length(s.v) <= self.s.static_threshold && hist.ids[i] & ID_MOVED == 0;
+        let h = if still {
             r.dbg |= DBG_STILL;
             Some(hist.color[i])
         } else {
@@ -244,7 +245,8 @@ impl Ctx<'_> {
                 t = t.min(sigma[k] / d[k].abs());
             }
         }
-        if t < 1.0 {
+        // Still: the history is kept unclipped (the shader says why).
+        if t < 1.0 && !still {
             r.dbg |= DBG_CLAMPED;
             h = untonemap(from_ycocg(add(mu, scale(d, t))));
         }
