@@ -163,6 +163,42 @@ fn far_from_the_origin_matches_the_origin_copy() {
         (s.settings.width, s.settings.height) = (w, h);
         s
     };
+    // The contrast: the same scene with the placement folded into f32 world-space vertices (what
+    // a renderer without per-object f64 origins stores). The test must tell the two apart.
+    let naive = |d: f64| {
+        let mut s = at(d);
+        for o in &mut s.objects {
+            let off = std::mem::replace(&mut o.origin, [0.0; 3]);
+            for v in &mut o.vertices {
+                v.pos = [0, 1, 2].map(|k| (off[k] + f64::from(v.pos[k])) as f32);
+            }
+        }
+        s
+    };
+    let origin = render(&gpu, &at(0.0), "native", &frames);
+    println!("native, f32 world-space vertices (the contrast): against the copy at the origin");
+    println!("| distance | mean abs | max abs | pixels off > 1/256 | IDs off |");
+    println!("|---|---|---|---|---|");
+    for d in [1.0, 1e3, 1e5, 1e6] {
+        let away = render(&gpu, &naive(d), "native", &frames);
+        for (a, o) in away.iter().zip(&origin) {
+            let e = diff(a, o);
+            println!(
+                "| {d:.0e} m (frame {}) | {:.2e} | {:.2e} | {:.3}% | {:.3}% |",
+                a.index,
+                e.mean_abs,
+                e.max_abs,
+                100.0 * e.pixels,
+                100.0 * e.ids
+            );
+            if d == 1e6 {
+                assert!(
+                    e.pixels > 0.01,
+                    "f32 world vertices at 1,000 km look right: the test cannot see the failure"
+                );
+            }
+        }
+    }
     for spec in ["native", "checkerboard:rotated:ours"] {
         let origin = render(&gpu, &at(0.0), spec, &frames);
         println!("{spec} at {w}x{h}, frames {frames:?}: against the copy at the origin");

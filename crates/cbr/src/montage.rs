@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 
 #[derive(clap::Args)]
 pub struct MontageArgs {
-    /// Images (PNG, JPEG, ...), placed left to right, then row by row.
+    /// Images (PNG, JPEG, ...), placed left to right, then row by row; `-` leaves a tile blank.
     #[arg(required = true)]
     images: Vec<PathBuf>,
     /// The window of every image to keep, x,y,w,h in pixels (default: the whole image).
@@ -49,7 +49,12 @@ pub fn run(a: &MontageArgs) -> Result<()> {
     }
     let crop = a.crop.as_deref().map(parse_crop).transpose()?;
     let mut tiles = Vec::with_capacity(a.images.len());
-    for path in &a.images {
+    let mut blanks = Vec::new();
+    for (i, path) in a.images.iter().enumerate() {
+        if path.as_os_str() == "-" {
+            blanks.push(i);
+            continue;
+        }
         let img = image::open(path)
             .with_context(|| format!("{}: cannot read the image", path.display()))?
             .to_rgba8();
@@ -65,10 +70,14 @@ pub fn run(a: &MontageArgs) -> Result<()> {
         }
         tiles.push(image::imageops::crop_imm(&img, x, y, cw, ch).to_image());
     }
-    let (tw, th) = tiles[0].dimensions();
+    let Some(first) = tiles.first() else {
+        bail!("every image is `-`: nothing to place");
+    };
+    let (tw, th) = first.dimensions();
     if let Some((p, t)) = a
         .images
         .iter()
+        .filter(|p| p.as_os_str() != "-")
         .zip(&tiles)
         .find(|(_, t)| t.dimensions() != (tw, th))
     {
@@ -92,6 +101,10 @@ pub fn run(a: &MontageArgs) -> Result<()> {
     }
     let (width, height) = (width as u32, height as u32);
     let mut out = image::RgbaImage::from_pixel(width, height, image::Rgba([255; 4]));
+    let blank = image::RgbaImage::from_pixel(tw, th, image::Rgba([255; 4]));
+    for &i in &blanks {
+        tiles.insert(i, blank.clone());
+    }
     for (i, t) in tiles.iter().enumerate() {
         let (cx, cy) = ((i % columns) as u64, (i / columns) as u64);
         let (ox, oy) = ((cx * (sw + gap)) as u32, (cy * (sh + gap)) as u32);
