@@ -59,6 +59,17 @@ bench-analytic: setup
     CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench scenes/sibenik.toml --width 160 --height 90 --warmup 0 --frames 1 --reference ssaa:32 --time-cached-rows --techniques native,msaa:4,ssaa:16,analytic,analytic:seed -o {{out}}/bench/analytic/sibenik
     python3 scripts/analytic-table.py {{out}}/bench/analytic/demo/bench.json {{out}}/bench/analytic/demo-untextured/bench.json {{out}}/bench/analytic/sibenik/bench.json
 
+# The hard-case gallery (docs/hard-cases.md): every technique on every built-in hard case
+# (`cbr info` lists them) at 320x180 against ssaa:16 (cached in out/cache; ~25 min cold on 2
+# cores), strips by `cbr montage` into docs/images/hard-cases/.
+hard-cases: setup
+    CBR_CACHE_DIR={{out}}/cache python3 scripts/hard-cases.py --cbr ./target/release/cbr -o {{out}}/hard-cases --docs docs
+
+# The stability figures of docs/hard-cases.md (far from the origin, reverse-Z, 1000-frame drift).
+stability:
+    cargo test --release -p cbr-render --test stability -- --nocapture --test-threads 1
+    CBR_DRIFT_FRAMES=1000 cargo test --release -p cbr-render --test stability drift -- --nocapture
+
 # Format check, clippy, then the whole test suite on lavapipe with validation on.
 test: lint
     @echo "[test] cargo test --workspace (GPU tests on ${VK_DRIVER_FILES:-the default Vulkan device}, validation layers on)"
