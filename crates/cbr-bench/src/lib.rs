@@ -21,7 +21,7 @@ use anyhow::{Context, Result, bail};
 use cbr_gpu::{Gpu, GpuOptions};
 use cbr_metrics::DisplayTransform;
 use cbr_metrics::io::write_bytes;
-use cbr_render::{Mapping, Spec};
+use cbr_render::{Mapping, Renderer, Spec};
 use cbr_scene::{LoadOptions, check_resolution};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
@@ -229,6 +229,15 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
         device: a.device.clone(),
         validation: a.validation,
     })?;
+    // Every configuration, the reference's included, is refused now if it cannot run here (an
+    // unknown spec, a missing device feature, memory the device cannot hold), before anything
+    // is rendered or written.
+    for ((w, h), configs) in &plan {
+        let r = expand(std::slice::from_ref(&reference), *w, *h, &[], &[], &[])?.remove(0);
+        for c in std::iter::once(&r).chain(configs) {
+            Renderer::check(&gpu, &scene, &c.settings)?;
+        }
+    }
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("cannot create the output folder {}", a.out.display()))?;
     let total_frames: u64 = plan

@@ -4,8 +4,9 @@
 use ash::vk;
 use serde::Serialize;
 
-/// Capabilities that matter to cbr, read once from the device.
-#[derive(Clone, Debug, Serialize)]
+/// Capabilities that matter to cbr, read once from the device. `Default` is a device that can do
+/// nothing (tests start from it and set what they need).
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct Caps {
     pub sample_rate_shading: bool,
     /// Sample counts usable for a colour + depth + integer-ID target together.
@@ -37,6 +38,14 @@ pub struct Caps {
     pub shader_float16: bool,
     /// Largest storage buffer range one descriptor can bind (lavapipe: 128 MiB).
     pub max_storage_buffer_range: u32,
+    /// Size of the largest memory heap with VK_MEMORY_HEAP_DEVICE_LOCAL_BIT (lavapipe: 2 GiB).
+    pub device_local_heap_bytes: u64,
+    /// Every memory heap is device-local (lavapipe, most integrated GPUs): host-visible memory,
+    /// the readbacks, comes out of the same heap as the images.
+    pub unified_memory: bool,
+    /// The largest single memory allocation, maxMemoryAllocationSize
+    /// (VkPhysicalDeviceMaintenance3Properties, core in Vulkan 1.1; lavapipe: 2 GiB).
+    pub max_memory_allocation_size: u64,
     pub fragment_stores_and_atomics: bool,
     /// 64-bit integer atomics on storage buffers (shaderInt64 + shaderBufferInt64Atomics).
     pub int64_atomics: bool,
@@ -75,6 +84,23 @@ pub(crate) fn sample_count_list(flags: vk::SampleCountFlags) -> Vec<u32> {
         .map(|b| 1u32 << b)
         .filter(|&n| flags.contains(vk::SampleCountFlags::from_raw(n)))
         .collect()
+}
+
+/// The largest device-local heap's size, and whether every heap is device-local (unified memory).
+/// A device that marks no heap device-local (none should) gets its largest heap.
+pub(crate) fn heap_limits(heaps: &[vk::MemoryHeap]) -> (u64, bool) {
+    let local = |h: &&vk::MemoryHeap| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL);
+    let largest = heaps
+        .iter()
+        .filter(local)
+        .map(|h| h.size)
+        .max()
+        .or_else(|| heaps.iter().map(|h| h.size).max())
+        .unwrap_or(0);
+    (
+        largest,
+        !heaps.is_empty() && heaps.iter().all(|h| local(&h)),
+    )
 }
 
 impl Caps {
@@ -146,6 +172,9 @@ mod tests {
         Caps {
             shader_float16: true,
             max_storage_buffer_range: 1 << 27,
+            device_local_heap_bytes: 1 << 31,
+            unified_memory: true,
+            max_memory_allocation_size: 1 << 31,
             fragment_stores_and_atomics: true,
             int64_atomics: true,
             sample_rate_shading: true,
@@ -189,6 +218,29 @@ mod tests {
         caps.sample_counts = vec![1, 2, 4, 8];
         caps.integer_color_sample_counts = vec![1, 2, 4, 8];
         assert_eq!(caps.supported_layouts(), Layout::ALL.to_vec());
+    }
+
+    #[test]
+    fn heaps_give_the_largest_device_local_one_and_whether_memory_is_unified() {
+        let heap = |size: u64, local: bool| vk::MemoryHeap {
+            size,
+            flags: if local {
+                vk::MemoryHeapFlags::DEVICE_LOCAL
+            } else {
+                vk::MemoryHeapFlags::empty()
+            },
+        };
+        // lavapipe: one heap, device-local.
+        assert_eq!(heap_limits(&[heap(1 << 31, true)]), (1 << 31, true));
+        // A discrete GPU: VRAM, the host's memory, and a small device-local BAR window.
+        let discrete = [
+            heap(80 << 30, true),
+            heap(128 << 30, false),
+            heap(1 << 28, true),
+        ];
+        assert_eq!(heap_limits(&discrete), (80 << 30, false));
+        assert_eq!(heap_limits(&[heap(4 << 30, false)]), (4 << 30, false));
+        assert_eq!(heap_limits(&[]), (0, false));
     }
 
     #[test]

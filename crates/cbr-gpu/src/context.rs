@@ -8,7 +8,7 @@ use std::sync::{Arc, Mutex};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, Allocator, AllocatorCreateDesc};
 
-use crate::caps::{Caps, sample_count_list};
+use crate::caps::{Caps, heap_limits, sample_count_list};
 use crate::error::{GpuError, Result, VkContext};
 use crate::select::{self, Candidate, DeviceKind};
 
@@ -76,6 +76,8 @@ pub(crate) struct Inner {
     #[allow(dead_code)] // kept for queue-family ownership transfers
     pub(crate) queue_family: u32,
     pub(crate) allocator: Mutex<Option<Allocator>>,
+    /// Memory allocations made so far (a count that only grows).
+    pub(crate) allocations_made: AtomicU64,
     command_pool: Mutex<vk::CommandPool>,
     pub(crate) validation: Arc<ValidationLog>,
     garbage: Mutex<Vec<(u64, Garbage)>>,
@@ -171,6 +173,8 @@ struct Probe {
     extensions: Vec<CString>,
     driver_name: String,
     driver_info: String,
+    /// maxMemoryAllocationSize (VkPhysicalDeviceMaintenance3Properties).
+    max_memory_allocation_size: u64,
 }
 
 fn probe(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Probe {
@@ -182,7 +186,10 @@ fn probe(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Probe {
         .push_next(&mut f12)
         .push_next(&mut f13);
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
-    let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+    let mut m3 = vk::PhysicalDeviceMaintenance3Properties::default();
+    let mut p2 = vk::PhysicalDeviceProperties2::default()
+        .push_next(&mut driver)
+        .push_next(&mut m3);
     // SAFETY: `pd` was enumerated from `instance`; the chained structs outlive the calls.
     unsafe {
         instance.get_physical_device_features2(pd, &mut f2);
@@ -190,6 +197,7 @@ fn probe(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Probe {
     }
     let f10 = f2.features;
     let props = p2.properties;
+    let max_memory_allocation_size = m3.max_memory_allocation_size;
     let f11_multiview = f11.multiview != 0;
     // Drop the pNext chains so the structs can be stored.
     f12.p_next = std::ptr::null_mut();
@@ -232,6 +240,7 @@ fn probe(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Probe {
         extensions,
         driver_name,
         driver_info,
+        max_memory_allocation_size,
     }
 }
 
@@ -260,6 +269,13 @@ fn caps_of(instance: &ash::Instance, pd: vk::PhysicalDevice, p: &Probe) -> Caps 
     let has_ext = |name: &CStr| p.extensions.iter().any(|e| e.as_c_str() == name);
     // SAFETY: `pd` belongs to `instance`.
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+    // SAFETY: `pd` belongs to `instance`.
+    let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
+    let heaps = memory
+        .memory_heaps
+        .get(..memory.memory_heap_count as usize)
+        .unwrap_or(&[]);
+    let (device_local_heap_bytes, unified_memory) = heap_limits(heaps);
     let ts_bits = p
         .queue_family
         .and_then(|q| families.get(q as usize))
@@ -291,6 +307,9 @@ fn caps_of(instance: &ash::Instance, pd: vk::PhysicalDevice, p: &Probe) -> Caps 
         sub_pixel_precision_bits: l.sub_pixel_precision_bits,
         shader_float16: p.f12.shader_float16 != 0,
         max_storage_buffer_range: l.max_storage_buffer_range,
+        device_local_heap_bytes,
+        unified_memory,
+        max_memory_allocation_size: p.max_memory_allocation_size,
         fragment_stores_and_atomics: p.f10.fragment_stores_and_atomics != 0,
         int64_atomics: p.f10.shader_int64 != 0 && p.f12.shader_buffer_int64_atomics != 0,
     }
@@ -551,6 +570,7 @@ impl Gpu {
                 queue: Mutex::new(queue),
                 queue_family,
                 allocator: Mutex::new(Some(allocator)),
+                allocations_made: AtomicU64::new(0),
                 command_pool: Mutex::new(command_pool),
                 validation,
                 garbage: Mutex::new(Vec::new()),
@@ -597,6 +617,30 @@ impl Gpu {
     }
     pub fn validation(&self) -> &ValidationLog {
         &self.inner.validation
+    }
+
+    /// How many memory allocations were made since the device was opened, freed ones included
+    /// (tests check that a refusal allocated nothing, not even briefly).
+    pub fn allocations_made(&self) -> u64 {
+        self.inner.allocations_made.load(Ordering::SeqCst)
+    }
+
+    /// Every live memory allocation, (name, bytes), those waiting in the deletion queue included
+    /// (tests hold the renderer's memory estimates to what was really allocated).
+    pub fn allocations(&self) -> Vec<(String, u64)> {
+        match self.inner.allocator.lock() {
+            Ok(guard) => guard
+                .as_ref()
+                .map(|a| {
+                    a.generate_report()
+                        .allocations
+                        .into_iter()
+                        .map(|r| (r.name, r.size))
+                        .collect()
+                })
+                .unwrap_or_default(),
+            Err(_) => Vec::new(),
+        }
     }
     pub fn device(&self) -> &ash::Device {
         &self.inner.device

@@ -29,17 +29,22 @@ fn allocate(
     let al = guard
         .as_mut()
         .ok_or_else(|| GpuError::Other("allocator already destroyed".into()))?;
-    al.allocate(&AllocationCreateDesc {
-        name,
-        requirements: req,
-        location,
-        linear,
-        allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-    })
-    .map_err(|e| GpuError::Alloc {
-        name: name.to_string(),
-        source: e,
-    })
+    let a = al
+        .allocate(&AllocationCreateDesc {
+            name,
+            requirements: req,
+            location,
+            linear,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        })
+        .map_err(|e| GpuError::Alloc {
+            name: name.to_string(),
+            source: e,
+        })?;
+    gpu.inner
+        .allocations_made
+        .fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+    Ok(a)
 }
 
 /// A named buffer with its memory.

@@ -8,6 +8,7 @@ use cbr_scene::{AlphaSource, Camera, Scene};
 use glam::{DMat3, DMat4, DVec3};
 
 use crate::gpu_types::{FrameConstants, LightData, MAX_PIECES, MaterialData, ObjectData};
+use crate::memory::MemoryEstimate;
 
 /// One draw: an object's index range in the shared index buffer.
 #[derive(Clone, Copy, Debug)]
@@ -166,6 +167,61 @@ fn upload_textures(gpu: &Gpu, scene: &Scene) -> Result<Vec<Image>> {
 }
 
 impl GpuScene {
+    /// What [`GpuScene::new`] allocates for `scene`: vertices, indices and materials, every
+    /// texture's mip chain and a 1x1 white one, the per-frame objects, lights and constants, and
+    /// the largest of the uploads' staging buffers (each lives only through its own upload, so
+    /// one of them at a time adds to the peak).
+    pub fn estimate(scene: &Scene) -> MemoryEstimate {
+        let mut e = MemoryEstimate::new();
+        let vertices: usize = scene.objects.iter().map(|o| o.vertices.len()).sum();
+        let indices: usize = scene.objects.iter().map(|o| o.indices.len()).sum();
+        let uploads = [
+            (
+                "scene.vertices",
+                vertices * std::mem::size_of::<cbr_scene::Vertex>(),
+                true,
+            ),
+            ("scene.indices", indices * 4, false),
+            (
+                "scene.materials",
+                scene.materials.len() * std::mem::size_of::<MaterialData>(),
+                true,
+            ),
+        ];
+        let mut staging = Vec::new();
+        for (name, bytes, storage) in uploads {
+            match storage {
+                true => e.storage_buffer(name, bytes as u64, false),
+                false => e.buffer(name, bytes as u64, false),
+            }
+            staging.push((format!("{name}.staging"), bytes as u64));
+        }
+        let mut texels = 0;
+        for (i, t) in scene.textures.iter().enumerate() {
+            let bytes: u64 = t.levels.iter().map(|l| l.rgba.len() as u64).sum();
+            e.image_bytes(
+                format!("texture[{i}] {}", t.name),
+                bytes,
+                t.width(),
+                t.height(),
+            );
+            texels += bytes;
+        }
+        e.image_bytes(format!("texture[{}] white", scene.textures.len()), 4, 1, 1);
+        staging.push(("textures.staging".into(), texels + 4));
+        if let Some((name, bytes)) = staging.into_iter().max_by_key(|s| s.1) {
+            e.buffer(name, bytes, true);
+        }
+        let objects = scene.objects.len().max(1) * std::mem::size_of::<ObjectData>();
+        e.storage_buffer("scene.objects", objects as u64, true);
+        let lights = (scene.directional.len() + scene.points.len()).max(1)
+            * std::mem::size_of::<LightData>();
+        e.storage_buffer("scene.lights", lights as u64, true);
+        let frame = std::mem::size_of::<FrameConstants>() as u64;
+        e.buffer("scene.frame", frame, true);
+        e
+    }
+
     pub fn new(gpu: &Gpu, scene: &Scene) -> Result<GpuScene> {
         let mut vertex_bytes: Vec<u8> = Vec::new();
         let mut index_data: Vec<u32> = Vec::new();

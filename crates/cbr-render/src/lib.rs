@@ -10,6 +10,7 @@ mod cpu_math;
 pub mod gpu_scene;
 pub mod gpu_types;
 pub mod layouts;
+pub mod memory;
 pub mod post;
 pub mod renderer;
 pub mod resolve;

@@ -4,16 +4,17 @@
 //! from the registries (crate::technique, crate::post) through the spec.
 
 use cbr_gpu::{Buffer, Gpu, GpuError, Location, PassKind, PassTiming, Profiler, Readback, Result};
-use cbr_gpu::{Shaders, vk};
+use cbr_gpu::{Caps, Shaders, vk};
 use cbr_scene::Scene;
 use half::f16;
 
 use crate::cache::FrameCache;
 use crate::gpu_scene::{FrameView, GpuScene, RasterUniforms};
 use crate::gpu_types::{FLAG_COUNT_SHADED, FLAG_DEBUG_LOD};
+use crate::memory::MemoryEstimate;
 use crate::post::{PostBuildCtx, PostFrame, PostPass};
 use crate::spec::Spec;
-use crate::technique::{BuildCtx, FrameCtx, Technique};
+use crate::technique::{BuildCtx, EstimateCtx, FrameCtx, Registration, Technique};
 
 /// How to render.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -158,6 +159,17 @@ impl FrameOutput {
     }
 }
 
+/// The registration of `spec`'s technique.
+fn registration(spec: &Spec) -> Result<&'static Registration> {
+    crate::technique::find(&spec.technique.name).ok_or_else(|| {
+        GpuError::Other(
+            Spec::parse(&spec.to_string())
+                .err()
+                .unwrap_or_else(|| format!("no technique `{}`", spec.technique.name)),
+        )
+    })
+}
+
 pub struct Renderer {
     gpu: Gpu,
     scene: GpuScene,
@@ -183,22 +195,12 @@ impl Renderer {
         scene: &Scene,
         settings: RenderSettings,
     ) -> Result<Renderer> {
+        // Unknown specs, missing device features and memory that cannot fit: refused before
+        // anything is allocated.
+        Renderer::check(gpu, scene, &settings)?;
         let spec = &settings.spec;
-        let reg = crate::technique::find(&spec.technique.name).ok_or_else(|| {
-            GpuError::Other(
-                Spec::parse(&spec.to_string())
-                    .err()
-                    .unwrap_or_else(|| format!("no technique `{}`", spec.technique.name)),
-            )
-        })?;
+        let reg = registration(spec)?;
         let params = spec.technique.params();
-        (reg.check)(&params).map_err(|e| GpuError::Other(format!("technique `{spec}`: {e}")))?;
-        if let Some(feature) = (reg.needs)(&params, gpu.caps()) {
-            return Err(GpuError::Unsupported {
-                device: gpu.info().name.clone(),
-                feature: format!("`{}` ({feature})", spec.technique),
-            });
-        }
         let gpu_scene = GpuScene::new(gpu, scene)?;
         let counter = Buffer::new(
             gpu,
@@ -310,6 +312,67 @@ impl Renderer {
             last_frame: None,
             progress: None,
         })
+    }
+
+    /// The GPU memory a renderer of `settings` for `scene` allocates on a device with `caps`
+    /// (crate::memory): the technique's and each post pass's estimates, the renderer's own
+    /// buffers (the shaded-fragment counter, the post chain's readback) and the scene's. `Err`:
+    /// a spec the registries do not know, or the technique's own refusal of the size (`analytic`'s
+    /// fragment lists).
+    pub fn estimate(
+        caps: &Caps,
+        scene: &Scene,
+        settings: &RenderSettings,
+    ) -> std::result::Result<MemoryEstimate, String> {
+        let spec = &settings.spec;
+        let reg = registration(spec).map_err(|e| e.to_string())?;
+        let ctx = EstimateCtx {
+            caps,
+            width: settings.width,
+            height: settings.height,
+            instrument: settings.instrument,
+        };
+        let mut e = (reg.estimate)(&ctx, &spec.technique.params())?;
+        for part in &spec.post {
+            let pr = crate::post::find(&part.name)
+                .ok_or_else(|| format!("no post pass `+{}`", part.name))?;
+            e.append((pr.estimate)(&ctx, &part.params()));
+        }
+        e.storage_buffer("shaded_fragments", 4, true);
+        if !spec.post.is_empty() {
+            let (w, h) = (settings.width, settings.height);
+            e.readback("readback.post", crate::targets::COLOR_FORMAT, w, h, 1);
+        }
+        e.append(GpuScene::estimate(scene));
+        Ok(e)
+    }
+
+    /// What [`Renderer::new`] refuses before it allocates anything: an unknown spec, parameters
+    /// the technique does not read, a device feature it lacks, and memory the device cannot
+    /// hold (crate::memory::check: the estimate, its largest allocation and the device's
+    /// limits in one message). `cbr bench` calls it for every configuration before it renders.
+    pub fn check(gpu: &Gpu, scene: &Scene, settings: &RenderSettings) -> Result<MemoryEstimate> {
+        let spec = &settings.spec;
+        let reg = registration(spec)?;
+        let params = spec.technique.params();
+        (reg.check)(&params).map_err(|e| GpuError::Other(format!("technique `{spec}`: {e}")))?;
+        if let Some(feature) = (reg.needs)(&params, gpu.caps()) {
+            return Err(GpuError::Unsupported {
+                device: gpu.info().name.clone(),
+                feature: format!("`{}` ({feature})", spec.technique),
+            });
+        }
+        let estimate = Renderer::estimate(gpu.caps(), scene, settings).map_err(GpuError::Other)?;
+        crate::memory::check(
+            &spec.to_string(),
+            settings.width,
+            settings.height,
+            &estimate,
+            gpu.caps(),
+            &gpu.info().name,
+        )
+        .map_err(GpuError::Other)?;
+        Ok(estimate)
     }
 
     /// Called with (samples done, samples total) while a frame of a many-pass technique renders.

@@ -2,6 +2,8 @@
 
 use cbr_gpu::{Gpu, Image, ImageDesc, Result, vk};
 
+use crate::memory::MemoryEstimate;
+
 pub const COLOR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 pub const VELOCITY_FORMAT: vk::Format = vk::Format::R32G32_SFLOAT;
 pub const ID_FORMAT: vk::Format = vk::Format::R32G32_UINT;
@@ -37,6 +39,26 @@ impl FrameTargets {
             * u64::from(t.layers)
             * u64::from(t.samples)
             * BYTES_PER_SAMPLE
+    }
+
+    /// What [`FrameTargets::layered`] allocates (crate::memory).
+    pub fn estimate(
+        e: &mut MemoryEstimate,
+        prefix: &str,
+        width: u32,
+        height: u32,
+        layers: u32,
+        samples: u32,
+    ) {
+        for (name, format) in [
+            ("color", COLOR_FORMAT),
+            ("velocity", VELOCITY_FORMAT),
+            ("ids", ID_FORMAT),
+            ("depth", DEPTH_FORMAT),
+        ] {
+            let name = format!("{prefix}.{name}");
+            e.image_array(name, format, width, height, layers, samples);
+        }
     }
 
     /// Single-layer, single-sample targets (the native technique).

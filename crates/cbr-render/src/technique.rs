@@ -8,6 +8,7 @@ use cbr_gpu::{Buffer, Caps, Cmd, Gpu, Image, PassTiming, Profiler, Result, Shade
 use cbr_scene::Scene;
 
 use crate::gpu_scene::{FrameView, GpuScene};
+use crate::memory::MemoryEstimate;
 use crate::renderer::FrameOutput;
 use crate::techniques;
 
@@ -141,6 +142,19 @@ pub trait Technique {
 /// A technique's constructor: context and parameters.
 pub type Build = fn(&BuildCtx, &[&str]) -> Result<Box<dyn Technique>>;
 
+/// What a memory estimate gets: the device's capabilities (`analytic` fits its lists to them),
+/// the output resolution, and whether instrumentation passes are built (BuildCtx::instrument).
+pub struct EstimateCtx<'a> {
+    pub caps: &'a Caps,
+    pub width: u32,
+    pub height: u32,
+    pub instrument: bool,
+}
+
+/// A technique's memory estimate: what `build` allocates for these parameters (crate::memory),
+/// or the technique's own refusal of the size.
+pub type Estimate = fn(&EstimateCtx, &[&str]) -> std::result::Result<MemoryEstimate, String>;
+
 /// One registered technique.
 pub struct Registration {
     pub name: &'static str,
@@ -153,6 +167,9 @@ pub struct Registration {
     pub check: fn(&[&str]) -> std::result::Result<(), String>,
     /// The device feature the parameters need and `caps` lacks, if any.
     pub needs: fn(&[&str], &Caps) -> Option<String>,
+    /// The GPU memory `build` allocates (targets, per-pixel buffers, readbacks), written beside
+    /// the constructor; the renderer refuses what cannot fit before anything is allocated.
+    pub estimate: Estimate,
     pub build: Build,
 }
 

@@ -99,6 +99,19 @@ pub fn run(a: &InfoArgs) -> Result<()> {
         caps.sub_pixel_precision_bits,
         caps.viewport_sub_pixel_bits
     );
+    let bytes = cbr_render::memory::human_bytes;
+    println!(
+        "  memory: largest device-local heap {}{}, maxMemoryAllocationSize {}, \
+         maxStorageBufferRange {} (renders that cannot fit are refused before allocating)",
+        bytes(caps.device_local_heap_bytes),
+        if caps.unified_memory {
+            " (unified: host-visible memory shares it)"
+        } else {
+            ""
+        },
+        bytes(caps.max_memory_allocation_size),
+        bytes(u64::from(caps.max_storage_buffer_range))
+    );
     println!("\ntechniques (--technique SPEC, bench --techniques; post passes append +PASS):");
     for t in cbr_render::technique::TECHNIQUES {
         let params: Vec<&str> = Vec::new();

@@ -1,6 +1,8 @@
 //! Bad input to every command (render, bench and its sweep file, compare, report, info): one
 //! clear error naming the file and line or the option, exit status 1 (`compare`: 2, its error
-//! status), no panic, and nothing written. More cases: cli.rs, compare_cli.rs.
+//! status), no panic, and nothing written. Renders that cannot fit the device are refused with
+//! the estimate and the device's limit before anything is allocated. More cases: cli.rs,
+//! compare_cli.rs.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -283,6 +285,105 @@ fn bench_refuses_bad_options_and_sweep_files_naming_the_line() {
         c.check(!out.exists(), &format!("{name}: nothing written"));
         let _ = std::fs::remove_dir_all(&out);
     }
+}
+
+#[test]
+fn render_and_bench_refuse_what_cannot_fit_before_allocating() {
+    let mut c = Cases::default();
+    let d = tempfile::tempdir().expect("tempdir");
+    let out = d.path().join("out");
+    // The test device's limits (lavapipe: a 2 GiB heap, 2 GiB per allocation) decide which limit
+    // is named; that one is, with the estimate, before anything is allocated or written.
+    let limit = |c: &mut Cases, o: &Output| {
+        let err = String::from_utf8_lossy(&o.stderr);
+        c.check(
+            ["device-local heap is", "(maxMemoryAllocationSize)"]
+                .iter()
+                .any(|l| err.contains(l)),
+            &format!("no device limit named:\n{err}"),
+        );
+    };
+    let started = std::time::Instant::now();
+    let o = cbr(&[
+        "render",
+        "builtin:demo",
+        "--width",
+        "16384",
+        "--height",
+        "16384",
+        "--frames",
+        "1",
+        "--technique",
+        "ssaa:16",
+        "-o",
+        s(&out),
+    ]);
+    c.fails(
+        &o,
+        1,
+        &[
+            "`ssaa:16` at 16384x16384 needs about ",
+            " GiB of GPU memory",
+            "the largest one `ssaa.accum` 4.0 GiB, more than `",
+            "Nothing was allocated",
+        ],
+    );
+    limit(&mut c, &o);
+    c.check(!out.exists(), "render: nothing written");
+
+    // bench: the reference (native) is refused at this size before anything renders.
+    let bench = |extra: &[&str]| {
+        let mut args = vec!["bench", "builtin:demo", "--warmup", "0", "--frames", "1"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["-o", s(&out)]);
+        cbr(&args)
+    };
+    let o = bench(&[
+        "--width",
+        "16384",
+        "--height",
+        "16384",
+        "--techniques",
+        "ssaa:16",
+    ]);
+    c.fails(
+        &o,
+        1,
+        &[
+            "`native` at 16384x16384 needs about ",
+            "Nothing was allocated",
+        ],
+    );
+    limit(&mut c, &o);
+    c.check(!out.exists(), "bench: nothing written");
+    // A row that cannot fit where the reference can: refused before the reference renders.
+    let o = bench(&[
+        "--width",
+        "5000",
+        "--height",
+        "5000",
+        "--techniques",
+        "msaa:4",
+    ]);
+    c.fails(
+        &o,
+        1,
+        &[
+            "`msaa:4` at 5000x5000 needs about ",
+            "Nothing was allocated",
+        ],
+    );
+    limit(&mut c, &o);
+    // The bench's own check, not a renderer set up after the reference rendered (whose error
+    // says `setting up ...`).
+    let err = String::from_utf8_lossy(&o.stderr);
+    c.check(
+        err.starts_with("error: `msaa:4` at 5000x5000"),
+        &format!("refused before the reference rendered:\n{err}"),
+    );
+    c.check(!out.exists(), "bench row: nothing written");
+    let took = started.elapsed().as_secs();
+    c.check(took < 60, &format!("refusals took {took} s"));
 }
 
 #[test]

@@ -16,6 +16,8 @@ use cbr_gpu::{
 };
 
 use super::{PostBuildCtx, PostFrame, PostPass, PostRegistration};
+use crate::memory::MemoryEstimate;
+use crate::targets::COLOR_FORMAT;
 
 pub const REGISTRATION: PostRegistration = PostRegistration {
     name: "fxaa",
@@ -23,6 +25,12 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
     about: "FXAA 3.11 quality presets 12, 29 (default), 39; luma in display space",
     check: |p| FxaaConfig::parse(p).map(|_| ()),
     geometry: false,
+    estimate: |ctx, _| {
+        let mut e = MemoryEstimate::new();
+        e.image("fxaa.out", COLOR_FORMAT, ctx.width, ctx.height);
+        e.image("fxaa.luma", vk::Format::R32_SFLOAT, ctx.width, ctx.height);
+        e
+    },
     build: |ctx, p, inputs| {
         let c = FxaaConfig::parse(p).map_err(cbr_gpu::GpuError::Other)?;
         Ok(Box::new(Fxaa::new(ctx, c, inputs)?))

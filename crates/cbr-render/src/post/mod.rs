@@ -12,8 +12,9 @@ use cbr_gpu::{
     DescriptorSet, Gpu, Image, ImageDesc, Profiler, Result, Sampler, SetLayout, Shaders, Write,
 };
 
+use crate::memory::MemoryEstimate;
 use crate::targets::COLOR_FORMAT;
-use crate::technique::Geometry;
+use crate::technique::{EstimateCtx, Geometry};
 
 /// What a post pass's constructor gets.
 pub struct PostBuildCtx<'a> {
@@ -107,6 +108,8 @@ pub struct PostRegistration {
     pub check: fn(&[&str]) -> std::result::Result<(), String>,
     /// It reads the technique's geometry (velocity, depth, IDs): temporal passes.
     pub geometry: bool,
+    /// The GPU memory `build` allocates (crate::memory), written beside the constructor.
+    pub estimate: fn(&EstimateCtx, &[&str]) -> MemoryEstimate,
     pub build: PostBuild,
 }
 

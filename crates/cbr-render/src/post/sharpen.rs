@@ -9,6 +9,8 @@ use cbr_gpu::{
 };
 
 use super::{PostBuildCtx, PostFrame, PostPass, PostRegistration};
+use crate::memory::MemoryEstimate;
+use crate::targets::COLOR_FORMAT;
 
 pub const REGISTRATION: PostRegistration = PostRegistration {
     name: "sharpen",
@@ -16,6 +18,11 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
     about: "5-tap unsharp mask on linear HDR colour (AMOUNT 0..4, default 0.5)",
     check: |p| parse(p).map(|_| ()),
     geometry: false,
+    estimate: |ctx, _| {
+        let mut e = MemoryEstimate::new();
+        e.image("sharpen.out", COLOR_FORMAT, ctx.width, ctx.height);
+        e
+    },
     build: |ctx, p, inputs| {
         let amount = parse(p).map_err(cbr_gpu::GpuError::Other)?;
         Ok(Box::new(Sharpen::new(ctx, amount, inputs)?))

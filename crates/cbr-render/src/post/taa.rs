@@ -32,6 +32,8 @@ use cbr_gpu::{
 };
 
 use super::{PostBuildCtx, PostFrame, PostPass, PostRegistration};
+use crate::memory::MemoryEstimate;
+use crate::targets::COLOR_FORMAT;
 use crate::technique::Geometry;
 
 pub const REGISTRATION: PostRegistration = PostRegistration {
@@ -42,6 +44,20 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
             depth, catmull, speed); `inside`: Playdead's INSIDE TAA",
     check: |p| TaaConfig::parse(p).map(|_| ()),
     geometry: true,
+    estimate: |ctx, _| {
+        let mut e = MemoryEstimate::new();
+        for k in 0..2 {
+            e.image(
+                format!("taa.history[{k}]"),
+                COLOR_FORMAT,
+                ctx.width,
+                ctx.height,
+            );
+            let geom = format!("taa.history_geom[{k}]");
+            e.image(geom, vk::Format::R32G32_UINT, ctx.width, ctx.height);
+        }
+        e
+    },
     build: |ctx, p, inputs| {
         let c = TaaConfig::parse(p).map_err(GpuError::Other)?;
         Ok(Box::new(Taa::new(ctx, c, inputs)?))

@@ -12,6 +12,7 @@ use cbr_gpu::{
 };
 
 use crate::layouts::LayoutPlan;
+use crate::memory::MemoryEstimate;
 use crate::scene_pass::layout_id;
 use crate::targets::FrameTargets;
 
@@ -304,6 +305,44 @@ pub struct ResolvePass {
 }
 
 impl ResolvePass {
+    /// What [`ResolvePass::new`] and [`ResolvePass::readbacks`] allocate at `width` x `height`:
+    /// two history slots (colour, geometry), the debug bits and velocity, the copy floor's
+    /// buffers (`bandwidth_floor`), and the readbacks.
+    pub fn estimate(e: &mut MemoryEstimate, settings: &ResolveSettings, width: u32, height: u32) {
+        let (w, h) = (width, height);
+        let color = if settings.f32_history {
+            vk::Format::R32G32B32A32_SFLOAT
+        } else {
+            vk::Format::R16G16B16A16_SFLOAT
+        };
+        for k in 0..2 {
+            e.image(format!("resolve.history[{k}].color"), color, w, h);
+            e.image(
+                format!("resolve.history[{k}].geom"),
+                HISTORY_GEOM_FORMAT,
+                w,
+                h,
+            );
+        }
+        e.image("resolve.debug_bits", vk::Format::R32_UINT, w, h);
+        e.image("resolve.debug_velocity", vk::Format::R32G32_SFLOAT, w, h);
+        if settings.bandwidth_floor {
+            let (read, write) = CopyFloor::bytes(w, h, settings.f32_history);
+            e.storage_buffer("copy_floor.src", read.div_ceil(16) * 16, false);
+            e.storage_buffer("copy_floor.dst", write.div_ceil(16) * 16, false);
+        }
+        e.readback("readback.resolved", color, w, h, 1);
+        e.readback("readback.resolved_geom", HISTORY_GEOM_FORMAT, w, h, 1);
+        e.readback("readback.resolve_debug", vk::Format::R32_UINT, w, h, 1);
+        e.readback(
+            "readback.resolve_velocity",
+            vk::Format::R32G32_SFLOAT,
+            w,
+            h,
+            1,
+        );
+    }
+
     /// `prepass`: the native-resolution ID (RG32UI) and depth images, when the renderer has them.
     pub fn new(
         gpu: &Gpu,

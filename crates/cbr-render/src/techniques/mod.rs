@@ -14,9 +14,10 @@ use cbr_gpu::{Buffer, Cmd, Gpu, Image, PassKind, Profiler, Readback, Result, Sha
 use half::f16;
 
 use crate::gpu_scene::GpuScene;
+use crate::memory::MemoryEstimate;
 use crate::renderer::FrameOutput;
 use crate::scene_pass::{RasterConfig, ScenePass};
-use crate::targets::FrameTargets;
+use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, FrameTargets, ID_FORMAT, VELOCITY_FORMAT};
 
 /// A native-resolution depth + ID pass at the pixel centres, no shading: checkerboard's
 /// `prepass`, and the depth and IDs of `msaa` (whose multisampled targets hold no IDs).
@@ -55,6 +56,15 @@ impl IdPass {
             ids_rb,
             depth_rb,
         })
+    }
+
+    /// What [`IdPass::new`] keeps: the ID and depth targets (colour and velocity are freed as
+    /// soon as they are made, before anything else is allocated) and their readbacks.
+    pub fn estimate(e: &mut MemoryEstimate, w: u32, h: u32) {
+        e.image("id_prepass.ids", ID_FORMAT, w, h);
+        e.image("id_prepass.depth", DEPTH_FORMAT, w, h);
+        e.readback("readback.prepass_ids", ID_FORMAT, w, h, 1);
+        e.readback("readback.prepass_depth", DEPTH_FORMAT, w, h, 1);
     }
 
     /// Records the raster and the copies of its IDs and depth.
@@ -104,6 +114,15 @@ impl LayerReadbacks {
             velocity: Readback::for_image(gpu, "readback.velocity", velocity)?,
             ids: Readback::for_image(gpu, "readback.ids", ids)?,
         })
+    }
+
+    /// What [`LayerReadbacks::new`] allocates for `width` x `height` layers (depth D32 or R32F:
+    /// 4 bytes either way).
+    pub fn estimate(e: &mut MemoryEstimate, width: u32, height: u32) {
+        e.readback("readback.color", COLOR_FORMAT, width, height, 1);
+        e.readback("readback.depth", DEPTH_FORMAT, width, height, 1);
+        e.readback("readback.velocity", VELOCITY_FORMAT, width, height, 1);
+        e.readback("readback.ids", ID_FORMAT, width, height, 1);
     }
 
     /// Records the copies (timed as `readback`).

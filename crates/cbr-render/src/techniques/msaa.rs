@@ -15,6 +15,7 @@ use cbr_gpu::{
 use half::f16;
 
 use super::IdPass;
+use crate::memory::MemoryEstimate;
 use crate::renderer::FrameOutput;
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, VELOCITY_FORMAT};
@@ -28,6 +29,7 @@ pub const REGISTRATION: Registration = Registration {
     layers: &[],
     check: |p| parse(p).map(|_| ()),
     needs,
+    estimate: |ctx, p| Ok(Msaa::estimate(parse(p)?, ctx.width, ctx.height)),
     build: |ctx, p| {
         let c = parse(p).map_err(cbr_gpu::GpuError::Other)?;
         Ok(Box::new(Msaa::new(ctx, c)?))
@@ -107,6 +109,25 @@ pub struct Msaa {
 }
 
 impl Msaa {
+    /// What [`Msaa::new`] allocates: the multisampled colour, velocity and depth, the 1x ID
+    /// pass, the resolved colour and velocity and their readbacks.
+    pub fn estimate(c: MsaaConfig, w: u32, h: u32) -> MemoryEstimate {
+        let mut e = MemoryEstimate::new();
+        for (name, format) in [
+            ("msaa.color", COLOR_FORMAT),
+            ("msaa.velocity", VELOCITY_FORMAT),
+            ("msaa.depth", DEPTH_FORMAT),
+        ] {
+            e.image_array(name, format, w, h, 1, c.samples);
+        }
+        IdPass::estimate(&mut e, w, h);
+        e.image("msaa.out_color", COLOR_FORMAT, w, h);
+        e.image("msaa.out_velocity", VELOCITY_FORMAT, w, h);
+        e.readback("readback.msaa.color", COLOR_FORMAT, w, h, 1);
+        e.readback("readback.msaa.velocity", VELOCITY_FORMAT, w, h, 1);
+        e
+    }
+
     pub fn new(ctx: &BuildCtx, c: MsaaConfig) -> Result<Msaa> {
         let (gpu, w, h) = (ctx.gpu, ctx.width, ctx.height);
         let config = RasterConfig {

@@ -4,6 +4,7 @@
 use cbr_gpu::{Image, Result};
 
 use super::{LayerReadbacks, no_params};
+use crate::memory::MemoryEstimate;
 use crate::renderer::FrameOutput;
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::FrameTargets;
@@ -16,6 +17,7 @@ pub const REGISTRATION: Registration = Registration {
     layers: &[],
     check: |p| no_params("native", p),
     needs: |_, _| None,
+    estimate: |ctx, _| Ok(Native::estimate(ctx.width, ctx.height)),
     build: |ctx, _| Ok(Box::new(Native::new(ctx)?)),
 };
 
@@ -27,6 +29,14 @@ pub struct Native {
 }
 
 impl Native {
+    /// What [`Native::new`] allocates: the four targets and their readbacks.
+    pub fn estimate(w: u32, h: u32) -> MemoryEstimate {
+        let mut e = MemoryEstimate::new();
+        FrameTargets::estimate(&mut e, "native", w, h, 1, 1);
+        LayerReadbacks::estimate(&mut e, w, h);
+        e
+    }
+
     pub fn new(ctx: &BuildCtx) -> Result<Native> {
         let (w, h) = (ctx.width, ctx.height);
         let config = RasterConfig::native(w, h);

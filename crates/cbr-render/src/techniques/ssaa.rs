@@ -17,6 +17,7 @@ use cbr_scene::rng::SplitMix;
 use half::f16;
 
 use super::LayerReadbacks;
+use crate::memory::MemoryEstimate;
 use crate::renderer::{Coverage, FrameOutput};
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::{COLOR_FORMAT, FrameTargets};
@@ -29,6 +30,7 @@ pub const REGISTRATION: Registration = Registration {
     layers: &["coverage"],
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
+    estimate: |ctx, _| Ok(Ssaa::estimate(ctx.width, ctx.height)),
     build: |ctx, p| {
         let c = parse(p).map_err(cbr_gpu::GpuError::Other)?;
         Ok(Box::new(Ssaa::new(ctx, c)?))
@@ -112,6 +114,20 @@ pub struct Ssaa {
 }
 
 impl Ssaa {
+    /// What [`Ssaa::new`] allocates, whatever N: native's targets and readbacks, the fp32
+    /// accumulation, coverage and output images, and the readbacks of the last two.
+    pub fn estimate(w: u32, h: u32) -> MemoryEstimate {
+        let mut e = MemoryEstimate::new();
+        FrameTargets::estimate(&mut e, "ssaa", w, h, 1, 1);
+        e.image("ssaa.accum", vk::Format::R32G32B32A32_SFLOAT, w, h);
+        e.image("ssaa.aux", vk::Format::R32G32_UINT, w, h);
+        e.image("ssaa.out", COLOR_FORMAT, w, h);
+        LayerReadbacks::estimate(&mut e, w, h);
+        e.readback("readback.ssaa.out", COLOR_FORMAT, w, h, 1);
+        e.readback("readback.ssaa.aux", vk::Format::R32G32_UINT, w, h, 1);
+        e
+    }
+
     pub fn new(ctx: &BuildCtx, c: SsaaConfig) -> Result<Ssaa> {
         let (gpu, w, h) = (ctx.gpu, ctx.width, ctx.height);
         let config = RasterConfig::native(w, h);

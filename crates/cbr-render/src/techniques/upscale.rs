@@ -8,6 +8,7 @@ use cbr_gpu::{
 
 use super::LayerReadbacks;
 use crate::gpu_scene::RasterUniforms;
+use crate::memory::MemoryEstimate;
 use crate::renderer::FrameOutput;
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::{COLOR_FORMAT, FrameTargets, ID_FORMAT, VELOCITY_FORMAT};
@@ -21,6 +22,7 @@ pub const REGISTRATION: Registration = Registration {
     layers: &[],
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
+    estimate: |ctx, _| Ok(Upscale::estimate(ctx.width, ctx.height)),
     build: |ctx, p| {
         let filter = parse(p).map_err(cbr_gpu::GpuError::Other)?;
         Ok(Box::new(Upscale::new(ctx, filter)?))
@@ -90,6 +92,18 @@ pub struct UpscalePass {
 }
 
 impl UpscalePass {
+    /// What [`UpscalePass::new`] allocates: the four full-resolution outputs.
+    pub fn estimate(e: &mut MemoryEstimate, width: u32, height: u32) {
+        for (name, format) in [
+            ("upscale.color", COLOR_FORMAT),
+            ("upscale.velocity", VELOCITY_FORMAT),
+            ("upscale.ids", ID_FORMAT),
+            ("upscale.depth", vk::Format::R32_SFLOAT),
+        ] {
+            e.image(name, format, width, height);
+        }
+    }
+
     pub fn new(
         gpu: &Gpu,
         shaders: &Shaders,
@@ -190,6 +204,17 @@ pub struct Upscale {
 }
 
 impl Upscale {
+    /// What [`Upscale::new`] allocates: the low-resolution targets, the upscaled layers and
+    /// their readbacks.
+    pub fn estimate(width: u32, height: u32) -> MemoryEstimate {
+        let mut e = MemoryEstimate::new();
+        let (lw, lh) = low_resolution(width, height);
+        FrameTargets::estimate(&mut e, "upscale.low", lw, lh, 1, 1);
+        UpscalePass::estimate(&mut e, width, height);
+        LayerReadbacks::estimate(&mut e, width, height);
+        e
+    }
+
     pub fn new(ctx: &BuildCtx, filter: UpscaleFilter) -> Result<Upscale> {
         let (lw, lh) = low_resolution(ctx.width, ctx.height);
         let config = RasterConfig::native(lw, lh);

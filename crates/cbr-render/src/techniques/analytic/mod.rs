@@ -23,6 +23,7 @@ use cbr_gpu::{
 use half::f16;
 
 use super::linear_depths;
+use crate::memory::MemoryEstimate;
 use crate::renderer::{AnalyticLayers, Coverage, FrameOutput};
 use crate::scene_pass::{self, BINDINGS as SCENE_BINDINGS, MATERIAL_BINDINGS};
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, FrameTargets, ID_FORMAT, VELOCITY_FORMAT};
@@ -36,6 +37,16 @@ pub const REGISTRATION: Registration = Registration {
     layers: &["coverage", "analytic"],
     check: |p| parse(p).map(|_| ()),
     needs,
+    estimate: |ctx, p| {
+        let c = parse(p)?;
+        let frags = plan_lists(
+            ctx.width,
+            ctx.height,
+            c.frags,
+            ctx.caps.max_storage_buffer_range,
+        )?;
+        Ok(Analytic::estimate(frags, ctx.width, ctx.height))
+    },
     build: |ctx, p| {
         let c = parse(p).map_err(GpuError::Other)?;
         Ok(Box::new(Analytic::new(ctx, c)?))
@@ -204,6 +215,40 @@ pub struct Analytic {
 }
 
 impl Analytic {
+    /// What [`Analytic::new`] keeps with `frags` fragments per pixel: the keys and the two
+    /// halves of the slots (K x 8 bytes per pixel each), the fragment counts and tails, native's
+    /// velocity, ID and depth targets (its colour target is freed as soon as it is made), the
+    /// resolved colour, coverage and counts, and six readbacks.
+    pub fn estimate(frags: u32, w: u32, h: u32) -> MemoryEstimate {
+        let mut e = MemoryEstimate::new();
+        let px = u64::from(w) * u64::from(h);
+        let kept = px * u64::from(frags);
+        e.storage_buffer("analytic.keys", kept * KEY_BYTES, false);
+        e.storage_buffer("analytic.slots", kept * HALF_SLOT_BYTES, false);
+        e.storage_buffer("analytic.colors", kept * HALF_SLOT_BYTES, false);
+        e.storage_buffer("analytic.counts_buffer", px * 4, false);
+        e.storage_buffer("analytic.tail", px * TAIL_BYTES, false);
+        e.image("analytic.velocity", VELOCITY_FORMAT, w, h);
+        e.image("analytic.ids", ID_FORMAT, w, h);
+        e.image("analytic.depth", DEPTH_FORMAT, w, h);
+        let images = [
+            ("color", COLOR_FORMAT),
+            ("coverage", COVERAGE_FORMAT),
+            ("counts", COUNTS_FORMAT),
+        ];
+        for (name, format) in images {
+            e.image(format!("analytic.{name}"), format, w, h);
+        }
+        for (name, format) in images.into_iter().chain([
+            ("depth", DEPTH_FORMAT),
+            ("velocity", VELOCITY_FORMAT),
+            ("ids", ID_FORMAT),
+        ]) {
+            e.readback(format!("readback.analytic.{name}"), format, w, h, 1);
+        }
+        e
+    }
+
     pub fn new(ctx: &BuildCtx, c: AnalyticConfig) -> Result<Analytic> {
         let (gpu, w, h) = (ctx.gpu, ctx.width, ctx.height);
         let frags = plan_lists(w, h, c.frags, gpu.caps().max_storage_buffer_range)

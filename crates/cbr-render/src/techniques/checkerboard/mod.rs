@@ -16,8 +16,9 @@ use super::{IdPass, linear_depths};
 use crate::gpu_scene::{FrameView, RasterUniforms};
 use crate::gpu_types::{FLAG_LOD_GRADIENTS, FLAG_PARITY};
 use crate::layouts::LayoutPlan;
+use crate::memory::MemoryEstimate;
 use crate::renderer::{FrameOutput, ResolveOutput};
-use crate::resolve::{ResolveFrame, ResolvePass, ResolveReadbacks};
+use crate::resolve::{ResolveFrame, ResolvePass, ResolveReadbacks, ResolveSettings};
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::FrameTargets;
 use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique};
@@ -45,6 +46,15 @@ pub const REGISTRATION: Registration = Registration {
         }
         None
     },
+    estimate: |ctx, p| {
+        let c = CheckerboardConfig::parse(p)?;
+        Ok(Checkerboard::estimate(
+            c,
+            ctx.width,
+            ctx.height,
+            ctx.instrument,
+        ))
+    },
     build: |ctx, p| {
         let c = CheckerboardConfig::parse(p).map_err(cbr_gpu::GpuError::Other)?;
         Ok(Box::new(Checkerboard::new(ctx, c)?))
@@ -68,6 +78,37 @@ pub struct Checkerboard {
 }
 
 impl Checkerboard {
+    /// What [`Checkerboard::new`] allocates: the layout's raster targets (layers, samples), the
+    /// prepass, the unpacked frame, and the resolve with its readbacks (and its copy floor when
+    /// `instrument`).
+    pub fn estimate(
+        config: CheckerboardConfig,
+        w: u32,
+        h: u32,
+        instrument: bool,
+    ) -> MemoryEstimate {
+        let mut e = MemoryEstimate::new();
+        let mut plan = LayoutPlan::new(config.layout, w, h, 0);
+        if config.locations {
+            plan = plan.with_sample_locations();
+        }
+        let (tw, th) = plan.target;
+        let prefix = format!("checkerboard.{}", config.layout.name());
+        FrameTargets::estimate(&mut e, &prefix, tw, th, plan.layers, plan.samples);
+        if config.prepass {
+            IdPass::estimate(&mut e, w, h);
+        }
+        UnpackPass::estimate(&mut e, &plan);
+        if let Some(rs) = &config.resolve {
+            let rs = ResolveSettings {
+                bandwidth_floor: instrument,
+                ..*rs
+            };
+            ResolvePass::estimate(&mut e, &rs, w, h);
+        }
+        e
+    }
+
     pub fn new(ctx: &BuildCtx, config: CheckerboardConfig) -> Result<Checkerboard> {
         let (gpu, shaders, w, h) = (ctx.gpu, ctx.shaders, ctx.width, ctx.height);
         let layout = config.layout;

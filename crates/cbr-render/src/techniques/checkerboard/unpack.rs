@@ -8,6 +8,7 @@ use cbr_gpu::{
 };
 
 use crate::layouts::LayoutPlan;
+use crate::memory::MemoryEstimate;
 use crate::scene_pass::layout_id;
 use crate::targets::FrameTargets;
 
@@ -41,6 +42,15 @@ pub struct UnpackPass {
 }
 
 impl UnpackPass {
+    /// What [`UnpackPass::new`] allocates: one host-visible `UnpackedPixel` per full-resolution
+    /// pixel, bound as a storage buffer.
+    pub fn estimate(e: &mut MemoryEstimate, plan: &LayoutPlan) {
+        let bytes = u64::from(plan.width)
+            * u64::from(plan.height)
+            * std::mem::size_of::<UnpackedPixel>() as u64;
+        e.storage_buffer("unpack.out", bytes, true);
+    }
+
     pub fn new(
         gpu: &Gpu,
         shaders: &Shaders,

@@ -13,6 +13,7 @@ pub use resolve::{InterlacedFrame, InterlacedResolve, InterlacedSettings, Resolv
 
 use super::linear_depths;
 use crate::gpu_types::FLAG_PARITY;
+use crate::memory::MemoryEstimate;
 use crate::renderer::{FrameOutput, ResolveOutput};
 use crate::scene_pass::{LAYOUT_INTERLACED, RasterConfig, ScenePass};
 use crate::targets::FrameTargets;
@@ -26,6 +27,7 @@ pub const REGISTRATION: Registration = Registration {
     layers: &["mask", "resolve_* (debug)"],
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
+    estimate: |ctx, p| Ok(Interlaced::estimate(&parse(p)?, ctx.width, ctx.height)),
     build: |ctx, p| {
         let s = parse(p).map_err(cbr_gpu::GpuError::Other)?;
         Ok(Box::new(Interlaced::new(ctx, s)?))
@@ -88,6 +90,15 @@ pub struct Interlaced {
 }
 
 impl Interlaced {
+    /// What [`Interlaced::new`] allocates: native's targets, the resolve's two slots and debug
+    /// bits, and the readbacks.
+    pub fn estimate(settings: &InterlacedSettings, w: u32, h: u32) -> MemoryEstimate {
+        let mut e = MemoryEstimate::new();
+        FrameTargets::estimate(&mut e, "interlaced", w, h, 1, 1);
+        InterlacedResolve::estimate(&mut e, settings, w, h);
+        e
+    }
+
     pub fn new(ctx: &BuildCtx, settings: InterlacedSettings) -> Result<Interlaced> {
         let (w, h) = (ctx.width, ctx.height);
         // Native's targets, viewport and samples; the layout only demotes rows.

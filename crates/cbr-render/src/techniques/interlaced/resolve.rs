@@ -11,6 +11,7 @@ use cbr_gpu::{
 };
 use half::f16;
 
+use crate::memory::MemoryEstimate;
 use crate::targets::{COLOR_FORMAT, FrameTargets, ID_FORMAT, VELOCITY_FORMAT};
 
 /// The resolved reverse-Z depth: a storage image, so R32F rather than a depth format.
@@ -168,6 +169,30 @@ pub struct InterlacedResolve {
 }
 
 impl InterlacedResolve {
+    /// What [`InterlacedResolve::new`] and [`InterlacedResolve::readbacks`] allocate at
+    /// `w` x `h`: two slots of colour, velocity, IDs and depth, the debug bits, one slot's
+    /// readbacks (and the debug bits' with `debug`).
+    pub fn estimate(e: &mut MemoryEstimate, settings: &InterlacedSettings, w: u32, h: u32) {
+        let layers = [
+            ("color", COLOR_FORMAT),
+            ("velocity", VELOCITY_FORMAT),
+            ("ids", ID_FORMAT),
+            ("depth", RESOLVED_DEPTH_FORMAT),
+        ];
+        for k in 0..2 {
+            for (name, format) in layers {
+                e.image(format!("interlaced.resolved[{k}].{name}"), format, w, h);
+            }
+        }
+        e.image("interlaced.debug_bits", vk::Format::R32_UINT, w, h);
+        for (name, format) in layers {
+            e.readback(format!("readback.{name}"), format, w, h, 1);
+        }
+        if settings.debug {
+            e.readback("readback.interlaced_debug", vk::Format::R32_UINT, w, h, 1);
+        }
+    }
+
     /// The resolve of `targets` (a full-resolution raster).
     pub fn new(
         gpu: &Gpu,
