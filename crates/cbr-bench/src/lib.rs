@@ -8,6 +8,7 @@
 #![forbid(unsafe_code)]
 #![cfg_attr(not(test), deny(clippy::unwrap_used))]
 
+pub mod attribution;
 pub mod config;
 pub mod measure;
 pub mod output;
@@ -382,6 +383,7 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
                     "flicker_mean": opt(mean(&m.flicker)),
                     "change_mean": opt(mean(&m.change)),
                     "ref_change_mean": opt(mean(&m.ref_change)),
+                    "attribution": m.attribution.as_ref().map(|a| a.to_json()),
                     "per_frame": m.errors,
                 })},
             }));

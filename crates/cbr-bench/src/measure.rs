@@ -113,6 +113,8 @@ pub struct Measured {
     pub ref_change: Vec<f64>,
     /// The reference only: the native raster that gave the IDs of the frames it skipped.
     pub id_stand_in: Option<IdStandIn>,
+    /// Error by pixel class, for resolves that write their debug bits (`:debug`).
+    pub attribution: Option<crate::attribution::Attribution>,
 }
 
 pub fn mean(v: &[f64]) -> Option<f64> {
@@ -304,6 +306,25 @@ fn compare_frame(
             .unwrap_or(f64::NAN)
     };
     let (flip_edge, flip_disocc) = (masked(&rf.edge), masked(&rf.disocc));
+    let bits = out.resolve.as_ref().and_then(|r| r.debug_bits.as_ref());
+    if let (Some(bits), Some(map)) = (bits, map.as_ref()) {
+        // Per-pixel error for the attribution: mean |display(test) - display(ref)| over RGB.
+        let d = &options.display;
+        let err: Vec<f32> = out
+            .color
+            .chunks(4)
+            .zip(rf.color.chunks(4))
+            .map(|(t, r)| {
+                (0..3)
+                    .map(|k| (d.apply(t[k].to_f32()) - d.apply(r[k].to_f32())).abs())
+                    .sum::<f32>()
+                    / 3.0
+            })
+            .collect();
+        m.attribution
+            .get_or_insert_default()
+            .add(bits, &err, &map.data, &rf.disocc);
+    }
     let change = stability.next(&ri, &ti, options)?;
     let v = |k| p.value(k).unwrap_or(f64::NAN);
     let flip_median = p.flip.map(|x| x.weighted_median).unwrap_or(f64::NAN);

@@ -2,7 +2,8 @@
 //! (docs/bench-and-report.md): provenance, a sortable summary with the best values marked,
 //! speed-vs-error charts with the Pareto front, per scene a synchronised zoom/pan viewer
 //! (reference, techniques, FLIP maps; slider, hold-to-flip, keys 1-9 and R, pixel readout),
-//! worst-FLIP crops, timing bars and per-frame error curves, and links to the raw files. Images
+//! worst-FLIP crops, the error by pixel class (`attribution`), timing bars and per-frame error
+//! curves, and links to the raw files. Images
 //! are embedded as data URIs, or copied next to the report with `assets_dir`.
 //!
 //! Modules by what they draw: `provenance`, `summary` (the sortable table), `chart` (speed
@@ -14,6 +15,7 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
+mod attribution;
 mod bench;
 mod chart;
 mod crops;
@@ -82,6 +84,7 @@ fn scene_section(
     viewer::viewer(html, &panels, *w, *h, &windows);
     viewer::colour_bar(html, &ctx.opts.colormap);
     crops::crops(html, g.reference, &windows, &panels.panels, *w, *h);
+    attribution::attribution(html, &g.rows, g.reference);
     html.push_str("<h3>GPU time per pass (medians)</h3>\n");
     timing::timing_bars(html, &g.rows);
     let _ = writeln!(html, "<h3>FLIP per frame vs {}</h3>", esc(g.reference));

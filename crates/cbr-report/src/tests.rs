@@ -523,3 +523,35 @@ fn temporal_columns_appear_with_their_window_and_values() {
     ]);
     assert!(html.contains(">disocclusion FLIP (k = 2, 4)<br>"));
 }
+
+#[test]
+fn attribution_panel_appears_with_its_shares() {
+    let plain = report(&[("a", fixture_json(true, "ssaa:16"))]);
+    assert!(!plain.contains("Error by pixel class"));
+    let mut json = fixture_json(true, "ssaa:16");
+    let class = |p: f64, e: f64| serde_json::json!({"pixels": p, "error": e, "error_mean": 0.02, "flip_mean": 0.1});
+    for r in json["rows"].as_array_mut().unwrap() {
+        if r["config"] == "checkerboard:rotated:ours" {
+            r["error"]["attribution"] = serde_json::json!({
+                "rendered": class(0.5, 0.25), "history": class(0.4, 0.5),
+                "clamped_history": class(0.05, 0.125), "rejected_id": class(0.05, 0.125),
+                "rejected_depth": class(0.0, 0.0), "spatial": class(0.0, 0.0),
+                "disoccluded": class(0.1, 0.3),
+            });
+        }
+    }
+    let html = report(&[("a", json)]);
+    assert!(html.contains("Error by pixel class vs ssaa:16"), "no panel");
+    assert!(
+        html.contains("history: 50.0% of the error"),
+        "no bar for history's error share"
+    );
+    assert!(
+        html.contains("<td>40.0% / 50.0% / 0.0200</td>"),
+        "no table cell"
+    );
+    assert!(
+        html.contains("<td>10.0% / 30.0% / 0.0200</td>"),
+        "no disoccluded cell"
+    );
+}
