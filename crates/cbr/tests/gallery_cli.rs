@@ -56,7 +56,10 @@ fn bad_builtin_names_are_one_clear_error() {
         let o = cbr(&["render", scene, "--frames", "1", "-o", s(&out)]);
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(1), "{scene}: {err}");
-        assert!(err.starts_with("error: ") && err.contains(expect), "{scene}: {err}");
+        assert!(
+            err.starts_with("error: ") && err.contains(expect),
+            "{scene}: {err}"
+        );
         assert!(!err.contains("panicked"), "{scene}: {err}");
         assert!(!out.exists(), "{scene}: wrote {}", out.display());
     }
@@ -162,7 +165,10 @@ fn montage_refuses_bad_input_and_writes_nothing() {
         let o = cbr(&full);
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
-        assert!(err.starts_with("error: ") && err.contains(expect), "{args:?}: {err}");
+        assert!(
+            err.starts_with("error: ") && err.contains(expect),
+            "{args:?}: {err}"
+        );
         assert!(!err.contains("panicked"), "{args:?}: {err}");
         assert!(!strip.exists(), "{args:?}: wrote the strip");
     }
