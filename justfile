@@ -59,6 +59,11 @@ bench-analytic: setup
     CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench scenes/sibenik.toml --width 160 --height 90 --warmup 0 --frames 1 --reference ssaa:32 --time-cached-rows --techniques native,msaa:4,ssaa:16,analytic,analytic:seed -o {{out}}/bench/analytic/sibenik
     python3 scripts/analytic-table.py {{out}}/bench/analytic/demo/bench.json {{out}}/bench/analytic/demo-untextured/bench.json {{out}}/bench/analytic/sibenik/bench.json
 
+# Instructions per resolved pixel of each resolve mode's CPU reference under callgrind: a cost
+# figure that does not move with the machine's load (docs/resolve.md).
+resolve-cost:
+    scripts/resolve-cost.sh
+
 # The hard-case gallery (docs/hard-cases.md): every technique on every built-in hard case
 # (`cbr info` lists them) at 320x180 against ssaa:16 (cached in out/cache; ~25 min cold on 2
 # cores), strips by `cbr montage` into docs/images/hard-cases/.
