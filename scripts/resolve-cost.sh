@@ -3,6 +3,7 @@
 # beside the noisy GPU times; docs/resolve.md): the resolve_cost example under callgrind, counting
 # only its `measured` function (4 frames of 256x256 resolved against their history).
 set -euo pipefail
+command -v valgrind >/dev/null || { echo "error: resolve-cost needs valgrind (apt-get install valgrind)" >&2; exit 1; }
 cargo build --release -p cbr-render --example resolve_cost
 bin=target/release/examples/resolve_cost
 printf '| mode | instructions (4 x 256x256 px) | per resolved pixel |\n|---|---|---|\n'
