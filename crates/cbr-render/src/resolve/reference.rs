@@ -458,7 +458,8 @@ impl Ctx<'_> {
             }
             ResolveMode::Ours => {
                 let (use_ids, use_depth, use_v) = (a.ids, a.depth, a.velocity);
-                let mut cand: Vec<usize> = Vec::with_capacity(4);
+                // At most four candidates, on the stack (no allocation per pixel: resolve-cost counts this).
+                let (mut cand, mut nc) = ([0usize; 4], 0usize);
                 if own {
                     let mut best: Option<usize> = None;
                     let mut best_diff = 0.0f32;
@@ -477,16 +478,20 @@ impl Ctx<'_> {
                             best_diff = dd;
                         }
                     }
-                    cand.push(best.unwrap_or(0));
+                    cand[nc] = best.unwrap_or(0);
+                    nc += 1;
                 } else if !use_ids && !use_depth {
-                    cand.push(partner);
+                    cand[nc] = partner;
+                    nc += 1;
                 } else if !use_ids {
-                    cand.push(o[0]);
+                    cand[nc] = o[0];
+                    nc += 1;
                 } else {
                     for (i, &by_depth) in o.iter().enumerate() {
                         let k = if use_depth { by_depth } else { i };
-                        if !cand.iter().any(|&c| n[c].ids[0] == n[k].ids[0]) {
-                            cand.push(k);
+                        if !cand[..nc].iter().any(|&c| n[c].ids[0] == n[k].ids[0]) {
+                            cand[nc] = k;
+                            nc += 1;
                         }
                     }
                 }
@@ -509,7 +514,7 @@ impl Ctx<'_> {
                     }
                 }
                 if !self.reset && found.is_none() {
-                    for &k in &cand {
+                    for &k in &cand[..nc] {
                         let s = n[k];
                         let v = if use_v { s.v } else { [0.0; 2] };
                         let id = if own { own_id } else { s.ids[0] };
