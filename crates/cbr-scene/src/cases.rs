@@ -5,7 +5,9 @@
 use glam::{Vec2, Vec3};
 
 use crate::camera::{CameraKey, CameraPath};
-use crate::procedural::{MeshBuilder, leaf_texture, texture};
+use crate::procedural::{
+    MeshBuilder, bricks_texture, checker_texture, leaf_texture, stripes_texture, texture,
+};
 use crate::rng::SplitMix;
 use crate::scene::{
     AlphaSource, DirLight, LoadStats, Material, Motion, Object, PointLight, Scene, Settings,
@@ -139,39 +141,6 @@ fn mat(name: &str, kd: [f32; 3], tex: Option<u32>) -> Material {
     m
 }
 
-fn checker(name: &str) -> Texture {
-    texture(name, 256, true, |x, y| {
-        let v = if ((x / 16) + (y / 16)) % 2 == 0 {
-            225
-        } else {
-            35
-        };
-        [v, v, v, 255]
-    })
-}
-
-fn bricks() -> Texture {
-    texture("bricks", 128, true, |x, y| {
-        let row = y / 16;
-        let xs = x + if row % 2 == 0 { 0 } else { 16 };
-        if y % 16 < 2 || xs % 32 < 2 {
-            [200, 200, 190, 255]
-        } else {
-            [150, 60 + ((row * 17) % 30) as u8, 45, 255]
-        }
-    })
-}
-
-fn stripes() -> Texture {
-    texture("stripes", 128, true, |x, _| {
-        if (x / 8) % 2 == 0 {
-            [230, 80, 40, 255]
-        } else {
-            [240, 220, 200, 255]
-        }
-    })
-}
-
 /// A square ground plane of half-side `s` at y = 0, UVs in units of `uv_metres`.
 fn ground(s: f32, uv_metres: f32) -> MeshBuilder {
     let mut g = MeshBuilder::default();
@@ -289,32 +258,10 @@ fn wires() -> Scene {
     let metal = p.material(metal);
     p.object(ground(100.0, 1.0), "ground", grey);
     let mut w = MeshBuilder::default();
-    w.cuboid(Vec3::new(-6.1, 0.0, -8.1), Vec3::new(-5.9, 5.0, -7.9), 1.0);
-    w.cuboid(Vec3::new(5.9, 0.0, -8.1), Vec3::new(6.1, 5.5, -7.9), 1.0);
-    for (k, t) in [0.02f32, 0.012, 0.008, 0.006, 0.004]
-        .into_iter()
-        .enumerate()
-    {
-        let y = 3.4 + 0.35 * k as f32;
-        w.beam(Vec3::new(-6.0, y, -8.0), Vec3::new(6.0, y + 0.45, -8.0), t);
-    }
+    w.poles_and_wires();
     p.object(w, "wires", metal);
     let mut f = MeshBuilder::default();
-    for i in 0..90 {
-        let x = -6.0 + 0.12 * i as f32;
-        f.cuboid(
-            Vec3::new(x, 0.0, -3.0),
-            Vec3::new(x + 0.03, 1.2, -2.97),
-            1.0,
-        );
-    }
-    for y in [0.3f32, 0.95] {
-        f.cuboid(
-            Vec3::new(-6.0, y, -3.03),
-            Vec3::new(4.8, y + 0.06, -3.0),
-            1.0,
-        );
-    }
+    f.fence(-6.0, 90, 4.8);
     p.object(f, "fence", metal);
     p.keys = vec![
         key(0.0, [-1.0, 1.7, 4.0], [0.0, 2.6, -8.0], 50.0),
@@ -325,7 +272,7 @@ fn wires() -> Scene {
 
 fn horizon() -> Scene {
     let mut p = Parts::new("horizon");
-    let t = p.texture(checker("checker"));
+    let t = p.texture(checker_texture("checker"));
     let m = p.material(mat("ground", [1.0; 3], Some(t)));
     // 0.25 m checks (16 texels per check, 256 texels per 4 m) over 2 km.
     p.object(ground(1000.0, 4.0), "ground", m);
@@ -347,30 +294,8 @@ fn foliage() -> Scene {
     };
     let m = p.material(m);
     p.object(ground(50.0, 1.0), "ground", g);
-    let mut rng = SplitMix(11);
     let mut cards = MeshBuilder::default();
-    for _ in 0..24 {
-        let c = Vec3::new(
-            -4.0 + 8.0 * rng.next_f32(),
-            0.0,
-            -6.0 + 6.0 * rng.next_f32(),
-        );
-        let h = 1.0 + 1.2 * rng.next_f32();
-        let a0 = rng.next_f32() * std::f32::consts::PI;
-        for k in 0..3 {
-            let a = a0 + k as f32 * std::f32::consts::FRAC_PI_3;
-            let d = Vec3::new(a.cos(), 0.0, a.sin()) * (h * 0.5);
-            cards.quad(
-                [c - d, c + d, c + d + Vec3::Y * h, c - d + Vec3::Y * h],
-                [
-                    Vec2::new(0.0, 1.0),
-                    Vec2::new(1.0, 1.0),
-                    Vec2::new(1.0, 0.0),
-                    Vec2::new(0.0, 0.0),
-                ],
-            );
-        }
-    }
+    cards.foliage_cards(11, 24, Vec2::new(-4.0, -6.0), Vec2::new(8.0, 6.0));
     p.object(cards, "foliage", m);
     p.keys = vec![
         key(0.0, [-2.5, 1.5, 4.0], [0.0, 0.9, -3.0], 50.0),
@@ -381,8 +306,8 @@ fn foliage() -> Scene {
 
 fn spinner() -> Scene {
     let mut p = Parts::new("spinner");
-    let st = p.texture(stripes());
-    let br = p.texture(bricks());
+    let st = p.texture(stripes_texture("stripes"));
+    let br = p.texture(bricks_texture("bricks"));
     let mut m = mat("spinner", [1.0; 3], Some(st));
     (m.ks, m.ns) = ([0.9; 3], 400.0);
     let spinner = p.material(m);
@@ -394,18 +319,7 @@ fn spinner() -> Scene {
     p.object(w, "wall", wall);
     let centre = Vec3::new(0.0, 1.3, -2.0);
     let mut t = MeshBuilder::default();
-    t.surface(
-        96,
-        32,
-        |u, v| {
-            let (a, b) = (u * std::f32::consts::TAU, v * std::f32::consts::TAU);
-            let ring = Vec3::new(a.cos(), 0.0, a.sin());
-            let n = ring * b.cos() + Vec3::Y * b.sin();
-            let rot = |q: Vec3| Vec3::new(q.x, q.z, q.y);
-            (centre + rot(ring * 0.8 + n * 0.25), rot(n))
-        },
-        Vec2::new(8.0, 1.0),
-    );
+    t.standing_torus(centre);
     let i = p.object(t, "spinner", spinner);
     p.motions = vec![spin("spinner", vec![i], centre, [0.0, 1.0, 0.0], 1.5)];
     p.keys = vec![key(0.0, [0.0, 1.5, 3.0], [0.0, 1.3, -2.0], 50.0)];
@@ -508,9 +422,9 @@ fn slivers() -> Scene {
 /// relative to each object's f64 `origin`).
 pub fn far(distance: f64) -> Scene {
     let mut p = Parts::new("far");
-    let ct = p.texture(checker("checker"));
-    let bt = p.texture(bricks());
-    let st = p.texture(stripes());
+    let ct = p.texture(checker_texture("checker"));
+    let bt = p.texture(bricks_texture("bricks"));
+    let st = p.texture(stripes_texture("stripes"));
     let g = p.material(mat("ground", [1.0; 3], Some(ct)));
     let b = p.material(mat("box", [1.0; 3], Some(bt)));
     let mut s = mat("ball", [1.0; 3], Some(st));
@@ -593,7 +507,7 @@ fn thin_motion() -> Scene {
     let mut metal = mat("metal", [0.7, 0.7, 0.75], None);
     (metal.ks, metal.ns) = ([0.4; 3], 64.0);
     let metal = p.material(metal);
-    let br = p.texture(bricks());
+    let br = p.texture(bricks_texture("bricks"));
     let wall = p.material(mat("wall", [1.0; 3], Some(br)));
     let mut w = MeshBuilder::default();
     w.cuboid(Vec3::new(-5.0, 0.0, -3.5), Vec3::new(5.0, 4.0, -3.0), 1.0);

@@ -221,29 +221,32 @@ pub(crate) fn leaf_texture(seed: u64) -> Texture {
     })
 }
 
-pub fn demo() -> Scene {
-    let mut textures = Vec::new();
-    let mut add_tex = |t: Texture| {
-        textures.push(t);
-        textures.len() as u32 - 1
-    };
-    let checker = add_tex(texture("demo.checker", 256, true, |x, y| {
+/// 0.25 m checks: 16-texel squares of a 256-texel sRGB texture (4 m per UV unit).
+pub(crate) fn checker_texture(name: &str) -> Texture {
+    texture(name, 256, true, |x, y| {
         let v = if ((x / 16) + (y / 16)) % 2 == 0 {
             225
         } else {
             35
         };
         [v, v, v, 255]
-    }));
-    let leaves = add_tex(leaf_texture(7));
-    let stripes = add_tex(texture("demo.stripes", 128, true, |x, _| {
+    })
+}
+
+/// Orange and cream stripes, 8 texels wide.
+pub(crate) fn stripes_texture(name: &str) -> Texture {
+    texture(name, 128, true, |x, _| {
         if (x / 8) % 2 == 0 {
             [230, 80, 40, 255]
         } else {
             [240, 220, 200, 255]
         }
-    }));
-    let bricks = add_tex(texture("demo.bricks", 128, true, |x, y| {
+    })
+}
+
+/// Running-bond bricks with light mortar.
+pub(crate) fn bricks_texture(name: &str) -> Texture {
+    texture(name, 128, true, |x, y| {
         let row = y / 16;
         let xs = x + if row % 2 == 0 { 0 } else { 16 };
         if y % 16 < 2 || xs % 32 < 2 {
@@ -251,7 +254,99 @@ pub fn demo() -> Scene {
         } else {
             [150, 60 + ((row * 17) % 30) as u8, 45, 255]
         }
-    }));
+    })
+}
+
+impl MeshBuilder {
+    /// Two poles 12 m apart at z = -8 and five tilted wires from 2 cm down to 4 mm thick.
+    pub(crate) fn poles_and_wires(&mut self) {
+        self.cuboid(Vec3::new(-6.1, 0.0, -8.1), Vec3::new(-5.9, 5.0, -7.9), 1.0);
+        self.cuboid(Vec3::new(5.9, 0.0, -8.1), Vec3::new(6.1, 5.5, -7.9), 1.0);
+        for (k, t) in [0.02f32, 0.012, 0.008, 0.006, 0.004]
+            .into_iter()
+            .enumerate()
+        {
+            let y = 3.4 + 0.35 * k as f32;
+            self.beam(Vec3::new(-6.0, y, -8.0), Vec3::new(6.0, y + 0.45, -8.0), t);
+        }
+    }
+
+    /// A fence at z = -3: `slats` 3 cm slats every 12 cm from x = `x0`, two rails to `rail_end`.
+    pub(crate) fn fence(&mut self, x0: f32, slats: u32, rail_end: f32) {
+        for i in 0..slats {
+            let x = x0 + 0.12 * i as f32;
+            self.cuboid(
+                Vec3::new(x, 0.0, -3.0),
+                Vec3::new(x + 0.03, 1.2, -2.97),
+                1.0,
+            );
+        }
+        for y in [0.3f32, 0.95] {
+            self.cuboid(
+                Vec3::new(x0, y, -3.03),
+                Vec3::new(rail_end, y + 0.06, -3.0),
+                1.0,
+            );
+        }
+    }
+
+    /// `clusters` clumps of three crossed alpha-tested cards, placed by a seeded generator in
+    /// the rectangle from `min` (x, z) spanning `size`.
+    pub(crate) fn foliage_cards(&mut self, seed: u64, clusters: u32, min: Vec2, size: Vec2) {
+        let mut rng = SplitMix(seed);
+        for _ in 0..clusters {
+            let c = Vec3::new(
+                min.x + size.x * rng.next_f32(),
+                0.0,
+                min.y + size.y * rng.next_f32(),
+            );
+            let h = 1.0 + 1.2 * rng.next_f32();
+            let a0 = rng.next_f32() * std::f32::consts::PI;
+            for k in 0..3 {
+                let a = a0 + k as f32 * std::f32::consts::FRAC_PI_3;
+                let d = Vec3::new(a.cos(), 0.0, a.sin()) * (h * 0.5);
+                self.quad(
+                    [c - d, c + d, c + d + Vec3::Y * h, c - d + Vec3::Y * h],
+                    [
+                        Vec2::new(0.0, 1.0),
+                        Vec2::new(1.0, 1.0),
+                        Vec2::new(1.0, 0.0),
+                        Vec2::new(0.0, 0.0),
+                    ],
+                );
+            }
+        }
+    }
+
+    /// A torus (radii 0.8 and 0.25 m) standing up about `centre` (its ring in the XY plane, so
+    /// that a spin about Y sweeps what is behind it), stripes across the tube.
+    pub(crate) fn standing_torus(&mut self, centre: Vec3) {
+        let (big, small) = (0.8f32, 0.25f32);
+        self.surface(
+            96,
+            32,
+            |u, v| {
+                let (a, b) = (u * std::f32::consts::TAU, v * std::f32::consts::TAU);
+                let ring = Vec3::new(a.cos(), 0.0, a.sin());
+                let n = ring * b.cos() + Vec3::Y * b.sin();
+                let rot = |p: Vec3| Vec3::new(p.x, p.z, p.y);
+                (centre + rot(ring * big + n * small), rot(n))
+            },
+            Vec2::new(8.0, 1.0),
+        );
+    }
+}
+
+pub fn demo() -> Scene {
+    let mut textures = Vec::new();
+    let mut add_tex = |t: Texture| {
+        textures.push(t);
+        textures.len() as u32 - 1
+    };
+    let checker = add_tex(checker_texture("demo.checker"));
+    let leaves = add_tex(leaf_texture(7));
+    let stripes = add_tex(stripes_texture("demo.stripes"));
+    let bricks = add_tex(bricks_texture("demo.bricks"));
 
     let m = |name: &str, kd: [f32; 3], tex: Option<u32>| {
         let mut mat = Material::named(name);
@@ -299,91 +394,28 @@ pub fn demo() -> Scene {
 
     // Two poles and tilted wires from 2 cm down to 4 mm thick (sub-pixel at 10 m and 720p).
     let mut w = MeshBuilder::default();
-    w.cuboid(Vec3::new(-6.1, 0.0, -8.1), Vec3::new(-5.9, 5.0, -7.9), 1.0);
-    w.cuboid(Vec3::new(5.9, 0.0, -8.1), Vec3::new(6.1, 5.5, -7.9), 1.0);
-    for (k, t) in [0.02f32, 0.012, 0.008, 0.006, 0.004]
-        .into_iter()
-        .enumerate()
-    {
-        let y = 3.4 + 0.35 * k as f32;
-        w.beam(Vec3::new(-6.0, y, -8.0), Vec3::new(6.0, y + 0.45, -8.0), t);
-    }
+    w.poles_and_wires();
     objects.push(w.object("wires", 1));
 
     // A fence: 3 cm slats every 12 cm, two rails.
     let mut f = MeshBuilder::default();
-    for i in 0..70 {
-        let x = -10.0 + 0.12 * i as f32;
-        f.cuboid(
-            Vec3::new(x, 0.0, -3.0),
-            Vec3::new(x + 0.03, 1.2, -2.97),
-            1.0,
-        );
-    }
-    for y in [0.3f32, 0.95] {
-        f.cuboid(
-            Vec3::new(-10.0, y, -3.03),
-            Vec3::new(-1.6, y + 0.06, -3.0),
-            1.0,
-        );
-    }
+    f.fence(-10.0, 70, -1.6);
     objects.push(f.object("fence", 1));
 
     // Foliage: crossed alpha-tested cards.
-    let mut rng = SplitMix(11);
     let mut leaves_mesh = MeshBuilder::default();
-    for _ in 0..14 {
-        let c = Vec3::new(2.0 + 8.0 * rng.next_f32(), 0.0, -7.0 + 8.0 * rng.next_f32());
-        let h = 1.0 + 1.2 * rng.next_f32();
-        let a0 = rng.next_f32() * std::f32::consts::PI;
-        for k in 0..3 {
-            let a = a0 + k as f32 * std::f32::consts::FRAC_PI_3;
-            let d = Vec3::new(a.cos(), 0.0, a.sin()) * (h * 0.5);
-            leaves_mesh.quad(
-                [c - d, c + d, c + d + Vec3::Y * h, c - d + Vec3::Y * h],
-                [
-                    Vec2::new(0.0, 1.0),
-                    Vec2::new(1.0, 1.0),
-                    Vec2::new(1.0, 0.0),
-                    Vec2::new(0.0, 0.0),
-                ],
-            );
-        }
-    }
+    leaves_mesh.foliage_cards(11, 14, Vec2::new(2.0, -7.0), Vec2::new(8.0, 8.0));
     objects.push(leaves_mesh.object("foliage", 2));
 
     // A fast-spinning torus (1.5 rev/s), shiny: disocclusion and sharp highlights.
     let mut t = MeshBuilder::default();
     let centre = Vec3::new(0.0, 1.3, -2.0);
-    let (big, small) = (0.8f32, 0.25f32);
-    t.surface(
-        96,
-        32,
-        |u, v| {
-            let (a, b) = (u * std::f32::consts::TAU, v * std::f32::consts::TAU);
-            let ring = Vec3::new(a.cos(), 0.0, a.sin());
-            let n = ring * b.cos() + Vec3::Y * b.sin();
-            // Stand the torus up (ring in the XY plane) so its spin about Y sweeps the background.
-            let rot = |p: Vec3| Vec3::new(p.x, p.z, p.y);
-            (centre + rot(ring * big + n * small), rot(n))
-        },
-        Vec2::new(8.0, 1.0),
-    );
+    t.standing_torus(centre);
     objects.push(t.object("spinner", 3));
 
     // An emissive sphere.
     let mut sph = MeshBuilder::default();
-    let sc = Vec3::new(-3.0, 2.4, -5.0);
-    sph.surface(
-        32,
-        16,
-        |u, v| {
-            let (a, b) = (u * std::f32::consts::TAU, (v - 0.5) * std::f32::consts::PI);
-            let n = Vec3::new(b.cos() * a.cos(), b.sin(), b.cos() * a.sin());
-            (sc + n * 0.3, n)
-        },
-        Vec2::ONE,
-    );
+    sph.sphere(Vec3::new(-3.0, 2.4, -5.0), 0.3, 32, 16);
     objects.push(sph.object("lamp", 4));
 
     // A textured tower 2.9 km from the origin: float precision far away.
