@@ -150,6 +150,23 @@ fn diff(a: &FrameOutput, b: &FrameOutput) -> Diff {
     }
 }
 
+const TABLE_HEAD: &str =
+    "| distance | mean abs | max abs | pixels off > 1/256 | IDs off |\n|---|---|---|---|---|";
+
+/// One row of the far-from-origin table; returns the difference.
+fn row(d: f64, a: &FrameOutput, o: &FrameOutput) -> Diff {
+    let e = diff(a, o);
+    println!(
+        "| {d:.0e} m (frame {}) | {:.2e} | {:.2e} | {:.3}% | {:.3}% |",
+        a.index,
+        e.mean_abs,
+        e.max_abs,
+        100.0 * e.pixels,
+        100.0 * e.ids
+    );
+    e
+}
+
 /// The same small scene at 1 m, 1 km, 100 km and 1,000 km from the origin, the camera following:
 /// against the copy at the origin, the error stays flat (asserted at 1,000 km). Objects keep f32
 /// vertices about an f64 origin and the renderer forms camera-relative transforms in f64.
@@ -177,20 +194,11 @@ fn far_from_the_origin_matches_the_origin_copy() {
     };
     let origin = render(&gpu, &at(0.0), "native", &frames);
     println!("native, f32 world-space vertices (the contrast): against the copy at the origin");
-    println!("| distance | mean abs | max abs | pixels off > 1/256 | IDs off |");
-    println!("|---|---|---|---|---|");
+    println!("{TABLE_HEAD}");
     for d in [1.0, 1e3, 1e5, 1e6] {
         let away = render(&gpu, &naive(d), "native", &frames);
         for (a, o) in away.iter().zip(&origin) {
-            let e = diff(a, o);
-            println!(
-                "| {d:.0e} m (frame {}) | {:.2e} | {:.2e} | {:.3}% | {:.3}% |",
-                a.index,
-                e.mean_abs,
-                e.max_abs,
-                100.0 * e.pixels,
-                100.0 * e.ids
-            );
+            let e = row(d, a, o);
             if d == 1e6 {
                 assert!(
                     e.pixels > 0.01,
@@ -202,8 +210,7 @@ fn far_from_the_origin_matches_the_origin_copy() {
     for spec in ["native", "checkerboard:rotated:ours"] {
         let origin = render(&gpu, &at(0.0), spec, &frames);
         println!("{spec} at {w}x{h}, frames {frames:?}: against the copy at the origin");
-        println!("| distance | mean abs | max abs | pixels off > 1/256 | IDs off |");
-        println!("|---|---|---|---|---|");
+        println!("{TABLE_HEAD}");
         for d in [1.0, 1e3, 1e5, 1e6] {
             let away = render(&gpu, &at(d), spec, &frames);
             for (a, o) in away.iter().zip(&origin) {
@@ -216,15 +223,7 @@ fn far_from_the_origin_matches_the_origin_copy() {
                         a.index
                     );
                 }
-                let e = diff(a, o);
-                println!(
-                    "| {d:.0e} m (frame {}) | {:.2e} | {:.2e} | {:.3}% | {:.3}% |",
-                    a.index,
-                    e.mean_abs,
-                    e.max_abs,
-                    100.0 * e.pixels,
-                    100.0 * e.ids
-                );
+                let e = row(d, a, o);
                 if d == 1e6 {
                     assert!(
                         e.mean_abs < 1e-3 && e.pixels < 0.005 && e.ids < 0.005,
