@@ -338,7 +338,7 @@ impl Renderer {
                 .ok_or_else(|| format!("no post pass `+{}`", part.name))?;
             e.append((pr.estimate)(&ctx, &part.params()));
         }
-        e.storage_buffer("shaded_fragments", 4, true);
+        e.storage_buffer("fragment_counters", 8, true);
         if !spec.post.is_empty() {
             let (w, h) = (settings.width, settings.height);
             e.readback("readback.post", crate::targets::COLOR_FORMAT, w, h, 1);

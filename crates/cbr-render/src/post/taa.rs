@@ -862,9 +862,20 @@ mod tests {
         };
         let (o, _) = reference(&c, &i);
         assert!(o.iter().all(|c| (c[0] - 2.5).abs() < 1e-6), "{:?}", o[0]);
-        // Clipping on: a flat neighbourhood has a zero-width box, the history clips to it.
-        let (o, _) = reference(&TaaConfig::OURS, &i);
+        // Clipping on, history texel moved: a flat neighbourhood has a zero-width box, the
+        // history clips to it.
+        let hg_moved: Vec<(u32, f32)> = vec![(1 | MOVED, 2.0); w * h];
+        let moved = RefInputs {
+            history: Some((&hist, &hg_moved)),
+            ..i
+        };
+        let (o, _) = reference(&TaaConfig::OURS, &moved);
         assert!(o.iter().all(|c| (c[0] - 1.0).abs() < 1e-5), "{:?}", o[0]);
+        // Clipping on, everything still: the history is kept unclipped (only the jitter would
+        // change the box there), so the result is the unclipped blend below.
+        let (o, _) = reference(&TaaConfig::OURS, &i);
+        let blend = (0.1 / 2.0 * 1.0 + 0.9 / 4.0 * 3.0) / (0.1 / 2.0 + 0.9 / 4.0);
+        assert!(o.iter().all(|c| (c[0] - blend).abs() < 1e-5), "{:?}", o[0]);
         // Without clipping: Karis's luminance weights, alpha 0.1: (0.1/2 * 1 + 0.9/4 * 3) / (0.1/2 + 0.9/4).
         let c = TaaConfig {
             clip: false,
@@ -938,7 +949,13 @@ mod tests {
         let mut nan = cur.clone();
         nan[2 * w + 3] = [f32::NAN, 1.0, 1.0];
         nan[2 * w + 4] = [f32::INFINITY, 0.0, 0.0];
-        let (o, _) = reference(&TaaConfig::OURS, &RefInputs { color: &nan, ..i });
+        let (o, _) = reference(
+            &TaaConfig::OURS,
+            &RefInputs {
+                color: &nan,
+                ..moved
+            },
+        );
         assert!(o.iter().all(|c| c.iter().all(|v| v.is_finite())));
         assert!((o[2 * w + 3][0] - 1.0).abs() < 1e-5);
         // Catmull-Rom at texel centres (no motion) returns the history texel itself.
