@@ -11,6 +11,7 @@ mod common;
 
 use cbr_gpu::Gpu;
 use cbr_render::gpu_types::Vpl;
+use cbr_render::techniques::deferred::DEFAULT_REACH;
 use cbr_render::techniques::deferred::vpl::{SunView, random_point_lights, vpl_texels};
 use cbr_render::{FrameOutput, RenderSettings, Renderer, Spec};
 use cbr_scene::{
@@ -166,7 +167,8 @@ fn extra_point_lights_match_native_with_the_same_lights() {
     let shaders = cbr_render::shader_library();
     let s = builtin("demo", 96, 54);
     let mut with = s.clone();
-    with.points.extend(random_point_lights(&s, 48));
+    with.points
+        .extend(random_point_lights(&s, 48, DEFAULT_REACH.into()));
     let native = render(&gpu, &shaders, &with, "native", &[0, 2]);
     let deferred = render(&gpu, &shaders, &s, "deferred:points=48", &[0, 2]);
     for (n, d) in native.iter().zip(&deferred) {
@@ -176,7 +178,7 @@ fn extra_point_lights_match_native_with_the_same_lights() {
     }
     let plain = render(&gpu, &shaders, &s, "deferred", &[0]);
     assert!(plain[0].color != deferred[0].color);
-    let again = random_point_lights(&s, 48);
+    let again = random_point_lights(&s, 48, DEFAULT_REACH.into());
     assert_eq!(
         format!("{again:?}"),
         format!("{:?}", &with.points[s.points.len()..])

@@ -65,7 +65,8 @@ pub struct DeferredConfig {
     pub points: u32,
     /// The reflective shadow map's side in texels.
     pub rsm: u32,
-    /// The map frames the scene within this many metres of the camera (a cube's half-side).
+    /// The map frames the scene within this many metres of the camera (a cube's half-side); the
+    /// random point lights fill the scene within this many metres of the camera path.
     pub reach: f32,
     /// The VPL clamp distance in metres (1/max(d^2, clamp^2)); `None`: the VPLs' mean spacing,
     /// sqrt(map area / N).
@@ -301,10 +302,11 @@ impl Deferred {
     fn prepare(&mut self, ctx: &FrameCtx) -> Result<Option<SunFrame>> {
         let scene = ctx.scene;
         let camera = ctx.view.camera.position;
+        let reach = f64::from(self.config.reach);
         if self.config.points > 0 {
             let lights = self
                 .point_lights
-                .get_or_insert_with(|| vpl::random_point_lights(scene, self.config.points));
+                .get_or_insert_with(|| vpl::random_point_lights(scene, self.config.points, reach));
             let data = vpl::light_data(lights, camera);
             self.points.write(0, bytemuck::cast_slice(&data))?;
         }
@@ -324,7 +326,7 @@ impl Deferred {
             .local_bounds
             .get_or_insert_with(|| vpl::local_bounds(scene));
         let bounds = vpl::bounds_at(scene, local, ctx.view.time);
-        let view = match vpl::framed_region(bounds, camera, f64::from(self.config.reach)) {
+        let view = match vpl::framed_region(bounds, camera, reach) {
             Some(region) => {
                 Some(SunView::new(sun.direction, region, camera, side).map_err(GpuError::Other)?)
             }

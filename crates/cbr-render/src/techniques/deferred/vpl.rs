@@ -161,25 +161,131 @@ pub fn bounds_at(scene: &Scene, local: &[Option<(DVec3, DVec3)>], t: f64) -> Bou
     Bounds { min, max }
 }
 
-/// `points=N`'s lights: `count` point lights uniform in the scene's bounds, of random saturated
-/// hues, range a quarter of the bounds' radius, and together as bright whatever `count`: each
-/// has intensity 8 range^2 / count. Deterministic per scene seed.
-pub fn random_point_lights(scene: &Scene, count: u32) -> Vec<PointLight> {
+/// The centre of the box around the camera path's key positions.
+fn path_centre(scene: &Scene) -> DVec3 {
+    let (lo, hi) = key_box(scene);
+    if lo.cmple(hi).all() {
+        (lo + hi) * 0.5
+    } else {
+        scene.bounds().center()
+    }
+}
+
+/// The box around the camera path's key positions (empty: min > max, without keys).
+fn key_box(scene: &Scene) -> (DVec3, DVec3) {
+    scene
+        .camera
+        .keys
+        .iter()
+        .map(|k| DVec3::from(k.position))
+        .fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(p), hi.max(p)),
+        )
+}
+
+/// Where `points=N` puts its lights: the scene's bounds within `reach` of the camera path's keys
+/// (the box around every key position, grown by `reach`), or the whole bounds when nothing is
+/// within reach. Fixed for the whole path, so the lights do not move with the camera.
+pub fn points_region(scene: &Scene, reach: f64) -> Bounds {
     let b = scene.bounds();
-    let range = (b.radius() as f32 * 0.25).max(1e-3);
-    let intensity = 8.0 * range * range / count.max(1) as f32;
+    let (lo, hi) = key_box(scene);
+    let (min, max) = (b.min.max(lo - reach), b.max.min(hi + reach));
+    if min.cmple(max).all() {
+        Bounds { min, max }
+    } else {
+        b
+    }
+}
+
+/// `points=N`'s lights, deterministic per scene seed: each hovers over a random point of the
+/// scene's surfaces inside [`points_region`] (uniform by area over every triangle clipped to the
+/// region, at time 0), on the side that faces the camera path's centre, at 2% to 12% of its range; range an eighth of the
+/// region's bounding radius; random saturated hue; intensity range^2 / count, so that the lights
+/// together are about as bright whatever `count`. With no surface in the region they fill it
+/// uniformly.
+pub fn random_point_lights(scene: &Scene, count: u32, reach: f64) -> Vec<PointLight> {
+    let region = points_region(scene, reach);
+    let viewer = path_centre(scene);
+    let range = (region.radius() * 0.125).max(1e-3);
+    let intensity = (range * range) as f32 / count.max(1) as f32;
+    let tris = surface_in(scene, region);
+    let total = tris.last().map_or(0.0, |t| t.0);
     let mut rng = SplitMix(scene.settings.seed ^ POINTS_STREAM);
     (0..count)
         .map(|_| {
-            let u = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+            let position = if total > 0.0 {
+                let pick = rng.next_f64() * total;
+                let k = tris.partition_point(|t| t.0 < pick).min(tris.len() - 1);
+                let [a, b, c] = tris[k].1;
+                let (r1, r2) = (rng.next_f64().sqrt(), rng.next_f64());
+                let p = a * (1.0 - r1) + b * (r1 * (1.0 - r2)) + c * (r1 * r2);
+                let n = (b - a).cross(c - a).normalize();
+                let n = if n.dot(viewer - p) < 0.0 { -n } else { n };
+                p + n * (range * (0.02 + 0.1 * rng.next_f64()))
+            } else {
+                let u = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+                region.min + (region.max - region.min) * u
+            };
             PointLight {
-                position: (b.min + (b.max - b.min) * u).to_array(),
+                position: position.to_array(),
                 color: rng.hue(),
                 intensity,
-                range,
+                range: range as f32,
             }
         })
         .collect()
+}
+
+/// The scene's surface inside `region` at time 0: every triangle clipped to the box, as fans of
+/// triangles with their cumulative area (for area-uniform sampling).
+fn surface_in(scene: &Scene, region: Bounds) -> Vec<(f64, [DVec3; 3])> {
+    let mut out = Vec::new();
+    let mut total = 0.0;
+    for (i, o) in scene.objects.iter().enumerate() {
+        let m = scene.object_transform(i, 0.0);
+        let world = |k: u32| {
+            let v = o.vertices[k as usize].pos.map(f64::from);
+            m.transform_point3(DVec3::from(v))
+        };
+        for t in o.indices.chunks_exact(3) {
+            let poly = clip_to_box(vec![world(t[0]), world(t[1]), world(t[2])], region);
+            for k in 2..poly.len() {
+                let c = [poly[0], poly[k - 1], poly[k]];
+                let area = 0.5 * (c[1] - c[0]).cross(c[2] - c[0]).length();
+                if area > 0.0 && area.is_finite() {
+                    total += area;
+                    out.push((total, c));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// A convex polygon clipped to a box (Sutherland-Hodgman, one plane at a time).
+fn clip_to_box(mut poly: Vec<DVec3>, b: Bounds) -> Vec<DVec3> {
+    for axis in 0..3 {
+        for (sign, bound) in [(1.0, b.min[axis]), (-1.0, b.max[axis])] {
+            let f = |p: DVec3| sign * (p[axis] - bound);
+            let mut next = Vec::with_capacity(poly.len() + 1);
+            for (k, &p) in poly.iter().enumerate() {
+                let q = poly[(k + 1) % poly.len()];
+                let (fp, fq) = (f(p), f(q));
+                if fp >= 0.0 {
+                    next.push(p);
+                }
+                if (fp >= 0.0) != (fq >= 0.0) {
+                    next.push(p + (q - p) * (fp / (fp - fq)));
+                }
+            }
+            poly = next;
+            if poly.is_empty() {
+                return poly;
+            }
+        }
+    }
+    poly
 }
 
 /// Point lights as the shaders read them, camera-relative (the conversion of
@@ -261,6 +367,56 @@ mod tests {
             w.clip_from_world.transform_point3(p - other),
         );
         assert!((a - c).length() < 1e-12, "{a} vs {c}");
+    }
+
+    #[test]
+    fn clipping_to_a_box_keeps_the_inside() {
+        let b = Bounds {
+            min: DVec3::new(0.0, -1.0, 0.0),
+            max: DVec3::new(1.0, 1.0, 1.0),
+        };
+        // A 4 x 4 square in y = 0 centred on the box's corner column: a quarter inside.
+        let square = vec![
+            DVec3::new(-2.0, 0.0, -2.0),
+            DVec3::new(2.0, 0.0, -2.0),
+            DVec3::new(2.0, 0.0, 2.0),
+            DVec3::new(-2.0, 0.0, 2.0),
+        ];
+        let p = clip_to_box(square, b);
+        let area: f64 = (2..p.len())
+            .map(|k| 0.5 * (p[k - 1] - p[0]).cross(p[k] - p[0]).length())
+            .sum();
+        assert!((area - 1.0).abs() < 1e-12, "{area}: {p:?}");
+        let above = vec![
+            DVec3::new(0.0, 2.0, 0.0),
+            DVec3::new(1.0, 2.0, 0.0),
+            DVec3::Y * 3.0,
+        ];
+        assert!(clip_to_box(above, b).is_empty());
+    }
+
+    #[test]
+    fn point_lights_hover_over_surfaces_within_reach() {
+        let s = cbr_scene::builtin("demo").expect("demo");
+        let region = points_region(&s, 32.0);
+        let lights = random_point_lights(&s, 200, 32.0);
+        assert_eq!(
+            format!("{lights:?}"),
+            format!("{:?}", random_point_lights(&s, 200, 32.0))
+        );
+        let range = f64::from(lights[0].range);
+        for l in &lights {
+            let p = DVec3::from(l.position);
+            // Within the region grown by the largest hover height.
+            let grow = 0.12 * range + 1e-9;
+            assert!(p.cmpge(region.min - grow).all() && p.cmple(region.max + grow).all());
+        }
+        // The demo's region is mostly ground: most lights hover low over it.
+        let low = lights
+            .iter()
+            .filter(|l| l.position[1] < 0.12 * range + 1e-9)
+            .count();
+        assert!(low > 100, "{low} of 200 lights near the ground");
     }
 
     #[test]
