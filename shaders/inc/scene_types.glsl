@@ -50,4 +50,11 @@ struct LightData {
     vec4 color;     // rgb: colour * intensity; w: range (point lights; <= 0: no window)
 };
 
+// A virtual point light (`deferred:vpls=N`): a reflective-shadow-map texel that reflects the sun.
+struct Vpl {
+    vec4 position;  // xyz: camera-relative position; w: 1 where the RSM texel saw geometry, else 0
+    vec4 normal;    // xyz: unit normal, facing the sun; w: 0
+    vec4 flux;      // rgb: reflected flux this VPL carries (its share of the RSM); w: 0
+};
+
 #endif

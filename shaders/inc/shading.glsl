@@ -1,4 +1,5 @@
-// Material evaluation and Lambert + Blinn-Phong lighting, shared by the scene passes.
+// Material evaluation and Lambert + Blinn-Phong lighting, shared by the scene passes (forward)
+// and the deferred lighting pass: one light term, one loop.
 #ifndef SHADING_GLSL
 #define SHADING_GLSL
 #include "scene_types.glsl"
@@ -11,32 +12,49 @@ float range_window(float dist, float range) {
     return w * w;
 }
 
+// Adds what `light` reflects towards the camera (unit direction v from p) to `radiance`: Lambert
+// without 1/pi (a white surface facing a light of irradiance E returns E) plus Blinn-Phong
+// specular (n.h)^ns, unnormalised, both masked by n.l > 0.
+void add_light(inout vec3 radiance, vec3 p, vec3 n, vec3 v, vec3 albedo, MaterialData m,
+               LightData light) {
+    vec3 l;
+    vec3 irradiance = light.color.rgb;
+    if (light.position.w == 0.0) {
+        l = -normalize(light.position.xyz);
+    } else {
+        vec3 d = light.position.xyz - p;
+        float dist2 = max(dot(d, d), 1e-8);
+        float dist = sqrt(dist2);
+        l = d / dist;
+        irradiance *= range_window(dist, light.color.w) / dist2;
+    }
+    float ndl = dot(n, l);
+    if (ndl <= 0.0) return;
+    vec3 h = normalize(l + v);
+    float spec = m.ks.w > 0.0 ? pow(max(dot(n, h), 0.0), m.ks.w) : 0.0;
+    radiance += (albedo * ndl + m.ks.rgb * spec * ndl) * irradiance;
+}
+
 // Outgoing radiance towards the camera at camera-relative position p with normal n (facing the
-// camera). Lambert without 1/pi: a white surface facing a light of irradiance E returns E.
-// Blinn-Phong specular (n.h)^ns, unnormalised, masked by n.l > 0.
+// camera): emission, ambient, and every light of the scene's `lights` buffer (directional first).
 vec3 shade(vec3 p, vec3 n, vec3 albedo, MaterialData m, FrameConstants frame) {
     vec3 v = normalize(-p);
     vec3 radiance = m.ke.rgb + frame.ambient.rgb * albedo;
     uint count = frame.counts.x + frame.counts.y;
-    for (uint i = 0u; i < count; ++i) {
-        LightData light = lights[i];
-        vec3 l;
-        vec3 irradiance = light.color.rgb;
-        if (light.position.w == 0.0) {
-            l = -normalize(light.position.xyz);
-        } else {
-            vec3 d = light.position.xyz - p;
-            float dist2 = max(dot(d, d), 1e-8);
-            float dist = sqrt(dist2);
-            l = d / dist;
-            irradiance *= range_window(dist, light.color.w) / dist2;
-        }
-        float ndl = dot(n, l);
-        if (ndl <= 0.0) continue;
-        vec3 h = normalize(l + v);
-        float spec = m.ks.w > 0.0 ? pow(max(dot(n, h), 0.0), m.ks.w) : 0.0;
-        radiance += (albedo * ndl + m.ks.rgb * spec * ndl) * irradiance;
-    }
+    for (uint i = 0u; i < count; ++i) add_light(radiance, p, n, v, albedo, m, lights[i]);
     return radiance;
+}
+
+// Irradiance at p (normal n) from one virtual point light (Dachsbacher & Stamminger 2005):
+// flux * max(0, n_vpl.(p - x)) * max(0, n.(x - p)) / (pi * d^2 * max(d^2, clamp_d2)), d = |p - x|:
+// the VPL radiates flux * cos / pi per steradian, and 1/max(d^2, clamp_d2) instead of 1/d^2 keeps
+// it finite near the VPL (the clamp's bias is docs/interleaved.md's). clamp_d2 > 0. Dead VPLs
+// (nothing in their RSM texel) have zero flux.
+vec3 vpl_irradiance(vec3 p, vec3 n, Vpl vpl, float clamp_d2) {
+    vec3 d = p - vpl.position.xyz;
+    float d2 = dot(d, d);
+    float cosines = max(dot(vpl.normal.xyz, d), 0.0) * max(-dot(n, d), 0.0);
+    // cosines <= d^2, so the guard against d2 == 0 only matters where cosines is 0 too.
+    return vpl.flux.rgb * (cosines / (3.14159265358979 * max(d2, 1e-30) * max(d2, clamp_d2)));
 }
 #endif

@@ -3,7 +3,9 @@
 #extension GL_EXT_demote_to_helper_invocation : require
 // Scene raster, fragment stage: alpha test, bump, lighting; writes colour, velocity and IDs.
 // Discards are demotions, so the remaining lanes of a quad keep valid derivatives (the masked
-// and interlaced layouts drop half of every quad).
+// and interlaced layouts drop half of every quad). With GBUFFER (`deferred`) it stops before the
+// lighting and writes the surface instead (position, shading normal, albedo): the lighting pass
+// (shaders/deferred/lighting.comp) calls the same `shade` on the same bits.
 #include "../inc/scene_types.glsl"
 
 layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
@@ -38,6 +40,13 @@ layout(location = 4) INTERP in vec4 v_prev_clip;
 #ifdef ID_ONLY
 // The native-resolution depth + ID prepass (--id-prepass): visibility only, no shading.
 layout(location = 0) out uvec2 o_ids;
+#elif defined(GBUFFER)
+// `deferred`'s G-buffer, f32 so that the lighting pass shades exactly these inputs.
+layout(location = 0) out vec4 o_position;  // xyz: camera-relative world position; w: 1
+layout(location = 1) out vec4 o_normal;    // xyz: shading normal (facing the camera, bumped)
+layout(location = 2) out vec4 o_albedo;    // rgb: kd x albedo texture (FLAG_DEBUG_LOD: r = LOD)
+layout(location = 3) out vec2 o_velocity;
+layout(location = 4) out uvec2 o_ids;      // the material is objects[x - 1].ids.y
 #else
 layout(location = 0) out vec4 o_color;     // HDR radiance; alpha 1 = shaded this frame
 layout(location = 1) out vec2 o_velocity;  // full-res pixels moved since the previous frame (current - previous)
@@ -137,6 +146,21 @@ void main() {
         float h = tex(bump_tex, v_uv).r * m.ke.w;
         n = bump(n, v_world, h);
     }
+#ifdef GBUFFER
+    o_position = vec4(v_world, 1.0);
+    o_normal = vec4(n, 0.0);
+    o_albedo = vec4(albedo, 1.0);
+    if ((frame.counts.w & FLAG_DEBUG_LOD) != 0u) {
+        o_albedo = vec4(m.tex.x >= 0 ? lod_of(albedo_tex, v_uv) : -100.0, 0.0, 0.0, 1.0);
+    }
+    o_velocity = to_pixels(v_clip) - to_pixels(v_prev_clip);
+    o_ids = uvec2(o.ids.x, uint(gl_PrimitiveID));
+    // The forward shader writes storage (the counters), so it runs with late depth tests; this
+    // variant must too: on llvmpipe an early depth test changes the derivatives in partly
+    // covered quads (bump mapping on the demo's foliage moved by up to 291 fp16 ulps). The
+    // condition never holds (object IDs start at 1); the store it guards keeps the late tests.
+    if (o.ids.x == 0u) atomicAdd(nonfinite_fragments, 1u);
+#else
     vec3 c = shade(v_world, n, albedo, m, frame);
     // NaN/Inf containment: a fragment whose shading is not finite is written black and counted
     // (reported per frame), so no history downstream ever holds one. Finite radiance above the
@@ -155,5 +179,6 @@ void main() {
 #endif
     // Helpers (and demoted lanes) do not count: their atomics have no effect.
     if ((frame.counts.w & FLAG_COUNT_SHADED) != 0u) atomicAdd(shaded_fragments, 1u);
+#endif  // GBUFFER
 #endif
 }

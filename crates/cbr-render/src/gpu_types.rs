@@ -51,6 +51,18 @@ pub struct LightData {
     pub color: [f32; 4],
 }
 
+/// A virtual point light of `deferred:vpls=N` (scene_types.glsl's `Vpl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Vpl {
+    /// xyz: camera-relative position; w: 1 where its RSM texel saw geometry, else 0 (dead).
+    pub position: [f32; 4],
+    /// xyz: unit normal, facing the sun.
+    pub normal: [f32; 4],
+    /// rgb: the flux it carries.
+    pub flux: [f32; 4],
+}
+
 /// Push constants of the scene pass.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -132,5 +144,25 @@ pub(crate) mod tests {
         check("MaterialData", 3, offset_of!(MaterialData, tex));
         check("LightData", 0, offset_of!(LightData, position));
         check("LightData", 1, offset_of!(LightData, color));
+    }
+
+    #[test]
+    fn the_vpl_struct_matches_the_shader_layout() {
+        use std::mem::offset_of;
+        let shaders = crate::shader_library();
+        let defs = crate::techniques::deferred::lighting::shader_defines();
+        let words = shaders
+            .compile("deferred/lighting.comp", &defs)
+            .expect("compiles");
+        let off = member_offsets(&words);
+        use super::Vpl;
+        for (m, host) in [
+            (0, offset_of!(Vpl, position)),
+            (1, offset_of!(Vpl, normal)),
+            (2, offset_of!(Vpl, flux)),
+        ] {
+            assert_eq!(off.get(&("Vpl".into(), m)).copied(), Some(host as u32));
+        }
+        assert_eq!(std::mem::size_of::<Vpl>(), 48);
     }
 }

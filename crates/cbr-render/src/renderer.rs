@@ -98,6 +98,8 @@ pub struct FrameOutput {
     pub coverage: Option<Coverage>,
     /// `analytic` frames: the fragment lists' statistics per pixel.
     pub analytic: Option<AnalyticLayers>,
+    /// `deferred:vpls=N` frames: the frame's virtual point lights (camera-relative).
+    pub vpls: Option<Vec<crate::gpu_types::Vpl>>,
     /// Where the frame came from when it was not rendered now (a cache file).
     pub cached: Option<std::path::PathBuf>,
     pub timings: Vec<PassTiming>,

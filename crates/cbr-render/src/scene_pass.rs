@@ -9,7 +9,7 @@ use cbr_gpu::{
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::ScenePush;
 use crate::layouts::LayoutPlan;
-use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT, VELOCITY_FORMAT};
+use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, GBUFFER_FORMAT, ID_FORMAT, VELOCITY_FORMAT};
 
 /// `LAYOUT` values of the scene shaders (shaders/inc/scene_types.glsl).
 pub const LAYOUT_NATIVE: u32 = 0;
@@ -89,6 +89,9 @@ pub struct RasterConfig {
     pub sample_shading: bool,
     /// msaa2x with VK_EXT_sample_locations: the frame's two sample locations.
     pub sample_locations: Option<[[f32; 2]; 2]>,
+    /// `deferred`'s G-buffer: the surface (position, shading normal, albedo) instead of its
+    /// shading, then velocity and IDs (the GBUFFER define of shaders/scene/forward.frag).
+    pub gbuffer: bool,
 }
 
 impl RasterConfig {
@@ -103,6 +106,7 @@ impl RasterConfig {
             write_ids: true,
             sample_shading: false,
             sample_locations: None,
+            gbuffer: false,
         }
     }
 
@@ -128,6 +132,7 @@ impl RasterConfig {
             write_ids: true,
             sample_shading: plan.samples > 1,
             sample_locations: plan.sample_locations,
+            gbuffer: false,
         }
     }
 }
@@ -163,6 +168,9 @@ impl ScenePass {
         if config.sample_shading {
             defines.push(("SAMPLE_SHADING".into(), "1".into()));
         }
+        if config.gbuffer {
+            defines.push(("GBUFFER".into(), "1".into()));
+        }
         let vs = shaders.compile("scene/forward.vert", &defines)?;
         let fs = shaders.compile("scene/forward.frag", &defines)?;
         let pipeline = Pipeline::graphics(
@@ -174,10 +182,17 @@ impl ScenePass {
                 fragment: &fs,
                 set_layouts: &[&layout, &material_layout],
                 push_constant_bytes: std::mem::size_of::<ScenePush>() as u32,
-                color_formats: match (config.id_only, config.write_ids) {
-                    (true, _) => &[ID_FORMAT],
-                    (false, false) => &[COLOR_FORMAT, VELOCITY_FORMAT],
-                    (false, true) => &[COLOR_FORMAT, VELOCITY_FORMAT, ID_FORMAT],
+                color_formats: match (config.id_only, config.gbuffer, config.write_ids) {
+                    (true, _, _) => &[ID_FORMAT],
+                    (false, true, _) => &[
+                        GBUFFER_FORMAT,
+                        GBUFFER_FORMAT,
+                        GBUFFER_FORMAT,
+                        VELOCITY_FORMAT,
+                        ID_FORMAT,
+                    ],
+                    (false, false, false) => &[COLOR_FORMAT, VELOCITY_FORMAT],
+                    (false, false, true) => &[COLOR_FORMAT, VELOCITY_FORMAT, ID_FORMAT],
                 },
                 depth_format: Some(DEPTH_FORMAT),
                 // Reverse-Z: nearer is larger.
@@ -214,8 +229,8 @@ impl ScenePass {
         self.record(cmd, profiler, scene, &t.colors(), &t.depth, counter, config);
     }
 
-    /// Clears `colors` (in the pipeline's order: colour, velocity, IDs; IDs only for `id_only`)
-    /// and `depth`, and draws every object. Colour clears to the background radiance with alpha 1
+    /// Clears `colors` (in the pipeline's order: colour, velocity, IDs; IDs only for `id_only`;
+    /// position, normal, albedo, velocity, IDs for `gbuffer`, all cleared to 0) and `depth`, and draws every object. Colour clears to the background radiance with alpha 1
     /// for native, 0 for the other layouts (checkerboard, interlaced: alpha marks shaded samples).
     #[allow(clippy::too_many_arguments)]
     pub fn record(

@@ -8,6 +8,9 @@ pub const COLOR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 pub const VELOCITY_FORMAT: vk::Format = vk::Format::R32G32_SFLOAT;
 pub const ID_FORMAT: vk::Format = vk::Format::R32G32_UINT;
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+/// `deferred`'s G-buffer surface layers (position, normal, albedo) and its reflective shadow map:
+/// f32, so the lighting pass shades the forward pass's exact inputs.
+pub const GBUFFER_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 /// Bytes of one sample across the four targets: RGBA16F + RG32F + RG32UI + D32.
 pub const BYTES_PER_SAMPLE: u64 = 8 + 8 + 8 + 4;

@@ -182,6 +182,7 @@ pub const TECHNIQUES: &[Registration] = &[
     techniques::upscale::REGISTRATION,
     techniques::interlaced::REGISTRATION,
     techniques::analytic::REGISTRATION,
+    techniques::deferred::REGISTRATION,
 ];
 
 pub fn find(name: &str) -> Option<&'static Registration> {

@@ -41,6 +41,8 @@ const SPECS: &[&str] = &[
     "interlaced:debug",
     "analytic",
     "analytic:seed:frags=3",
+    "deferred",
+    "deferred:vpls=64:points=8:rsm=128",
     "native+taa",
     "native+fxaa+sharpen",
     "checkerboard:rotated:ours+taa",

@@ -3,6 +3,7 @@
 
 pub mod analytic;
 pub mod checkerboard;
+pub mod deferred;
 pub mod interlaced;
 pub mod msaa;
 

@@ -1,0 +1,67 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// `deferred`'s lighting pass: per pixel, the G-buffer's surface (written by the forward fragment
+// shader with GBUFFER: the same position, shading normal and albedo bits it would shade) through
+// the forward pass's `shade` (shaders/inc/shading.glsl), then the extra point lights
+// (`points=N`) through the same light term, then the one-bounce indirect light of the VPLs
+// (`vpls=N`): albedo x their summed irradiance. NaN/Inf shading is written black and counted,
+// as the forward pass does; background pixels get the background radiance.
+layout(local_size_x = 8, local_size_y = 8) in;
+#include "../inc/scene_types.glsl"
+
+layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
+layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
+layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
+layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
+layout(std430, set = 0, binding = BINDING_POINTS) readonly buffer Points { LightData points[]; };
+layout(std430, set = 0, binding = BINDING_VPLS) readonly buffer Vpls { Vpl vpls[]; };
+layout(std430, set = 0, binding = BINDING_COUNTER) buffer Counter {
+    uint shaded_fragments;
+    uint nonfinite_fragments;
+};
+layout(set = 0, binding = BINDING_POSITION) uniform sampler2D g_position;
+layout(set = 0, binding = BINDING_NORMAL) uniform sampler2D g_normal;
+layout(set = 0, binding = BINDING_ALBEDO) uniform sampler2D g_albedo;
+layout(set = 0, binding = BINDING_IDS) uniform usampler2D g_ids;
+layout(set = 0, binding = BINDING_OUT_COLOR, rgba16f) uniform writeonly image2D out_color;
+
+layout(push_constant) uniform Push {
+    vec4 background;  // rgb: radiance where nothing was drawn
+    uvec4 counts;     // x: extra point lights, y: VPLs, zw: width, height
+    vec4 params;      // x: the VPL clamp c in 1/max(d^2, c) (m^2)
+} pc;
+
+#include "../inc/shading.glsl"
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (px.x >= int(pc.counts.z) || px.y >= int(pc.counts.w)) return;
+    uint object = texelFetch(g_ids, px, 0).x;
+    if (object == 0u) {
+        imageStore(out_color, px, vec4(pc.background.rgb, 1.0));
+        return;
+    }
+    vec3 p = texelFetch(g_position, px, 0).xyz;
+    vec3 n = texelFetch(g_normal, px, 0).xyz;
+    vec3 albedo = texelFetch(g_albedo, px, 0).rgb;
+    if ((frame.counts.w & FLAG_DEBUG_LOD) != 0u) {
+        imageStore(out_color, px, vec4(albedo.r, 0.0, 0.0, 1.0));
+        return;
+    }
+    MaterialData m = materials[objects[object - 1u].ids.y];
+    vec3 c = shade(p, n, albedo, m, frame);
+    vec3 v = normalize(-p);
+    for (uint i = 0u; i < pc.counts.x; ++i) add_light(c, p, n, v, albedo, m, points[i]);
+    if (pc.counts.y > 0u) {
+        vec3 e = vec3(0.0);
+        for (uint i = 0u; i < pc.counts.y; ++i) e += vpl_irradiance(p, n, vpls[i], pc.params.x);
+        c += albedo * e;
+    }
+    // NaN/Inf containment and the fp16 clamp, as in shaders/scene/forward.frag.
+    if (any(isnan(c)) || any(isinf(c))) {
+        c = vec3(0.0);
+        atomicAdd(nonfinite_fragments, 1u);
+    }
+    imageStore(out_color, px, vec4(min(c, vec3(65504.0)), 1.0));
+    if ((frame.counts.w & FLAG_COUNT_SHADED) != 0u) atomicAdd(shaded_fragments, 1u);
+}
