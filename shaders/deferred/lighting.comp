@@ -4,8 +4,9 @@
 // shader with GBUFFER: the same position, shading normal and albedo bits it would shade) through
 // the forward pass's `shade` (shaders/inc/shading.glsl), then the extra point lights
 // (`points=N`) through the same light term, then the one-bounce indirect light of the VPLs
-// (`vpls=N`): albedo x their summed irradiance. NaN/Inf shading is written black and counted,
-// as the forward pass does; background pixels get the background radiance.
+// (`vpls=N`): albedo x their summed irradiance (with INTERLEAVED, `interleaved`'s filtered
+// estimate instead: shaders/interleaved/filter.glsl). NaN/Inf shading is written black and
+// counted, as the forward pass does; background pixels get the background radiance.
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "../inc/scene_types.glsl"
 
@@ -32,6 +33,9 @@ layout(push_constant) uniform Push {
 } pc;
 
 #include "../inc/shading.glsl"
+#ifdef INTERLEAVED
+#include "../interleaved/filter.glsl"
+#endif
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -53,9 +57,14 @@ void main() {
     vec3 v = normalize(-p);
     for (uint i = 0u; i < pc.counts.x; ++i) add_light(c, p, n, v, albedo, m, points[i]);
     if (pc.counts.y > 0u) {
+#ifdef INTERLEAVED
+        // `interleaved`: the filtered sub-image estimates, then (as below) times albedo.
+        c += albedo * interleaved_irradiance(px, object, p, n);
+#else
         vec3 e = vec3(0.0);
         for (uint i = 0u; i < pc.counts.y; ++i) e += vpl_irradiance(p, n, vpls[i], pc.params.x);
         c += albedo * e;
+#endif
     }
     // NaN/Inf containment and the fp16 clamp, as in shaders/scene/forward.frag.
     if (any(isnan(c)) || any(isinf(c))) {

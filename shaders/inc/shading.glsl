@@ -4,6 +4,8 @@
 #define SHADING_GLSL
 #include "scene_types.glsl"
 
+// VPLS_ONLY: only vpl_irradiance (passes without the scene's `lights` buffer: interleaved's).
+#ifndef VPLS_ONLY
 // Smooth window that takes a point light to zero at its range (1 well inside it).
 float range_window(float dist, float range) {
     if (range <= 0.0) return 1.0;
@@ -44,6 +46,7 @@ vec3 shade(vec3 p, vec3 n, vec3 albedo, MaterialData m, FrameConstants frame) {
     for (uint i = 0u; i < count; ++i) add_light(radiance, p, n, v, albedo, m, lights[i]);
     return radiance;
 }
+#endif  // VPLS_ONLY
 
 // Irradiance at p (normal n) from one virtual point light (Dachsbacher & Stamminger 2005):
 // flux * max(0, n_vpl.(p - x)) * max(0, n.(x - p)) / (pi * d^2 * max(d^2, clamp_d2)), d = |p - x|:

@@ -183,6 +183,7 @@ pub const TECHNIQUES: &[Registration] = &[
     techniques::interlaced::REGISTRATION,
     techniques::analytic::REGISTRATION,
     techniques::deferred::REGISTRATION,
+    techniques::interleaved::REGISTRATION,
 ];
 
 pub fn find(name: &str) -> Option<&'static Registration> {

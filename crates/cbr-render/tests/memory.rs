@@ -43,6 +43,8 @@ const SPECS: &[&str] = &[
     "analytic:seed:frags=3",
     "deferred",
     "deferred:vpls=64:points=8:rsm=128",
+    "interleaved:4x4:vpls=64:rsm=128",
+    "interleaved:2x3:vpls=48:points=4:rsm=64:box",
     "native+taa",
     "native+fxaa+sharpen",
     "checkerboard:rotated:ours+taa",

@@ -5,6 +5,7 @@ pub mod analytic;
 pub mod checkerboard;
 pub mod deferred;
 pub mod interlaced;
+pub mod interleaved;
 pub mod msaa;
 
 pub mod native;

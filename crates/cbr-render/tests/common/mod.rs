@@ -2,6 +2,8 @@
 //! the check that it reported nothing.
 #![allow(dead_code)]
 
+pub mod lighting;
+
 use cbr_gpu::{Gpu, GpuOptions};
 
 /// The test device: `CBR_TEST_DEVICE` (index or name) or the default pick, validation on.

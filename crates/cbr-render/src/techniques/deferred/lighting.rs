@@ -1,17 +1,20 @@
 //! `deferred`'s lighting pass (shaders/deferred/lighting.comp): the G-buffer's surfaces through
-//! the forward pass's `shade`, the extra point lights and the VPLs, into the RGBA16F frame.
+//! the forward pass's `shade`, the extra point lights and the VPLs, into the RGBA16F frame. For
+//! `interleaved` the same pass takes the VPLs' light from the gathered sub-image estimates through
+//! its filter (the INTERLEAVED define, shaders/interleaved/filter.glsl).
 
 use bytemuck::{Pod, Zeroable};
 use cbr_gpu::{
-    Access, BindingDesc, Buffer, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Gpu, PassKind,
-    Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout, Shaders, Write,
+    Access, BindingDesc, Buffer, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Image, PassKind,
+    Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout, Write,
 };
 
-use super::GBuffer;
-use crate::gpu_scene::GpuScene;
+use super::lights::SunFrame;
+use super::{DeferredConfig, GBuffer};
+use crate::technique::{BuildCtx, FrameCtx};
 
 /// The lighting pass's set: the one definition of its bindings.
-pub const BINDINGS: [BindingDesc; 12] = {
+pub const BINDINGS: [BindingDesc; 13] = {
     use DescriptorKind::{
         CombinedImageSampler as S, StorageBuffer as B, StorageImage as I, UniformBuffer as U,
     };
@@ -28,6 +31,8 @@ pub const BINDINGS: [BindingDesc; 12] = {
         BindingDesc::one("albedo", 9, S),
         BindingDesc::one("ids", 10, S),
         BindingDesc::one("out_color", 11, I),
+        // `interleaved` only: the gathered sub-image estimates of the VPLs' irradiance.
+        BindingDesc::one("irradiance", 12, S),
     ]
 };
 
@@ -47,6 +52,34 @@ pub struct LightingPush {
     pub params: [f32; 4],
 }
 
+impl LightingPush {
+    /// This frame's constants for `config`'s lights at `size`.
+    pub fn new(
+        ctx: &FrameCtx,
+        config: &DeferredConfig,
+        size: (u32, u32),
+        sun: Option<&SunFrame>,
+    ) -> LightingPush {
+        let bg = ctx.gpu_scene.background;
+        LightingPush {
+            background: [bg[0], bg[1], bg[2], 0.0],
+            counts: [config.points, config.vpls, size.0, size.1],
+            params: [sun.map_or(1.0, |s| s.clamp_d2), 0.0, 0.0, 0.0],
+        }
+    }
+}
+
+/// `interleaved`'s VPL light: the M x N sub-images' estimates gathered back to full resolution,
+/// and the filter that combines them (shaders/interleaved/filter.glsl).
+pub struct Interleaving<'a> {
+    pub m: u32,
+    pub n: u32,
+    /// The FILTER define: 0 none (each pixel its own subset), 1 box over the M x N window,
+    /// 2 geometry-aware.
+    pub filter: u32,
+    pub irradiance: &'a Image,
+}
+
 /// What the lighting pass reads besides the G-buffer and the scene.
 pub struct LightSources<'a> {
     /// Extra point lights (`points=N`), camera-relative, host-written each frame.
@@ -60,53 +93,72 @@ pub struct LightingPass {
     _layout: SetLayout,
     set: DescriptorSet,
     _sampler: Sampler,
+    name: &'static str,
 }
 
 impl LightingPass {
+    /// The pass over `g` lighting with `sources`; with `interleaving`, the VPLs' light comes from
+    /// the sub-image estimates instead of every VPL at every pixel.
     pub fn new(
-        gpu: &Gpu,
-        shaders: &Shaders,
-        scene: &GpuScene,
-        counter: &Buffer,
+        ctx: &BuildCtx,
         g: &GBuffer,
         sources: &LightSources,
+        interleaving: Option<&Interleaving>,
     ) -> Result<LightingPass> {
-        let layout = SetLayout::new(gpu, "deferred.lighting.set_layout", &BINDINGS)?;
-        let cs = shaders.compile("deferred/lighting.comp", &shader_defines())?;
+        let gpu = ctx.gpu;
+        let name = match interleaving {
+            None => "deferred.lighting",
+            Some(_) => "interleaved.lighting",
+        };
+        let layout = SetLayout::new(gpu, &format!("{name}.set_layout"), &BINDINGS)?;
+        let mut defines = shader_defines();
+        if let Some(i) = interleaving {
+            for (k, v) in [
+                ("INTERLEAVED", 1),
+                ("TILE_M", i.m),
+                ("TILE_N", i.n),
+                ("FILTER", i.filter),
+            ] {
+                defines.push((k.into(), v.to_string()));
+            }
+        }
+        let cs = ctx.shaders.compile("deferred/lighting.comp", &defines)?;
         let pipeline = Pipeline::compute(
             gpu,
             &ComputeDesc {
-                name: "deferred.lighting",
+                name,
                 shader: &cs,
                 set_layouts: &[&layout],
                 push_constant_bytes: std::mem::size_of::<LightingPush>() as u32,
             },
         )?;
-        let sampler = Sampler::new(gpu, "deferred.lighting.sampler", SamplerDesc::NEAREST)?;
-        let set = DescriptorSet::new(
-            gpu,
-            "deferred.lighting.set",
-            &layout,
-            &[
-                Write::Buffer(0, &scene.frame),
-                Write::Buffer(1, &scene.objects),
-                Write::Buffer(2, &scene.materials),
-                Write::Buffer(3, &scene.lights),
-                Write::Buffer(4, sources.points),
-                Write::Buffer(5, sources.vpls),
-                Write::Buffer(6, counter),
-                Write::Sampled(7, vec![(&g.position, &sampler)]),
-                Write::Sampled(8, vec![(&g.normal, &sampler)]),
-                Write::Sampled(9, vec![(&g.albedo, &sampler)]),
-                Write::Sampled(10, vec![(&g.ids, &sampler)]),
-                Write::Storage(11, &g.color),
-            ],
-        )?;
+        let sampler = Sampler::new(gpu, &format!("{name}.sampler"), SamplerDesc::NEAREST)?;
+        let scene = ctx.scene;
+        let mut writes = vec![
+            Write::Buffer(0, &scene.frame),
+            Write::Buffer(1, &scene.objects),
+            Write::Buffer(2, &scene.materials),
+            Write::Buffer(3, &scene.lights),
+            Write::Buffer(4, sources.points),
+            Write::Buffer(5, sources.vpls),
+            Write::Buffer(6, ctx.counter),
+            Write::Sampled(7, vec![(&g.position, &sampler)]),
+            Write::Sampled(8, vec![(&g.normal, &sampler)]),
+            Write::Sampled(9, vec![(&g.albedo, &sampler)]),
+            Write::Sampled(10, vec![(&g.ids, &sampler)]),
+            Write::Storage(11, &g.color),
+        ];
+        // Without interleaving the binding is never read, but it holds an image: lavapipe crashes
+        // binding a set with an unwritten sampler.
+        let irradiance = interleaving.map_or(&g.albedo, |i| i.irradiance);
+        writes.push(Write::Sampled(12, vec![(irradiance, &sampler)]));
+        let set = DescriptorSet::new(gpu, &format!("{name}.set"), &layout, &writes)?;
         Ok(LightingPass {
             pipeline,
             _layout: layout,
             set,
             _sampler: sampler,
+            name,
         })
     }
 
@@ -119,15 +171,19 @@ impl LightingPass {
         sources: &LightSources,
         counter: &Buffer,
         push: &LightingPush,
+        interleaving: Option<&Interleaving>,
     ) {
         for img in [&g.position, &g.normal, &g.albedo, &g.ids] {
             cmd.use_image(img, Access::ComputeSampled);
+        }
+        if let Some(i) = interleaving {
+            cmd.use_image(i.irradiance, Access::ComputeSampled);
         }
         cmd.use_image(&g.color, Access::ComputeStorageWrite);
         cmd.use_buffer(sources.points, Access::ComputeSampled);
         cmd.use_buffer(sources.vpls, Access::ComputeSampled);
         cmd.use_buffer(counter, Access::ComputeStorageReadWrite);
-        let scope = profiler.begin(cmd, "deferred.lighting", PassKind::Compute);
+        let scope = profiler.begin(cmd, self.name, PassKind::Compute);
         cmd.bind_pipeline(&self.pipeline);
         cmd.bind_set(&self.pipeline, 0, &self.set);
         cmd.push_constants(&self.pipeline, bytemuck::bytes_of(push));

@@ -12,12 +12,11 @@
 //! reference the interleaved technique approximates: every light at every pixel.
 
 pub mod lighting;
+pub mod lights;
 pub mod rsm;
 pub mod vpl;
 
-use cbr_gpu::{Access, Buffer, GpuError, Image, ImageDesc, Location, Result, vk};
-use cbr_scene::PointLight;
-use glam::DVec3;
+use cbr_gpu::{Access, GpuError, Image, ImageDesc, Result, vk};
 
 use super::LayerReadbacks;
 use crate::gpu_types::{LightData, Vpl};
@@ -26,9 +25,8 @@ use crate::renderer::FrameOutput;
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, GBUFFER_FORMAT, ID_FORMAT, VELOCITY_FORMAT};
 use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, unknown_param};
-use lighting::{LightSources, LightingPass, LightingPush};
-use rsm::{RsmPass, VplPass};
-use vpl::SunView;
+use lighting::{LightingPass, LightingPush};
+use lights::ManyLights;
 
 pub const REGISTRATION: Registration = Registration {
     name: "deferred",
@@ -152,10 +150,10 @@ pub struct GBuffer {
 }
 
 impl GBuffer {
-    pub fn new(gpu: &cbr_gpu::Gpu, width: u32, height: u32) -> Result<GBuffer> {
+    pub fn new(gpu: &cbr_gpu::Gpu, prefix: &str, width: u32, height: u32) -> Result<GBuffer> {
         use vk::ImageUsageFlags as U;
         let img = |name: &str, format, usage| {
-            let name = format!("deferred.{name}");
+            let name = format!("{prefix}.{name}");
             Image::new(gpu, &ImageDesc::new_2d(&name, format, width, height, usage))
         };
         let attachment = U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC;
@@ -204,200 +202,100 @@ pub struct Deferred {
     raster: RasterConfig,
     gbuffer_pass: ScenePass,
     g: GBuffer,
+    lights: ManyLights,
     lighting: LightingPass,
-    /// The `points=N` lights (world), drawn at the first frame from the scene's seed.
-    point_lights: Option<Vec<PointLight>>,
-    points: Buffer,
-    rsm: Option<RsmPass>,
-    vpl_pass: Option<VplPass>,
-    /// The VPLs (device-local; one unread VPL when there are none), read by the lighting pass.
-    vpls: Buffer,
-    vpl_readback: Option<Buffer>,
-    /// The scene seed the VPL pattern was written for.
-    texels_seed: Option<u64>,
-    local_bounds: Option<Vec<Option<(DVec3, DVec3)>>>,
     readbacks: LayerReadbacks,
     size: (u32, u32),
 }
 
 impl Deferred {
-    /// What [`Deferred::new`] allocates (crate::memory): the G-buffer and frame, the light
-    /// buffers, with VPLs the sun's map, its VPL pattern and the VPL readback, and the readbacks.
+    /// What [`Deferred::new`] allocates (crate::memory): [`estimate_gbuffer_and_lights`] and the
+    /// readbacks.
     pub fn estimate(config: &DeferredConfig, w: u32, h: u32) -> MemoryEstimate {
         let mut e = MemoryEstimate::new();
-        for name in ["position", "normal", "albedo"] {
-            e.image(format!("deferred.{name}"), GBUFFER_FORMAT, w, h);
-        }
-        e.image("deferred.velocity", VELOCITY_FORMAT, w, h);
-        e.image("deferred.ids", ID_FORMAT, w, h);
-        e.image("deferred.depth", DEPTH_FORMAT, w, h);
-        e.image("deferred.color", COLOR_FORMAT, w, h);
-        let light = std::mem::size_of::<LightData>() as u64;
-        e.storage_buffer(
-            "deferred.points",
-            u64::from(config.points.max(1)) * light,
-            true,
-        );
-        let vpl_bytes = u64::from(config.vpls.max(1)) * std::mem::size_of::<Vpl>() as u64;
-        e.storage_buffer("deferred.vpls", vpl_bytes, false);
-        if config.vpls > 0 {
-            let side = config.rsm;
-            for name in ["position", "normal", "flux"] {
-                e.image(format!("deferred.rsm.{name}"), GBUFFER_FORMAT, side, side);
-            }
-            e.image("deferred.rsm.depth", DEPTH_FORMAT, side, side);
-            e.storage_buffer("deferred.vpl_texels", u64::from(config.vpls) * 8, true);
-            e.buffer("readback.vpls", vpl_bytes, true);
-        }
+        estimate_gbuffer_and_lights(&mut e, "deferred", config, w, h);
         LayerReadbacks::estimate(&mut e, w, h);
         e
     }
 
     pub fn new(ctx: &BuildCtx, config: DeferredConfig) -> Result<Deferred> {
-        if config.vpls > 0 && ctx.scene.light_count.0 == 0 {
-            return Err(GpuError::Other(format!(
-                "deferred:vpls={}: the VPLs come from a reflective shadow map rendered from the \
-                 sun, the scene's first directional light, and this scene has none (use vpls=0; \
-                 points=N adds point lights)",
-                config.vpls
-            )));
-        }
-        let (gpu, (w, h)) = (ctx.gpu, (ctx.width, ctx.height));
-        let raster = RasterConfig {
-            gbuffer: true,
-            ..RasterConfig::native(w, h)
-        };
-        let gbuffer_pass = ScenePass::new(
-            gpu,
-            ctx.shaders,
-            ctx.scene,
-            "deferred.gbuffer",
-            &raster,
-            ctx.counter,
-        )?;
-        let g = GBuffer::new(gpu, w, h)?;
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let points = Buffer::new(
-            gpu,
-            "deferred.points",
-            u64::from(config.points.max(1)) * std::mem::size_of::<LightData>() as u64,
-            storage,
-            Location::CpuToGpu,
-        )?;
-        let vpls = Buffer::new(
-            gpu,
-            "deferred.vpls",
-            u64::from(config.vpls.max(1)) * std::mem::size_of::<Vpl>() as u64,
-            storage | vk::BufferUsageFlags::TRANSFER_SRC,
-            Location::GpuOnly,
-        )?;
-        let (rsm, vpl_pass, vpl_readback) = if config.vpls > 0 {
-            let rsm = RsmPass::new(gpu, ctx.shaders, ctx.scene, ctx.counter, config.rsm)?;
-            let vp = VplPass::new(gpu, ctx.shaders, &rsm, &vpls, config.vpls)?;
-            let rb = Buffer::new(
-                gpu,
-                "readback.vpls",
-                vpls.size(),
-                vk::BufferUsageFlags::TRANSFER_DST,
-                Location::GpuToCpu,
-            )?;
-            (Some(rsm), Some(vp), Some(rb))
-        } else {
-            (None, None, None)
-        };
-        let sources = LightSources {
-            points: &points,
-            vpls: &vpls,
-        };
-        let lighting = LightingPass::new(gpu, ctx.shaders, ctx.scene, ctx.counter, &g, &sources)?;
-        let readbacks = LayerReadbacks::new(gpu, g.layers())?;
+        let lights = ManyLights::new(ctx, &config, "deferred")?;
+        let (raster, gbuffer_pass, g) = gbuffer(ctx, "deferred")?;
+        let lighting = LightingPass::new(ctx, &g, &lights.sources(), None)?;
+        let readbacks = LayerReadbacks::new(ctx.gpu, g.layers())?;
         Ok(Deferred {
             config,
             raster,
             gbuffer_pass,
             g,
+            lights,
             lighting,
-            point_lights: None,
-            points,
-            rsm,
-            vpl_pass,
-            vpls,
-            vpl_readback,
-            texels_seed: None,
-            local_bounds: None,
             readbacks,
-            size: (w, h),
+            size: (ctx.width, ctx.height),
         })
-    }
-
-    /// Writes this frame's extra point lights and, with VPLs, the pattern (once per seed); returns
-    /// where the sun's map looks (`None` inside: nothing of the scene within reach, the map stays
-    /// empty) and the VPL clamp c (m^2).
-    fn prepare(&mut self, ctx: &FrameCtx) -> Result<Option<SunFrame>> {
-        let scene = ctx.scene;
-        let camera = ctx.view.camera.position;
-        let reach = f64::from(self.config.reach);
-        if self.config.points > 0 {
-            let lights = self
-                .point_lights
-                .get_or_insert_with(|| vpl::random_point_lights(scene, self.config.points, reach));
-            let data = vpl::light_data(lights, camera);
-            self.points.write(0, bytemuck::cast_slice(&data))?;
-        }
-        let Some(vp) = self.vpl_pass.as_mut() else {
-            return Ok(None);
-        };
-        let (n, side) = (self.config.vpls, self.config.rsm);
-        let seed = scene.settings.seed;
-        if self.texels_seed != Some(seed) {
-            vp.write_texels(&vpl::vpl_texels(seed, n, side))?;
-            self.texels_seed = Some(seed);
-        }
-        let sun = scene.directional.first().ok_or_else(|| {
-            GpuError::Other("deferred: the VPLs need a directional light (the sun)".into())
-        })?;
-        let local = self
-            .local_bounds
-            .get_or_insert_with(|| vpl::local_bounds(scene));
-        let bounds = vpl::bounds_at(scene, local, ctx.view.time);
-        let view = match vpl::framed_region(bounds, camera, reach) {
-            Some(region) => {
-                Some(SunView::new(sun.direction, region, camera, side).map_err(GpuError::Other)?)
-            }
-            None => None,
-        };
-        let clamp_d2 = match (self.config.clamp, &view) {
-            (Some(d), _) => d * d,
-            // The VPLs' mean spacing: the map's area over N.
-            (None, Some(v)) => (4.0 * v.radius * v.radius / f64::from(n)) as f32,
-            (None, None) => 1.0,
-        };
-        Ok(Some(SunFrame { view, clamp_d2 }))
     }
 }
 
-/// The sun's map this frame.
-struct SunFrame {
-    view: Option<SunView>,
-    clamp_d2: f32,
+/// The G-buffer pass (native's raster with `RasterConfig::gbuffer`) and its targets.
+/// What [`gbuffer`] and [`ManyLights::new`] allocate under `prefix` (crate::memory): the
+/// G-buffer and frame, the light buffers and, with VPLs, the sun's map, its VPL pattern and the
+/// VPL readback.
+pub fn estimate_gbuffer_and_lights(
+    e: &mut MemoryEstimate,
+    prefix: &str,
+    config: &DeferredConfig,
+    w: u32,
+    h: u32,
+) {
+    for name in ["position", "normal", "albedo"] {
+        e.image(format!("{prefix}.{name}"), GBUFFER_FORMAT, w, h);
+    }
+    e.image(format!("{prefix}.velocity"), VELOCITY_FORMAT, w, h);
+    e.image(format!("{prefix}.ids"), ID_FORMAT, w, h);
+    e.image(format!("{prefix}.depth"), DEPTH_FORMAT, w, h);
+    e.image(format!("{prefix}.color"), COLOR_FORMAT, w, h);
+    let light = std::mem::size_of::<LightData>() as u64;
+    e.storage_buffer(
+        format!("{prefix}.points"),
+        u64::from(config.points.max(1)) * light,
+        true,
+    );
+    let vpl_bytes = u64::from(config.vpls.max(1)) * std::mem::size_of::<Vpl>() as u64;
+    e.storage_buffer(format!("{prefix}.vpls"), vpl_bytes, false);
+    if config.vpls > 0 {
+        let side = config.rsm;
+        for name in ["position", "normal", "flux"] {
+            e.image(format!("deferred.rsm.{name}"), GBUFFER_FORMAT, side, side);
+        }
+        e.image("deferred.rsm.depth", DEPTH_FORMAT, side, side);
+        e.storage_buffer("deferred.vpl_texels", u64::from(config.vpls) * 8, true);
+        e.buffer("readback.vpls", vpl_bytes, true);
+    }
+}
+
+pub fn gbuffer(ctx: &BuildCtx, name: &str) -> Result<(RasterConfig, ScenePass, GBuffer)> {
+    let (w, h) = (ctx.width, ctx.height);
+    let raster = RasterConfig {
+        gbuffer: true,
+        ..RasterConfig::native(w, h)
+    };
+    let pass = ScenePass::new(
+        ctx.gpu,
+        ctx.shaders,
+        ctx.scene,
+        &format!("{name}.gbuffer"),
+        &raster,
+        ctx.counter,
+    )?;
+    Ok((raster, pass, GBuffer::new(ctx.gpu, name, w, h)?))
 }
 
 impl Technique for Deferred {
     fn render(&mut self, ctx: &mut FrameCtx) -> Result<()> {
         let view = ctx.view.clone();
         ctx.upload(&view)?;
-        let sun = self.prepare(ctx)?;
-        let bg = ctx.gpu_scene.background;
-        let push = LightingPush {
-            background: [bg[0], bg[1], bg[2], 0.0],
-            counts: [
-                self.config.points,
-                self.config.vpls,
-                self.size.0,
-                self.size.1,
-            ],
-            params: [sun.as_ref().map_or(1.0, |s| s.clamp_d2), 0.0, 0.0, 0.0],
-        };
+        let sun = self.lights.prepare(ctx)?;
+        let push = LightingPush::new(ctx, &self.config, self.size, sun.as_ref());
         let counter = ctx.counter;
         let this = &*self;
         ctx.submit("frame", |cmd, profiler, gs| {
@@ -411,21 +309,18 @@ impl Technique for Deferred {
                 counter,
                 &this.raster,
             );
-            if let (Some(rsm), Some(vp), Some(sun)) = (&this.rsm, &this.vpl_pass, &sun) {
-                rsm.record(cmd, profiler, gs, sun.view.as_ref());
-                vp.record(cmd, profiler, rsm, &this.vpls);
-            }
-            let sources = LightSources {
-                points: &this.points,
-                vpls: &this.vpls,
-            };
-            this.lighting
-                .record(cmd, profiler, g, &sources, counter, &push);
+            this.lights.record(cmd, profiler, gs, sun.as_ref());
+            this.lighting.record(
+                cmd,
+                profiler,
+                g,
+                &this.lights.sources(),
+                counter,
+                &push,
+                None,
+            );
             this.readbacks.record(cmd, profiler, g.layers());
-            if let Some(rb) = &this.vpl_readback {
-                cmd.copy_buffer(&this.vpls, rb, rb.size());
-                cmd.use_buffer(rb, Access::HostRead);
-            }
+            this.lights.record_readback(cmd);
             cmd.use_buffer(counter, Access::HostRead);
             Ok(())
         })
@@ -448,16 +343,12 @@ impl Technique for Deferred {
         let mut out =
             self.readbacks
                 .output(ctx.view.width, ctx.view.height, ctx.view.camera.near)?;
-        if let Some(rb) = &self.vpl_readback {
-            let n = self.config.vpls as usize * std::mem::size_of::<Vpl>();
-            out.vpls = Some(bytemuck::pod_collect_to_vec(&rb.bytes()?[..n]));
-        }
+        out.vpls = self.lights.read_vpls()?;
         Ok(out)
     }
 
     fn target_bytes(&self) -> u64 {
         let (w, h) = self.size;
-        u64::from(w) * u64::from(h) * GBuffer::BYTES_PER_PIXEL
-            + self.rsm.as_ref().map_or(0, RsmPass::bytes)
+        u64::from(w) * u64::from(h) * GBuffer::BYTES_PER_PIXEL + self.lights.bytes()
     }
 }

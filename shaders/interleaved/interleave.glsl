@@ -1,0 +1,30 @@
+// `interleaved`'s split layout, shared by split.comp, shade.comp and gather.comp: the W x H
+// G-buffer becomes M x N sub-images of Ws x Hs = ceil(W/M) x ceil(H/N), side by side; sub-image
+// (i, j) holds the pixels (x, y) with x mod M = i, y mod N = j, so neighbouring texels of a
+// sub-image are M (N) pixels apart on screen (Segovia et al. 2006's "split" of the G-buffer).
+layout(set = 0, binding = BINDING_POSITION) uniform sampler2D g_position;
+layout(set = 0, binding = BINDING_NORMAL) uniform sampler2D g_normal;
+layout(std430, set = 0, binding = BINDING_VPLS) readonly buffer Vpls { Vpl vpls[]; };
+layout(set = 0, binding = BINDING_SPLIT_POSITION, rgba32f) uniform image2D s_position;
+layout(set = 0, binding = BINDING_SPLIT_NORMAL, rgba32f) uniform image2D s_normal;
+layout(set = 0, binding = BINDING_SPLIT_IRRADIANCE, rgba32f) uniform image2D s_irradiance;
+layout(set = 0, binding = BINDING_IRRADIANCE, rgba32f) uniform image2D irradiance;
+
+layout(push_constant) uniform Push {
+    ivec4 size;    // W, H, Ws, Hs
+    uvec4 counts;  // x: VPLs
+    vec4 params;   // x: the VPL clamp c (m^2)
+} pc;
+
+// The screen pixel of split texel s (may lie past the screen's edge when M or N does not divide
+// W or H).
+ivec2 pixel_of(ivec2 s) {
+    ivec2 sub = s / pc.size.zw;
+    return (s - sub * pc.size.zw) * ivec2(TILE_M, TILE_N) + sub;
+}
+
+// The split texel of screen pixel q.
+ivec2 split_of(ivec2 q) {
+    ivec2 sub = q % ivec2(TILE_M, TILE_N);
+    return sub * pc.size.zw + q / ivec2(TILE_M, TILE_N);
+}
