@@ -187,6 +187,16 @@ impl GBuffer {
         ]
     }
 
+    /// Velocity, depth and IDs for temporal post passes.
+    pub fn geometry(&self) -> Geometry<'_> {
+        Geometry {
+            velocity: &self.velocity,
+            depth: &self.depth,
+            ids: &self.ids,
+            packed: false,
+        }
+    }
+
     /// Colour, depth, velocity, IDs: the common layers.
     pub fn layers(&self) -> [&Image; 4] {
         [&self.color, &self.depth, &self.velocity, &self.ids]
@@ -273,6 +283,17 @@ pub fn estimate_gbuffer_and_lights(
     }
 }
 
+/// The frame's layers read back, with the frame's VPLs (deferred and interleaved).
+pub fn output(
+    readbacks: &LayerReadbacks,
+    lights: &ManyLights,
+    ctx: &FrameCtx,
+) -> Result<FrameOutput> {
+    let mut out = readbacks.output(ctx.view.width, ctx.view.height, ctx.view.camera.near)?;
+    out.vpls = lights.read_vpls()?;
+    Ok(out)
+}
+
 pub fn gbuffer(ctx: &BuildCtx, name: &str) -> Result<(RasterConfig, ScenePass, GBuffer)> {
     let (w, h) = (ctx.width, ctx.height);
     let raster = RasterConfig {
@@ -331,20 +352,11 @@ impl Technique for Deferred {
     }
 
     fn geometry(&self, _frame: u32) -> Option<Geometry<'_>> {
-        Some(Geometry {
-            velocity: &self.g.velocity,
-            depth: &self.g.depth,
-            ids: &self.g.ids,
-            packed: false,
-        })
+        Some(self.g.geometry())
     }
 
     fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput> {
-        let mut out =
-            self.readbacks
-                .output(ctx.view.width, ctx.view.height, ctx.view.camera.near)?;
-        out.vpls = self.lights.read_vpls()?;
-        Ok(out)
+        output(&self.readbacks, &self.lights, ctx)
     }
 
     fn target_bytes(&self) -> u64 {

@@ -232,20 +232,11 @@ impl Technique for Interleaved {
     }
 
     fn geometry(&self, _frame: u32) -> Option<Geometry<'_>> {
-        Some(Geometry {
-            velocity: &self.g.velocity,
-            depth: &self.g.depth,
-            ids: &self.g.ids,
-            packed: false,
-        })
+        Some(self.g.geometry())
     }
 
     fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput> {
-        let mut out =
-            self.readbacks
-                .output(ctx.view.width, ctx.view.height, ctx.view.camera.near)?;
-        out.vpls = self.lights.read_vpls()?;
-        Ok(out)
+        deferred::output(&self.readbacks, &self.lights, ctx)
     }
 
     fn target_bytes(&self) -> u64 {
