@@ -24,6 +24,16 @@ pub struct FrameTargets {
 }
 
 impl FrameTargets {
+    /// Velocity, depth and IDs for temporal post passes.
+    pub fn geometry(&self) -> crate::technique::Geometry<'_> {
+        crate::technique::Geometry {
+            velocity: &self.velocity,
+            depth: &self.depth,
+            ids: &self.ids,
+            packed: false,
+        }
+    }
+
     /// The colour attachments in the scene pipeline's order.
     pub fn colors(&self) -> [&Image; 3] {
         [&self.color, &self.velocity, &self.ids]

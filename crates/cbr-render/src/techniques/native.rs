@@ -83,13 +83,7 @@ impl Technique for Native {
     }
 
     fn geometry(&self, _frame: u32) -> Option<Geometry<'_>> {
-        let t = &self.targets;
-        Some(Geometry {
-            velocity: &t.velocity,
-            depth: &t.depth,
-            ids: &t.ids,
-            packed: false,
-        })
+        Some(self.targets.geometry())
     }
 
     fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput> {
