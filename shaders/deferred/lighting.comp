@@ -40,6 +40,9 @@ layout(push_constant) uniform Push {
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (px.x >= int(pc.counts.z) || px.y >= int(pc.counts.w)) return;
+#if defined(INTERLEAVED) && defined(DEBUG)
+    imageStore(debug_bits, px, uvec4(0u));
+#endif
     uint object = texelFetch(g_ids, px, 0).x;
     if (object == 0u) {
         imageStore(out_color, px, vec4(pc.background.rgb, 1.0));
@@ -59,7 +62,12 @@ void main() {
     if (pc.counts.y > 0u) {
 #ifdef INTERLEAVED
         // `interleaved`: the filtered sub-image estimates, then (as below) times albedo.
-        c += albedo * interleaved_irradiance(px, object, p, n);
+        uint bits;
+        c += albedo * interleaved_irradiance(px, object, p, n, bits);
+#ifdef DEBUG
+        if (texelFetch(g_irradiance, px, 0).a != 0.0) bits |= DBG_ROUNDTRIP;
+        imageStore(debug_bits, px, uvec4(bits));
+#endif
 #else
         vec3 e = vec3(0.0);
         for (uint i = 0u; i < pc.counts.y; ++i) e += vpl_irradiance(p, n, vpls[i], pc.params.x);

@@ -1,15 +1,29 @@
-// `interleaved`'s filter, in the lighting pass (deferred/lighting.comp with INTERLEAVED): the
-// VPLs' irradiance at pixel p from the gathered sub-image estimates of the M x N window around p,
-// offsets -(M-1)/2 .. M/2 (and likewise for N): one pixel of each subset. FILTER 0: p's own
-// estimate (no filter); 1: the window's mean; 2 (ours): the window's mean where a neighbour that
-// is not on p's surface (another object, a normal more than ~25 degrees off, or off p's tangent
-// plane by more than 2% of p's distance) is replaced by its subset shaded at p itself. On a
-// smooth surface that is the box; at an edge, p shades the subsets its surface lacks (DESIGN.md);
-// where every neighbour is rejected, p gets every VPL, the reference.
+// `interleaved`'s filter, in the lighting pass (deferred/lighting.comp with INTERLEAVED): the VPLs'
+// irradiance at pixel p from the gathered sub-image estimates. The M x N window around p, offsets
+// -(M-1)/2 .. M/2 (and likewise for N), holds one pixel of each subset.
+//   FILTER 0 (`none`) and 3 (`seed`: the image bound here is already the seed's blur,
+//     seed_blur.comp): p's own texel.
+//   FILTER 1 (`box`): the window's mean.
+//   FILTER 2 (`ours`): for each subset, the window's pixel holding it if it lies on p's surface
+//     (same object, normals within ~25 degrees, on p's tangent plane within 2% of p's distance),
+//     with SEARCH 1 else the nearest pixel holding it one period (M or N pixels) further that does;
+//     when at least ENOUGH subsets were found (`enough=K`), their mean; otherwise every subset
+//     with no such pixel is shaded at p itself (ENOUGH = M N, the default: always). Every subset counts once, so on a smooth surface it is
+//     the box, and at an edge p never mixes in another surface's light; only where its surface
+//     holds no pixel of a subset nearby (thin features) does p pay for that subset.
 layout(set = 0, binding = BINDING_IRRADIANCE) uniform sampler2D g_irradiance;
+#ifdef DEBUG
+// Per pixel (docs/interleaved.md, debug views): bits 0-5 the pixel's subset, bit 6 edge (the
+// window holds a pixel not on p's surface; `seed`: the seed's edge test), bits 8-14 the subsets
+// p shaded itself, bit 16 where gather(split(G-buffer)) differs from the G-buffer.
+layout(set = 0, binding = BINDING_DEBUG_BITS, r32ui) uniform writeonly uimage2D debug_bits;
+#endif
 
 #define SAME_NORMAL_COS 0.9
 #define PLANE_TOLERANCE 0.02
+const uint DBG_EDGE = 1u << 6;
+const uint DBG_FALLBACK_SHIFT = 8u;
+const uint DBG_ROUNDTRIP = 1u << 16;
 
 #include "../interleaved/subsets.glsl"
 
@@ -24,25 +38,86 @@ bool same_surface(ivec2 q, uint object, vec3 p, vec3 n) {
     return dot(n, nq) >= SAME_NORMAL_COS && abs(dot(n, pq - p)) <= PLANE_TOLERANCE * length(p);
 }
 
-vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n) {
-#if FILTER == 0
-    return texelFetch(g_irradiance, px, 0).rgb;
-#else
-    vec3 sum = vec3(0.0);
+#if FILTER == 3
+#include "../interleaved/seed_edges.glsl"
+#endif
+
+// Candidate i (0, 1, 2) along one axis for the window offset o of period P: o itself, then the
+// same subset one period the other way (both ways for o = 0); 1 << 20 where there is none.
+int candidate(int o, int period, int i) {
+    if (i == 0) return o;
+    if (o > 0) return i == 1 ? o - period : 1 << 20;
+    if (o < 0) return i == 1 ? o + period : 1 << 20;
+    return i == 1 ? -period : period;
+}
+
+// The filtered irradiance; `bits` gets the debug bits (edge, fallback count).
+vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, out uint bits) {
+    bits = subset_of(px);
+#if FILTER == 0 || FILTER == 3
+#if defined(DEBUG) && FILTER == 3
+    if (seed_edge(px)) bits |= DBG_EDGE;
+#elif defined(DEBUG)
     for (int oy = -(TILE_N - 1) / 2; oy <= TILE_N / 2; ++oy) {
         for (int ox = -(TILE_M - 1) / 2; ox <= TILE_M / 2; ++ox) {
             ivec2 q = px + ivec2(ox, oy);
-            bool use = on_screen(q);
-#if FILTER == 2
-            use = use && same_surface(q, object, p, n);
+            if (on_screen(q) && !same_surface(q, object, p, n)) bits |= DBG_EDGE;
+        }
+    }
+#endif
+    return texelFetch(g_irradiance, px, 0).rgb;
+#else
+    vec3 sum = vec3(0.0);
+    uint found = 0u;
+    uvec2 missing = uvec2(0u);  // window slots (t = row M + column) with no estimate to use
+    for (int oy = -(TILE_N - 1) / 2; oy <= TILE_N / 2; ++oy) {
+        for (int ox = -(TILE_M - 1) / 2; ox <= TILE_M / 2; ++ox) {
+            ivec2 q = px + ivec2(ox, oy);
+            bool on = on_screen(q);
+            bool here = on && same_surface(q, object, p, n);
+            if (on && !here) bits |= DBG_EDGE;
+#if FILTER == 1
+            bool use = on;
+#else
+            bool use = here;
+            // Not on p's surface: the same subset one period further, nearest first (SEARCH 1).
+            for (int s = 1; s <= 4 * SEARCH && !use; ++s) {
+                for (int i = max(0, s - 2); i <= min(s, 2) && !use; ++i) {
+                    int dx = candidate(ox, TILE_M, i);
+                    int dy = candidate(oy, TILE_N, s - i);
+                    if (dx == (1 << 20) || dy == (1 << 20)) continue;
+                    ivec2 c = px + ivec2(dx, dy);
+                    if (on_screen(c) && same_surface(c, object, p, n)) {
+                        q = c;
+                        use = true;
+                    }
+                }
+            }
 #endif
             if (use) {
                 sum += texelFetch(g_irradiance, q, 0).rgb;
+                found += 1u;
             } else {
-                sum += subset_irradiance(p, n, subset_of(q), pc.counts.y, pc.params.x);
+                uint t = uint((oy + (TILE_N - 1) / 2) * TILE_M + ox + (TILE_M - 1) / 2);
+                missing[t >> 5] |= 1u << (t & 31u);
             }
         }
     }
+#if FILTER == 2
+    // Enough of p's own surface in the window: the mean of what it holds (each estimate is
+    // one subset's, so any of them estimates all the VPLs).
+    if (found >= uint(ENOUGH)) return sum / float(found);
+#endif
+    // Otherwise p shades the missing subsets itself.
+    uint fallback = 0u;
+    for (uint t = 0u; t < SUBSETS; ++t) {
+        if ((missing[t >> 5] & (1u << (t & 31u))) == 0u) continue;
+        ivec2 o = ivec2(int(t % uint(TILE_M)) - (TILE_M - 1) / 2,
+                        int(t / uint(TILE_M)) - (TILE_N - 1) / 2);
+        sum += subset_irradiance(p, n, subset_of(px + o), pc.counts.y, pc.params.x);
+        fallback += 1u;
+    }
+    bits |= fallback << DBG_FALLBACK_SHIFT;
     return sum / float(SUBSETS);
 #endif
 }

@@ -1,6 +1,11 @@
-// `interleaved`'s light subsets: subset k of the M x N (TILE_M x TILE_N) sub-images is every VPL i
-// with i mod (M N) = k, a stride through the seeded Halton pattern, itself spread over the whole
-// map. Its irradiance times M N estimates that of all the VPLs (N is a multiple of M N). Needs
+// `interleaved`'s light subsets: subset k of the M x N (TILE_M x TILE_N) sub-images is the k-th
+// contiguous block of count / (M N) VPLs (count is a multiple of M N). The VPLs are the seeded
+// Halton (2, 3) points in order, and any block of consecutive Halton points is stratified over the
+// whole map (64 consecutive indices take every residue mod 64: one point in each 1/64 column), so
+// each subset spreads over the whole map. (A stride, every (M N)-th VPL from the k-th, is not:
+// indices equal mod 16 share the first four binary digits of their base-2 radical inverse, so such
+// a subset lies in one 1/16 strip of the map; crates/cbr-render/src/techniques/interleaved/mod.rs,
+// `subset_range`, and its test.) Its irradiance times M N estimates that of all the VPLs. Needs
 // `vpls` and shading.glsl's vpl_irradiance.
 #ifndef SUBSETS_GLSL
 #define SUBSETS_GLSL
@@ -15,8 +20,9 @@ uint subset_of(ivec2 q) {
 }
 
 vec3 subset_irradiance(vec3 p, vec3 n, uint k, uint count, float clamp_d2) {
+    uint size = count / SUBSETS;
     vec3 e = vec3(0.0);
-    for (uint i = k; i < count; i += SUBSETS) e += vpl_irradiance(p, n, vpls[i], clamp_d2);
+    for (uint i = k * size; i < (k + 1u) * size; ++i) e += vpl_irradiance(p, n, vpls[i], clamp_d2);
     return e * float(SUBSETS);
 }
 #endif

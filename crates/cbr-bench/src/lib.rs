@@ -377,6 +377,7 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
                     "flip_mean": opt(mean(&m.flip)),
                     "flip_median_mean": opt(mean(&m.flip_median)),
                     "flip_edge_mean": opt(mean(&m.flip_edge)),
+                    "flip_interior_mean": opt(mean(&m.flip_interior)),
                     "flip_disocc_mean": opt(mean(&m.flip_disocc)),
                     "disocc_fraction_mean": opt(mean(&m.disocc_fraction)),
                     "relmse_mean": opt(mean(&m.relmse)),

@@ -104,6 +104,8 @@ pub struct Measured {
     pub flip: Vec<f64>,
     pub flip_median: Vec<f64>,
     pub flip_edge: Vec<f64>,
+    /// FLIP mean over the pixels that are not edge pixels.
+    pub flip_interior: Vec<f64>,
     pub flip_disocc: Vec<f64>,
     pub disocc_fraction: Vec<f64>,
     pub relmse: Vec<f64>,
@@ -306,6 +308,8 @@ fn compare_frame(
             .unwrap_or(f64::NAN)
     };
     let (flip_edge, flip_disocc) = (masked(&rf.edge), masked(&rf.disocc));
+    let interior: Vec<bool> = rf.edge.iter().map(|&e| !e).collect();
+    let flip_interior = masked(&interior);
     let bits = out.resolve.as_ref().and_then(|r| r.debug_bits.as_ref());
     if let (Some(bits), Some(map)) = (bits, map.as_ref()) {
         // Per-pixel error for the attribution: mean |display(test) - display(ref)| over RGB.
@@ -333,6 +337,7 @@ fn compare_frame(
     m.flip.push(v(Metric::Flip));
     m.flip_median.push(flip_median);
     m.flip_edge.push(flip_edge);
+    m.flip_interior.push(flip_interior);
     m.flip_disocc.push(flip_disocc);
     m.disocc_fraction.push(rf.disocc_fraction);
     m.relmse.push(v(Metric::RelMse));
@@ -349,6 +354,7 @@ fn compare_frame(
         "flip_mean": v(Metric::Flip),
         "flip_median": flip_median,
         "flip_edge": finite_or_null(flip_edge),
+        "flip_interior": finite_or_null(flip_interior),
         "flip_disocc": finite_or_null(flip_disocc),
         "disocc_fraction": rf.disocc_fraction,
         "relmse": v(Metric::RelMse),

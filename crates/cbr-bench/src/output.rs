@@ -160,7 +160,7 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
 
 /// Columns of bench.csv: every row carries device, driver, resolution and settings. Columns added
 /// later go at the end, so older columns keep their positions.
-pub const CSV_COLUMNS: [&str; 32] = [
+pub const CSV_COLUMNS: [&str; 33] = [
     "scene",
     "config",
     "technique",
@@ -184,6 +184,7 @@ pub const CSV_COLUMNS: [&str; 32] = [
     "ssim_mean",
     "flip_mean",
     "flip_edge_mean",
+    "flip_interior_mean",
     "relmse_mean",
     "reference",
     "pareto",
@@ -234,6 +235,7 @@ pub fn csv(bench: &serde_json::Value) -> String {
             &r["error"]["ssim_mean"],
             &r["error"]["flip_mean"],
             &r["error"]["flip_edge_mean"],
+            &r["error"]["flip_interior_mean"],
             &r["error"]["relmse_mean"],
             &r["reference"],
             &r["pareto"],

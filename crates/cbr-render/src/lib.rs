@@ -21,7 +21,8 @@ pub mod technique;
 pub mod techniques;
 
 pub use renderer::{
-    AnalyticLayers, Coverage, FrameOutput, RenderSettings, Renderer, ResolveOutput,
+    AnalyticLayers, Coverage, FrameOutput, InterleavedLayers, RenderSettings, Renderer,
+    ResolveOutput,
 };
 pub use resolve::{Mapping, ResolveMode, ResolveSettings};
 pub use spec::Spec;

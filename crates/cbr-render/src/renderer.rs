@@ -100,6 +100,8 @@ pub struct FrameOutput {
     pub analytic: Option<AnalyticLayers>,
     /// `deferred:vpls=N` frames: the frame's virtual point lights (camera-relative).
     pub vpls: Option<Vec<crate::gpu_types::Vpl>>,
+    /// `interleaved:...:debug` frames: the debug views.
+    pub interleaved: Option<InterleavedLayers>,
     /// Where the frame came from when it was not rendered now (a cache file).
     pub cached: Option<std::path::PathBuf>,
     pub timings: Vec<PassTiming>,
@@ -122,6 +124,26 @@ pub struct Coverage {
     pub edge: Vec<u8>,
     /// Fraction of the pixel's samples that hit geometry.
     pub fraction: Vec<f32>,
+}
+
+/// What `interleaved:...:debug` adds to a frame (docs/interleaved.md, the debug views).
+#[derive(Clone, Debug, Default)]
+pub struct InterleavedLayers {
+    /// M, N.
+    pub tile: (u32, u32),
+    /// Per pixel: its VPL subset, (x mod M) + M (y mod N); 0 where nothing was drawn.
+    pub subset: Vec<u8>,
+    /// Per pixel: 1 where the filter's M x N window holds a pixel that is not on the pixel's
+    /// surface (`seed`: the seed's own edge test).
+    pub edge: Vec<u8>,
+    /// Per pixel: the subsets the pixel shaded itself (`ours`' fallback; 0 with other filters).
+    pub fallback: Vec<u8>,
+    /// Pixels where the G-buffer split and gathered back differs from the G-buffer (position or
+    /// normal, bit for bit): 0 unless the split and gather are not inverses.
+    pub roundtrip_mismatches: u64,
+    /// The split mosaic of the subset estimates (M Ws x N Hs texels, RGB); `None` with
+    /// `implicit`, which has no split.
+    pub mosaic: Option<(u32, u32, Vec<[f32; 3]>)>,
 }
 
 /// What `analytic` adds to a frame: per pixel, the fragments that touched it, the overflow (those
@@ -299,7 +321,8 @@ impl Renderer {
             }
             _ => None,
         };
-        let profiler = Profiler::new(gpu, "renderer.profiler", 8)?;
+        // Timed passes per frame: interleaved:MxN:seed:floor has the most (12).
+        let profiler = Profiler::new(gpu, "renderer.profiler", 16)?;
         Ok(Renderer {
             gpu: gpu.clone(),
             scene: gpu_scene,

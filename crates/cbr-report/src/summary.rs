@@ -36,7 +36,7 @@ struct Col {
     tip: &'static str,
 }
 
-const COLS: [Col; 13] = [
+const COLS: [Col; 14] = [
     Col {
         key: "frame_ms",
         title: "GPU ms (median)",
@@ -116,6 +116,16 @@ const COLS: [Col; 13] = [
         higher: Some(false),
         optional: true,
         tip: "FLIP mean over the reference's edge pixels: more than one object ID among its samples",
+    },
+    Col {
+        key: "flip_interior",
+        title: "interior FLIP",
+        get: |r| num(&r["error"]["flip_interior_mean"]),
+        digits: 4,
+        error: true,
+        higher: Some(false),
+        optional: true,
+        tip: "FLIP mean over the pixels that are not edge pixels",
     },
     Col {
         key: "flip_disocc",

@@ -316,6 +316,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         }
         write_debug_pngs(&a.out, f, &out)?;
         write_seed_figure(&a.out, f, &out, &display.to_rgba8(&out.color))?;
+        write_interleaved_pngs(&a.out, f, &out)?;
         for t in &out.timings {
             pass_times.entry(t.name.clone()).or_default().push(t.gpu_ms);
         }
@@ -331,6 +332,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             "shaded_fragments": out.shaded_fragments,
             "nonfinite_fragments": out.nonfinite_fragments,
             "analytic": analytic_summary(&out),
+            "interleaved": interleaved_summary(&out),
         }));
         bar.inc(1);
     }
@@ -598,6 +600,19 @@ fn debug_layers(out: &FrameOutput) -> Vec<cbr_metrics::io::ExtraLayer> {
             ],
         ));
     }
+    if let Some(i) = &out.interleaved {
+        // `interleaved:...:debug`: per pixel its VPL subset, the edge mask (the filter's window
+        // holds another surface; `seed`: the seed's edge test) and the subsets it shaded itself.
+        let f = |v: &[u8]| v.iter().map(|&x| f32::from(x)).collect();
+        layers.push((
+            "interleaved".to_string(),
+            vec![
+                ("subset".to_string(), f(&i.subset)),
+                ("edge".to_string(), f(&i.edge)),
+                ("fallback".to_string(), f(&i.fallback)),
+            ],
+        ));
+    }
     let Some(r) = &out.resolve else {
         return layers;
     };
@@ -647,6 +662,97 @@ fn analytic_summary(out: &FrameOutput) -> serde_json::Value {
         "seed_differs_pixels": count(&a.seed_differs),
         "seed_differs_edge_fraction": if edge > 0 { seed as f64 / edge as f64 } else { 0.0 },
     })
+}
+
+/// `interleaved:...:debug` frames in run.json: M x N, pixels on a surface, edge pixels, pixels
+/// that shaded a subset themselves and the mean number of subsets they shaded, and the pixels where
+/// the split G-buffer gathered back differs from the G-buffer (0 unless the passes are broken).
+fn interleaved_summary(out: &FrameOutput) -> serde_json::Value {
+    let Some(i) = &out.interleaved else {
+        return json!(null);
+    };
+    let drawn: Vec<bool> = out.ids.iter().map(|id| id[0] != 0).collect();
+    let count = |v: &[u8]| v.iter().zip(&drawn).filter(|&(&x, &d)| x != 0 && d).count();
+    let visible = drawn.iter().filter(|&&d| d).count();
+    let shaded: u64 = i.fallback.iter().map(|&x| u64::from(x)).sum();
+    json!({
+        "tile": [i.tile.0, i.tile.1],
+        "visible_pixels": visible,
+        "edge_pixels": count(&i.edge),
+        "fallback_pixels": count(&i.fallback),
+        "fallback_subsets_per_visible_pixel":
+            if visible > 0 { shaded as f64 / visible as f64 } else { 0.0 },
+        "roundtrip_mismatches": i.roundtrip_mismatches,
+    })
+}
+
+/// `interleaved:...:debug`: debug/frame_NNNN_interleaved_{mosaic,subset,edges,fallback}.png: the
+/// split mosaic of the subset estimates (x / (1 + x), sRGB-like 1/2.2; not with `implicit`), the
+/// subset index (grey k / (M N - 1)), the edge mask (white) and the fallback (black none, then
+/// dark red to yellow as the subsets shaded at the pixel go from 1 to M N).
+fn write_interleaved_pngs(dir: &Path, f: u32, out: &FrameOutput) -> Result<()> {
+    let Some(i) = &out.interleaved else {
+        return Ok(());
+    };
+    let dbg = dir.join("debug");
+    std::fs::create_dir_all(&dbg).with_context(|| format!("cannot create {}", dbg.display()))?;
+    let png = |name: &str, w: u32, h: u32, rgba: Vec<u8>| {
+        write_png_rgba8(
+            &dbg.join(format!("frame_{f:04}_interleaved_{name}.png")),
+            w,
+            h,
+            &rgba,
+        )
+    };
+    if let Some((w, h, texels)) = &i.mosaic {
+        let tone = |x: f32| {
+            let x = if x.is_finite() { x.max(0.0) } else { 0.0 };
+            ((x / (1.0 + x)).powf(1.0 / 2.2) * 255.0).round() as u8
+        };
+        let rgba = texels
+            .iter()
+            .flat_map(|t| [tone(t[0]), tone(t[1]), tone(t[2]), 255])
+            .collect();
+        png("mosaic", *w, *h, rgba)?;
+    }
+    let (w, h) = (out.width, out.height);
+    let subsets = (i.tile.0 * i.tile.1).max(2) - 1;
+    let grey = |v: u8| [v, v, v, 255];
+    png(
+        "subset",
+        w,
+        h,
+        i.subset
+            .iter()
+            .flat_map(|&k| grey((u32::from(k) * 255 / subsets) as u8))
+            .collect(),
+    )?;
+    png(
+        "edges",
+        w,
+        h,
+        i.edge.iter().flat_map(|&e| grey(e * 255)).collect(),
+    )?;
+    let all = (i.tile.0 * i.tile.1) as f32;
+    let heat = |n: u8| {
+        if n == 0 {
+            return [0, 0, 0, 255];
+        }
+        let t = f32::from(n) / all;
+        [
+            (128.0 + 127.0 * t.min(0.5) * 2.0) as u8,
+            (255.0 * ((t - 0.5).max(0.0) * 2.0)) as u8,
+            0,
+            255,
+        ]
+    };
+    png(
+        "fallback",
+        w,
+        h,
+        i.fallback.iter().flat_map(|&n| heat(n)).collect(),
+    )?;
+    Ok(())
 }
 
 /// `analytic:seed`: debug/frame_NNNN_seed_differs.png, the frame with the pixels where the seed's

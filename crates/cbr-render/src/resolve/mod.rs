@@ -327,9 +327,11 @@ impl ResolvePass {
         e.image("resolve.debug_bits", vk::Format::R32_UINT, w, h);
         e.image("resolve.debug_velocity", vk::Format::R32G32_SFLOAT, w, h);
         if settings.bandwidth_floor {
-            let (read, write) = CopyFloor::bytes(w, h, settings.f32_history);
-            e.storage_buffer("copy_floor.src", read.div_ceil(16) * 16, false);
-            e.storage_buffer("copy_floor.dst", write.div_ceil(16) * 16, false);
+            CopyFloor::estimate(
+                e,
+                "copy_floor",
+                CopyFloor::bytes(w, h, settings.f32_history),
+            );
         }
         e.readback("readback.resolved", color, w, h, 1);
         e.readback("readback.resolved_geom", HISTORY_GEOM_FORMAT, w, h, 1);
@@ -688,6 +690,7 @@ impl ResolveReadbacks {
 /// texel of colour, depth and ID per missing pixel; one colour, depth and ID per output pixel),
 /// as 16-byte words, in the same command buffer.
 pub struct CopyFloor {
+    name: &'static str,
     pipeline: Pipeline,
     _layout: SetLayout,
     set: DescriptorSet,
@@ -715,14 +718,32 @@ impl CopyFloor {
 
     fn new(gpu: &Gpu, shaders: &Shaders, w: u32, h: u32, f32_history: bool) -> Result<CopyFloor> {
         let (read, write) = CopyFloor::bytes(w, h, f32_history);
-        let layout = SetLayout::new(gpu, "copy_floor.set_layout", &COPY_BINDINGS)?;
+        CopyFloor::named(
+            gpu,
+            shaders,
+            "resolve.copy_floor",
+            "copy_floor",
+            (read, write),
+        )
+    }
+
+    /// A copy kernel reading `read` and writing `write` bytes (rounded up to 16-byte words),
+    /// timed as the pass `name`; its buffers are `{buffers}.src` and `{buffers}.dst`.
+    pub fn named(
+        gpu: &Gpu,
+        shaders: &Shaders,
+        name: &'static str,
+        buffers: &str,
+        (read, write): (u64, u64),
+    ) -> Result<CopyFloor> {
+        let layout = SetLayout::new(gpu, &format!("{buffers}.set_layout"), &COPY_BINDINGS)?;
         let defines: Vec<(String, String)> =
             COPY_BINDINGS.iter().map(BindingDesc::define).collect();
         let cs = shaders.compile("resolve/copy_floor.comp", &defines)?;
         let pipeline = Pipeline::compute(
             gpu,
             &ComputeDesc {
-                name: "resolve.copy_floor",
+                name,
                 shader: &cs,
                 set_layouts: &[&layout],
                 push_constant_bytes: 8,
@@ -730,7 +751,7 @@ impl CopyFloor {
         )?;
         let words_in = read.div_ceil(16) as u32;
         let words_out = write.div_ceil(16) as u32;
-        let buf = |name, words: u32| {
+        let buf = |name: &str, words: u32| {
             Buffer::new(
                 gpu,
                 name,
@@ -739,15 +760,16 @@ impl CopyFloor {
                 Location::GpuOnly,
             )
         };
-        let src = buf("copy_floor.src", words_in)?;
-        let dst = buf("copy_floor.dst", words_out)?;
+        let src = buf(&format!("{buffers}.src"), words_in)?;
+        let dst = buf(&format!("{buffers}.dst"), words_out)?;
         let set = DescriptorSet::new(
             gpu,
-            "copy_floor.set",
+            &format!("{buffers}.set"),
             &layout,
             &[Write::Buffer(0, &src), Write::Buffer(1, &dst)],
         )?;
         Ok(CopyFloor {
+            name,
             pipeline,
             _layout: layout,
             set,
@@ -758,10 +780,20 @@ impl CopyFloor {
         })
     }
 
-    fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler) {
+    /// What [`CopyFloor::named`] allocates.
+    pub fn estimate(
+        e: &mut crate::memory::MemoryEstimate,
+        buffers: &str,
+        (read, write): (u64, u64),
+    ) {
+        e.storage_buffer(format!("{buffers}.src"), read.div_ceil(16) * 16, false);
+        e.storage_buffer(format!("{buffers}.dst"), write.div_ceil(16) * 16, false);
+    }
+
+    pub fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler) {
         cmd.use_buffer(&self._src, Access::ComputeSampled);
         cmd.use_buffer(&self._dst, Access::ComputeStorageWrite);
-        let scope = profiler.begin(cmd, "resolve.copy_floor", PassKind::Compute);
+        let scope = profiler.begin(cmd, self.name, PassKind::Compute);
         cmd.bind_pipeline(&self.pipeline);
         cmd.bind_set(&self.pipeline, 0, &self.set);
         cmd.push_constants(

@@ -14,7 +14,7 @@ use super::{DeferredConfig, GBuffer};
 use crate::technique::{BuildCtx, FrameCtx};
 
 /// The lighting pass's set: the one definition of its bindings.
-pub const BINDINGS: [BindingDesc; 13] = {
+pub const BINDINGS: [BindingDesc; 14] = {
     use DescriptorKind::{
         CombinedImageSampler as S, StorageBuffer as B, StorageImage as I, UniformBuffer as U,
     };
@@ -33,6 +33,8 @@ pub const BINDINGS: [BindingDesc; 13] = {
         BindingDesc::one("out_color", 11, I),
         // `interleaved` only: the gathered sub-image estimates of the VPLs' irradiance.
         BindingDesc::one("irradiance", 12, S),
+        // `interleaved:...:debug` only: the debug bits (shaders/interleaved/filter.glsl).
+        BindingDesc::one("debug_bits", 13, I),
     ]
 };
 
@@ -74,10 +76,16 @@ impl LightingPush {
 pub struct Interleaving<'a> {
     pub m: u32,
     pub n: u32,
+    /// The SEARCH define (`ours` only): 1 looks one period beyond the window.
+    pub search: u32,
+    /// The ENOUGH define (`ours` only): found subsets that spare the fallback.
+    pub enough: u32,
     /// The FILTER define: 0 none (each pixel its own subset), 1 box over the M x N window,
-    /// 2 geometry-aware.
+    /// 2 ours (geometry-aware), 3 seed (the image is already the seed's blur).
     pub filter: u32,
     pub irradiance: &'a Image,
+    /// `debug`: the R32UI image the pass writes its debug bits to.
+    pub debug: Option<&'a Image>,
 }
 
 /// What the lighting pass reads besides the G-buffer and the scene.
@@ -118,8 +126,13 @@ impl LightingPass {
                 ("TILE_M", i.m),
                 ("TILE_N", i.n),
                 ("FILTER", i.filter),
+                ("SEARCH", i.search),
+                ("ENOUGH", i.enough),
             ] {
                 defines.push((k.into(), v.to_string()));
+            }
+            if i.debug.is_some() {
+                defines.push(("DEBUG".into(), "1".into()));
             }
         }
         let cs = ctx.shaders.compile("deferred/lighting.comp", &defines)?;
@@ -152,6 +165,9 @@ impl LightingPass {
         // binding a set with an unwritten sampler.
         let irradiance = interleaving.map_or(&g.albedo, |i| i.irradiance);
         writes.push(Write::Sampled(12, vec![(irradiance, &sampler)]));
+        // Likewise the debug bits: the frame (a storage image) where there are none.
+        let debug = interleaving.and_then(|i| i.debug).unwrap_or(&g.color);
+        writes.push(Write::Storage(13, debug));
         let set = DescriptorSet::new(gpu, &format!("{name}.set"), &layout, &writes)?;
         Ok(LightingPass {
             pipeline,
@@ -178,6 +194,9 @@ impl LightingPass {
         }
         if let Some(i) = interleaving {
             cmd.use_image(i.irradiance, Access::ComputeSampled);
+            if let Some(d) = i.debug {
+                cmd.use_image(d, Access::ComputeStorageWrite);
+            }
         }
         cmd.use_image(&g.color, Access::ComputeStorageWrite);
         cmd.use_buffer(sources.points, Access::ComputeSampled);

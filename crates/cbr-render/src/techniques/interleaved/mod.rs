@@ -1,37 +1,40 @@
-//! `interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D][:raw|box]`: interleaved
-//! many-light shading (Segovia et al. 2006; docs/interleaved.md) on `deferred`'s G-buffer and
-//! VPLs.
+//! `interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D][:ours|seed|box|none]
+//! [:search=S][:enough=K][:implicit][:debug][:floor]`: interleaved many-light shading (Segovia et al. 2006;
+//! docs/interleaved.md) on `deferred`'s G-buffer and VPLs.
 //!
 //! Passes per frame, one submission: `interleaved.gbuffer` (deferred's G-buffer pass), the sun's
 //! map and the VPLs (deferred::lights), then (split.rs) `interleaved.split` (the G-buffer into
 //! M x N sub-images of every M-th column and N-th row), `interleaved.shade` (sub-image k with VPL
 //! subset k, every (M N)-th VPL, times M N), `interleaved.gather` (the estimates back to their
-//! pixels), and `interleaved.lighting`: deferred's lighting pass, whose VPL term becomes the
-//! filter over the M x N window (shaders/interleaved/filter.glsl) times albedo. Each pixel
-//! evaluates N / (M N) VPLs instead of N; `deferred:vpls=N` is the reference.
+//! pixels) or, with `implicit`, `interleaved.implicit` (each pixel its own subset, no split); with
+//! `seed` the seed's blur; and `interleaved.lighting`: deferred's lighting pass, whose VPL term
+//! becomes the filter (shaders/interleaved/filter.glsl) times albedo. Each pixel evaluates
+//! N / (M N) VPLs instead of N, plus what `ours` shades for subsets its surface lacks nearby;
+//! `deferred:vpls=N` is the reference.
 
 pub mod split;
 
-use cbr_gpu::{Access, GpuError, Image, Result};
+use cbr_gpu::{Access, GpuError, Image, ImageDesc, Readback, Result, vk};
 
 use super::LayerReadbacks;
 use super::deferred::lighting::{Interleaving, LightingPass, LightingPush};
 use super::deferred::lights::ManyLights;
 use super::deferred::{self, DeferredConfig, GBuffer};
 use crate::memory::MemoryEstimate;
-use crate::renderer::FrameOutput;
+use crate::renderer::{FrameOutput, InterleavedLayers};
 use crate::scene_pass::{RasterConfig, ScenePass};
-use crate::targets::GBUFFER_FORMAT;
 use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, unknown_param};
 use split::SplitPasses;
 
 pub const REGISTRATION: Registration = Registration {
     name: "interleaved",
-    grammar: "interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D][:raw|box]",
+    grammar: "interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D]\
+              [:ours|seed|box|none][:search=S][:enough=K][:implicit][:debug][:floor]",
     about: "deferred's VPLs, interleaved: the G-buffer split into M x N sub-images, sub-image k \
-            shaded with every (M N)-th VPL from the k-th, gathered back, filtered over the M x N \
-            window (geometry-aware; `box`: plain mean, `raw`: none), times albedo",
-    layers: &[],
+            shaded with every (M N)-th VPL from the k-th, gathered back, filtered (ours: \
+            geometry-aware, missing subsets shaded at the pixel; seed: the seed's edge-skipping \
+            Gaussian; box; none), times albedo; implicit: no split",
+    layers: &["interleaved (debug)"],
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
     estimate: |ctx, p| Ok(Interleaved::estimate(&parse(p)?, ctx.width, ctx.height)),
@@ -43,19 +46,43 @@ pub const REGISTRATION: Registration = Registration {
 
 /// The largest M and N.
 pub const MAX_TILE: u32 = 8;
+/// The VPLs of subset `k` of `subsets` when there are `count` (a multiple of `subsets`): the k-th
+/// contiguous block (shaders/interleaved/subsets.glsl). Consecutive points of the VPLs' Halton
+/// pattern are stratified over the whole map; a stride through it is not (test below).
+pub fn subset_range(k: u32, count: u32, subsets: u32) -> std::ops::Range<usize> {
+    let size = (count / subsets) as usize;
+    k as usize * size..(k as usize + 1) * size
+}
+
+/// `ours`' search beyond the window unless `search=K` says otherwise.
+pub const DEFAULT_SEARCH: u32 = 0;
 /// VPLs unless `vpls=N` says otherwise.
 pub const DEFAULT_VPLS: u32 = 1024;
 
-/// How the lighting pass combines the window's estimates (the FILTER define).
+/// How the window's subset estimates become a pixel's VPL irradiance (the FILTER define).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Filter {
-    /// Each pixel keeps its own subset's estimate: the interleaved pattern, unfiltered.
-    Raw = 0,
-    /// The mean over the M x N window (one pixel of each subset), whatever the geometry.
+    /// `none` (`raw`): each pixel keeps its own subset's estimate, the interleaved pattern.
+    None = 0,
+    /// `box`: the mean over the M x N window (one pixel of each subset), whatever the geometry.
     Box = 1,
-    /// The mean where the neighbour lies on the pixel's surface, else its subset shaded at the
-    /// pixel.
-    Geometry = 2,
+    /// `ours` (the default): per subset, the nearest pixel holding it on the pixel's surface
+    /// (the window's own, else one period further); a subset with none is shaded at the pixel.
+    Ours = 2,
+    /// `seed`: the seed's edge detection (depth and normal against the 4 neighbours) and a
+    /// separable Gaussian over non-edge pixels; edge pixels keep their own subset's estimate.
+    Seed = 3,
+}
+
+impl Filter {
+    pub fn name(self) -> &'static str {
+        match self {
+            Filter::None => "none",
+            Filter::Box => "box",
+            Filter::Ours => "ours",
+            Filter::Seed => "seed",
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -63,6 +90,20 @@ pub struct InterleavedConfig {
     pub m: u32,
     pub n: u32,
     pub filter: Filter,
+    /// `implicit`: no split; each pixel shades the subset of its position (x mod M, y mod N) in
+    /// one full-resolution pass.
+    pub implicit: bool,
+    /// `debug`: the debug views (subset, edge, fallback, split mosaic) read back each frame.
+    pub debug: bool,
+    /// `search=1`: `ours` looks for a subset one period further when the window's pixel is on
+    /// another surface, before shading it at the pixel (`search=0`: the window only).
+    pub search: u32,
+    /// `enough=K` (`ours`): a pixel that finds at least K subsets on its surface takes their
+    /// mean; with fewer it shades the missing ones itself. M N unless set.
+    pub enough: u32,
+    /// `floor`: also run a copy kernel moving the split and gather passes' bytes (their
+    /// bandwidth floor), timed as `interleaved.copy_floor`.
+    pub floor: bool,
     pub lights: DeferredConfig,
 }
 
@@ -82,21 +123,70 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
         return Err("interleaved needs its sub-images, MxN (`interleaved:4x4`)".into());
     };
     let (m, n) = tile(first)?;
-    let mut filter = Filter::Geometry;
+    let mut filter = None;
+    let (mut implicit, mut debug, mut floor) = (false, false, false);
+    let mut search = DEFAULT_SEARCH;
+    let mut enough = None;
     let mut light_params = Vec::new();
     for p in rest {
         let key = p.split_once('=').map_or(*p, |(k, _)| k);
-        match key {
-            "raw" => filter = Filter::Raw,
-            "box" => filter = Filter::Box,
-            "vpls" | "points" | "rsm" | "reach" | "clamp" => light_params.push(*p),
+        let f = match key {
+            "none" | "raw" => Some(Filter::None),
+            "box" => Some(Filter::Box),
+            "ours" => Some(Filter::Ours),
+            "seed" => Some(Filter::Seed),
+            "implicit" => {
+                implicit = true;
+                None
+            }
+            "debug" => {
+                debug = true;
+                None
+            }
+            "floor" => {
+                floor = true;
+                None
+            }
+            "search" => {
+                search = match p.split_once('=').map(|(_, v)| v) {
+                    Some("0") => 0,
+                    Some("1") => 1,
+                    _ => return Err(format!("interleaved `{p}`: search=0 or search=1")),
+                };
+                None
+            }
+            "enough" => {
+                let k = p.split_once('=').and_then(|(_, v)| v.parse::<u32>().ok());
+                enough = Some(k.filter(|&k| (1..=m * n).contains(&k)).ok_or_else(|| {
+                    format!(
+                        "interleaved:{m}x{n} `{p}`: enough=K with K from 1 to {}",
+                        m * n
+                    )
+                })?);
+                None
+            }
+            "vpls" | "points" | "rsm" | "reach" | "clamp" => {
+                light_params.push(*p);
+                None
+            }
             _ => {
                 return Err(unknown_param(
                     "interleaved",
                     p,
-                    "vpls=N, points=N, rsm=R, reach=D, clamp=D, raw, box",
+                    "vpls=N, points=N, rsm=R, reach=D, clamp=D, one filter of none (raw), box, \
+                     ours, seed, and search=0|1, enough=K, implicit, debug, floor",
                 ));
             }
+        };
+        if let Some(f) = f {
+            if filter.is_some_and(|old| old != f) {
+                return Err(format!(
+                    "interleaved: one filter at a time (`{}` and `{}`)",
+                    filter.map_or("", Filter::name),
+                    f.name()
+                ));
+            }
+            filter = Some(f);
         }
     }
     // deferred's parameters, read by deferred's reader; its messages name it.
@@ -113,10 +203,22 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
             lights.vpls
         ));
     }
+    if implicit && floor {
+        return Err(
+            "interleaved: `floor` measures the split and gather passes, which `implicit` does not \
+             have"
+                .into(),
+        );
+    }
     Ok(InterleavedConfig {
         m,
         n,
-        filter,
+        filter: filter.unwrap_or(Filter::Ours),
+        implicit,
+        debug,
+        search,
+        enough: enough.unwrap_or(m * n),
+        floor,
         lights,
     })
 }
@@ -130,21 +232,26 @@ pub struct Interleaved {
     split: SplitPasses,
     lighting: LightingPass,
     readbacks: LayerReadbacks,
+    /// `debug`: the lighting pass's debug bits (filter.glsl) and their readback.
+    debug: Option<(Image, Readback)>,
     size: (u32, u32),
 }
 
+/// The debug bits' format (filter.glsl): one u32 per pixel.
+const DEBUG_FORMAT: vk::Format = vk::Format::R32_UINT;
+
 impl Interleaved {
     /// What [`Interleaved::new`] allocates (crate::memory): deferred's G-buffer and lights, the
-    /// M x N split images and the gathered irradiance, and the readbacks.
+    /// M x N split images (none with `implicit`), the gathered estimates, the seed's blur images,
+    /// the copy floor's buffers, the debug bits and mosaic, and the readbacks.
     pub fn estimate(config: &InterleavedConfig, w: u32, h: u32) -> MemoryEstimate {
         let mut e = MemoryEstimate::new();
         deferred::estimate_gbuffer_and_lights(&mut e, "interleaved", &config.lights, w, h);
-        let (ws, hs) = split::sub_image(w, h, config.m, config.n);
-        let (sw, sh) = (config.m * ws, config.n * hs);
-        for name in ["split_position", "split_normal", "split_irradiance"] {
-            e.image(format!("interleaved.{name}"), GBUFFER_FORMAT, sw, sh);
+        SplitPasses::estimate(&mut e, config, w, h);
+        if config.debug {
+            e.image("interleaved.debug_bits", DEBUG_FORMAT, w, h);
+            e.readback("readback.interleaved_bits", DEBUG_FORMAT, w, h, 1);
         }
-        e.image("interleaved.irradiance", GBUFFER_FORMAT, w, h);
         LayerReadbacks::estimate(&mut e, w, h);
         e
     }
@@ -153,12 +260,30 @@ impl Interleaved {
         let lights = ManyLights::new(ctx, &config.lights, "interleaved")?;
         let (raster, gbuffer_pass, g) = deferred::gbuffer(ctx, "interleaved")?;
         let sources = lights.sources();
-        let split = SplitPasses::new(ctx, &g, sources.vpls, (config.m, config.n))?;
+        let split = SplitPasses::new(ctx, &g, sources.vpls, &config)?;
+        let debug = if config.debug {
+            let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+            let d = ImageDesc::new_2d(
+                "interleaved.debug_bits",
+                DEBUG_FORMAT,
+                ctx.width,
+                ctx.height,
+                usage,
+            );
+            let image = Image::new(ctx.gpu, &d)?;
+            let rb = Readback::for_image(ctx.gpu, "readback.interleaved_bits", &image)?;
+            Some((image, rb))
+        } else {
+            None
+        };
         let interleaving = Interleaving {
             m: config.m,
             n: config.n,
+            search: config.search,
+            enough: config.enough,
             filter: config.filter as u32,
-            irradiance: &split.irradiance,
+            irradiance: split.output(),
+            debug: debug.as_ref().map(|d| &d.0),
         };
         let lighting = LightingPass::new(ctx, &g, &sources, Some(&interleaving))?;
         let readbacks = LayerReadbacks::new(ctx.gpu, g.layers())?;
@@ -171,10 +296,52 @@ impl Interleaved {
             split,
             lighting,
             readbacks,
+            debug,
             size: (ctx.width, ctx.height),
         })
     }
+
+    /// The debug views from this frame's readbacks.
+    fn layers(&self) -> Result<Option<InterleavedLayers>> {
+        let Some((_, bits)) = &self.debug else {
+            return Ok(None);
+        };
+        let words: Vec<u32> = bits
+            .bytes()?
+            .chunks_exact(4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect();
+        let mosaic = match &self.split.mosaic {
+            Some(rb) => {
+                let texels = rb
+                    .bytes()?
+                    .chunks_exact(16)
+                    .map(|t| {
+                        let f = |k: usize| {
+                            f32::from_le_bytes([t[4 * k], t[4 * k + 1], t[4 * k + 2], t[4 * k + 3]])
+                        };
+                        [f(0), f(1), f(2)]
+                    })
+                    .collect();
+                let (w, h) = self.split.mosaic_size();
+                Some((w, h, texels))
+            }
+            None => None,
+        };
+        Ok(Some(InterleavedLayers {
+            tile: (self.config.m, self.config.n),
+            subset: words.iter().map(|&b| (b & 0x3f) as u8).collect(),
+            edge: words.iter().map(|&b| u8::from(b & DBG_EDGE != 0)).collect(),
+            fallback: words.iter().map(|&b| ((b >> 8) & 0x7f) as u8).collect(),
+            roundtrip_mismatches: words.iter().filter(|&&b| b & DBG_ROUNDTRIP != 0).count() as u64,
+            mosaic,
+        }))
+    }
 }
+
+/// filter.glsl's debug bits: bits 0-5 the subset, 6 edge, 8-14 fallback subsets, 16 round trip.
+const DBG_EDGE: u32 = 1 << 6;
+const DBG_ROUNDTRIP: u32 = 1 << 16;
 
 impl Technique for Interleaved {
     fn render(&mut self, ctx: &mut FrameCtx) -> Result<()> {
@@ -208,8 +375,11 @@ impl Technique for Interleaved {
             let interleaving = Interleaving {
                 m: this.config.m,
                 n: this.config.n,
+                search: this.config.search,
+                enough: this.config.enough,
                 filter: this.config.filter as u32,
-                irradiance: &this.split.irradiance,
+                irradiance: this.split.output(),
+                debug: this.debug.as_ref().map(|d| &d.0),
             };
             this.lighting.record(
                 cmd,
@@ -221,6 +391,10 @@ impl Technique for Interleaved {
                 Some(&interleaving),
             );
             this.readbacks.record(cmd, profiler, g.layers());
+            if let Some((image, rb)) = &this.debug {
+                cmd.read_image(image, rb);
+                this.split.record_readback(cmd);
+            }
             this.lights.record_readback(cmd);
             cmd.use_buffer(counter, Access::HostRead);
             Ok(())
@@ -236,7 +410,9 @@ impl Technique for Interleaved {
     }
 
     fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput> {
-        deferred::output(&self.readbacks, &self.lights, ctx)
+        let mut out = deferred::output(&self.readbacks, &self.lights, ctx)?;
+        out.interleaved = self.layers()?;
+        Ok(out)
     }
 
     fn target_bytes(&self) -> u64 {
@@ -244,5 +420,46 @@ impl Technique for Interleaved {
         u64::from(w) * u64::from(h) * GBuffer::BYTES_PER_PIXEL
             + self.lights.bytes()
             + self.split.bytes()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::techniques::deferred::vpl::vpl_texels;
+
+    /// Cells of an 8 x 8 grid over the map that the VPLs of `indices` fall in.
+    fn cells(texels: &[[u32; 2]], indices: impl Iterator<Item = usize>, side: u32) -> usize {
+        let mut hit = [false; 64];
+        for i in indices {
+            let [u, v] = texels[i];
+            hit[(v * 8 / side * 8 + u * 8 / side) as usize] = true;
+        }
+        hit.iter().filter(|&&h| h).count()
+    }
+
+    /// Each subset spreads over the whole map: every one of the 16 subsets of 1024 VPLs (64 each)
+    /// falls in at least 40 of the 64 cells of an 8 x 8 grid, for several seeds. The stride the
+    /// first version used (every 16th VPL from the k-th) puts a subset in one 1/16 column of the
+    /// map: at most 16 cells (two columns of 8, where the seed's shift straddles a boundary).
+    #[test]
+    fn subsets_cover_the_whole_map() {
+        let side = 512;
+        for seed in [0u64, 1, 7, 12345] {
+            let texels = vpl_texels(seed, 1024, side);
+            for k in 0..16u32 {
+                let block = cells(&texels, subset_range(k, 1024, 16), side);
+                assert!(block >= 40, "seed {seed}, subset {k}: {block} of 64 cells");
+                let stride = cells(&texels, (k as usize..1024).step_by(16), side);
+                assert!(stride <= 16, "seed {seed}, stride {k}: {stride} cells");
+            }
+        }
+    }
+
+    #[test]
+    fn subset_ranges_partition_the_vpls() {
+        let mut all: Vec<usize> = (0..12).flat_map(|k| subset_range(k, 96, 12)).collect();
+        all.dedup();
+        assert_eq!(all, (0..96).collect::<Vec<_>>());
     }
 }

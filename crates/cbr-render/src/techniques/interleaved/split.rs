@@ -1,20 +1,26 @@
-//! `interleaved`'s three passes between the G-buffer and the lighting pass
-//! (shaders/interleaved/): `interleaved.split` (the G-buffer into M x N sub-images),
-//! `interleaved.shade` (sub-image k with VPL subset k) and `interleaved.gather` (the estimates back
-//! to their pixels). One set layout and one set serve the three pipelines.
+//! `interleaved`'s passes between the G-buffer and the lighting pass (shaders/interleaved/):
+//! `interleaved.split` (the G-buffer into M x N sub-images), `interleaved.shade` (sub-image k with
+//! VPL subset k) and `interleaved.gather` (the estimates back to their pixels); with `implicit`
+//! the one pass `interleaved.implicit` instead (each pixel its own position's subset, no split);
+//! with `seed` the seed's blur, `interleaved.seed_blur_h` and `interleaved.seed_blur_v`; with
+//! `floor` a copy kernel moving the split and gather passes' bytes (`interleaved.copy_floor`).
+//! One set layout and one set serve every pipeline.
 
 use bytemuck::{Pod, Zeroable};
 use cbr_gpu::{
     Access, BindingDesc, Buffer, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Image, ImageDesc,
-    PassKind, Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout, Write, vk,
+    PassKind, Pipeline, Profiler, Readback, Result, Sampler, SamplerDesc, SetLayout, Write, vk,
 };
 
+use super::{Filter, InterleavedConfig};
+use crate::memory::MemoryEstimate;
+use crate::resolve::CopyFloor;
 use crate::targets::GBUFFER_FORMAT;
 use crate::technique::BuildCtx;
 use crate::techniques::deferred::GBuffer;
 
 /// The passes' set: the one definition of its bindings.
-pub const BINDINGS: [BindingDesc; 7] = {
+pub const BINDINGS: [BindingDesc; 9] = {
     use DescriptorKind::{CombinedImageSampler as S, StorageBuffer as B, StorageImage as I};
     [
         BindingDesc::one("position", 0, S),
@@ -24,6 +30,9 @@ pub const BINDINGS: [BindingDesc; 7] = {
         BindingDesc::one("split_normal", 4, I),
         BindingDesc::one("split_irradiance", 5, I),
         BindingDesc::one("irradiance", 6, I),
+        // `seed` only: the horizontal blur's output and the vertical's.
+        BindingDesc::one("seed_tmp", 7, I),
+        BindingDesc::one("seed_out", 8, I),
     ]
 };
 
@@ -44,36 +53,80 @@ pub fn sub_image(width: u32, height: u32, m: u32, n: u32) -> (u32, u32) {
     (width.div_ceil(m), height.div_ceil(n))
 }
 
+/// Bytes the split and gather passes move at least for a W x H frame: the split reads and writes
+/// each pixel's position and normal (RGBA32F each), the gather reads and writes each pixel's
+/// estimate (RGBA32F). Their copy kernel (`floor`) moves as many.
+pub fn moved_bytes(width: u32, height: u32) -> (u64, u64) {
+    let px = u64::from(width) * u64::from(height);
+    (px * 48, px * 48)
+}
+
+/// The buffers of the `floor` copy kernel.
+const FLOOR: &str = "interleaved.copy_floor";
+
+/// Storage images of `interleaved`'s passes, by name; the debug readbacks.
+struct Images {
+    split_position: Option<Image>,
+    split_normal: Option<Image>,
+    split_irradiance: Option<Image>,
+    irradiance: Image,
+    seed: Option<(Image, Image)>,
+}
+
 pub struct SplitPasses {
-    split: Pipeline,
-    shade: Pipeline,
-    gather: Pipeline,
+    split: Option<(Pipeline, Pipeline, Pipeline)>,
+    implicit: Option<Pipeline>,
+    seed: Option<(Pipeline, Pipeline)>,
+    floor: Option<CopyFloor>,
     _layout: SetLayout,
     set: DescriptorSet,
     _sampler: Sampler,
-    split_position: Image,
-    split_normal: Image,
-    split_irradiance: Image,
-    /// The gathered estimates at full resolution (RGBA32F), read by the lighting pass.
-    pub irradiance: Image,
+    images: Images,
+    /// `debug`: the split mosaic of the estimates, read back each frame.
+    pub mosaic: Option<Readback>,
     tile: (u32, u32),
     size: [i32; 4],
 }
 
 impl SplitPasses {
+    /// What [`SplitPasses::new`] allocates.
+    pub fn estimate(e: &mut MemoryEstimate, config: &InterleavedConfig, w: u32, h: u32) {
+        let (ws, hs) = sub_image(w, h, config.m, config.n);
+        let (sw, sh) = (config.m * ws, config.n * hs);
+        if !config.implicit {
+            for name in ["split_position", "split_normal", "split_irradiance"] {
+                e.image(format!("interleaved.{name}"), GBUFFER_FORMAT, sw, sh);
+            }
+            if config.debug {
+                e.readback("readback.interleaved_mosaic", GBUFFER_FORMAT, sw, sh, 1);
+            }
+        }
+        e.image("interleaved.irradiance", GBUFFER_FORMAT, w, h);
+        if config.filter == Filter::Seed {
+            e.image("interleaved.seed_tmp", GBUFFER_FORMAT, w, h);
+            e.image("interleaved.seed_out", GBUFFER_FORMAT, w, h);
+        }
+        if config.floor {
+            CopyFloor::estimate(e, FLOOR, moved_bytes(w, h));
+        }
+    }
+
     pub fn new(
         ctx: &BuildCtx,
         g: &GBuffer,
         vpls: &Buffer,
-        (m, n): (u32, u32),
+        config: &InterleavedConfig,
     ) -> Result<SplitPasses> {
         let gpu = ctx.gpu;
+        let (m, n) = (config.m, config.n);
         let layout = SetLayout::new(gpu, "interleaved.set_layout", &BINDINGS)?;
         let mut defines: Vec<(String, String)> = BINDINGS.iter().map(BindingDesc::define).collect();
         defines.push(("TILE_M".into(), m.to_string()));
         defines.push(("TILE_N".into(), n.to_string()));
-        let pipeline = |name: &str, file: &str| {
-            let cs = ctx.shaders.compile(file, &defines)?;
+        let pipeline = |name: &str, file: &str, extra: &[&str]| {
+            let mut d = defines.clone();
+            d.extend(extra.iter().map(|k| (k.to_string(), "1".to_string())));
+            let cs = ctx.shaders.compile(file, &d)?;
             Pipeline::compute(
                 gpu,
                 &ComputeDesc {
@@ -84,9 +137,25 @@ impl SplitPasses {
                 },
             )
         };
-        let split = pipeline("interleaved.split", "interleaved/split.comp")?;
-        let shade = pipeline("interleaved.shade", "interleaved/shade.comp")?;
-        let gather = pipeline("interleaved.gather", "interleaved/gather.comp")?;
+        let debug: &[&str] = if config.debug { &["DEBUG"] } else { &[] };
+        let (split, implicit) = if config.implicit {
+            let p = pipeline("interleaved.implicit", "interleaved/implicit.comp", &[])?;
+            (None, Some(p))
+        } else {
+            let split = pipeline("interleaved.split", "interleaved/split.comp", &[])?;
+            let shade = pipeline("interleaved.shade", "interleaved/shade.comp", &[])?;
+            let gather = pipeline("interleaved.gather", "interleaved/gather.comp", debug)?;
+            (Some((split, shade, gather)), None)
+        };
+        let seed = if config.filter == Filter::Seed {
+            let file = "interleaved/seed_blur.comp";
+            Some((
+                pipeline("interleaved.seed_blur_h", file, &["HORIZONTAL"])?,
+                pipeline("interleaved.seed_blur_v", file, &[])?,
+            ))
+        } else {
+            None
+        };
         let (w, h) = (ctx.width, ctx.height);
         let (ws, hs) = sub_image(w, h, m, n);
         let img = |name: &str, width, height, usage| {
@@ -95,11 +164,56 @@ impl SplitPasses {
             Image::new(gpu, &d)
         };
         let storage = vk::ImageUsageFlags::STORAGE;
-        let split_position = img("split_position", m * ws, n * hs, storage)?;
-        let split_normal = img("split_normal", m * ws, n * hs, storage)?;
-        let split_irradiance = img("split_irradiance", m * ws, n * hs, storage)?;
-        let irradiance = img("irradiance", w, h, storage | vk::ImageUsageFlags::SAMPLED)?;
+        let sampled = storage | vk::ImageUsageFlags::SAMPLED;
+        let read_back = if config.debug {
+            vk::ImageUsageFlags::TRANSFER_SRC
+        } else {
+            vk::ImageUsageFlags::empty()
+        };
+        let (split_position, split_normal, split_irradiance) = if config.implicit {
+            (None, None, None)
+        } else {
+            (
+                Some(img("split_position", m * ws, n * hs, storage)?),
+                Some(img("split_normal", m * ws, n * hs, storage)?),
+                Some(img(
+                    "split_irradiance",
+                    m * ws,
+                    n * hs,
+                    storage | read_back,
+                )?),
+            )
+        };
+        let irradiance = img("irradiance", w, h, sampled)?;
+        let seed_images = match seed {
+            Some(_) => Some((
+                img("seed_tmp", w, h, storage)?,
+                img("seed_out", w, h, sampled)?,
+            )),
+            None => None,
+        };
+        let mosaic = match (&split_irradiance, config.debug) {
+            (Some(s), true) => Some(Readback::for_image(gpu, "readback.interleaved_mosaic", s)?),
+            _ => None,
+        };
+        let floor = if config.floor {
+            Some(CopyFloor::named(
+                gpu,
+                ctx.shaders,
+                "interleaved.copy_floor",
+                FLOOR,
+                moved_bytes(w, h),
+            )?)
+        } else {
+            None
+        };
         let sampler = Sampler::new(gpu, "interleaved.sampler", SamplerDesc::NEAREST)?;
+        // Bindings a mode does not use still hold an image (lavapipe crashes binding a set with
+        // an unwritten descriptor): the gathered estimates, which every mode has.
+        fn pick<'a>(i: Option<&'a Image>, or: &'a Image) -> &'a Image {
+            i.unwrap_or(or)
+        }
+        let pick = |i| pick(i, &irradiance);
         let set = DescriptorSet::new(
             gpu,
             "interleaved.set",
@@ -108,36 +222,68 @@ impl SplitPasses {
                 Write::Sampled(0, vec![(&g.position, &sampler)]),
                 Write::Sampled(1, vec![(&g.normal, &sampler)]),
                 Write::Buffer(2, vpls),
-                Write::Storage(3, &split_position),
-                Write::Storage(4, &split_normal),
-                Write::Storage(5, &split_irradiance),
+                Write::Storage(3, pick(split_position.as_ref())),
+                Write::Storage(4, pick(split_normal.as_ref())),
+                Write::Storage(5, pick(split_irradiance.as_ref())),
                 Write::Storage(6, &irradiance),
+                Write::Storage(7, pick(seed_images.as_ref().map(|s| &s.0))),
+                Write::Storage(8, pick(seed_images.as_ref().map(|s| &s.1))),
             ],
         )?;
         Ok(SplitPasses {
             split,
-            shade,
-            gather,
+            implicit,
+            seed,
+            floor,
             _layout: layout,
             set,
             _sampler: sampler,
-            split_position,
-            split_normal,
-            split_irradiance,
-            irradiance,
+            images: Images {
+                split_position,
+                split_normal,
+                split_irradiance,
+                irradiance,
+                seed: seed_images,
+            },
+            mosaic,
             tile: (m, n),
             size: [w as i32, h as i32, ws as i32, hs as i32],
         })
     }
 
-    /// Bytes of the split images and the gathered estimates.
-    pub fn bytes(&self) -> u64 {
-        let (m, n) = self.tile;
-        let split = u64::from(m) * self.size[2] as u64 * u64::from(n) * self.size[3] as u64;
-        (3 * split + self.size[0] as u64 * self.size[1] as u64) * 16
+    /// The full-resolution estimates the lighting pass filters: the gathered ones, or with `seed`
+    /// their blur.
+    pub fn output(&self) -> &Image {
+        match &self.images.seed {
+            Some((_, out)) => out,
+            None => &self.images.irradiance,
+        }
     }
 
-    /// Split, shade (with `count` VPLs, clamp `clamp_d2`) and gather.
+    /// The split mosaic's side (M Ws x N Hs).
+    pub fn mosaic_size(&self) -> (u32, u32) {
+        (
+            self.tile.0 * self.size[2] as u32,
+            self.tile.1 * self.size[3] as u32,
+        )
+    }
+
+    /// Bytes of the split images and the estimates.
+    pub fn bytes(&self) -> u64 {
+        let (sw, sh) = self.mosaic_size();
+        let split = u64::from(sw) * u64::from(sh);
+        let full = self.size[0] as u64 * self.size[1] as u64;
+        let splits = if self.images.split_position.is_some() {
+            3
+        } else {
+            0
+        };
+        let seeds = if self.images.seed.is_some() { 2 } else { 0 };
+        (splits * split + (1 + seeds) * full) * 16
+    }
+
+    /// Split, shade (with `count` VPLs, clamp `clamp_d2`) and gather, or the implicit pass; then
+    /// the seed's blur, and the copy floor.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -153,52 +299,72 @@ impl SplitPasses {
             counts: [count, 0, 0, 0],
             params: [clamp_d2, 0.0, 0.0, 0.0],
         };
-        let (m, n) = self.tile;
-        let split_groups = (
-            (m * self.size[2] as u32).div_ceil(8),
-            (n * self.size[3] as u32).div_ceil(8),
-        );
-        // Split: G-buffer -> sub-images.
-        cmd.use_image(&g.position, Access::ComputeSampled);
-        cmd.use_image(&g.normal, Access::ComputeSampled);
-        cmd.use_image(&self.split_position, Access::ComputeStorageWrite);
-        cmd.use_image(&self.split_normal, Access::ComputeStorageWrite);
-        self.dispatch(
-            cmd,
-            profiler,
-            &self.split,
-            "interleaved.split",
-            &push,
-            split_groups,
-        );
-        // Shade: sub-image k with subset k.
-        cmd.use_image(&self.split_position, Access::ComputeStorageReadWrite);
-        cmd.use_image(&self.split_normal, Access::ComputeStorageReadWrite);
-        cmd.use_image(&self.split_irradiance, Access::ComputeStorageWrite);
-        cmd.use_buffer(vpls, Access::ComputeSampled);
-        self.dispatch(
-            cmd,
-            profiler,
-            &self.shade,
-            "interleaved.shade",
-            &push,
-            split_groups,
-        );
-        // Gather: sub-images -> pixels.
-        cmd.use_image(&self.split_irradiance, Access::ComputeStorageReadWrite);
-        cmd.use_image(&self.irradiance, Access::ComputeStorageWrite);
+        let (sw, sh) = self.mosaic_size();
+        let split_groups = (sw.div_ceil(8), sh.div_ceil(8));
         let full = (
             (self.size[0] as u32).div_ceil(8),
             (self.size[1] as u32).div_ceil(8),
         );
-        self.dispatch(
-            cmd,
-            profiler,
-            &self.gather,
-            "interleaved.gather",
-            &push,
-            full,
-        );
+        let im = &self.images;
+        cmd.use_image(&g.position, Access::ComputeSampled);
+        cmd.use_image(&g.normal, Access::ComputeSampled);
+        cmd.use_buffer(vpls, Access::ComputeSampled);
+        if let Some(implicit) = &self.implicit {
+            cmd.use_image(&im.irradiance, Access::ComputeStorageWrite);
+            self.dispatch(cmd, profiler, implicit, "interleaved.implicit", &push, full);
+        }
+        if let (Some((split, shade, gather)), Some(sp), Some(sn), Some(si)) = (
+            &self.split,
+            &im.split_position,
+            &im.split_normal,
+            &im.split_irradiance,
+        ) {
+            // Split: G-buffer -> sub-images.
+            cmd.use_image(sp, Access::ComputeStorageWrite);
+            cmd.use_image(sn, Access::ComputeStorageWrite);
+            self.dispatch(
+                cmd,
+                profiler,
+                split,
+                "interleaved.split",
+                &push,
+                split_groups,
+            );
+            // Shade: sub-image k with subset k.
+            cmd.use_image(sp, Access::ComputeStorageReadWrite);
+            cmd.use_image(sn, Access::ComputeStorageReadWrite);
+            cmd.use_image(si, Access::ComputeStorageWrite);
+            self.dispatch(
+                cmd,
+                profiler,
+                shade,
+                "interleaved.shade",
+                &push,
+                split_groups,
+            );
+            // Gather: sub-images -> pixels.
+            cmd.use_image(si, Access::ComputeStorageReadWrite);
+            cmd.use_image(&im.irradiance, Access::ComputeStorageWrite);
+            self.dispatch(cmd, profiler, gather, "interleaved.gather", &push, full);
+        }
+        if let (Some((h, v)), Some((tmp, out))) = (&self.seed, &im.seed) {
+            cmd.use_image(&im.irradiance, Access::ComputeStorageReadWrite);
+            cmd.use_image(tmp, Access::ComputeStorageWrite);
+            self.dispatch(cmd, profiler, h, "interleaved.seed_blur_h", &push, full);
+            cmd.use_image(tmp, Access::ComputeStorageReadWrite);
+            cmd.use_image(out, Access::ComputeStorageWrite);
+            self.dispatch(cmd, profiler, v, "interleaved.seed_blur_v", &push, full);
+        }
+        if let Some(floor) = &self.floor {
+            floor.record(cmd, profiler);
+        }
+    }
+
+    /// Records the copy of the split mosaic (`debug`, split mode).
+    pub fn record_readback(&self, cmd: &mut Cmd) {
+        if let (Some(rb), Some(si)) = (&self.mosaic, &self.images.split_irradiance) {
+            cmd.read_image(si, rb);
+        }
     }
 
     fn dispatch(

@@ -1,0 +1,54 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// `interleaved:MxN:seed`: the seed's filter (Segovia et al. 2006 as the seed reproduces it), one
+// direction per dispatch: HORIZONTAL reads the gathered estimates and writes seed_tmp, otherwise it
+// reads seed_tmp and writes seed_out, which the lighting pass reads. Edge pixels (seed_edges.glsl)
+// keep their own subset's estimate (the seed's noisy edge lines) and are skipped as taps, as are
+// pixels without a surface; the others take a Gaussian over offsets -(P-1) .. P-1 along the
+// direction (P = M, then N), sigma P / 2, weights renormalised over the taps used. The alpha
+// channel carries the gather's round-trip flag of the pixel through both directions.
+layout(local_size_x = 8, local_size_y = 8) in;
+#include "../inc/scene_types.glsl"
+#include "interleave.glsl"
+
+layout(set = 0, binding = BINDING_SEED_TMP, rgba32f) uniform image2D seed_tmp;
+layout(set = 0, binding = BINDING_SEED_OUT, rgba32f) uniform image2D seed_out;
+
+bool on_screen(ivec2 q) {
+    return q.x >= 0 && q.y >= 0 && q.x < pc.size.x && q.y < pc.size.y;
+}
+
+#include "seed_edges.glsl"
+
+#ifdef HORIZONTAL
+#define PERIOD TILE_M
+#define STEP ivec2(1, 0)
+vec4 load(ivec2 q) { return imageLoad(irradiance, q); }
+void store(ivec2 q, vec4 v) { imageStore(seed_tmp, q, v); }
+#else
+#define PERIOD TILE_N
+#define STEP ivec2(0, 1)
+vec4 load(ivec2 q) { return imageLoad(seed_tmp, q); }
+void store(ivec2 q, vec4 v) { imageStore(seed_out, q, v); }
+#endif
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (!on_screen(px)) return;
+    vec4 own = load(px);
+    if (seed_edge(px)) {
+        store(px, own);
+        return;
+    }
+    float sigma = 0.5 * float(PERIOD);
+    vec3 sum = vec3(0.0);
+    float weights = 0.0;
+    for (int d = -(PERIOD - 1); d <= PERIOD - 1; ++d) {
+        ivec2 q = px + d * STEP;
+        if (!on_screen(q) || seed_edge(q)) continue;
+        float w = exp(-float(d * d) / (2.0 * sigma * sigma));
+        sum += w * load(q).rgb;
+        weights += w;
+    }
+    store(px, vec4(sum / weights, own.a));
+}
