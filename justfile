@@ -46,6 +46,8 @@ bench: setup
     python3 scripts/post-aa.py --cbr ./target/release/cbr -o {{out}}/bench/post-aa
     @echo "[bench] analytic coverage AA against ssaa:32 (demo 320x180, Sibenik 160x90) -> docs/analytic.md"
     just bench-analytic
+    @echo "[bench] interleaved many-light shading against every VPL at every pixel -> docs/interleaved.md"
+    just bench-interleaved
 
 # analytic coverage AA, its seed shortcut and the sample-based techniques against the 1024-sample
 # ground truth (ssaa:32: ~3 min a frame of the demo at 320x180 on lavapipe, cached in out/cache);
@@ -58,6 +60,22 @@ bench-analytic: setup
     done
     CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench scenes/sibenik.toml --width 160 --height 90 --warmup 0 --frames 1 --reference ssaa:32 --time-cached-rows --techniques native,msaa:4,ssaa:16,analytic,analytic:seed -o {{out}}/bench/analytic/sibenik
     python3 scripts/analytic-table.py {{out}}/bench/analytic/demo/bench.json {{out}}/bench/analytic/demo-untextured/bench.json {{out}}/bench/analytic/sibenik/bench.json
+
+# Interleaved many-light shading (docs/interleaved.md): every VPL at every pixel
+# (deferred:vpls=1024, the reference; ~3 s a frame at 1280x720 on lavapipe, cached in out/cache)
+# against interleaved:4x4 with each filter, implicit, and the split+gather copy floor, on the demo
+# and Sibenik at 1280x720 (1 warm-up + 2 frames); then the sweep over M x N (2x2, 4x4, 8x8) and
+# the VPL count (256, 1024, 4096) on the demo at 320x180 against deferred:vpls=4096, with its
+# report (the speed-vs-error chart). The tables: scripts/interleaved-table.py.
+bench-interleaved: setup
+    for s in builtin:demo scenes/sibenik.toml; do \
+        n=$(basename "$s" .toml | sed 's/builtin://'); \
+        CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench "$s" --width 1280 --height 720 --warmup 1 --frames 2 --reference deferred:vpls=1024 --techniques deferred,interleaved:4x4:floor,interleaved:4x4:implicit,interleaved:4x4:seed,interleaved:4x4:box,interleaved:4x4:none,interleaved:4x4:enough=8 -o {{out}}/bench/interleaved/$n || exit 1; \
+    done
+    CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench builtin:demo --width 320 --height 180 --warmup 1 --frames 2 --reference deferred:vpls=4096 --techniques deferred:vpls=256,deferred:vpls=1024,interleaved:2x2:vpls=256,interleaved:4x4:vpls=256,interleaved:8x8:vpls=256,interleaved:2x2:vpls=1024,interleaved:4x4:vpls=1024,interleaved:8x8:vpls=1024,interleaved:2x2:vpls=4096,interleaved:4x4:vpls=4096,interleaved:8x8:vpls=4096,interleaved:4x4:vpls=1024:seed,interleaved:4x4:vpls=1024:box -o {{out}}/bench/interleaved/sweep
+    ./target/release/cbr report {{out}}/bench/interleaved/sweep -o {{out}}/bench/interleaved/sweep/report.html
+    python3 scripts/interleaved-table.py {{out}}/bench/interleaved/demo/bench.json {{out}}/bench/interleaved/sibenik/bench.json {{out}}/bench/interleaved/sweep/bench.json
+    @echo "[bench-interleaved] the sweep's report: $(realpath {{out}}/bench/interleaved/sweep/report.html)"
 
 # Instructions per resolved pixel of each resolve mode's CPU reference under callgrind: a cost
 # figure that does not move with the machine's load (docs/resolve.md).

@@ -108,10 +108,15 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, out uint bits
     // one subset's, so any of them estimates all the VPLs).
     if (found >= uint(ENOUGH)) return sum / float(found);
 #endif
-    // Otherwise p shades the missing subsets itself.
+    // Otherwise p shades the missing subsets itself, each invocation walking its own list (lowest
+    // slot first): a SIMD group or warp then pays for its longest list, not for the union of its
+    // lanes' missing subsets, as a loop over every slot with a test would.
     uint fallback = 0u;
-    for (uint t = 0u; t < SUBSETS; ++t) {
-        if ((missing[t >> 5] & (1u << (t & 31u))) == 0u) continue;
+    while (missing.x != 0u || missing.y != 0u) {
+        uint word = missing.x != 0u ? 0u : 1u;
+        uint t = uint(findLSB(missing[word]));
+        missing[word] &= ~(1u << t);
+        t += 32u * word;
         ivec2 o = ivec2(int(t % uint(TILE_M)) - (TILE_M - 1) / 2,
                         int(t / uint(TILE_M)) - (TILE_N - 1) / 2);
         sum += subset_irradiance(p, n, subset_of(px + o), pc.counts.y, pc.params.x);

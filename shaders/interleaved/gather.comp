@@ -1,22 +1,46 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // `interleaved.gather`: the sub-images' estimates back to their pixels (the inverse of the split).
-// With DEBUG the alpha channel says whether the split G-buffer gathered back the same way differs
-// from the G-buffer (position and normal, bit for bit): gather(split(x)) == x at every pixel.
+// The alpha channel holds flags (as a float): 1 with DEBUG where the split G-buffer gathered back the
+// same way differs from the G-buffer (position and normal, bit for bit: gather(split(x)) == x at
+// every pixel), + 2 with SEED where the pixel is an edge by the seed's test (seed_edges.glsl), which
+// the seed's blur then reads once per tap.
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "../inc/scene_types.glsl"
 #include "interleave.glsl"
+#ifdef SEED
+bool on_screen(ivec2 q) {
+    return q.x >= 0 && q.y >= 0 && q.x < pc.size.x && q.y < pc.size.y;
+}
+#include "seed_edges.glsl"
+#endif
 
-void main() {
-    ivec2 q = ivec2(gl_GlobalInvocationID.xy);
-    if (q.x >= pc.size.x || q.y >= pc.size.y) return;
-    vec4 e = imageLoad(s_irradiance, split_of(q));
+// Pixel q's estimate from split texel s, with its flags.
+void gather(ivec2 q, ivec2 s) {
+    vec4 e = imageLoad(s_irradiance, s);
+    e.a = 0.0;
 #ifdef DEBUG
-    bool same = all(equal(floatBitsToUint(imageLoad(s_position, split_of(q))),
+    bool same = all(equal(floatBitsToUint(imageLoad(s_position, s)),
                           floatBitsToUint(texelFetch(g_position, q, 0)))) &&
-                all(equal(floatBitsToUint(imageLoad(s_normal, split_of(q))),
+                all(equal(floatBitsToUint(imageLoad(s_normal, s)),
                           floatBitsToUint(texelFetch(g_normal, q, 0))));
     e.a = same ? 0.0 : 1.0;
 #endif
+#ifdef SEED
+    if (seed_edge(q)) e.a += 2.0;
+#endif
     imageStore(irradiance, q, e);
+}
+
+// One invocation per M x N block of pixels, as the split: lanes read contiguous texels of each
+// sub-image and write whole rows of pixels.
+void main() {
+    ivec2 b = ivec2(gl_GlobalInvocationID.xy);
+    if (b.x >= pc.size.z || b.y >= pc.size.w) return;
+    for (int j = 0; j < TILE_N; ++j) {
+        for (int i = 0; i < TILE_M; ++i) {
+            ivec2 q = b * ivec2(TILE_M, TILE_N) + ivec2(i, j);
+            if (q.x < pc.size.x && q.y < pc.size.y) gather(q, ivec2(i, j) * pc.size.zw + b);
+        }
+    }
 }

@@ -10,6 +10,12 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #define VPLS_ONLY
 #include "../inc/shading.glsl"
 #include "subsets.glsl"
+#ifdef SEED
+bool on_screen(ivec2 q) {
+    return q.x >= 0 && q.y >= 0 && q.x < pc.size.x && q.y < pc.size.y;
+}
+#include "seed_edges.glsl"
+#endif
 
 void main() {
     ivec2 q = ivec2(gl_GlobalInvocationID.xy);
@@ -20,5 +26,10 @@ void main() {
         e = subset_irradiance(p.xyz, texelFetch(g_normal, q, 0).xyz, subset_of(q), pc.counts.x,
                               pc.params.x);
     }
-    imageStore(irradiance, q, vec4(e, 0.0));
+    // Alpha: the seed's edge flag (2), as the gather writes it.
+    float flags = 0.0;
+#ifdef SEED
+    if (seed_edge(q)) flags = 2.0;
+#endif
+    imageStore(irradiance, q, vec4(e, flags));
 }

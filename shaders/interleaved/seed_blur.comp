@@ -6,7 +6,8 @@
 // keep their own subset's estimate (the seed's noisy edge lines) and are skipped as taps, as are
 // pixels without a surface; the others take a Gaussian over offsets -(P-1) .. P-1 along the
 // direction (P = M, then N), sigma P / 2, weights renormalised over the taps used. The alpha
-// channel carries the gather's round-trip flag of the pixel through both directions.
+// channel carries the gather's flags of the pixel through both directions: the round trip (1)
+// and the seed's edge test (2), computed once per pixel by the gather (or implicit) pass.
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "../inc/scene_types.glsl"
 #include "interleave.glsl"
@@ -17,8 +18,6 @@ layout(set = 0, binding = BINDING_SEED_OUT, rgba32f) uniform image2D seed_out;
 bool on_screen(ivec2 q) {
     return q.x >= 0 && q.y >= 0 && q.x < pc.size.x && q.y < pc.size.y;
 }
-
-#include "seed_edges.glsl"
 
 #ifdef HORIZONTAL
 #define PERIOD TILE_M
@@ -32,11 +31,13 @@ vec4 load(ivec2 q) { return imageLoad(seed_tmp, q); }
 void store(ivec2 q, vec4 v) { imageStore(seed_out, q, v); }
 #endif
 
+bool edge(vec4 v) { return (int(v.a) & 2) != 0; }
+
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (!on_screen(px)) return;
     vec4 own = load(px);
-    if (seed_edge(px)) {
+    if (edge(own)) {
         store(px, own);
         return;
     }
@@ -45,9 +46,11 @@ void main() {
     float weights = 0.0;
     for (int d = -(PERIOD - 1); d <= PERIOD - 1; ++d) {
         ivec2 q = px + d * STEP;
-        if (!on_screen(q) || seed_edge(q)) continue;
+        if (!on_screen(q)) continue;
+        vec4 v = load(q);
+        if (edge(v)) continue;
         float w = exp(-float(d * d) / (2.0 * sigma * sigma));
-        sum += w * load(q).rgb;
+        sum += w * v.rgb;
         weights += w;
     }
     store(px, vec4(sum / weights, own.a));

@@ -137,14 +137,21 @@ impl SplitPasses {
                 },
             )
         };
-        let debug: &[&str] = if config.debug { &["DEBUG"] } else { &[] };
+        // The gather (or implicit) pass's flags: DEBUG the round trip, SEED the seed's edges.
+        let mut flags = Vec::new();
+        if config.debug {
+            flags.push("DEBUG");
+        }
+        if config.filter == Filter::Seed {
+            flags.push("SEED");
+        }
         let (split, implicit) = if config.implicit {
-            let p = pipeline("interleaved.implicit", "interleaved/implicit.comp", &[])?;
+            let p = pipeline("interleaved.implicit", "interleaved/implicit.comp", &flags)?;
             (None, Some(p))
         } else {
             let split = pipeline("interleaved.split", "interleaved/split.comp", &[])?;
             let shade = pipeline("interleaved.shade", "interleaved/shade.comp", &[])?;
-            let gather = pipeline("interleaved.gather", "interleaved/gather.comp", debug)?;
+            let gather = pipeline("interleaved.gather", "interleaved/gather.comp", &flags)?;
             (Some((split, shade, gather)), None)
         };
         let seed = if config.filter == Filter::Seed {
@@ -301,6 +308,11 @@ impl SplitPasses {
         };
         let (sw, sh) = self.mosaic_size();
         let split_groups = (sw.div_ceil(8), sh.div_ceil(8));
+        // The split and the gather: one invocation per M x N block of pixels (Ws x Hs of them).
+        let blocks = (
+            (self.size[2] as u32).div_ceil(8),
+            (self.size[3] as u32).div_ceil(8),
+        );
         let full = (
             (self.size[0] as u32).div_ceil(8),
             (self.size[1] as u32).div_ceil(8),
@@ -345,7 +357,7 @@ impl SplitPasses {
             // Gather: sub-images -> pixels.
             cmd.use_image(si, Access::ComputeStorageReadWrite);
             cmd.use_image(&im.irradiance, Access::ComputeStorageWrite);
-            self.dispatch(cmd, profiler, gather, "interleaved.gather", &push, full);
+            self.dispatch(cmd, profiler, gather, "interleaved.gather", &push, blocks);
         }
         if let (Some((h, v)), Some((tmp, out))) = (&self.seed, &im.seed) {
             cmd.use_image(&im.irradiance, Access::ComputeStorageReadWrite);

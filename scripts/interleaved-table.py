@@ -1,0 +1,92 @@
+#!/usr/bin/env python3
+"""The tables of docs/interleaved.md from `cbr bench` runs of `interleaved` (just bench-interleaved).
+
+For each bench.json given: one row per configuration with the frame time, the VPL work (the passes
+that deal with the VPLs: the reference's lighting pass less `deferred`'s lighting pass of the same
+run, i.e. the VPL sum; interleaved's split, shade, gather or implicit, the seed's blur, and its
+lighting pass less `deferred`'s), both as ratios to the reference's, FLIP (mean, edge pixels,
+interior pixels and their ratio) and PSNR against the reference; then, for rows run with `floor`,
+the split and gather passes against their copy kernel. Every number comes from the one run named
+in its heading: ratios are taken within a run, never across runs.
+"""
+import json
+import sys
+
+VPL_PASSES = ("split", "shade", "gather", "implicit", "seed_blur_h", "seed_blur_v")
+
+
+def med(row, name):
+    for k, v in (row.get("passes") or {}).items():
+        if k.split(".")[-1] == name:
+            return v["median"]
+    return None
+
+
+def lighting(row):
+    for k, v in (row.get("passes") or {}).items():
+        if k.endswith(".lighting"):
+            return v["median"]
+    return None
+
+
+def vpl_work(row, base_lighting):
+    light = lighting(row)
+    if light is None or base_lighting is None:
+        return None
+    extra = sum(med(row, p) or 0.0 for p in VPL_PASSES)
+    return extra + light - base_lighting
+
+
+def f(v, d=4):
+    return "–" if v is None else f"{v:.{d}f}"
+
+
+def table(path):
+    b = json.load(open(path))
+    rows = {r["config"]: r for r in b["rows"]}
+    ref = b["reference"]
+    r0 = rows.get(ref)
+    base = rows.get("deferred")
+    base_light = lighting(base) if base else None
+    ref_frame = r0["frame_ms"]["median"] if r0 else None
+    ref_vpl = vpl_work(r0, base_light) if r0 else None
+    w, h = r0["width"], r0["height"]
+    frames = r0["frames"]
+    scene = b["scene"]["name"] if isinstance(b["scene"], dict) else b["scene"]
+    print(f"\n#### {scene}, {w}x{h}, against `{ref}` ({r0['warmup']} warm-up + {frames} "
+          f"measured frames, medians; {r0['device']})\n")
+    print(f"`{' '.join(b['command'][1:] if isinstance(b['command'], list) else [b['command']])}`\n")
+    print("| spec | frame ms | x faster (frame) | VPL work ms | x faster (VPL work) | FLIP | "
+          "edge FLIP | interior FLIP | edge / interior | PSNR dB |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    floors = []
+    for cfg, r in rows.items():
+        e = r.get("error") or {}
+        frame = r["frame_ms"]["median"]
+        vw = vpl_work(r, base_light) if cfg.startswith(("interleaved", "deferred:")) else None
+        ratio = ref_frame / frame if ref_frame and cfg != ref else None
+        vratio = ref_vpl / vw if (ref_vpl and vw and cfg != ref) else None
+        edge, interior = e.get("flip_edge_mean"), e.get("flip_interior_mean")
+        er = edge / interior if edge is not None and interior else None
+        name = f"`{cfg}`" + (" (reference)" if cfg == ref else "")
+        print(f"| {name} | {f(frame, 1)} | {f(ratio, 2)} | {f(vw, 1)} | {f(vratio, 2)} | "
+              f"{f(e.get('flip_mean'))} | {f(edge)} | {f(interior)} | {f(er, 2)} | "
+              f"{f(e.get('psnr_mean'), 2)} |")
+        copy = med(r, "copy_floor")
+        if copy:
+            sg = (med(r, "split") or 0.0) + (med(r, "gather") or 0.0)
+            floors.append((cfg, sg, copy))
+    for cfg, sg, copy in floors:
+        print(f"\n`{cfg}`: split + gather {sg:.2f} ms, their copy kernel (48 bytes read and 48 "
+              f"written a pixel) {copy:.2f} ms: **{sg / copy:.2f}x** the floor.")
+
+
+def main():
+    if len(sys.argv) < 2:
+        sys.exit("usage: interleaved-table.py BENCH.json...")
+    for p in sys.argv[1:]:
+        table(p)
+
+
+if __name__ == "__main__":
+    main()
