@@ -32,15 +32,8 @@ void gather(ivec2 q, ivec2 s) {
     imageStore(irradiance, q, e);
 }
 
-// One invocation per M x N block of pixels, as the split: lanes read contiguous texels of each
-// sub-image and write whole rows of pixels.
 void main() {
-    ivec2 b = ivec2(gl_GlobalInvocationID.xy);
-    if (b.x >= pc.size.z || b.y >= pc.size.w) return;
-    for (int j = 0; j < TILE_N; ++j) {
-        for (int i = 0; i < TILE_M; ++i) {
-            ivec2 q = b * ivec2(TILE_M, TILE_N) + ivec2(i, j);
-            if (q.x < pc.size.x && q.y < pc.size.y) gather(q, ivec2(i, j) * pc.size.zw + b);
-        }
-    }
+    ivec2 q = ivec2(gl_GlobalInvocationID.xy);
+    if (q.x >= pc.size.x || q.y >= pc.size.y) return;
+    gather(q, split_of(q));
 }
