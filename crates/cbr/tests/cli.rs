@@ -1054,3 +1054,60 @@ fn analytic_seed_counts_its_errors_in_run_json_and_draws_them() {
     assert_eq!(a["nonfinite_pixels"], 0, "{a}");
     assert!(out.join("debug/frame_0000_seed_differs.png").is_file());
 }
+
+/// `interleaved:...:debug` writes its debug views: the EXR layer `interleaved` (subset, edge,
+/// fallback, read back by our reader: the subset layer is (x mod M) + M (y mod N) where something
+/// was drawn), the four PNGs, and its counts in run.json (no round-trip mismatch).
+#[test]
+fn interleaved_debug_views_reach_the_exr_the_pngs_and_run_json() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out");
+    let o = cbr(
+        &[
+            "render",
+            "builtin:demo",
+            "--technique",
+            "interleaved:3x2:vpls=48:debug",
+            "--width",
+            "64",
+            "--height",
+            "36",
+            "--frames",
+            "1",
+            "-o",
+            out.to_str().expect("utf8"),
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json"))
+            .expect("json");
+    let i = &run["frames"][0]["interleaved"];
+    assert_eq!(i["tile"], serde_json::json!([3, 2]), "{i}");
+    assert_eq!(i["roundtrip_mismatches"], 0, "{i}");
+    let visible = i["visible_pixels"].as_u64().expect("visible");
+    let edges = i["edge_pixels"].as_u64().expect("edges");
+    let fallback = i["fallback_pixels"].as_u64().expect("fallback");
+    assert!(visible > 500 && edges > 0 && edges < visible, "{i}");
+    assert!(fallback > 0 && fallback <= visible, "{i}");
+    for view in ["mosaic", "subset", "edges", "fallback"] {
+        let png = out.join(format!("debug/frame_0000_interleaved_{view}.png"));
+        assert!(png.is_file(), "{}", png.display());
+    }
+    let exr = out.join("frame_0000.exr");
+    let subset = cbr_metrics::input::load(&exr, Some("interleaved"), Some(&["subset".into()]))
+        .expect("interleaved layer");
+    let ids = cbr_metrics::input::load(&exr, Some("object_id"), Some(&["id".into()]))
+        .expect("object_id layer");
+    let (w, h) = (subset.rgb.width, subset.rgb.height);
+    assert_eq!((w, h), (64, 36));
+    for y in 0..h {
+        for x in 0..w {
+            if ids.rgb.c[0].data[y * w + x] > 0.0 {
+                let want = (x % 3 + 3 * (y % 2)) as f32;
+                assert_eq!(subset.rgb.c[0].data[y * w + x], want, "({x}, {y})");
+            }
+        }
+    }
+}

@@ -217,10 +217,10 @@ impl SplitPasses {
         let sampler = Sampler::new(gpu, "interleaved.sampler", SamplerDesc::NEAREST)?;
         // Bindings a mode does not use still hold an image (lavapipe crashes binding a set with
         // an unwritten descriptor): the gathered estimates, which every mode has.
-        fn pick<'a>(i: Option<&'a Image>, or: &'a Image) -> &'a Image {
-            i.unwrap_or(or)
+        fn or_else<'a>(i: Option<&'a Image>, fallback: &'a Image) -> &'a Image {
+            i.unwrap_or(fallback)
         }
-        let pick = |i| pick(i, &irradiance);
+        let pick = |i| or_else(i, &irradiance);
         let set = DescriptorSet::new(
             gpu,
             "interleaved.set",
