@@ -1020,20 +1020,26 @@ fn interlaced_writes_its_mask_and_debug_views() {
     );
 }
 
-#[test]
-fn analytic_seed_counts_its_errors_in_run_json_and_draws_them() {
+/// Renders frame 0 of the demo with `technique` at `w` x `h`; returns the folder (kept alive by
+/// the TempDir), the output directory and run.json.
+fn render_demo_frame(
+    technique: &str,
+    w: u32,
+    h: u32,
+) -> (tempfile::TempDir, std::path::PathBuf, serde_json::Value) {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("out");
+    let (w, h) = (w.to_string(), h.to_string());
     let o = cbr(
         &[
             "render",
             "builtin:demo",
             "--technique",
-            "analytic:seed",
+            technique,
             "--width",
-            "96",
+            &w,
             "--height",
-            "54",
+            &h,
             "--frames",
             "1",
             "-o",
@@ -1041,10 +1047,15 @@ fn analytic_seed_counts_its_errors_in_run_json_and_draws_them() {
         ],
         &[],
     );
-    assert!(o.status.success(), "{}", stderr(&o));
-    let run: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json"))
-            .expect("json");
+    assert!(o.status.success(), "{technique}: {}", stderr(&o));
+    let run = serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json"))
+        .expect("json");
+    (dir, out, run)
+}
+
+#[test]
+fn analytic_seed_counts_its_errors_in_run_json_and_draws_them() {
+    let (_dir, out, run) = render_demo_frame("analytic:seed", 96, 54);
     let a = &run["frames"][0]["analytic"];
     let edge = a["edge_pixels"].as_u64().expect("edge pixels");
     let off = a["seed_differs_pixels"].as_u64().expect("seed pixels");
@@ -1060,29 +1071,7 @@ fn analytic_seed_counts_its_errors_in_run_json_and_draws_them() {
 /// was drawn), the four PNGs, and its counts in run.json (no round-trip mismatch).
 #[test]
 fn interleaved_debug_views_reach_the_exr_the_pngs_and_run_json() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let out = dir.path().join("out");
-    let o = cbr(
-        &[
-            "render",
-            "builtin:demo",
-            "--technique",
-            "interleaved:3x2:vpls=48:debug",
-            "--width",
-            "64",
-            "--height",
-            "36",
-            "--frames",
-            "1",
-            "-o",
-            out.to_str().expect("utf8"),
-        ],
-        &[],
-    );
-    assert!(o.status.success(), "{}", stderr(&o));
-    let run: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json"))
-            .expect("json");
+    let (_dir, out, run) = render_demo_frame("interleaved:3x2:vpls=48:debug", 64, 36);
     let i = &run["frames"][0]["interleaved"];
     assert_eq!(i["tile"], serde_json::json!([3, 2]), "{i}");
     assert_eq!(i["roundtrip_mismatches"], 0, "{i}");
