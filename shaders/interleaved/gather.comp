@@ -9,9 +9,6 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "../inc/scene_types.glsl"
 #include "interleave.glsl"
 #ifdef SEED
-bool on_screen(ivec2 q) {
-    return q.x >= 0 && q.y >= 0 && q.x < pc.size.x && q.y < pc.size.y;
-}
 #include "seed_edges.glsl"
 #endif
 

@@ -11,9 +11,6 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "../inc/shading.glsl"
 #include "subsets.glsl"
 #ifdef SEED
-bool on_screen(ivec2 q) {
-    return q.x >= 0 && q.y >= 0 && q.x < pc.size.x && q.y < pc.size.y;
-}
 #include "seed_edges.glsl"
 #endif
 

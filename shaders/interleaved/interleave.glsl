@@ -23,6 +23,11 @@ ivec2 pixel_of(ivec2 s) {
     return (s - sub * pc.size.zw) * ivec2(TILE_M, TILE_N) + sub;
 }
 
+// Whether pixel q lies on the screen.
+bool on_screen(ivec2 q) {
+    return q.x >= 0 && q.y >= 0 && q.x < pc.size.x && q.y < pc.size.y;
+}
+
 // The split texel of screen pixel q.
 ivec2 split_of(ivec2 q) {
     ivec2 sub = q % ivec2(TILE_M, TILE_N);

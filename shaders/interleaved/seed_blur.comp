@@ -15,9 +15,6 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = BINDING_SEED_TMP, rgba32f) uniform image2D seed_tmp;
 layout(set = 0, binding = BINDING_SEED_OUT, rgba32f) uniform image2D seed_out;
 
-bool on_screen(ivec2 q) {
-    return q.x >= 0 && q.y >= 0 && q.x < pc.size.x && q.y < pc.size.y;
-}
 
 #ifdef HORIZONTAL
 #define PERIOD TILE_M

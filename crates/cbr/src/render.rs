@@ -705,6 +705,8 @@ fn write_interleaved_pngs(dir: &Path, f: u32, out: &FrameOutput) -> Result<()> {
         )
     };
     if let Some((w, h, texels)) = &i.mosaic {
+        // Its own curve, not the frame's display transform: the mosaic holds irradiance without
+        // albedo, dim at the frame's exposure (lit sub-images then read as black).
         let tone = |x: f32| {
             let x = if x.is_finite() { x.max(0.0) } else { 0.0 };
             ((x / (1.0 + x)).powf(1.0 / 2.2) * 255.0).round() as u8

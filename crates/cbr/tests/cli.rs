@@ -506,7 +506,13 @@ fn check_bench_schema(b: &serde_json::Value) {
             assert!(r["error"].is_null());
         } else {
             let e = &r["error"];
-            for k in ["ssim_mean", "flip_mean", "flip_edge_mean", "relmse_mean"] {
+            for k in [
+                "ssim_mean",
+                "flip_mean",
+                "flip_edge_mean",
+                "flip_interior_mean",
+                "relmse_mean",
+            ] {
                 assert!(e[k].is_f64(), "error.{k}: {r}");
             }
             let frames = r["frames"].as_u64().expect("frames") as usize;
@@ -672,6 +678,17 @@ fn bench_against_a_supersampled_reference_names_it_everywhere_and_caches_it() {
             .is_some_and(|v| v > 0.0)
     );
     assert!(native["error"]["per_frame"][0]["flip_edge"].is_f64());
+    // The frame's FLIP mean is the pixel-weighted mix of its edge and interior means.
+    let f0 = &native["error"]["per_frame"][0];
+    let (mean, edge, interior) = (
+        f0["flip_mean"].as_f64().expect("flip"),
+        f0["flip_edge"].as_f64().expect("edge"),
+        f0["flip_interior"].as_f64().expect("interior"),
+    );
+    assert!(
+        edge.min(interior) - 1e-6 <= mean && mean <= edge.max(interior) + 1e-6 && edge != interior,
+        "mean {mean}, edge {edge}, interior {interior}"
+    );
     assert!(b["reference_images"]["48x27"]["image"].is_string());
     assert!(
         b["protocol"]["reference"]

@@ -5,7 +5,7 @@
 //! Passes per frame, one submission: `interleaved.gbuffer` (deferred's G-buffer pass), the sun's
 //! map and the VPLs (deferred::lights), then (split.rs) `interleaved.split` (the G-buffer into
 //! M x N sub-images of every M-th column and N-th row), `interleaved.shade` (sub-image k with VPL
-//! subset k, every (M N)-th VPL, times M N), `interleaved.gather` (the estimates back to their
+//! subset k, the k-th contiguous block of VPLs, times M N), `interleaved.gather` (the estimates back to their
 //! pixels) or, with `implicit`, `interleaved.implicit` (each pixel its own subset, no split); with
 //! `seed` the seed's blur; and `interleaved.lighting`: deferred's lighting pass, whose VPL term
 //! becomes the filter (shaders/interleaved/filter.glsl) times albedo. Each pixel evaluates
@@ -31,7 +31,7 @@ pub const REGISTRATION: Registration = Registration {
     grammar: "interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D]\
               [:ours|seed|box|none][:search=S][:enough=K][:implicit][:debug][:floor]",
     about: "deferred's VPLs, interleaved: the G-buffer split into M x N sub-images, sub-image k \
-            shaded with every (M N)-th VPL from the k-th, gathered back, filtered (ours: \
+            shaded with the k-th block of N / (M N) VPLs, gathered back, filtered (ours: \
             geometry-aware, missing subsets shaded at the pixel; seed: the seed's edge-skipping \
             Gaussian; box; none), times albedo; implicit: no split",
     layers: &["interleaved (debug)"],
@@ -66,8 +66,9 @@ pub enum Filter {
     None = 0,
     /// `box`: the mean over the M x N window (one pixel of each subset), whatever the geometry.
     Box = 1,
-    /// `ours` (the default): per subset, the nearest pixel holding it on the pixel's surface
-    /// (the window's own, else one period further); a subset with none is shaded at the pixel.
+    /// `ours` (the default): per subset, the window's pixel holding it if it lies on the pixel's
+    /// surface (with `search=1`, else the nearest one a period further that does); a subset with
+    /// none is shaded at the pixel (unless `enough=K` of them were found).
     Ours = 2,
     /// `seed`: the seed's edge detection (depth and normal against the 4 neighbours) and a
     /// separable Gaussian over non-edge pixels; edge pixels keep their own subset's estimate.
@@ -306,25 +307,12 @@ impl Interleaved {
         let Some((_, bits)) = &self.debug else {
             return Ok(None);
         };
-        let words: Vec<u32> = bits
-            .bytes()?
-            .chunks_exact(4)
-            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-            .collect();
+        let words: &[u32] = bytemuck::cast_slice(bits.bytes()?);
         let mosaic = match &self.split.mosaic {
             Some(rb) => {
-                let texels = rb
-                    .bytes()?
-                    .chunks_exact(16)
-                    .map(|t| {
-                        let f = |k: usize| {
-                            f32::from_le_bytes([t[4 * k], t[4 * k + 1], t[4 * k + 2], t[4 * k + 3]])
-                        };
-                        [f(0), f(1), f(2)]
-                    })
-                    .collect();
+                let texels: &[[f32; 4]] = bytemuck::cast_slice(rb.bytes()?);
                 let (w, h) = self.split.mosaic_size();
-                Some((w, h, texels))
+                Some((w, h, texels.iter().map(|t| [t[0], t[1], t[2]]).collect()))
             }
             None => None,
         };

@@ -64,7 +64,8 @@ pub fn moved_bytes(width: u32, height: u32) -> (u64, u64) {
 /// The buffers of the `floor` copy kernel.
 const FLOOR: &str = "interleaved.copy_floor";
 
-/// Storage images of `interleaved`'s passes, by name; the debug readbacks.
+/// Storage images of `interleaved`'s passes (the split ones absent with `implicit`, the seed's
+/// blur ones present with `seed` only).
 struct Images {
     split_position: Option<Image>,
     split_normal: Option<Image>,
