@@ -10,7 +10,8 @@
 // slots end sorted and hold the K nearest whatever the order of arrival) and counts the
 // fragment. Otherwise: a fragment whose key is among its pixel's K is shaded once, at the
 // centroid of its covered part, and writes (coverage, sample mask, colour) into that slot; in a
-// pixel with more than K fragments the others are shaded too and summed into the pixel's tail.
+// pixel with more than K fragments the others are shaded too and summed into the pixel's tails
+// (facing the camera; facing away).
 // Fragments whose triangle holds the pixel centre also write native's depth, velocity and IDs
 // through the depth test.
 #include "../inc/scene_types.glsl"
@@ -27,9 +28,14 @@ layout(std430, set = 2, binding = BINDING_KEYS) buffer Keys { uint64_t keys[]; }
 // sample mask; colour (3 x f16) and flags.
 layout(std430, set = 2, binding = BINDING_SLOTS) buffer Slots { uvec2 slots[]; };
 layout(std430, set = 2, binding = BINDING_COLORS) buffer Colors { uvec2 colors[]; };
+// A kept fragment's depth plane in the pixel: depth at the pixel centre and its change per pixel
+// in x (planes) and y (planes_y), for the resolve's per-sample visibility.
+layout(std430, set = 2, binding = BINDING_PLANES) buffer Planes { uvec2 planes[]; };
+layout(std430, set = 2, binding = BINDING_PLANES_Y) buffer PlanesY { uint planes_y[]; };
 layout(std430, set = 2, binding = BINDING_COUNTS) buffer Counts { uint counts[]; };
-// Per pixel, the fixed-point sums (2^-24 units) of coverage x colour and of coverage of the
-// fragments beyond the K nearest: integers, so the sums do not depend on the order of arrival.
+// Per pixel, two tails (fragments facing the camera, facing away), each the fixed-point sums
+// (2^-24 units) of coverage x colour and of coverage of the fragments beyond the K nearest,
+// and the union of their sample masks: integers, so the sums do not depend on the order of arrival.
 layout(std430, set = 2, binding = BINDING_TAIL) buffer Tail { uint64_t tail[]; };
 layout(push_constant) uniform Push { uint object_index; } pc;
 
@@ -169,7 +175,10 @@ void main() {
     if (mat.tex.x >= 0) albedo *= textureGrad(albedo_tex, uv, gx, gy).rgb;
     vec3 world = world_at(b);
     vec3 nrm = normalize(b.x * g_normal[0] + b.y * g_normal[1] + b.z * g_normal[2]);
-    if (dot(nrm, -world) < 0.0) nrm = -nrm;
+    // Facing away: the back of a surface (of a closed mesh, behind its front); shaded from the
+    // side the camera sees, and summed into the back tail.
+    bool facing_away = dot(nrm, -world) < 0.0;
+    if (facing_away) nrm = -nrm;
     if (mat.tex.w >= 0) {
         float h = textureGrad(bump_tex, uv, gx, gy).r * mat.ke.w;
         float hx = textureGrad(bump_tex, uv + gx, gx, gy).r * mat.ke.w;
@@ -179,12 +188,12 @@ void main() {
     vec3 color = shade(world, nrm, albedo, mat, frame);
     bool finite = !any(isnan(color)) && !any(isinf(color));
 
-    // The mask only matters in a slot (and to the seed's vertex columns).
+    // The mask: for the resolve's per-sample visibility (a slot) or the tail's (beyond the K).
     uint mask = 0u;
 #ifdef SEED
     mask = sample_mask(p, n, orient);
 #else
-    if (slot >= 0) mask = sample_mask(p, n, orient);
+    mask = sample_mask(p, n, orient);
 #endif
     float coverage = cov.area;
     uint flags = 0u;
@@ -200,22 +209,35 @@ void main() {
         coverage = 0.0;
         flags |= 6u;
     }
-    if (slot >= 0 && mask == 0u) {
+    if (mask == 0u) {
         mask = nearest_sample_bit(cov.mean_point);
-        flags |= 2u;  // a stand-in bit: never used to hide this fragment
+        flags |= 8u;  // a stand-in bit (the resolve treats it as one sample of this fragment)
     }
     if (slot >= 0) {
+        // The depth plane: z / w is affine in the screen, z(ndc) = gz . (ndc, 1) / gw . (ndc, 1)
+        // with gw = (0, 0, 1) up to rounding (the clip matrix's third row is the w's).
+        vec3 gz = vec3(g_clip[0].z, g_clip[1].z, g_clip[2].z) * inv_clip;
+        vec3 gw = vec3(g_clip[0].w, g_clip[1].w, g_clip[2].w) * inv_clip;
+        vec3 ndc_c = vec3((corner + 0.5) * frame.output_size.zw * 2.0 - 1.0, 1.0);
+        float norm = dot(gw, ndc_c);
+        vec3 plane = vec3(dot(gz, ndc_c), gz.xy * 2.0 * frame.output_size.zw) / norm;
+        if (any(isnan(plane)) || any(isinf(plane)) || !finite) plane = vec3(z, 0.0, 0.0);
+        planes[base + uint(slot)] = floatBitsToUint(plane.xy);
+        planes_y[base + uint(slot)] = floatBitsToUint(plane.z);
         slots[base + uint(slot)] = uvec2(floatBitsToUint(coverage), mask);
         colors[base + uint(slot)] = uvec2(packHalf2x16(color.rg),
                                           (packHalf2x16(vec2(color.b, 0.0)) & 0xFFFFu) | (flags << 16u));
     } else if (coverage > 0.0) {
         const float unit = 16777216.0;  // 2^24
         vec3 ac = clamp(color, 0.0, 65504.0) * coverage * unit;
-        uint t = pixel * 4u;
+        // Two tails: fragments facing the camera, and those facing away (composited after).
+        // Per pixel 10 words: the two tails' sums (4 each), then their sample masks' union.
+        uint t = pixel * 10u + (facing_away ? 4u : 0u);
         atomicAdd(tail[t], uint64_t(ac.r));
         atomicAdd(tail[t + 1u], uint64_t(ac.g));
         atomicAdd(tail[t + 2u], uint64_t(ac.b));
         atomicAdd(tail[t + 3u], uint64_t(coverage * unit));
+        atomicOr(tail[pixel * 10u + (facing_away ? 9u : 8u)], uint64_t(mask));
     }
     }
 

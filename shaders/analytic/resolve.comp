@@ -1,23 +1,36 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// `analytic`, resolve: per pixel, its K nearest fragments front to back. The visibility model:
-// fragments sorted by depth at the pixel centre (nearer first; ties by object, then primitive,
-// so the order never depends on the order of the atomics). A fragment whose sample
-// mask lies wholly under the masks of nearer fragments of the same object is hidden: the back
-// faces of a closed mesh at its silhouette, the far side of a mesh folded over itself. Every
-// other fragment adds its exact coverage clamped to what nearer ones left, v = min(a, 1 - sum),
-// colour += v c; the background fills the remainder. Exact for one surface over a background,
-// for abutting triangles (their coverages add up to the pixel), and for an opaque surface in
-// front of another object that covers the whole pixel (the clamp hands the far object exactly
-// what the near one leaves); approximate where two partial surfaces overlap in one pixel
-// (docs/analytic.md measures it against ssaa:32). A fragment too small to hold a mask sample
-// carries a stand-in bit that neither hides nor is hidden (either would open seams in meshes).
-// Only the K nearest fragments of a pixel are kept (the select pass); those beyond count as
-// overflow and are merged into one tail fragment (coverage-weighted mean colour, summed
-// coverage) composited after the K, so no surface is dropped, only its order within the tail.
+// `analytic`, resolve: per pixel, its K nearest fragments, each with its exact coverage a, its
+// 32-sample mask and its depth plane. The visibility model (docs/analytic.md):
+// 1. Per mask sample, its winner: the nearest fragment there by the fragments' depth planes
+//    (ties: the earlier key, object then primitive), among the fragments whose mask holds the
+//    sample. A fragment too small to hold a sample takes the one nearest its centroid (a
+//    stand-in bit). Alpha-tested fragments (their covered part has holes) win no samples.
+// 2. Fragment k loses a sample of its mask to the winner there, in front of it, except where one
+//    of the two holds the sample as a stand-in and the other is of the same object and nearer by
+//    at most 1e-3 of the depth: the same surface, a sliver sharing its neighbour's sample (a fold
+//    of the mesh is further behind). A fragment that loses no sample
+//    is unoccluded: it adds its exact coverage a. Otherwise each winner w occludes it by w's
+//    visible coverage spread evenly over the samples w won:
+//        v = a - sum over k's lost samples s of v(w(s)) / won(w(s)).
+//    Exact for an opaque surface in front of another that covers the rest of the pixel (the far
+//    one gets exactly 1 - a_near) and for abutting triangles; where two partial surfaces overlap
+//    or two surfaces intersect inside the pixel, the overlap's shape is sampled by the 32 samples
+//    and its area by the exact coverages. v depends on the winners' v: two sweeps in key order,
+//    the first from v = a won / m.
+// 3. Front to back in key order, v is clamped to what nearer ones left, v = min(v, 1 - sum):
+//    colour += v c. Alpha-tested fragments are composited by the clamp alone.
+// 4. Only the K nearest fragments of a pixel are kept (the select pass); those beyond count as
+//    overflow and are merged into two tail fragments (coverage-weighted mean colour, summed
+//    coverage, union of masks), those facing the camera, then those facing away, composited
+//    after the K, each by the share of its samples not held by the K (nor the front tail), at
+//    most the fraction of the pixel's samples that share is (a tail's summed coverage counts
+//    its overlapping layers once each): no surface is dropped, only its order within its tail
+//    and the overlaps among it are estimated. The background fills the remainder.
 #extension GL_ARB_gpu_shader_int64 : require
 #define EMPTY_KEY 0xFFFFFFFFFFFFFFFFul  // a slot no fragment took
 #include "../inc/scene_types.glsl"
+#include "coverage.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -26,6 +39,8 @@ layout(std430, set = 0, binding = BINDING_SLOTS) readonly buffer Slots { uvec2 s
 layout(std430, set = 0, binding = BINDING_COLORS) readonly buffer Colors { uvec2 colors[]; };
 layout(std430, set = 0, binding = BINDING_COUNTS) readonly buffer Counts { uint counts[]; };
 layout(std430, set = 0, binding = BINDING_TAIL) readonly buffer Tail { uint64_t tail[]; };
+layout(std430, set = 0, binding = BINDING_PLANES) readonly buffer Planes { vec2 planes[]; };
+layout(std430, set = 0, binding = BINDING_PLANES_Y) readonly buffer PlanesY { float planes_y[]; };
 layout(set = 0, binding = BINDING_OUT_COLOR, rgba16f) uniform writeonly image2D out_color;
 layout(set = 0, binding = BINDING_OUT_COVERAGE, r32f) uniform writeonly image2D out_coverage;
 layout(set = 0, binding = BINDING_OUT_COUNTS, rgba32ui) uniform writeonly uimage2D out_counts;
@@ -40,6 +55,16 @@ layout(push_constant) uniform Push {
 #define FLAG_SEED 2u      // analytic:seed: a visible fragment's shortcut area is off by > 1e-3
 #define FLAG_OVERFLOW 4u
 #define FLAG_NONFINITE 8u  // a kept fragment's shading was not finite (dropped)
+// A fragment's own flags (raster.frag): 1 seed's area off, 2 holes (alpha-tested or not finite:
+// wins no samples), 4 not finite, 8 a stand-in bit.
+#define FRAG_HOLES 2u
+#define FRAG_STAND_IN 8u
+
+// Fragment k's depth at mask sample q (pixel-local).
+float plane_depth(uint slot, vec2 q) {
+    vec2 p = planes[slot];
+    return p.x + p.y * (q.x - 0.5) + planes_y[slot] * (q.y - 0.5);
+}
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -49,39 +74,109 @@ void main() {
 
     // The slots hold the K nearest keys in order (the select pass's insertion).
     uint objs[K_SLOTS];
+    uint masks[K_SLOTS];
+    uint fl[K_SLOTS];
+    float area[K_SLOTS];
     int count = 0;
     for (int k = 0; k < K_SLOTS; ++k) {
         uint64_t key = keys[base + uint(k)];
         if (key == EMPTY_KEY) break;
         objs[k] = uint(key & 0xFFFFFFFFul) >> 20u;
+        uvec2 sl = slots[base + uint(k)];
+        area[k] = uintBitsToFloat(sl.x);
+        masks[k] = sl.y;
+        fl[k] = colors[base + uint(k)].y >> 16u;
         ++count;
     }
 
+    // 1. Each mask sample's winner (a slot index, 0xFF for none) and its depth there.
+    uint winner[MASK_SAMPLES];
+    float wz[MASK_SAMPLES];
+    uint won[K_SLOTS];
+    for (int k = 0; k < count; ++k) won[k] = 0u;
+    for (int s = 0; s < MASK_SAMPLES; ++s) {
+        vec2 q = mask_sample(s);
+        uint best = 0xFFu;
+        float bz = 0.0;
+        for (int k = 0; k < count; ++k) {
+            if ((fl[k] & FRAG_HOLES) != 0u || ((masks[k] >> uint(s)) & 1u) == 0u) continue;
+            float z = plane_depth(base + uint(k), q);
+            // Reverse-Z: nearer is larger; ties keep the earlier key.
+            if (best == 0xFFu || z > bz) {
+                best = uint(k);
+                bz = z;
+            }
+        }
+        winner[s] = best;
+        wz[s] = bz;
+        if (best != 0xFFu) won[best] |= 1u << uint(s);
+    }
+
+    // 2. The samples each fragment lost to a winner in front of it, and the visible coverages.
+    uint lost[K_SLOTS];
+    float vis[K_SLOTS];
+    for (int k = 0; k < count; ++k) {
+        uint l = 0u;
+        if ((fl[k] & FRAG_HOLES) == 0u) {
+            uint rest = masks[k] & ~won[k];
+            while (rest != 0u) {
+                int s = findLSB(rest);
+                rest &= rest - 1u;
+                uint w = winner[s];
+                float zk = plane_depth(base + uint(k), mask_sample(s));
+                bool stand_in = ((fl[k] | fl[w]) & FRAG_STAND_IN) != 0u;
+                bool same_surface = stand_in && objs[w] == objs[k] && wz[s] - zk <= 1e-3 * abs(zk);
+                if (!same_surface) l |= 1u << uint(s);
+            }
+        }
+        lost[k] = l;
+        uint m = bitCount(masks[k]);
+        vis[k] = m > 0u ? area[k] * float(m - bitCount(l)) / float(m) : area[k];
+    }
+    for (int sweep = 0; sweep < 2; ++sweep) {
+        for (int k = 0; k < count; ++k) {
+            if (lost[k] == 0u) continue;
+            if (lost[k] == masks[k]) {
+                // Every sample behind fragments of its own object: a fold of the mesh (the
+                // back of a closed one behind its front) is hidden entirely.
+                bool own = true;
+                uint rest = lost[k];
+                while (rest != 0u) {
+                    int s = findLSB(rest);
+                    rest &= rest - 1u;
+                    own = own && objs[winner[s]] == objs[k];
+                }
+                if (own) {
+                    vis[k] = 0.0;
+                    continue;
+                }
+            }
+            float occ = 0.0;
+            uint rest = lost[k];
+            while (rest != 0u) {
+                int s = findLSB(rest);
+                rest &= rest - 1u;
+                uint w = winner[s];
+                occ += vis[w] / float(bitCount(won[w]));
+            }
+            vis[k] = clamp(area[k] - occ, 0.0, area[k]);
+        }
+    }
+
+    // 3. Front to back, clamped to what nearer ones left.
     float sum = 0.0;
     vec3 color = vec3(0.0);
     uint flags = 0u;
     uint visible = 0u;
     for (int k = 0; k < count; ++k) {
-        uvec2 sl = slots[base + uint(k)];
-        uvec2 cl = colors[base + uint(k)];
-        uvec4 s = uvec4(sl, cl);
-        uint mask = s.y;
-        uint fflags = s.w >> 16u;
-        if ((fflags & 2u) == 0u) {
-            // Hidden under nearer fragments of the same object?
-            uint under = 0u;
-            for (int m = 0; m < k; ++m) {
-                bool stand_in = ((colors[base + uint(m)].y >> 17u) & 1u) != 0u;
-                if (objs[m] == objs[k] && !stand_in) under |= slots[base + uint(m)].y;
-            }
-            if ((mask & ~under) == 0u) continue;
-        }
-        float a = uintBitsToFloat(s.x);
+        uint fflags = fl[k];
+        float a = area[k];
         if ((fflags & 1u) != 0u) flags |= FLAG_SEED;
         if ((fflags & 4u) != 0u) flags |= FLAG_NONFINITE;
-        float v = min(a, 1.0 - sum);
+        float v = min(vis[k], 1.0 - sum);
         if (v <= 0.0) continue;
-        vec3 c = vec3(unpackHalf2x16(s.z), unpackHalf2x16(s.w & 0xFFFFu).x);
+        uvec2 cl = colors[base + uint(k)];
+        vec3 c = vec3(unpackHalf2x16(cl.x), unpackHalf2x16(cl.y & 0xFFFFu).x);
         color += v * c;
         sum += v;
         ++visible;
@@ -91,18 +186,31 @@ void main() {
     uint overflow = seen - uint(count);
     if (overflow > 0u) flags |= FLAG_OVERFLOW;
     if (sum < 1.0 - 1e-6 && visible > 0u) flags |= FLAG_EDGE;
-    if (overflow > 0u && sum < 1.0) {
-        // The fragments beyond the K nearest, merged into one (their coverage-weighted mean
-        // colour, their summed coverage), fill what the nearest left, as one more fragment.
-        uint t = pixel * 4u;
+    // The fragments beyond the K nearest, merged into two (their coverage-weighted mean colours,
+    // their summed coverages, the union of their masks): those facing the camera, then those
+    // facing away (of a closed mesh, behind its front). Each fills what the nearest left, in
+    // proportion to the share of its mask's samples that no kept fragment (nor, for the back
+    // tail, the front tail) holds: the tails lie behind the K.
+    uint held = 0u;
+    for (int k = 0; k < count; ++k) {
+        if ((fl[k] & FRAG_HOLES) == 0u) held |= masks[k];
+    }
+    for (uint part = 0u; part < 2u && overflow > 0u && sum < 1.0; ++part) {
+        uint t = pixel * 10u + part * 4u;
         const float unit = 1.0 / 16777216.0;
         float ta = float(tail[t + 3u]) * unit;
-        if (ta > 0.0) {
+        uint tm = uint(tail[pixel * 10u + 8u + part]);
+        if (ta > 0.0 && tm != 0u) {
             vec3 tc = vec3(float(tail[t]), float(tail[t + 1u]), float(tail[t + 2u])) * unit / ta;
-            float v = min(ta, 1.0 - sum);
+            // Its summed coverage counts overlapping layers of the tail once each: no more than
+            // the share of the pixel's samples it holds open.
+            uint open_bits = bitCount(tm & ~held);
+            float open_share = float(open_bits) / float(bitCount(tm));
+            float v = min(min(ta * open_share, float(open_bits) / float(MASK_SAMPLES)), 1.0 - sum);
             color += v * tc;
             sum += v;
         }
+        held |= tm;
     }
     color += max(1.0 - sum, 0.0) * pc.background.rgb;
     imageStore(out_color, px, vec4(color, 1.0));

@@ -699,8 +699,10 @@ fn fragments_beyond_k_are_counted_as_overflow_and_lists_that_cannot_fit_are_refu
     // Overflowing pixels are flagged, not silently dropped: more fragments counted than kept.
     let listed: u64 = a.fragments.iter().map(|&f| u64::from(f)).sum();
     assert!(listed > u64::from(W * H), "{listed}");
-    // The fragments beyond the one kept are merged into the tail: with one white material the
-    // frame matches the one that keeps 16 (the merge changes only the order within the tail).
+    // The fragments beyond the one kept are merged into the tails, which know their layers'
+    // summed coverage and the union of their masks, not their order nor their overlaps: with
+    // one white material the frame stays within a few of the 32 samples of the one that keeps
+    // 16 (measured: worst 0.093, mean 0.0020).
     let wide = render(&gpu, &s, "analytic:frags=16");
     let worst = out
         .color
@@ -708,7 +710,17 @@ fn fragments_beyond_k_are_counted_as_overflow_and_lists_that_cannot_fit_are_refu
         .zip(&wide.color)
         .map(|(a, b)| (a.to_f32() - b.to_f32()).abs())
         .fold(0.0f32, f32::max);
-    assert!(worst < 1e-2, "K = 1 and K = 16 differ by {worst}");
+    let mean = out
+        .color
+        .iter()
+        .zip(&wide.color)
+        .map(|(a, b)| f64::from((a.to_f32() - b.to_f32()).abs()))
+        .sum::<f64>()
+        / out.color.len() as f64;
+    assert!(
+        worst < 4.0 / 32.0 && mean < 5e-3,
+        "K = 1 and K = 16 differ by {worst} (mean {mean})"
+    );
     assert_clean(&gpu);
 
     // 8192 x 8192 x 8 fragments x 24 bytes: refused with the estimate, before the lists exist.
@@ -721,7 +733,7 @@ fn fragments_beyond_k_are_counted_as_overflow_and_lists_that_cannot_fit_are_refu
         Err(e) => e.to_string(),
     };
     assert!(
-        err.contains("12884901888 bytes") && err.contains("maxStorageBufferRange"),
+        err.contains("19327352832 bytes") && err.contains("maxStorageBufferRange"),
         "{err}"
     );
 }

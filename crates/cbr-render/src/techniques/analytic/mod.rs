@@ -53,15 +53,19 @@ pub const REGISTRATION: Registration = Registration {
     },
 };
 
-/// Bytes of one kept fragment: its 64-bit key (depth, object, primitive) and its slot (coverage,
-/// mask, colour as 3 x f16, flags).
+/// Bytes of one kept fragment: its 64-bit key (depth, object, primitive), its slot (coverage,
+/// mask, colour as 3 x f16, flags) and its depth plane ([`PLANE_BYTES`]).
 pub const KEY_BYTES: u64 = 8;
 /// A slot is two 8-byte halves in two buffers (coverage + mask; colour + flags), so that each
 /// buffer holds K x 8 bytes per pixel under `maxStorageBufferRange`.
 pub const SLOT_BYTES: u64 = 16;
 const HALF_SLOT_BYTES: u64 = SLOT_BYTES / 2;
-/// Per pixel, the fixed-point tail sums of the fragments beyond the K nearest (4 x u64).
-pub const TAIL_BYTES: u64 = 32;
+/// A kept fragment's depth plane (depth at the pixel centre, its change per pixel in x and y: 3 x
+/// f32) for the resolve's per-sample visibility, in two buffers (x: 8 bytes, y: 4).
+pub const PLANE_BYTES: u64 = 12;
+/// Per pixel, the fixed-point tail sums of the fragments beyond the K nearest (4 x u64), facing
+/// the camera and facing away, and the two tails' mask unions (u64 each).
+pub const TAIL_BYTES: u64 = 80;
 /// Fragments kept per pixel unless `frags=K` says otherwise (lowered to what fits).
 pub const DEFAULT_FRAGS: u32 = 16;
 /// The key's identity field: object IDs below 2^12, primitive IDs below 2^20.
@@ -130,8 +134,8 @@ pub fn plan_lists(
              lists ({k} x {} bytes per pixel), the largest buffer {} bytes; this device binds at \
              most {max_range} bytes in one storage buffer (maxStorageBufferRange): lower the \
              resolution or frags=K (at most {fit} fits)",
-            px * u64::from(k) * (KEY_BYTES + SLOT_BYTES),
-            KEY_BYTES + SLOT_BYTES,
+            px * u64::from(k) * (KEY_BYTES + SLOT_BYTES + PLANE_BYTES),
+            KEY_BYTES + SLOT_BYTES + PLANE_BYTES,
             px * u64::from(k) * KEY_BYTES.max(HALF_SLOT_BYTES)
         )
     };
@@ -144,7 +148,7 @@ pub fn plan_lists(
 }
 
 /// Set 2 of the raster passes (set 0: the scene's, set 1: the material's).
-pub const RASTER_BINDINGS: [BindingDesc; 5] = {
+pub const RASTER_BINDINGS: [BindingDesc; 7] = {
     use DescriptorKind::StorageBuffer as B;
     [
         BindingDesc::one("keys", 0, B),
@@ -152,10 +156,12 @@ pub const RASTER_BINDINGS: [BindingDesc; 5] = {
         BindingDesc::one("counts", 2, B),
         BindingDesc::one("tail", 3, B),
         BindingDesc::one("colors", 4, B),
+        BindingDesc::one("planes", 5, B),
+        BindingDesc::one("planes_y", 6, B),
     ]
 };
 
-pub const RESOLVE_BINDINGS: [BindingDesc; 8] = {
+pub const RESOLVE_BINDINGS: [BindingDesc; 10] = {
     use DescriptorKind::{StorageBuffer as B, StorageImage as I};
     [
         BindingDesc::one("keys", 0, B),
@@ -166,6 +172,8 @@ pub const RESOLVE_BINDINGS: [BindingDesc; 8] = {
         BindingDesc::one("out_counts", 5, I),
         BindingDesc::one("tail", 6, B),
         BindingDesc::one("colors", 7, B),
+        BindingDesc::one("planes", 8, B),
+        BindingDesc::one("planes_y", 9, B),
     ]
 };
 
@@ -206,6 +214,8 @@ pub struct Analytic {
     counts_buf: Buffer,
     tail: Buffer,
     colors: Buffer,
+    planes: Buffer,
+    planes_y: Buffer,
     targets: Targets,
     color: Image,
     coverage: Image,
@@ -226,6 +236,8 @@ impl Analytic {
         e.storage_buffer("analytic.keys", kept * KEY_BYTES, false);
         e.storage_buffer("analytic.slots", kept * HALF_SLOT_BYTES, false);
         e.storage_buffer("analytic.colors", kept * HALF_SLOT_BYTES, false);
+        e.storage_buffer("analytic.planes", kept * 8, false);
+        e.storage_buffer("analytic.planes_y", kept * 4, false);
         e.storage_buffer("analytic.counts_buffer", px * 4, false);
         e.storage_buffer("analytic.tail", px * TAIL_BYTES, false);
         e.image("analytic.velocity", VELOCITY_FORMAT, w, h);
@@ -345,6 +357,8 @@ impl Analytic {
         let keys = buffer("analytic.keys", kept * KEY_BYTES, storage)?;
         let slots = buffer("analytic.slots", kept * HALF_SLOT_BYTES, storage)?;
         let colors = buffer("analytic.colors", kept * HALF_SLOT_BYTES, storage)?;
+        let planes = buffer("analytic.planes", kept * 8, storage)?;
+        let planes_y = buffer("analytic.planes_y", kept * 4, storage)?;
         let counts_buf = buffer("analytic.counts_buffer", px * 4, storage)?;
         let tail = buffer("analytic.tail", px * TAIL_BYTES, storage)?;
         // Native's colour target is not drawn (the resolve writes the colour).
@@ -383,6 +397,8 @@ impl Analytic {
                 Write::Buffer(2, &counts_buf),
                 Write::Buffer(3, &tail),
                 Write::Buffer(4, &colors),
+                Write::Buffer(5, &planes),
+                Write::Buffer(6, &planes_y),
             ],
         )?;
         let resolve_set = DescriptorSet::new(
@@ -398,6 +414,8 @@ impl Analytic {
                 Write::Storage(5, &counts),
                 Write::Buffer(6, &tail),
                 Write::Buffer(7, &colors),
+                Write::Buffer(8, &planes),
+                Write::Buffer(9, &planes_y),
             ],
         )?;
         let rb = |name: &str, image: &Image| Readback::for_image(gpu, name, image);
@@ -425,6 +443,8 @@ impl Analytic {
             counts_buf,
             tail,
             colors,
+            planes,
+            planes_y,
             targets,
             color,
             coverage,
@@ -453,6 +473,8 @@ impl Analytic {
             &self.keys,
             &self.slots,
             &self.colors,
+            &self.planes,
+            &self.planes_y,
             &self.counts_buf,
             &self.tail,
         ] {
@@ -523,6 +545,8 @@ impl Technique for Analytic {
                 &this.keys,
                 &this.slots,
                 &this.colors,
+                &this.planes,
+                &this.planes_y,
                 &this.counts_buf,
                 &this.tail,
             ] {
@@ -609,9 +633,9 @@ impl Technique for Analytic {
 
     fn target_bytes(&self) -> u64 {
         let px = u64::from(self.color.width) * u64::from(self.color.height);
-        // K x (key + slot) + the fragment count (4) and tail (32) + colour (8), coverage (4),
+        // K x (key + slot + plane) + the fragment count (4) and tails (80) + colour (8), coverage (4),
         // counts (16), depth (4), velocity (8), IDs (8).
-        px * (u64::from(self.frags) * (KEY_BYTES + SLOT_BYTES)
+        px * (u64::from(self.frags) * (KEY_BYTES + SLOT_BYTES + PLANE_BYTES)
             + 4
             + TAIL_BYTES
             + 8
