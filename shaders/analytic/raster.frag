@@ -37,6 +37,8 @@ layout(std430, set = 2, binding = BINDING_COUNTS) buffer Counts { uint counts[];
 // (2^-24 units) of coverage x colour and of coverage of the fragments beyond the K nearest,
 // and the union of their sample masks: integers, so the sums do not depend on the order of arrival.
 layout(std430, set = 2, binding = BINDING_TAIL) buffer Tail { uint64_t tail[]; };
+layout(std430, set = 2, binding = BINDING_TAIL_BACK) buffer TailBack { uint64_t tail_back[]; };
+layout(std430, set = 2, binding = BINDING_TAIL_MASKS) buffer TailMasks { uint tail_masks[]; };
 layout(push_constant) uniform Push { uint object_index; } pc;
 
 #include "../inc/shading.glsl"
@@ -231,13 +233,20 @@ void main() {
         const float unit = 16777216.0;  // 2^24
         vec3 ac = clamp(color, 0.0, 65504.0) * coverage * unit;
         // Two tails: fragments facing the camera, and those facing away (composited after).
-        // Per pixel 10 words: the two tails' sums (4 each), then their sample masks' union.
-        uint t = pixel * 10u + (facing_away ? 4u : 0u);
-        atomicAdd(tail[t], uint64_t(ac.r));
-        atomicAdd(tail[t + 1u], uint64_t(ac.g));
-        atomicAdd(tail[t + 2u], uint64_t(ac.b));
-        atomicAdd(tail[t + 3u], uint64_t(coverage * unit));
-        atomicOr(tail[pixel * 10u + (facing_away ? 9u : 8u)], uint64_t(mask));
+        // Two tails (each 4 sums a pixel, in its own buffer) and their masks' unions.
+        uint t = pixel * 4u;
+        if (facing_away) {
+            atomicAdd(tail_back[t], uint64_t(ac.r));
+            atomicAdd(tail_back[t + 1u], uint64_t(ac.g));
+            atomicAdd(tail_back[t + 2u], uint64_t(ac.b));
+            atomicAdd(tail_back[t + 3u], uint64_t(coverage * unit));
+        } else {
+            atomicAdd(tail[t], uint64_t(ac.r));
+            atomicAdd(tail[t + 1u], uint64_t(ac.g));
+            atomicAdd(tail[t + 2u], uint64_t(ac.b));
+            atomicAdd(tail[t + 3u], uint64_t(coverage * unit));
+        }
+        atomicOr(tail_masks[pixel * 2u + (facing_away ? 1u : 0u)], mask);
     }
     }
 

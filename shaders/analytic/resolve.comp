@@ -39,6 +39,8 @@ layout(std430, set = 0, binding = BINDING_SLOTS) readonly buffer Slots { uvec2 s
 layout(std430, set = 0, binding = BINDING_COLORS) readonly buffer Colors { uvec2 colors[]; };
 layout(std430, set = 0, binding = BINDING_COUNTS) readonly buffer Counts { uint counts[]; };
 layout(std430, set = 0, binding = BINDING_TAIL) readonly buffer Tail { uint64_t tail[]; };
+layout(std430, set = 0, binding = BINDING_TAIL_BACK) readonly buffer TailBack { uint64_t tail_back[]; };
+layout(std430, set = 0, binding = BINDING_TAIL_MASKS) readonly buffer TailMasks { uint tail_masks[]; };
 layout(std430, set = 0, binding = BINDING_PLANES) readonly buffer Planes { vec2 planes[]; };
 layout(std430, set = 0, binding = BINDING_PLANES_Y) readonly buffer PlanesY { float planes_y[]; };
 layout(set = 0, binding = BINDING_OUT_COLOR, rgba16f) uniform writeonly image2D out_color;
@@ -196,12 +198,15 @@ void main() {
         if ((fl[k] & FRAG_HOLES) == 0u) held |= masks[k];
     }
     for (uint part = 0u; part < 2u && overflow > 0u && sum < 1.0; ++part) {
-        uint t = pixel * 10u + part * 4u;
+        uint t = pixel * 4u;
         const float unit = 1.0 / 16777216.0;
-        float ta = float(tail[t + 3u]) * unit;
-        uint tm = uint(tail[pixel * 10u + 8u + part]);
+        u64vec4 sums = part == 0u
+            ? u64vec4(tail[t], tail[t + 1u], tail[t + 2u], tail[t + 3u])
+            : u64vec4(tail_back[t], tail_back[t + 1u], tail_back[t + 2u], tail_back[t + 3u]);
+        float ta = float(sums.w) * unit;
+        uint tm = tail_masks[pixel * 2u + part];
         if (ta > 0.0 && tm != 0u) {
-            vec3 tc = vec3(float(tail[t]), float(tail[t + 1u]), float(tail[t + 2u])) * unit / ta;
+            vec3 tc = vec3(sums.xyz) * unit / ta;
             // Its summed coverage counts overlapping layers of the tail once each: no more than
             // the share of the pixel's samples it holds open.
             uint open_bits = bitCount(tm & ~held);

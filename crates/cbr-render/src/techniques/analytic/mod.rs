@@ -63,9 +63,11 @@ const HALF_SLOT_BYTES: u64 = SLOT_BYTES / 2;
 /// A kept fragment's depth plane (depth at the pixel centre, its change per pixel in x and y: 3 x
 /// f32) for the resolve's per-sample visibility, in two buffers (x: 8 bytes, y: 4).
 pub const PLANE_BYTES: u64 = 12;
-/// Per pixel, the fixed-point tail sums of the fragments beyond the K nearest (4 x u64), facing
-/// the camera and facing away, and the two tails' mask unions (u64 each).
-pub const TAIL_BYTES: u64 = 80;
+/// Per pixel and tail, the fixed-point sums of the fragments beyond the K nearest (4 x u64); two
+/// tails (facing the camera, facing away), each in its own buffer.
+pub const TAIL_BYTES: u64 = 32;
+/// Per pixel, the two tails' sample-mask unions (2 x u32).
+pub const TAIL_MASK_BYTES: u64 = 8;
 /// Fragments kept per pixel unless `frags=K` says otherwise (lowered to what fits).
 pub const DEFAULT_FRAGS: u32 = 16;
 /// The key's identity field: object IDs below 2^12, primitive IDs below 2^20.
@@ -148,7 +150,7 @@ pub fn plan_lists(
 }
 
 /// Set 2 of the raster passes (set 0: the scene's, set 1: the material's).
-pub const RASTER_BINDINGS: [BindingDesc; 7] = {
+pub const RASTER_BINDINGS: [BindingDesc; 9] = {
     use DescriptorKind::StorageBuffer as B;
     [
         BindingDesc::one("keys", 0, B),
@@ -158,10 +160,12 @@ pub const RASTER_BINDINGS: [BindingDesc; 7] = {
         BindingDesc::one("colors", 4, B),
         BindingDesc::one("planes", 5, B),
         BindingDesc::one("planes_y", 6, B),
+        BindingDesc::one("tail_back", 7, B),
+        BindingDesc::one("tail_masks", 8, B),
     ]
 };
 
-pub const RESOLVE_BINDINGS: [BindingDesc; 10] = {
+pub const RESOLVE_BINDINGS: [BindingDesc; 12] = {
     use DescriptorKind::{StorageBuffer as B, StorageImage as I};
     [
         BindingDesc::one("keys", 0, B),
@@ -174,6 +178,8 @@ pub const RESOLVE_BINDINGS: [BindingDesc; 10] = {
         BindingDesc::one("colors", 7, B),
         BindingDesc::one("planes", 8, B),
         BindingDesc::one("planes_y", 9, B),
+        BindingDesc::one("tail_back", 10, B),
+        BindingDesc::one("tail_masks", 11, B),
     ]
 };
 
@@ -213,6 +219,8 @@ pub struct Analytic {
     slots: Buffer,
     counts_buf: Buffer,
     tail: Buffer,
+    tail_back: Buffer,
+    tail_masks: Buffer,
     colors: Buffer,
     planes: Buffer,
     planes_y: Buffer,
@@ -240,6 +248,8 @@ impl Analytic {
         e.storage_buffer("analytic.planes_y", kept * 4, false);
         e.storage_buffer("analytic.counts_buffer", px * 4, false);
         e.storage_buffer("analytic.tail", px * TAIL_BYTES, false);
+        e.storage_buffer("analytic.tail_back", px * TAIL_BYTES, false);
+        e.storage_buffer("analytic.tail_masks", px * TAIL_MASK_BYTES, false);
         e.image("analytic.velocity", VELOCITY_FORMAT, w, h);
         e.image("analytic.ids", ID_FORMAT, w, h);
         e.image("analytic.depth", DEPTH_FORMAT, w, h);
@@ -361,6 +371,8 @@ impl Analytic {
         let planes_y = buffer("analytic.planes_y", kept * 4, storage)?;
         let counts_buf = buffer("analytic.counts_buffer", px * 4, storage)?;
         let tail = buffer("analytic.tail", px * TAIL_BYTES, storage)?;
+        let tail_back = buffer("analytic.tail_back", px * TAIL_BYTES, storage)?;
+        let tail_masks = buffer("analytic.tail_masks", px * TAIL_MASK_BYTES, storage)?;
         // Native's colour target is not drawn (the resolve writes the colour).
         let FrameTargets {
             velocity,
@@ -399,6 +411,8 @@ impl Analytic {
                 Write::Buffer(4, &colors),
                 Write::Buffer(5, &planes),
                 Write::Buffer(6, &planes_y),
+                Write::Buffer(7, &tail_back),
+                Write::Buffer(8, &tail_masks),
             ],
         )?;
         let resolve_set = DescriptorSet::new(
@@ -416,6 +430,8 @@ impl Analytic {
                 Write::Buffer(7, &colors),
                 Write::Buffer(8, &planes),
                 Write::Buffer(9, &planes_y),
+                Write::Buffer(10, &tail_back),
+                Write::Buffer(11, &tail_masks),
             ],
         )?;
         let rb = |name: &str, image: &Image| Readback::for_image(gpu, name, image);
@@ -442,6 +458,8 @@ impl Analytic {
             slots,
             counts_buf,
             tail,
+            tail_back,
+            tail_masks,
             colors,
             planes,
             planes_y,
@@ -477,6 +495,8 @@ impl Analytic {
             &self.planes_y,
             &self.counts_buf,
             &self.tail,
+            &self.tail_back,
+            &self.tail_masks,
         ] {
             cmd.use_buffer(buf, Access::FragmentStorageWrite);
         }
@@ -534,6 +554,8 @@ impl Technique for Analytic {
             cmd.fill_buffer(&this.keys, u32::MAX);
             cmd.fill_buffer(&this.counts_buf, 0);
             cmd.fill_buffer(&this.tail, 0);
+            cmd.fill_buffer(&this.tail_back, 0);
+            cmd.fill_buffer(&this.tail_masks, 0);
             profiler.end(cmd, scope);
             cmd.use_buffer(counter, Access::FragmentStorageWrite);
             // The select pass writes no attachment (its fragments all discard); the second pass
@@ -549,6 +571,8 @@ impl Technique for Analytic {
                 &this.planes_y,
                 &this.counts_buf,
                 &this.tail,
+                &this.tail_back,
+                &this.tail_masks,
             ] {
                 cmd.use_buffer(buf, Access::ComputeSampled);
             }
@@ -633,11 +657,12 @@ impl Technique for Analytic {
 
     fn target_bytes(&self) -> u64 {
         let px = u64::from(self.color.width) * u64::from(self.color.height);
-        // K x (key + slot + plane) + the fragment count (4) and tails (80) + colour (8), coverage (4),
+        // K x (key + slot + plane) + the fragment count (4), tails (2 x 32) and their masks (8) + colour (8), coverage (4),
         // counts (16), depth (4), velocity (8), IDs (8).
         px * (u64::from(self.frags) * (KEY_BYTES + SLOT_BYTES + PLANE_BYTES)
             + 4
-            + TAIL_BYTES
+            + 2 * TAIL_BYTES
+            + TAIL_MASK_BYTES
             + 8
             + 4
             + 16
