@@ -190,13 +190,9 @@ void main() {
     vec3 color = shade(world, nrm, albedo, mat, frame);
     bool finite = !any(isnan(color)) && !any(isinf(color));
 
-    // The mask: for the resolve's per-sample visibility (a slot) or the tail's (beyond the K).
-    uint mask = 0u;
-#ifdef SEED
-    mask = sample_mask(p, n, orient);
-#else
-    mask = sample_mask(p, n, orient);
-#endif
+    // The mask: for the resolve's per-sample visibility (a slot) or the tail's (beyond the K), and
+    // the seed's vertex columns.
+    uint mask = sample_mask(p, n, orient);
     float coverage = cov.area;
     uint flags = 0u;
 #ifdef SEED
@@ -232,20 +228,20 @@ void main() {
     } else if (coverage > 0.0) {
         const float unit = 16777216.0;  // 2^24
         vec3 ac = clamp(color, 0.0, 65504.0) * coverage * unit;
-        // Two tails: fragments facing the camera, and those facing away (composited after).
-        // Two tails (each 4 sums a pixel, in its own buffer) and their masks' unions.
+        // Two tails, each 4 sums a pixel in its own buffer: fragments facing the camera, and
+        // those facing away (composited after); and their masks' unions.
         uint t = pixel * 4u;
+#define ADD_TAIL(buf)                                       \
+        atomicAdd(buf[t], uint64_t(ac.r));                  \
+        atomicAdd(buf[t + 1u], uint64_t(ac.g));             \
+        atomicAdd(buf[t + 2u], uint64_t(ac.b));             \
+        atomicAdd(buf[t + 3u], uint64_t(coverage * unit))
         if (facing_away) {
-            atomicAdd(tail_back[t], uint64_t(ac.r));
-            atomicAdd(tail_back[t + 1u], uint64_t(ac.g));
-            atomicAdd(tail_back[t + 2u], uint64_t(ac.b));
-            atomicAdd(tail_back[t + 3u], uint64_t(coverage * unit));
+            ADD_TAIL(tail_back);
         } else {
-            atomicAdd(tail[t], uint64_t(ac.r));
-            atomicAdd(tail[t + 1u], uint64_t(ac.g));
-            atomicAdd(tail[t + 2u], uint64_t(ac.b));
-            atomicAdd(tail[t + 3u], uint64_t(coverage * unit));
+            ADD_TAIL(tail);
         }
+#undef ADD_TAIL
         atomicOr(tail_masks[pixel * 2u + (facing_away ? 1u : 0u)], mask);
     }
     }

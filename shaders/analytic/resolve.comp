@@ -4,14 +4,16 @@
 // 32-sample mask and its depth plane. The visibility model (docs/analytic.md):
 // 1. Per mask sample, its winner: the nearest fragment there by the fragments' depth planes
 //    (ties: the earlier key, object then primitive), among the fragments whose mask holds the
-//    sample. A fragment too small to hold a sample takes the one nearest its centroid (a
-//    stand-in bit). Alpha-tested fragments (their covered part has holes) win no samples.
-// 2. Fragment k loses a sample of its mask to the winner there, in front of it, except where one
-//    of the two holds the sample as a stand-in and the other is of the same object and nearer by
-//    at most 1e-3 of the depth: the same surface, a sliver sharing its neighbour's sample (a fold
-//    of the mesh is further behind). A fragment that loses no sample
-//    is unoccluded: it adds its exact coverage a. Otherwise each winner w occludes it by w's
-//    visible coverage spread evenly over the samples w won:
+//    sample. Alpha-tested fragments (their covered part has holes) win no samples. Fragments too
+//    small to hold a sample carry a stand-in bit (the sample nearest their centroid, which lies
+//    outside them, often in a neighbour of their own mesh): they win only samples that no real
+//    mask holds.
+// 2. Fragment k loses a sample of its mask to the winner there. A stand-in loses its sample only
+//    where the winner is in front of its plane there, by more than 1e-3 of the depth if the
+//    winner is its own object (else the same surface: a sliver beside its neighbour). A fragment that loses no sample is unoccluded: it adds its
+//    exact coverage a; one that loses every sample to its own object is hidden (the back of a
+//    closed mesh behind its front). Otherwise each winner w occludes it by w's visible coverage
+//    spread evenly over the samples w won:
 //        v = a - sum over k's lost samples s of v(w(s)) / won(w(s)).
 //    Exact for an opaque surface in front of another that covers the rest of the pixel (the far
 //    one gets exactly 1 - a_near) and for abutting triangles; where two partial surfaces overlap
@@ -57,10 +59,11 @@ layout(push_constant) uniform Push {
 #define FLAG_SEED 2u      // analytic:seed: a visible fragment's shortcut area is off by > 1e-3
 #define FLAG_OVERFLOW 4u
 #define FLAG_NONFINITE 8u  // a kept fragment's shading was not finite (dropped)
-// A fragment's own flags (raster.frag): 1 seed's area off, 2 holes (alpha-tested or not finite:
-// wins no samples), 4 not finite, 8 a stand-in bit.
-#define FRAG_HOLES 2u
-#define FRAG_STAND_IN 8u
+// A fragment's own flags (raster.frag).
+#define FRAG_SEED_OFF 1u   // analytic:seed: its shortcut area is off by > 1e-3
+#define FRAG_HOLES 2u      // alpha-tested or not finite: wins no samples
+#define FRAG_NONFINITE 4u
+#define FRAG_STAND_IN 8u   // its mask is the one sample nearest its centroid
 
 // Fragment k's depth at mask sample q (pixel-local).
 float plane_depth(uint slot, vec2 q) {
@@ -98,15 +101,19 @@ void main() {
     for (int k = 0; k < count; ++k) won[k] = 0u;
     for (int s = 0; s < MASK_SAMPLES; ++s) {
         vec2 q = mask_sample(s);
+        // The nearest real sample of the mask wins; where none holds it, the nearest stand-in.
         uint best = 0xFFu;
         float bz = 0.0;
+        bool best_real = false;
         for (int k = 0; k < count; ++k) {
             if ((fl[k] & FRAG_HOLES) != 0u || ((masks[k] >> uint(s)) & 1u) == 0u) continue;
+            bool real = (fl[k] & FRAG_STAND_IN) == 0u;
             float z = plane_depth(base + uint(k), q);
             // Reverse-Z: nearer is larger; ties keep the earlier key.
-            if (best == 0xFFu || z > bz) {
+            if (best == 0xFFu || (real && !best_real) || (real == best_real && z > bz)) {
                 best = uint(k);
                 bz = z;
+                best_real = real;
             }
         }
         winner[s] = best;
@@ -114,11 +121,14 @@ void main() {
         if (best != 0xFFu) won[best] |= 1u << uint(s);
     }
 
-    // 2. The samples each fragment lost to a winner in front of it, and the visible coverages.
+    // 2. The samples each fragment lost to a winner in front of it, and the visible coverages:
+    // settled (unoccluded, or hidden behind its own mesh) or by the occlusion sum (two sweeps).
     uint lost[K_SLOTS];
     float vis[K_SLOTS];
+    bool settled[K_SLOTS];
     for (int k = 0; k < count; ++k) {
         uint l = 0u;
+        bool own = true;  // every lost sample lost to its own object
         if ((fl[k] & FRAG_HOLES) == 0u) {
             uint rest = masks[k] & ~won[k];
             while (rest != 0u) {
@@ -126,33 +136,27 @@ void main() {
                 rest &= rest - 1u;
                 uint w = winner[s];
                 float zk = plane_depth(base + uint(k), mask_sample(s));
-                bool stand_in = ((fl[k] | fl[w]) & FRAG_STAND_IN) != 0u;
-                bool same_surface = stand_in && objs[w] == objs[k] && wz[s] - zk <= 1e-3 * abs(zk);
-                if (!same_surface) l |= 1u << uint(s);
+                bool stand_in = (fl[k] & FRAG_STAND_IN) != 0u;
+                bool same_object = objs[w] == objs[k];
+                // A stand-in is behind the winner where its plane, extrapolated to its sample,
+                // is (beyond 1e-3 of the depth when the winner is its own object: the same
+                // surface); a real sample is lost to any winner but itself.
+                bool behind = !stand_in || (wz[s] > zk && !(same_object && wz[s] - zk <= 1e-3 * abs(zk)));
+                if (behind) {
+                    l |= 1u << uint(s);
+                    own = own && same_object;
+                }
             }
         }
         lost[k] = l;
         uint m = bitCount(masks[k]);
+        // Hidden (l == mask) gives 0, unoccluded (l == 0) gives a.
         vis[k] = m > 0u ? area[k] * float(m - bitCount(l)) / float(m) : area[k];
+        settled[k] = l == 0u || (l == masks[k] && own);
     }
     for (int sweep = 0; sweep < 2; ++sweep) {
         for (int k = 0; k < count; ++k) {
-            if (lost[k] == 0u) continue;
-            if (lost[k] == masks[k]) {
-                // Every sample behind fragments of its own object: a fold of the mesh (the
-                // back of a closed one behind its front) is hidden entirely.
-                bool own = true;
-                uint rest = lost[k];
-                while (rest != 0u) {
-                    int s = findLSB(rest);
-                    rest &= rest - 1u;
-                    own = own && objs[winner[s]] == objs[k];
-                }
-                if (own) {
-                    vis[k] = 0.0;
-                    continue;
-                }
-            }
+            if (settled[k]) continue;
             float occ = 0.0;
             uint rest = lost[k];
             while (rest != 0u) {
@@ -173,8 +177,8 @@ void main() {
     for (int k = 0; k < count; ++k) {
         uint fflags = fl[k];
         float a = area[k];
-        if ((fflags & 1u) != 0u) flags |= FLAG_SEED;
-        if ((fflags & 4u) != 0u) flags |= FLAG_NONFINITE;
+        if ((fflags & FRAG_SEED_OFF) != 0u) flags |= FLAG_SEED;
+        if ((fflags & FRAG_NONFINITE) != 0u) flags |= FLAG_NONFINITE;
         float v = min(vis[k], 1.0 - sum);
         if (v <= 0.0) continue;
         uvec2 cl = colors[base + uint(k)];

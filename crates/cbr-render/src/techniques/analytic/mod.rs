@@ -61,8 +61,10 @@ pub const KEY_BYTES: u64 = 8;
 pub const SLOT_BYTES: u64 = 16;
 const HALF_SLOT_BYTES: u64 = SLOT_BYTES / 2;
 /// A kept fragment's depth plane (depth at the pixel centre, its change per pixel in x and y: 3 x
-/// f32) for the resolve's per-sample visibility, in two buffers (x: 8 bytes, y: 4).
-pub const PLANE_BYTES: u64 = 12;
+/// f32) for the resolve's per-sample visibility, in two buffers: depth and x change; y change.
+const PLANE_XY_BYTES: u64 = 8;
+const PLANE_Y_BYTES: u64 = 4;
+pub const PLANE_BYTES: u64 = PLANE_XY_BYTES + PLANE_Y_BYTES;
 /// Per pixel and tail, the fixed-point sums of the fragments beyond the K nearest (4 x u64); two
 /// tails (facing the camera, facing away), each in its own buffer.
 pub const TAIL_BYTES: u64 = 32;
@@ -129,7 +131,8 @@ pub fn plan_lists(
     max_range: u32,
 ) -> std::result::Result<u32, String> {
     let px = u64::from(width) * u64::from(height);
-    let fit = (u64::from(max_range) / (px * KEY_BYTES.max(HALF_SLOT_BYTES)).max(1)).min(16) as u32;
+    let widest = KEY_BYTES.max(HALF_SLOT_BYTES).max(PLANE_XY_BYTES);
+    let fit = (u64::from(max_range) / (px * widest).max(1)).min(16) as u32;
     let refuse = |k: u32| {
         format!(
             "analytic at {width}x{height} with {k} fragments per pixel needs {} bytes of fragment \
@@ -138,7 +141,7 @@ pub fn plan_lists(
              resolution or frags=K (at most {fit} fits)",
             px * u64::from(k) * (KEY_BYTES + SLOT_BYTES + PLANE_BYTES),
             KEY_BYTES + SLOT_BYTES + PLANE_BYTES,
-            px * u64::from(k) * KEY_BYTES.max(HALF_SLOT_BYTES)
+            px * u64::from(k) * widest
         )
     };
     match frags {
@@ -244,8 +247,8 @@ impl Analytic {
         e.storage_buffer("analytic.keys", kept * KEY_BYTES, false);
         e.storage_buffer("analytic.slots", kept * HALF_SLOT_BYTES, false);
         e.storage_buffer("analytic.colors", kept * HALF_SLOT_BYTES, false);
-        e.storage_buffer("analytic.planes", kept * 8, false);
-        e.storage_buffer("analytic.planes_y", kept * 4, false);
+        e.storage_buffer("analytic.planes", kept * PLANE_XY_BYTES, false);
+        e.storage_buffer("analytic.planes_y", kept * PLANE_Y_BYTES, false);
         e.storage_buffer("analytic.counts_buffer", px * 4, false);
         e.storage_buffer("analytic.tail", px * TAIL_BYTES, false);
         e.storage_buffer("analytic.tail_back", px * TAIL_BYTES, false);
@@ -367,8 +370,8 @@ impl Analytic {
         let keys = buffer("analytic.keys", kept * KEY_BYTES, storage)?;
         let slots = buffer("analytic.slots", kept * HALF_SLOT_BYTES, storage)?;
         let colors = buffer("analytic.colors", kept * HALF_SLOT_BYTES, storage)?;
-        let planes = buffer("analytic.planes", kept * 8, storage)?;
-        let planes_y = buffer("analytic.planes_y", kept * 4, storage)?;
+        let planes = buffer("analytic.planes", kept * PLANE_XY_BYTES, storage)?;
+        let planes_y = buffer("analytic.planes_y", kept * PLANE_Y_BYTES, storage)?;
         let counts_buf = buffer("analytic.counts_buffer", px * 4, storage)?;
         let tail = buffer("analytic.tail", px * TAIL_BYTES, storage)?;
         let tail_back = buffer("analytic.tail_back", px * TAIL_BYTES, storage)?;
@@ -657,8 +660,8 @@ impl Technique for Analytic {
 
     fn target_bytes(&self) -> u64 {
         let px = u64::from(self.color.width) * u64::from(self.color.height);
-        // K x (key + slot + plane) + the fragment count (4), tails (2 x 32) and their masks (8) + colour (8), coverage (4),
-        // counts (16), depth (4), velocity (8), IDs (8).
+        // K x (key + slot + plane) + the fragment count (4), tails (2 x 32) and their masks (8)
+        // + colour (8), coverage (4), counts (16), depth (4), velocity (8), IDs (8).
         px * (u64::from(self.frags) * (KEY_BYTES + SLOT_BYTES + PLANE_BYTES)
             + 4
             + 2 * TAIL_BYTES

@@ -356,54 +356,53 @@ mod visibility_tests {
         }
     }
 
+    fn check(s: &[Surface], want: &[f64]) {
+        let a = visible_areas(s, 0, 0);
+        assert!(
+            a.iter().zip(want).all(|(a, w)| (a - w).abs() < 1e-12),
+            "{a:?} vs {want:?}"
+        );
+    }
+
     #[test]
     fn visible_areas_of_overlaps_and_intersections() {
         // A near square over the left 0.3 of the pixel, a far one over its left 0.7: the far
         // one shows on 0.4.
-        let s = [
-            square(0.0, 0.0, 0.3, 1.0, [2.0, 0.0, 0.0]),
-            square(0.0, 0.0, 0.7, 1.0, [1.0, 0.0, 0.0]),
-        ];
-        let a = visible_areas(&s, 0, 0);
-        assert!(
-            (a[0] - 0.3).abs() < 1e-12 && (a[1] - 0.4).abs() < 1e-12,
-            "{a:?}"
+        check(
+            &[
+                square(0.0, 0.0, 0.3, 1.0, [2.0, 0.0, 0.0]),
+                square(0.0, 0.0, 0.7, 1.0, [1.0, 0.0, 0.0]),
+            ],
+            &[0.3, 0.4],
         );
         // Two full-pixel planes crossing on the line x + y = 1 (depth equal there): each owns
         // the triangle where it is nearer, 1/2 each.
-        let s = [
-            square(-1.0, -1.0, 2.0, 2.0, [1.0, 1.0, 1.0]),
-            square(-1.0, -1.0, 2.0, 2.0, [3.0, -1.0, -1.0]),
-        ];
-        let a = visible_areas(&s, 0, 0);
-        assert!(
-            (a[0] - 0.5).abs() < 1e-12 && (a[1] - 0.5).abs() < 1e-12,
-            "{a:?}"
+        check(
+            &[
+                square(-1.0, -1.0, 2.0, 2.0, [1.0, 1.0, 1.0]),
+                square(-1.0, -1.0, 2.0, 2.0, [3.0, -1.0, -1.0]),
+            ],
+            &[0.5, 0.5],
         );
         // Crossing on x = 0.25 (a vertical depth line), the second nearer left of it.
-        let s = [
-            square(-1.0, -1.0, 2.0, 2.0, [0.0, 4.0, 0.0]),
-            square(-1.0, -1.0, 2.0, 2.0, [1.0, 0.0, 0.0]),
-        ];
-        let a = visible_areas(&s, 0, 0);
-        assert!(
-            (a[0] - 0.75).abs() < 1e-12 && (a[1] - 0.25).abs() < 1e-12,
-            "{a:?}"
+        check(
+            &[
+                square(-1.0, -1.0, 2.0, 2.0, [0.0, 4.0, 0.0]),
+                square(-1.0, -1.0, 2.0, 2.0, [1.0, 0.0, 0.0]),
+            ],
+            &[0.75, 0.25],
         );
-        // A triangle in front of a square that covers half the pixel: the union, split exactly.
-        let s = [
-            Surface {
-                poly: vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
-                depth: [5.0, 0.0, 0.0],
-            },
-            square(0.5, 0.0, 1.0, 1.0, [1.0, 0.0, 0.0]),
-        ];
-        let a = visible_areas(&s, 0, 0);
-        // The triangle: 1/2; the square's part right of x + y = 1: 1/2 - (the triangle's part
-        // of it, 1/8) = 3/8.
-        assert!(
-            (a[0] - 0.5).abs() < 1e-12 && (a[1] - 0.375).abs() < 1e-12,
-            "{a:?}"
+        // A triangle in front of a square that covers half the pixel: the triangle 1/2; the
+        // square's part right of x + y = 1: 1/2 - (the triangle's part of it, 1/8) = 3/8.
+        check(
+            &[
+                Surface {
+                    poly: vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+                    depth: [5.0, 0.0, 0.0],
+                },
+                square(0.5, 0.0, 1.0, 1.0, [1.0, 0.0, 0.0]),
+            ],
+            &[0.5, 0.375],
         );
     }
 }
