@@ -25,7 +25,8 @@ layout(set = 1, binding = BINDING_MASK) uniform sampler2D mask_tex;
 layout(set = 1, binding = BINDING_BUMP) uniform sampler2D bump_tex;
 layout(std430, set = 2, binding = BINDING_KEYS) buffer Keys { uint64_t keys[]; };
 // A kept fragment's slot, in two buffers (each must fit maxStorageBufferRange): coverage and
-// sample mask; colour (3 x f16) and flags.
+// sample mask; colour (3 x f16), flags (8 bits) and the passing share of an alpha-tested
+// fragment without samples (8 bits, for the resolve's transmittance).
 layout(std430, set = 2, binding = BINDING_SLOTS) buffer Slots { uvec2 slots[]; };
 layout(std430, set = 2, binding = BINDING_COLORS) buffer Colors { uvec2 colors[]; };
 // A kept fragment's depth plane in the pixel: depth at the pixel centre and its change per pixel
@@ -96,6 +97,62 @@ vec3 bump_from(vec3 n, vec3 dpdx, vec3 dpdy, float dhdx, float dhdy) {
     return normalize(abs(det) * n - grad);
 }
 
+// Anisotropic filtering in the shader: the pixel's footprint in the texture is the parallelogram
+// spanned by the UV map's screen derivatives gx, gy; isotropic trilinear filtering takes the mip
+// level of its longer side and blurs the shorter direction too (the receding floor's checks). So
+// the footprint is cut along its longer side into n = ceil(long / short) pieces (at most
+// MAX_ANISO), each filtered at the shorter side's level, and their mean taken: a box filter
+// along the long side, as the supersampled reference integrates it.
+#define MAX_ANISO 16
+vec4 texture_aniso(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
+    vec2 size = vec2(textureSize(t, 0));
+    float lx = length(gx * size);
+    float ly = length(gy * size);
+    vec2 major = lx >= ly ? gx : gy;
+    vec2 minor = lx >= ly ? gy : gx;
+    float ratio = max(lx, ly) / max(min(lx, ly), 1e-6);
+    int n = isnan(ratio) ? 1 : int(clamp(ceil(ratio), 1.0, float(MAX_ANISO)));
+    if (n == 1) return textureGrad(t, uv, gx, gy);
+    vec2 step_uv = major / float(n);
+    vec4 sum = vec4(0.0);
+    for (int i = 0; i < n; ++i) {
+        sum += textureGrad(t, uv + step_uv * (float(i) + 0.5 - 0.5 * float(n)), step_uv, minor);
+    }
+    return sum / float(n);
+}
+
+// Alpha-tested materials, per sample: the alpha test at each of the covered part's mask samples
+// (the UV carried there by its screen derivatives dx, dy; filtered over a quarter pixel, about the
+// samples' spacing). Returns the passing samples; `pass` is their share of the covered part's, by
+// which its coverage scales. Such a fragment then hides and is hidden per sample like an opaque
+// one. One too small to hold a sample has none to test: the share of it that passes is estimated
+// from the alpha at the shading point and its change over one pixel (alpha taken as linear across
+// the pixel), and it has holes: its stand-in neither hides nor is hidden, and the resolve
+// composites it through the transmittance of the alpha-tested fragments in front.
+uint alpha_test(uint geo_mask, vec2 uv, vec2 dx, vec2 dy, vec2 gx, vec2 gy, vec2 mean_point,
+                int channel, out float pass) {
+    if (geo_mask == 0u) {
+        float a = textureGrad(mask_tex, uv, gx, gy)[channel];
+        float ax = textureGrad(mask_tex, uv + gx, gx, gy)[channel];
+        float ay = textureGrad(mask_tex, uv + gy, gx, gy)[channel];
+        float width = abs(ax - a) + abs(ay - a);
+        pass = clamp((a - 0.5) / max(width, 1e-4) + 0.5, 0.0, 1.0);
+        return 0u;
+    }
+    uint passing = 0u;
+    uint rest = geo_mask;
+    while (rest != 0u) {
+        int k = findLSB(rest);
+        rest &= rest - 1u;
+        vec2 d = mask_sample(k) - mean_point;
+        if (textureGrad(mask_tex, uv + dx * d.x + dy * d.y, 0.25 * gx, 0.25 * gy)[channel] >= 0.5) {
+            passing |= 1u << uint(k);
+        }
+    }
+    pass = float(bitCount(passing)) / float(bitCount(geo_mask));
+    return passing;
+}
+
 void main() {
     ivec2 pix = ivec2(gl_FragCoord.xy);
     vec2 corner = vec2(pix);
@@ -123,7 +180,8 @@ void main() {
         zlo = min(zlo, zi);
         zhi = max(zhi, zi);
     }
-    bool holds_centre = inside(p, n, orientation(p, n), vec2(0.5));
+    float orient = orientation(p, n);
+    bool holds_centre = inside(p, n, orient, vec2(0.5));
     float zc = depth_at(holds_centre ? corner + 0.5 : corner + cov.mean_point);
     float z = isnan(zc) ? zlo : clamp(zc, zlo, zhi);
     // Reverse-Z: nearer is larger, and the smaller key must be the nearer.
@@ -141,18 +199,18 @@ void main() {
     // Texture footprint: the exact screen derivatives of the UV map at the shading point (one
     // pixel step), scaled by the LOD bias.
     float lod_scale = exp2(frame.ambient.w);
-    vec2 gx = (uv_at(bx) - uv) * lod_scale;
-    vec2 gy = (uv_at(by) - uv) * lod_scale;
-    // Alpha-tested materials: the fraction of the covered part that passes the test, from the
-    // alpha at the shading point and its change over one pixel (alpha taken as linear across the
-    // pixel); such a fragment has holes, so its mask neither hides nor is hidden.
+    vec2 dx = uv_at(bx) - uv;
+    vec2 dy = uv_at(by) - uv;
+    vec2 gx = dx * lod_scale;
+    vec2 gy = dy * lod_scale;
+    // Alpha-tested materials: the passing samples of the covered part (below); a fragment that
+    // passes nowhere is dropped before it takes a slot.
     float alpha_pass = 1.0;
+    uint alpha_mask = 0u;
+    uint geo_mask = 0u;
     if (mat.tex.y >= 0) {
-        float a = textureGrad(mask_tex, uv, gx, gy)[mat.tex.z];
-        float ax = textureGrad(mask_tex, uv + gx, gx, gy)[mat.tex.z];
-        float ay = textureGrad(mask_tex, uv + gy, gx, gy)[mat.tex.z];
-        float width = abs(ax - a) + abs(ay - a);
-        alpha_pass = clamp((a - 0.5) / max(width, 1e-4) + 0.5, 0.0, 1.0);
+        geo_mask = sample_mask(p, n, orient);
+        alpha_mask = alpha_test(geo_mask, uv, dx, dy, gx, gy, cov.mean_point, mat.tex.z, alpha_pass);
         if (alpha_pass <= 0.0) discard;
     }
 #ifdef SELECT_PASS
@@ -165,7 +223,6 @@ void main() {
     }
     discard;
 #else
-    float orient = orientation(p, n);
     int slot = -1;
     for (int i = 0; i < K_SLOTS; ++i) {
         if (keys[base + uint(i)] == key) slot = i;
@@ -174,13 +231,15 @@ void main() {
     if (slot >= 0 || counts[pixel] > uint(K_SLOTS)) {
     // (the payload block is not indented: it is the whole shading path)
     vec3 albedo = mat.kd.rgb;
-    if (mat.tex.x >= 0) albedo *= textureGrad(albedo_tex, uv, gx, gy).rgb;
+    if (mat.tex.x >= 0) albedo *= texture_aniso(albedo_tex, uv, gx, gy).rgb;
     vec3 world = world_at(b);
     vec3 nrm = normalize(b.x * g_normal[0] + b.y * g_normal[1] + b.z * g_normal[2]);
     // Facing away: the back of a surface (of a closed mesh, behind its front); shaded from the
     // side the camera sees, and summed into the back tail.
     bool facing_away = dot(nrm, -world) < 0.0;
     if (facing_away) nrm = -nrm;
+    // The height's change over one pixel step (isotropic: anisotropic taps here cost on lavapipe
+    // and changed no measured error).
     if (mat.tex.w >= 0) {
         float h = textureGrad(bump_tex, uv, gx, gy).r * mat.ke.w;
         float hx = textureGrad(bump_tex, uv + gx, gx, gy).r * mat.ke.w;
@@ -192,15 +251,16 @@ void main() {
 
     // The mask: for the resolve's per-sample visibility (a slot) or the tail's (beyond the K), and
     // the seed's vertex columns.
-    uint mask = sample_mask(p, n, orient);
+    if (mat.tex.y < 0) geo_mask = sample_mask(p, n, orient);
+    uint mask = mat.tex.y >= 0 ? alpha_mask : geo_mask;
     float coverage = cov.area;
     uint flags = 0u;
 #ifdef SEED
-    coverage = seed_coverage(p, n, mask);
+    coverage = seed_coverage(p, n, geo_mask);
     if (abs(coverage - cov.area) > 1e-3) flags |= 1u;
 #endif
     coverage *= alpha_pass;
-    if (mat.tex.y >= 0) flags |= 2u;
+    if (mat.tex.y >= 0 && geo_mask == 0u) flags |= 2u;
     if (!finite) {
         // Never let a non-finite colour into the pixel: the fragment covers nothing, flagged.
         color = vec3(0.0);
@@ -224,7 +284,8 @@ void main() {
         planes_y[base + uint(slot)] = floatBitsToUint(plane.z);
         slots[base + uint(slot)] = uvec2(floatBitsToUint(coverage), mask);
         colors[base + uint(slot)] = uvec2(packHalf2x16(color.rg),
-                                          (packHalf2x16(vec2(color.b, 0.0)) & 0xFFFFu) | (flags << 16u));
+                                          (packHalf2x16(vec2(color.b, 0.0)) & 0xFFFFu) | (flags << 16u)
+                                          | (uint(round(alpha_pass * 255.0)) << 24u));
     } else if (coverage > 0.0) {
         const float unit = 16777216.0;  // 2^24
         vec3 ac = clamp(color, 0.0, 65504.0) * coverage * unit;

@@ -4,7 +4,9 @@
 // 32-sample mask and its depth plane. The visibility model (docs/analytic.md):
 // 1. Per mask sample, its winner: the nearest fragment there by the fragments' depth planes
 //    (ties: the earlier key, object then primitive), among the fragments whose mask holds the
-//    sample. Alpha-tested fragments (their covered part has holes) win no samples. Fragments too
+//    sample. An alpha-tested fragment's mask holds only its samples that pass the test (raster.frag),
+//    so it hides and is hidden per sample; one too small to hold a sample has an estimated passing
+//    share and holes (FRAG_HOLES): it wins no samples. Fragments too
 //    small to hold a sample carry a stand-in bit (the sample nearest their centroid, which lies
 //    outside them, often in a neighbour of their own mesh): they win only samples that no real
 //    mask holds.
@@ -20,14 +22,18 @@
 //    or two surfaces intersect inside the pixel, the overlap's shape is sampled by the 32 samples
 //    and its area by the exact coverages. v depends on the winners' v: two sweeps in key order,
 //    the first from v = a won / m.
-// 3. Front to back in key order, v is clamped to what nearer ones left, v = min(v, 1 - sum):
-//    colour += v c. Alpha-tested fragments are composited by the clamp alone.
+// 3. Front to back in key order, through each sample's transmittance past the fragments with
+//    holes composited before (over compositing per sample: their holes are unrelated to anything
+//    else, and abutting ones do not darken their shared edge): a fragment with holes shows
+//    through the mean transmittance of its samples that no opaque winner in front of it holds,
+//    an opaque one through that of the samples it keeps. Then v is clamped to what nearer ones
+//    left, v = min(v, 1 - sum): colour += v c.
 // 4. Only the K nearest fragments of a pixel are kept (the select pass); those beyond count as
 //    overflow and are merged into two tail fragments (coverage-weighted mean colour, summed
 //    coverage, union of masks), those facing the camera, then those facing away, composited
 //    after the K, each by the share of its samples not held by the K (nor the front tail), at
 //    most the fraction of the pixel's samples that share is (a tail's summed coverage counts
-//    its overlapping layers once each): no surface is dropped, only its order within its tail
+//    its overlapping layers once each), and through the transmittance of its open samples: no surface is dropped, only its order within its tail
 //    and the overlaps among it are estimated. The background fills the remainder.
 #extension GL_ARB_gpu_shader_int64 : require
 #define EMPTY_KEY 0xFFFFFFFFFFFFFFFFul  // a slot no fragment took
@@ -61,7 +67,7 @@ layout(push_constant) uniform Push {
 #define FLAG_NONFINITE 8u  // a kept fragment's shading was not finite (dropped)
 // A fragment's own flags (raster.frag).
 #define FRAG_SEED_OFF 1u   // analytic:seed: its shortcut area is off by > 1e-3
-#define FRAG_HOLES 2u      // alpha-tested or not finite: wins no samples
+#define FRAG_HOLES 2u      // alpha-tested without samples, or not finite: wins no samples
 #define FRAG_NONFINITE 4u
 #define FRAG_STAND_IN 8u   // its mask is the one sample nearest its centroid
 
@@ -82,6 +88,7 @@ void main() {
     uint masks[K_SLOTS];
     uint fl[K_SLOTS];
     float area[K_SLOTS];
+    float alpha[K_SLOTS];  // an alpha-tested fragment's passing share of its covered part
     int count = 0;
     for (int k = 0; k < K_SLOTS; ++k) {
         uint64_t key = keys[base + uint(k)];
@@ -90,7 +97,9 @@ void main() {
         uvec2 sl = slots[base + uint(k)];
         area[k] = uintBitsToFloat(sl.x);
         masks[k] = sl.y;
-        fl[k] = colors[base + uint(k)].y >> 16u;
+        uint packed = colors[base + uint(k)].y;
+        fl[k] = (packed >> 16u) & 0xFFu;
+        alpha[k] = float(packed >> 24u) / 255.0;
         ++count;
     }
 
@@ -169,7 +178,15 @@ void main() {
         }
     }
 
-    // 3. Front to back, clamped to what nearer ones left.
+    // 3. Front to back in key order, with each sample's transmittance through the alpha-tested
+    // fragments composited so far (their holes are unrelated to anything else: over compositing,
+    // but per sample, so that abutting cards do not darken their shared edge). An alpha-tested
+    // fragment shows through its samples' transmittance where no opaque winner lies in front of
+    // it; an opaque one through the mean transmittance over the samples it keeps. Then clamped to
+    // what nearer ones left, v = min(v, 1 - sum).
+    float trans[MASK_SAMPLES];
+    for (int s = 0; s < MASK_SAMPLES; ++s) trans[s] = 1.0;
+    bool any_holes = false;
     float sum = 0.0;
     vec3 color = vec3(0.0);
     uint flags = 0u;
@@ -179,7 +196,28 @@ void main() {
         float a = area[k];
         if ((fflags & FRAG_SEED_OFF) != 0u) flags |= FLAG_SEED;
         if ((fflags & FRAG_NONFINITE) != 0u) flags |= FLAG_NONFINITE;
-        float v = min(vis[k], 1.0 - sum);
+        bool holes = (fflags & (FRAG_HOLES | FRAG_NONFINITE)) == FRAG_HOLES;
+        float v = vis[k];
+        if (holes || any_holes) {
+            uint keep = holes ? masks[k] : masks[k] & ~lost[k];
+            if (keep == 0u) keep = masks[k];
+            float t = 0.0;
+            uint n = 0u;
+            uint rest = keep;
+            while (rest != 0u) {
+                int s = findLSB(rest);
+                rest &= rest - 1u;
+                // An alpha-tested fragment is hidden where an opaque winner is in front of it.
+                bool open = !holes || winner[s] == 0xFFu
+                    || wz[s] <= plane_depth(base + uint(k), mask_sample(s));
+                t += open ? trans[s] : 0.0;
+                ++n;
+                if (holes) trans[s] *= 1.0 - alpha[k];
+            }
+            v *= n > 0u ? t / float(n) : 1.0;
+            any_holes = any_holes || holes;
+        }
+        v = min(v, 1.0 - sum);
         if (v <= 0.0) continue;
         uvec2 cl = colors[base + uint(k)];
         vec3 c = vec3(unpackHalf2x16(cl.x), unpackHalf2x16(cl.y & 0xFFFFu).x);
@@ -213,9 +251,19 @@ void main() {
             vec3 tc = vec3(sums.xyz) * unit / ta;
             // Its summed coverage counts overlapping layers of the tail once each: no more than
             // the share of the pixel's samples it holds open.
-            uint open_bits = bitCount(tm & ~held);
+            uint open_mask = tm & ~held;
+            uint open_bits = bitCount(open_mask);
             float open_share = float(open_bits) / float(bitCount(tm));
-            float v = min(min(ta * open_share, float(open_bits) / float(MASK_SAMPLES)), 1.0 - sum);
+            // Through the kept alpha-tested fragments: the mean transmittance of its open samples.
+            float t = 0.0;
+            uint rest = open_mask;
+            while (rest != 0u) {
+                int s = findLSB(rest);
+                rest &= rest - 1u;
+                t += trans[s];
+            }
+            t = open_bits > 0u ? t / float(open_bits) : 0.0;
+            float v = min(min(ta * open_share, float(open_bits) / float(MASK_SAMPLES)) * t, 1.0 - sum);
             color += v * tc;
             sum += v;
         }

@@ -12,7 +12,10 @@ use cbr_gpu::{
 };
 use cbr_render::techniques::analytic::reference::{self, Poly, Surface};
 use cbr_render::{FrameOutput, RenderSettings, Renderer, Spec};
-use cbr_scene::{CameraKey, CameraPath, LoadStats, Material, Object, Scene, Settings, Vertex};
+use cbr_scene::{
+    AlphaSource, CameraKey, CameraPath, LoadStats, Material, Object, Scene, Settings, Texture,
+    Vertex,
+};
 use common::{assert_clean, gpu};
 use glam::{DVec3, DVec4};
 
@@ -966,4 +969,120 @@ fn fragments_beyond_k_are_counted_as_overflow_and_lists_that_cannot_fit_are_refu
         err.contains("19327352832 bytes") && err.contains("maxStorageBufferRange"),
         "{err}"
     );
+}
+
+/// A quad (two triangles 0-1-2, 0-2-3) with per-corner UVs, facing +z.
+fn textured_quad(name: &str, v: [[f32; 3]; 4], uv: [[f32; 2]; 4], material: u32) -> Object {
+    let mut o = quad(name, v, material);
+    for (vert, uv) in o.vertices.iter_mut().zip(uv) {
+        vert.uv = uv;
+    }
+    o
+}
+
+/// Columns of texels `texels` wide, alternately passing (alpha 255) and failing (alpha 0), the
+/// first passing unless `inverted`; 2 rows.
+fn stripe_mask(name: &str, texels: u32, inverted: bool) -> Texture {
+    let rgba = (0..texels * 2)
+        .flat_map(|i| {
+            let pass = ((i % texels) % 2 == 0) != inverted;
+            [255, 255, 255, if pass { 255 } else { 0 }]
+        })
+        .collect();
+    Texture::from_rgba8(name, texels, 2, rgba, false)
+}
+
+#[test]
+fn alpha_tested_layers_hide_each_other_per_sample() {
+    // Two alpha-tested quads facing the camera, one behind the other and scaled so that both
+    // project onto the same screen rectangle, their alpha masks columns 1.4 pixels wide. With
+    // the same mask the back one is hidden wherever the front passes and the background shows
+    // where both fail; with complementary masks the two tile every pixel and no background
+    // shows. Models that treat alpha-tested layers as independent (over compositing) or as
+    // filling each other's gaps (the coverage clamp) each get one of the two wrong by up to half
+    // a pixel's colour.
+    let gpu = gpu();
+    let texels = 32u32;
+    let (x0, x1, y0, y1) = (-2.2f32, 2.2f32, -1.5f32, 1.5f32);
+    let (zf, zb) = (0.5f32, 0.0f32);
+    let k = (5.0 - zb) / (5.0 - zf);
+    let corners = |z: f32, scale: f32| {
+        [[x0, y0], [x1, y0], [x1, y1], [x0, y1]].map(|[x, y]| [x * scale, y * scale, z])
+    };
+    let uvs = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+    let (cf, cb, bg) = ([1.0, 0.9, 0.1], [0.1, 0.05, 1.0], [0.02, 0.02, 0.02]);
+    for complementary in [false, true] {
+        let mut front = emissive("front", cf);
+        front.alpha = AlphaSource::Texture { tex: 0, channel: 3 };
+        let mut back = emissive("back", cb);
+        back.alpha = AlphaSource::Texture { tex: 1, channel: 3 };
+        let mut s = scene(
+            vec![
+                textured_quad("front", corners(zf, 1.0), uvs, 0),
+                textured_quad("back", corners(zb, k), uvs, 1),
+            ],
+            vec![front, back],
+            bg,
+        );
+        s.textures = vec![
+            stripe_mask("front", texels, false),
+            stripe_mask("back", texels, complementary),
+        ];
+        let out = render(&gpu, &s, "analytic");
+        assert_clean(&gpu);
+        // The front quad's screen rectangle; u is affine in screen x (the quad faces the camera).
+        let [sx0, sy0] = project(&s, [x0, y0, zf]);
+        let [sx1, sy1] = project(&s, [x1, y1, zf]);
+        let (ylo, yhi) = (sy0.min(sy1), sy0.max(sy1));
+        // The share of pixel column [x, x + 1) where the front mask passes, exactly.
+        let passing = |x: f64| -> f64 {
+            let steps = 4096;
+            (0..steps)
+                .filter(|&i| {
+                    let sx = x + (f64::from(i) + 0.5) / f64::from(steps);
+                    let u = (sx - sx0) / (sx1 - sx0);
+                    (u * f64::from(texels)).floor() as i64 % 2 == 0
+                })
+                .count() as f64
+                / f64::from(steps)
+        };
+        let (mut worst, mut sum, mut n) = (0.0f64, 0.0f64, 0usize);
+        for y in 0..H as i64 {
+            for x in 0..W as i64 {
+                // Pixels inside the rectangle, a pixel from its sides (where the quads' own
+                // edges and the masks' wrap-around come in).
+                let (fx, fy) = (x as f64, y as f64);
+                if fx < sx0 + 1.0 || fx + 1.0 > sx1 - 1.0 || fy < ylo + 1.0 || fy + 1.0 > yhi - 1.0
+                {
+                    continue;
+                }
+                let f = passing(fx);
+                let other = if complementary { cb } else { bg };
+                let i = (y * W as i64 + x) as usize;
+                let got = rgb(&out, i);
+                for c in 0..3 {
+                    let want = f * f64::from(cf[c]) + (1.0 - f) * f64::from(other[c]);
+                    let contrast = f64::from((cf[c] - other[c]).abs());
+                    if contrast < 0.5 {
+                        continue;
+                    }
+                    let e = (got[c] - want).abs() / contrast;
+                    worst = worst.max(e);
+                    sum += e;
+                    n += 1;
+                }
+            }
+        }
+        let mean = sum / n as f64;
+        eprintln!(
+            "complementary {complementary}: {n} channel values, mean {mean:.4}, worst {worst:.4} of the contrast"
+        );
+        assert!(n > 1500, "the rectangle holds {n} channel values");
+        // 32 mask samples, one per 1/32 of the pixel's width: a column's passing share is
+        // sampled within 1/32.
+        assert!(
+            worst <= 1.5 / 32.0 && mean <= 0.02,
+            "complementary {complementary}: mean {mean}, worst {worst} of the contrast"
+        );
+    }
 }
