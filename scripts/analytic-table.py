@@ -21,11 +21,19 @@ for path in sys.argv[1:]:
     first = rows[0]
     print(f"\n### {b['scene']['name']} ({first['width']}x{first['height']}, "
           f"{b['protocol']['warmup_frames']} warm-up + {b['protocol']['measured_frames']} measured frames, "
-          f"reference `{ref}`, {b['device']['name']})\n")
+          + ("timing only" if ref == "native" else f"reference `{ref}`") + f", {b['device']['name']})\n")
     by = {r["spec"]: r for r in rows}
     s16 = by.get("ssaa:16")
     e16 = s16["error"]["flip_edge_mean"] if s16 and s16.get("error") else None
     t16 = med(s16["frame_ms"]) if s16 else None
+    if ref == "native":
+        # A timing run (no ground truth): frame times and their ratio to ssaa:16's only.
+        print("| technique | frame ms (median) | time / ssaa:16's |")
+        print("|---|---|---|")
+        for r in rows:
+            t = med(r["frame_ms"])
+            print(f"| `{r['spec']}` | {fmt(t, '{:.2f}')} | {fmt(t16 / t if t and t16 else None, '1/{:.0f}')} |")
+        continue
     print("| technique | FLIP | edge-pixel FLIP | edge FLIP / ssaa:16's | frame ms (median) | time / ssaa:16's |")
     print("|---|---|---|---|---|---|")
     for r in rows:
