@@ -985,7 +985,7 @@ fn textured_quad(name: &str, v: [[f32; 3]; 4], uv: [[f32; 2]; 4], material: u32)
 fn stripe_mask(name: &str, texels: u32, inverted: bool) -> Texture {
     let rgba = (0..texels * 2)
         .flat_map(|i| {
-            let pass = ((i % texels) % 2 == 0) != inverted;
+            let pass = (i % texels).is_multiple_of(2) != inverted;
             [255, 255, 255, if pass { 255 } else { 0 }]
         })
         .collect();
@@ -1098,7 +1098,11 @@ fn textures_are_filtered_over_the_anisotropic_footprint() {
     let texels = 8u32;
     let rgba = (0..texels * 4)
         .flat_map(|i| {
-            let v = if (i % texels) % 2 == 0 { 255 } else { 0 };
+            let v = if (i % texels).is_multiple_of(2) {
+                255
+            } else {
+                0
+            };
             [v, v, v, 255]
         })
         .collect();
@@ -1135,7 +1139,8 @@ fn textures_are_filtered_over_the_anisotropic_footprint() {
         let q = inv * DVec4::new(sx / w * 2.0 - 1.0, sy / h * 2.0 - 1.0, 0.5, 1.0);
         let dir = q.truncate() / q.w;
         let t = (f64::from(fy) - cam.position.y) / dir.y;
-        if !(t > 0.0) {
+        // Behind the camera, or parallel (NaN): no floor.
+        if t.is_nan() || t <= 0.0 {
             return None;
         }
         let p = cam.position + dir * t;
