@@ -147,6 +147,9 @@ uint alpha_test(uint geo_mask, vec2 uv, vec2 dx, vec2 dy, vec2 gx, vec2 gy, vec2
         vec2 d = mask_sample(k) - mean_point;
         if (textureGrad(mask_tex, uv + dx * d.x + dy * d.y, 0.25 * gx, 0.25 * gy)[channel] >= 0.5) {
             passing |= 1u << uint(k);
+#ifdef SELECT_PASS
+            break;  // the select pass needs only whether any sample passes
+#endif
         }
     }
     pass = float(bitCount(passing)) / float(bitCount(geo_mask));

@@ -4,12 +4,12 @@
 // 32-sample mask and its depth plane. The visibility model (docs/analytic.md):
 // 1. Per mask sample, its winner: the nearest fragment there by the fragments' depth planes
 //    (ties: the earlier key, object then primitive), among the fragments whose mask holds the
-//    sample. An alpha-tested fragment's mask holds only its samples that pass the test (raster.frag),
-//    so it hides and is hidden per sample; one too small to hold a sample has an estimated passing
-//    share and holes (FRAG_HOLES): it wins no samples. Fragments too
-//    small to hold a sample carry a stand-in bit (the sample nearest their centroid, which lies
-//    outside them, often in a neighbour of their own mesh): they win only samples that no real
-//    mask holds.
+//    sample. An alpha-tested fragment's mask holds only its samples that pass the test
+//    (raster.frag), so it hides and is hidden per sample; one too small to hold a sample has an
+//    estimated passing share and holes (FRAG_HOLES): it wins no samples. Fragments too small to
+//    hold a sample carry a stand-in bit (the sample nearest their centroid, which lies outside
+//    them, often in a neighbour of their own mesh): they win only samples that no real mask
+//    holds.
 // 2. Fragment k loses a sample of its mask to the winner there. A stand-in loses its sample only
 //    where the winner is in front of its plane there, by more than 1e-3 of the depth if the
 //    winner is its own object (else the same surface: a sliver beside its neighbour). A fragment that loses no sample is unoccluded: it adds its
@@ -33,8 +33,9 @@
 //    coverage, union of masks), those facing the camera, then those facing away, composited
 //    after the K, each by the share of its samples not held by the K (nor the front tail), at
 //    most the fraction of the pixel's samples that share is (a tail's summed coverage counts
-//    its overlapping layers once each), and through the transmittance of its open samples: no surface is dropped, only its order within its tail
-//    and the overlaps among it are estimated. The background fills the remainder.
+//    its overlapping layers once each), and through the transmittance of its open samples: no
+//    surface is dropped, only its order within its tail and the overlaps among it are
+//    estimated. The background fills the remainder.
 #extension GL_ARB_gpu_shader_int64 : require
 #define EMPTY_KEY 0xFFFFFFFFFFFFFFFFul  // a slot no fragment took
 #include "../inc/scene_types.glsl"
