@@ -40,6 +40,10 @@ layout(std430, set = 2, binding = BINDING_COUNTS) buffer Counts { uint counts[];
 layout(std430, set = 2, binding = BINDING_TAIL) buffer Tail { uint64_t tail[]; };
 layout(std430, set = 2, binding = BINDING_TAIL_BACK) buffer TailBack { uint64_t tail_back[]; };
 layout(std430, set = 2, binding = BINDING_TAIL_MASKS) buffer TailMasks { uint tail_masks[]; };
+// Per pixel and mask sample, the farthest depth over the pixel (f32 bits, reverse-Z: larger is
+// nearer; 0 where none) of the nearest fragment opaque at that sample: the select pass's
+// atomicMax. Behind the least of the 32, a fragment is hidden at every sample.
+layout(std430, set = 2, binding = BINDING_OCCLUDERS) buffer Occluders { uint occluders[]; };
 layout(push_constant) uniform Push { uint object_index; } pc;
 
 #include "../inc/shading.glsl"
@@ -211,11 +215,52 @@ void main() {
     float alpha_pass = 1.0;
     uint alpha_mask = 0u;
     uint geo_mask = 0u;
+    // The plane's depth at the pixel's corners: over the covered part (inside the pixel) the
+    // affine z / w lies between their extremes.
+    vec4 zc4 = vec4(depth_at(corner), depth_at(corner + vec2(1.0, 0.0)),
+                    depth_at(corner + vec2(0.0, 1.0)), depth_at(corner + 1.0));
+#ifndef SELECT_PASS
+    int slot = -1;
+    for (int i = 0; i < K_SLOTS; ++i) {
+        if (keys[base + uint(i)] == key) slot = i;
+    }
+    // A fragment beyond the K nearest lying wholly behind the pixel's occluder is hidden at every
+    // point of the pixel (and behind it at the centre, so native's layers do not need it either):
+    // it is not shaded into the tails. The kept ones are shaded whatever their depth.
+    float near = max(max(zc4.x, zc4.y), max(zc4.z, zc4.w));
+    near = isnan(near) ? zhi : min(near, zhi);
+    if (slot < 0) {
+        float occ = 1e30;
+        for (uint k = 0u; k < uint(MASK_SAMPLES); ++k)
+            occ = min(occ, uintBitsToFloat(occluders[pixel * uint(MASK_SAMPLES) + k]));
+        // Strictly behind, by more than rounding: coplanar neighbours (abutting triangles of one
+        // surface) evaluate their corners' depths with different rounding, and neither hides
+        // the other.
+        if (near < occ * (1.0 - 1e-5)) discard;
+    }
+#endif
     if (mat.tex.y >= 0) {
         geo_mask = sample_mask(p, n, orient);
         alpha_mask = alpha_test(geo_mask, uv, dx, dy, gx, gy, cov.mean_point, mat.tex.z, alpha_pass);
         if (alpha_pass <= 0.0) discard;
     }
+#ifdef SELECT_PASS
+    // The samples where this fragment is opaque (an alpha-tested one's passing samples) are
+    // hidden behind its farthest depth in the pixel; each keeps the nearest such depth.
+    {
+        float far = min(min(zc4.x, zc4.y), min(zc4.z, zc4.w));
+        far = isnan(far) ? zlo : max(far, zlo);
+        uint opaque = mat.tex.y >= 0 ? alpha_mask : sample_mask(p, n, orient);
+        if (far > 0.0 && !isinf(far)) {
+            uint fb = floatBitsToUint(far);
+            while (opaque != 0u) {
+                uint k = uint(findLSB(opaque));
+                opaque &= opaque - 1u;
+                atomicMax(occluders[pixel * uint(MASK_SAMPLES) + k], fb);
+            }
+        }
+    }
+#endif
 #ifdef SELECT_PASS
     atomicAdd(counts[pixel], 1u);
     uint64_t cand = key;
@@ -226,10 +271,6 @@ void main() {
     }
     discard;
 #else
-    int slot = -1;
-    for (int i = 0; i < K_SLOTS; ++i) {
-        if (keys[base + uint(i)] == key) slot = i;
-    }
     // Fragments beyond their pixel's K nearest are shaded too, into the pixel's tail sums.
     if (slot >= 0 || counts[pixel] > uint(K_SLOTS)) {
     // (the payload block is not indented: it is the whole shading path)

@@ -971,6 +971,64 @@ fn fragments_beyond_k_are_counted_as_overflow_and_lists_that_cannot_fit_are_refu
     );
 }
 
+#[test]
+fn fragments_beyond_k_hidden_behind_an_opaque_layer_do_not_tint_the_pixel() {
+    // One slot per pixel. A red triangle in front takes the slot where it reaches; behind it a
+    // green quad fills the frame, and three blue quads lie behind the green. The exact colour is
+    // red over green, no blue anywhere. Green and blue are all beyond the one kept fragment
+    // where the red reaches: tails that merged every layer beyond K would tint the red's edge
+    // pixels blue (3 blue layers to 1 green: up to 0.75 of the uncovered part; measured with the
+    // occluder test off, worst blue 0.73). Fragments lying behind the samples' nearest opaque
+    // layer are left out of the tails.
+    let gpu = gpu();
+    let full = |name: &str, z: f32, material: u32| {
+        let v = [
+            [-20.0, -15.0, z],
+            [20.0, -15.0, z],
+            [20.0, 15.0, z],
+            [-20.0, 15.0, z],
+        ];
+        quad(name, v, material)
+    };
+    let red = mesh(
+        "red",
+        &[[-1.1, -0.8, 1.0], [1.2, -0.45, 1.0], [0.15, 1.05, 1.0]],
+        vec![0, 1, 2],
+        0,
+    );
+    let s = scene(
+        vec![
+            red,
+            full("green", 0.0, 1),
+            full("blue1", -1.0, 2),
+            full("blue2", -2.0, 2),
+            full("blue3", -3.0, 2),
+        ],
+        vec![
+            emissive("red", [1.0, 0.0, 0.0]),
+            emissive("green", [0.0, 1.0, 0.0]),
+            emissive("blue", [0.0, 0.0, 1.0]),
+        ],
+        [0.0; 3],
+    );
+    let out = render(&gpu, &s, "analytic:frags=1");
+    assert_clean(&gpu);
+    let (mut worst_blue, mut worst_sum, mut edges) = (0.0f64, 0.0f64, 0);
+    for i in 0..(W * H) as usize {
+        let [r, g, b] = rgb(&out, i);
+        worst_blue = worst_blue.max(b);
+        worst_sum = worst_sum.max((r + g - 1.0).abs());
+        if r > 0.01 && g > 0.01 {
+            edges += 1;
+        }
+    }
+    assert!(edges > 40, "{edges} pixels partly red");
+    assert!(
+        worst_blue < 2e-3 && worst_sum < 1.5 / 32.0,
+        "hidden layers show: worst blue {worst_blue}, worst |r + g - 1| {worst_sum}"
+    );
+}
+
 /// A quad (two triangles 0-1-2, 0-2-3) with per-corner UVs, facing +z.
 fn textured_quad(name: &str, v: [[f32; 3]; 4], uv: [[f32; 2]; 4], material: u32) -> Object {
     let mut o = quad(name, v, material);

@@ -70,6 +70,10 @@ pub const PLANE_BYTES: u64 = PLANE_XY_BYTES + PLANE_Y_BYTES;
 pub const TAIL_BYTES: u64 = 32;
 /// Per pixel, the two tails' sample-mask unions (2 x u32).
 pub const TAIL_MASK_BYTES: u64 = 8;
+/// Per pixel and mask sample, the farthest depth over the pixel of the nearest fragment opaque
+/// at that sample (32 x f32 bits; 0 where none): fragments beyond the K nearest lying behind
+/// every sample's are not shaded.
+pub const OCCLUDER_BYTES: u64 = 32 * 4;
 /// Fragments kept per pixel unless `frags=K` says otherwise (lowered to what fits).
 pub const DEFAULT_FRAGS: u32 = 16;
 /// The key's identity field: object IDs below 2^12, primitive IDs below 2^20.
@@ -153,7 +157,7 @@ pub fn plan_lists(
 }
 
 /// Set 2 of the raster passes (set 0: the scene's, set 1: the material's).
-pub const RASTER_BINDINGS: [BindingDesc; 9] = {
+pub const RASTER_BINDINGS: [BindingDesc; 10] = {
     use DescriptorKind::StorageBuffer as B;
     [
         BindingDesc::one("keys", 0, B),
@@ -165,6 +169,7 @@ pub const RASTER_BINDINGS: [BindingDesc; 9] = {
         BindingDesc::one("planes_y", 6, B),
         BindingDesc::one("tail_back", 7, B),
         BindingDesc::one("tail_masks", 8, B),
+        BindingDesc::one("occluders", 9, B),
     ]
 };
 
@@ -224,6 +229,7 @@ pub struct Analytic {
     tail: Buffer,
     tail_back: Buffer,
     tail_masks: Buffer,
+    occluders: Buffer,
     colors: Buffer,
     planes: Buffer,
     planes_y: Buffer,
@@ -253,6 +259,7 @@ impl Analytic {
         e.storage_buffer("analytic.tail", px * TAIL_BYTES, false);
         e.storage_buffer("analytic.tail_back", px * TAIL_BYTES, false);
         e.storage_buffer("analytic.tail_masks", px * TAIL_MASK_BYTES, false);
+        e.storage_buffer("analytic.occluders", px * OCCLUDER_BYTES, false);
         e.image("analytic.velocity", VELOCITY_FORMAT, w, h);
         e.image("analytic.ids", ID_FORMAT, w, h);
         e.image("analytic.depth", DEPTH_FORMAT, w, h);
@@ -376,6 +383,7 @@ impl Analytic {
         let tail = buffer("analytic.tail", px * TAIL_BYTES, storage)?;
         let tail_back = buffer("analytic.tail_back", px * TAIL_BYTES, storage)?;
         let tail_masks = buffer("analytic.tail_masks", px * TAIL_MASK_BYTES, storage)?;
+        let occluders = buffer("analytic.occluders", px * OCCLUDER_BYTES, storage)?;
         // Native's colour target is not drawn (the resolve writes the colour).
         let FrameTargets {
             velocity,
@@ -416,6 +424,7 @@ impl Analytic {
                 Write::Buffer(6, &planes_y),
                 Write::Buffer(7, &tail_back),
                 Write::Buffer(8, &tail_masks),
+                Write::Buffer(9, &occluders),
             ],
         )?;
         let resolve_set = DescriptorSet::new(
@@ -463,6 +472,7 @@ impl Analytic {
             tail,
             tail_back,
             tail_masks,
+            occluders,
             colors,
             planes,
             planes_y,
@@ -500,6 +510,7 @@ impl Analytic {
             &self.tail,
             &self.tail_back,
             &self.tail_masks,
+            &self.occluders,
         ] {
             cmd.use_buffer(buf, Access::FragmentStorageWrite);
         }
@@ -559,6 +570,7 @@ impl Technique for Analytic {
             cmd.fill_buffer(&this.tail, 0);
             cmd.fill_buffer(&this.tail_back, 0);
             cmd.fill_buffer(&this.tail_masks, 0);
+            cmd.fill_buffer(&this.occluders, 0);
             profiler.end(cmd, scope);
             cmd.use_buffer(counter, Access::FragmentStorageWrite);
             // The select pass writes no attachment (its fragments all discard); the second pass
@@ -660,12 +672,13 @@ impl Technique for Analytic {
 
     fn target_bytes(&self) -> u64 {
         let px = u64::from(self.color.width) * u64::from(self.color.height);
-        // K x (key + slot + plane) + the fragment count (4), tails (2 x 32) and their masks (8)
-        // + colour (8), coverage (4), counts (16), depth (4), velocity (8), IDs (8).
+        // K x (key + slot + plane) + the fragment count (4), tails (2 x 32) and their masks (8),
+        // the samples' occluder depths (128) + colour (8), coverage (4), counts (16), depth (4), velocity (8), IDs (8).
         px * (u64::from(self.frags) * (KEY_BYTES + SLOT_BYTES + PLANE_BYTES)
             + 4
             + 2 * TAIL_BYTES
             + TAIL_MASK_BYTES
+            + OCCLUDER_BYTES
             + 8
             + 4
             + 16
