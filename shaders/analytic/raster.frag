@@ -42,7 +42,10 @@ layout(std430, set = 2, binding = BINDING_TAIL_BACK) buffer TailBack { uint64_t 
 layout(std430, set = 2, binding = BINDING_TAIL_MASKS) buffer TailMasks { uint tail_masks[]; };
 // Per pixel and mask sample, the farthest depth over the pixel (f32 bits, reverse-Z: larger is
 // nearer; 0 where none) of the nearest fragment opaque at that sample: the select pass's
-// atomicMax. Behind the least of the 32, a fragment is hidden at every sample.
+// atomicMax. Behind the least of them, a fragment is hidden at every sample. A word per
+// OCCLUDER_GROUP consecutive samples (1 unless 32 words a pixel exceed a storage buffer), written
+// only by fragments opaque at the whole group.
+#define OCCLUDER_WORDS (MASK_SAMPLES / OCCLUDER_GROUP)
 layout(std430, set = 2, binding = BINDING_OCCLUDERS) buffer Occluders { uint occluders[]; };
 layout(push_constant) uniform Push { uint object_index; } pc;
 
@@ -231,8 +234,8 @@ void main() {
     near = isnan(near) ? zhi : min(near, zhi);
     if (slot < 0) {
         float occ = 1e30;
-        for (uint k = 0u; k < uint(MASK_SAMPLES); ++k)
-            occ = min(occ, uintBitsToFloat(occluders[pixel * uint(MASK_SAMPLES) + k]));
+        for (uint k = 0u; k < uint(OCCLUDER_WORDS); ++k)
+            occ = min(occ, uintBitsToFloat(occluders[pixel * uint(OCCLUDER_WORDS) + k]));
         // Strictly behind, by more than rounding: coplanar neighbours (abutting triangles of one
         // surface) evaluate their corners' depths with different rounding, and neither hides
         // the other.
@@ -253,10 +256,12 @@ void main() {
         uint opaque = mat.tex.y >= 0 ? alpha_mask : sample_mask(p, n, orient);
         if (far > 0.0 && !isinf(far)) {
             uint fb = floatBitsToUint(far);
-            while (opaque != 0u) {
-                uint k = uint(findLSB(opaque));
-                opaque &= opaque - 1u;
-                atomicMax(occluders[pixel * uint(MASK_SAMPLES) + k], fb);
+            uint left = opaque;
+            while (left != 0u) {
+                uint g = uint(findLSB(left)) / uint(OCCLUDER_GROUP);
+                uint gm = (0xFFFFFFFFu >> uint(32 - OCCLUDER_GROUP)) << (g * uint(OCCLUDER_GROUP));
+                if ((opaque & gm) == gm) atomicMax(occluders[pixel * uint(OCCLUDER_WORDS) + g], fb);
+                left &= ~gm;
             }
         }
     }

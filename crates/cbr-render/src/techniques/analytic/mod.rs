@@ -45,7 +45,12 @@ pub const REGISTRATION: Registration = Registration {
             c.frags,
             ctx.caps.max_storage_buffer_range,
         )?;
-        Ok(Analytic::estimate(frags, ctx.width, ctx.height))
+        Ok(Analytic::estimate(
+            frags,
+            ctx.width,
+            ctx.height,
+            ctx.caps.max_storage_buffer_range,
+        ))
     },
     build: |ctx, p| {
         let c = parse(p).map_err(GpuError::Other)?;
@@ -71,9 +76,26 @@ pub const TAIL_BYTES: u64 = 32;
 /// Per pixel, the two tails' sample-mask unions (2 x u32).
 pub const TAIL_MASK_BYTES: u64 = 8;
 /// Per pixel and mask sample, the farthest depth over the pixel of the nearest fragment opaque
-/// at that sample (32 x f32 bits; 0 where none): fragments beyond the K nearest lying behind
-/// every sample's are not shaded.
-pub const OCCLUDER_BYTES: u64 = 32 * 4;
+/// at that sample (f32 bits; 0 where none): fragments beyond the K nearest lying behind every
+/// sample's are not shaded. One 4-byte word per sample, or per group of 2, 4, ... consecutive
+/// samples (written only by a fragment opaque at the whole group) where 32 words a pixel would
+/// not fit one storage buffer: [`occluder_group`].
+pub const OCCLUDER_WORD_BYTES: u64 = 4;
+
+/// Samples per occluder word at `px` pixels: the fewest (1, 2, 4, ... 32) whose words fit
+/// `maxStorageBufferRange` (lavapipe's 128 MiB: 1 up to 1280x720, 2 at 1920x1080).
+pub fn occluder_group(px: u64, max_range: u32) -> u32 {
+    let mut group = 1u32;
+    while group < 32 && px * u64::from(32 / group) * OCCLUDER_WORD_BYTES > u64::from(max_range) {
+        group *= 2;
+    }
+    group
+}
+
+fn occluder_bytes(px: u64, max_range: u32) -> u64 {
+    px * u64::from(32 / occluder_group(px, max_range)) * OCCLUDER_WORD_BYTES
+}
+
 /// Fragments kept per pixel unless `frags=K` says otherwise (lowered to what fits).
 pub const DEFAULT_FRAGS: u32 = 16;
 /// The key's identity field: object IDs below 2^12, primitive IDs below 2^20.
@@ -215,6 +237,7 @@ struct Raster {
 pub struct Analytic {
     c: AnalyticConfig,
     frags: u32,
+    occluder_group: u32,
     select: Raster,
     raster: Raster,
     _layouts: Vec<SetLayout>,
@@ -246,7 +269,7 @@ impl Analytic {
     /// halves of the slots (K x 8 bytes per pixel each), the fragment counts and tails, native's
     /// velocity, ID and depth targets (its colour target is freed as soon as it is made), the
     /// resolved colour, coverage and counts, and six readbacks.
-    pub fn estimate(frags: u32, w: u32, h: u32) -> MemoryEstimate {
+    pub fn estimate(frags: u32, w: u32, h: u32, max_range: u32) -> MemoryEstimate {
         let mut e = MemoryEstimate::new();
         let px = u64::from(w) * u64::from(h);
         let kept = px * u64::from(frags);
@@ -259,7 +282,7 @@ impl Analytic {
         e.storage_buffer("analytic.tail", px * TAIL_BYTES, false);
         e.storage_buffer("analytic.tail_back", px * TAIL_BYTES, false);
         e.storage_buffer("analytic.tail_masks", px * TAIL_MASK_BYTES, false);
-        e.storage_buffer("analytic.occluders", px * OCCLUDER_BYTES, false);
+        e.storage_buffer("analytic.occluders", occluder_bytes(px, max_range), false);
         e.image("analytic.velocity", VELOCITY_FORMAT, w, h);
         e.image("analytic.ids", ID_FORMAT, w, h);
         e.image("analytic.depth", DEPTH_FORMAT, w, h);
@@ -283,9 +306,10 @@ impl Analytic {
 
     pub fn new(ctx: &BuildCtx, c: AnalyticConfig) -> Result<Analytic> {
         let (gpu, w, h) = (ctx.gpu, ctx.width, ctx.height);
-        let frags = plan_lists(w, h, c.frags, gpu.caps().max_storage_buffer_range)
-            .map_err(GpuError::Other)?;
+        let max_range = gpu.caps().max_storage_buffer_range;
+        let frags = plan_lists(w, h, c.frags, max_range).map_err(GpuError::Other)?;
         let px = u64::from(w) * u64::from(h);
+        let occluder_group = occluder_group(px, max_range);
         if ctx.scene.draws.len() > MAX_OBJECTS
             || ctx
                 .scene
@@ -313,7 +337,10 @@ impl Analytic {
 
         let mut defines = scene_pass::shader_defines(scene_pass::LAYOUT_NATIVE);
         defines.extend(RASTER_BINDINGS.iter().map(BindingDesc::define));
-        let common = [("K_SLOTS".to_string(), frags.to_string())];
+        let common = [
+            ("K_SLOTS".to_string(), frags.to_string()),
+            ("OCCLUDER_GROUP".to_string(), occluder_group.to_string()),
+        ];
         defines.extend(common.iter().cloned());
         if c.seed {
             defines.push(("SEED".into(), "1".into()));
@@ -383,7 +410,7 @@ impl Analytic {
         let tail = buffer("analytic.tail", px * TAIL_BYTES, storage)?;
         let tail_back = buffer("analytic.tail_back", px * TAIL_BYTES, storage)?;
         let tail_masks = buffer("analytic.tail_masks", px * TAIL_MASK_BYTES, storage)?;
-        let occluders = buffer("analytic.occluders", px * OCCLUDER_BYTES, storage)?;
+        let occluders = buffer("analytic.occluders", occluder_bytes(px, max_range), storage)?;
         // Native's colour target is not drawn (the resolve writes the colour).
         let FrameTargets {
             velocity,
@@ -458,6 +485,7 @@ impl Analytic {
         Ok(Analytic {
             c,
             frags,
+            occluder_group,
             select,
             raster,
             _layouts: vec![scene_layout, material_layout, raster_layout, resolve_layout],
@@ -673,12 +701,12 @@ impl Technique for Analytic {
     fn target_bytes(&self) -> u64 {
         let px = u64::from(self.color.width) * u64::from(self.color.height);
         // K x (key + slot + plane) + the fragment count (4), tails (2 x 32) and their masks (8),
-        // the samples' occluder depths (128) + colour (8), coverage (4), counts (16), depth (4), velocity (8), IDs (8).
+        // the occluder words (4 x 32 / group) + colour (8), coverage (4), counts (16), depth (4), velocity (8), IDs (8).
         px * (u64::from(self.frags) * (KEY_BYTES + SLOT_BYTES + PLANE_BYTES)
             + 4
             + 2 * TAIL_BYTES
             + TAIL_MASK_BYTES
-            + OCCLUDER_BYTES
+            + 32 / u64::from(self.occluder_group) * OCCLUDER_WORD_BYTES
             + 8
             + 4
             + 16
