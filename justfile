@@ -61,7 +61,7 @@ bench-analytic: setup
     done
     CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench scenes/sibenik.toml --width 160 --height 90 --warmup 0 --frames 1 --reference ssaa:32 --time-cached-rows --techniques native,msaa:4,ssaa:16,analytic,analytic:seed -o {{out}}/bench/analytic/sibenik
     for r in 160x90 320x180; do \
-        CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench scenes/sibenik.toml --width ${r%x*} --height ${r#*x} --warmup 1 --frames 2 --techniques native,ssaa:16,analytic -o {{out}}/bench/analytic/sibenik-time-$r || exit 1; \
+        CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench scenes/sibenik.toml --width ${r%x*} --height ${r#*x} --warmup 1 --frames 2 --time-cached-rows --techniques native,ssaa:16,analytic -o {{out}}/bench/analytic/sibenik-time-$r || exit 1; \
     done
     python3 scripts/analytic-table.py {{out}}/bench/analytic/demo/bench.json {{out}}/bench/analytic/demo-untextured/bench.json {{out}}/bench/analytic/sibenik/bench.json {{out}}/bench/analytic/sibenik-time-160x90/bench.json {{out}}/bench/analytic/sibenik-time-320x180/bench.json
 
