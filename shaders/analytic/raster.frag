@@ -227,12 +227,13 @@ void main() {
     for (int i = 0; i < K_SLOTS; ++i) {
         if (keys[base + uint(i)] == key) slot = i;
     }
-    // A fragment beyond the K nearest lying wholly behind the pixel's occluder is hidden at every
-    // point of the pixel (and behind it at the centre, so native's layers do not need it either):
-    // it is not shaded into the tails. The kept ones are shaded whatever their depth.
-    float near = max(max(zc4.x, zc4.y), max(zc4.z, zc4.w));
-    near = isnan(near) ? zhi : min(near, zhi);
+    // A fragment beyond the K nearest whose nearest depth in the pixel lies behind every
+    // sample's occluder is hidden at every sample (and behind an opaque fragment at the centre,
+    // so native's layers do not need it either): it is not shaded into the tails. The kept ones
+    // are shaded whatever their depth.
     if (slot < 0) {
+        float near = max(max(zc4.x, zc4.y), max(zc4.z, zc4.w));
+        near = isnan(near) ? zhi : min(near, zhi);
         float occ = 1e30;
         for (uint k = 0u; k < uint(OCCLUDER_WORDS); ++k)
             occ = min(occ, uintBitsToFloat(occluders[pixel * uint(OCCLUDER_WORDS) + k]));

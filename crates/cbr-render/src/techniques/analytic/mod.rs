@@ -86,14 +86,19 @@ pub const OCCLUDER_WORD_BYTES: u64 = 4;
 /// `maxStorageBufferRange` (lavapipe's 128 MiB: 1 up to 1280x720, 2 at 1920x1080).
 pub fn occluder_group(px: u64, max_range: u32) -> u32 {
     let mut group = 1u32;
-    while group < 32 && px * u64::from(32 / group) * OCCLUDER_WORD_BYTES > u64::from(max_range) {
+    while group < 32 && px * occluder_pixel_bytes(group) > u64::from(max_range) {
         group *= 2;
     }
     group
 }
 
+/// Occluder bytes per pixel with `group` samples per word.
+fn occluder_pixel_bytes(group: u32) -> u64 {
+    u64::from(32 / group) * OCCLUDER_WORD_BYTES
+}
+
 fn occluder_bytes(px: u64, max_range: u32) -> u64 {
-    px * u64::from(32 / occluder_group(px, max_range)) * OCCLUDER_WORD_BYTES
+    px * occluder_pixel_bytes(occluder_group(px, max_range))
 }
 
 /// Fragments kept per pixel unless `frags=K` says otherwise (lowered to what fits).
@@ -701,12 +706,13 @@ impl Technique for Analytic {
     fn target_bytes(&self) -> u64 {
         let px = u64::from(self.color.width) * u64::from(self.color.height);
         // K x (key + slot + plane) + the fragment count (4), tails (2 x 32) and their masks (8),
-        // the occluder words (4 x 32 / group) + colour (8), coverage (4), counts (16), depth (4), velocity (8), IDs (8).
+        // the occluder words (4 x 32 / group) + colour (8), coverage (4), counts (16), depth (4),
+        // velocity (8), IDs (8).
         px * (u64::from(self.frags) * (KEY_BYTES + SLOT_BYTES + PLANE_BYTES)
             + 4
             + 2 * TAIL_BYTES
             + TAIL_MASK_BYTES
-            + 32 / u64::from(self.occluder_group) * OCCLUDER_WORD_BYTES
+            + occluder_pixel_bytes(self.occluder_group)
             + 8
             + 4
             + 16
