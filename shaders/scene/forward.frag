@@ -60,7 +60,7 @@ vec2 to_pixels(vec4 clip) {
 }
 
 // Texture lookup at the layout's footprint: a LOD bias, or (FLAG_LOD_GRADIENTS) derivatives turned
-// into full-res screen derivatives. Neighbouring samples are 2 px apart in split/msaa2x; in the
+// into full-res screen derivatives (scaled by 2^bias). Neighbouring samples are 2 px apart in split/msaa2x; in the
 // tangram a texel step is a diagonal screen step: d/du = d/dx - d/dy, d/dv = d/dx + d/dy.
 bool lod_gradients() {
     return (frame.counts.w & FLAG_LOD_GRADIENTS) != 0u;
@@ -91,7 +91,10 @@ vec4 tex(sampler2D t, vec2 uv) {
     if (!lod_gradients()) return texture(t, uv, frame.ambient.w);
     vec2 gx, gy;
     screen_gradients(uv, gx, gy);
-    return textureGrad(t, uv, gx, gy);
+    // A bias on top of the full-res footprint (0 unless --lod-bias or a temporal pass asks):
+    // scaling both derivatives by 2^b adds b to the isotropic LOD.
+    float s = exp2(frame.ambient.w);
+    return textureGrad(t, uv, s * gx, s * gy);
 }
 
 // The level of detail `tex` selects (the isotropic formula of the Vulkan spec), for FLAG_DEBUG_LOD.
@@ -99,10 +102,7 @@ float lod_of(sampler2D t, vec2 uv) {
     vec2 a = dFdx(uv);
     vec2 b = dFdy(uv);
     float bias = frame.ambient.w;
-    if (lod_gradients()) {
-        screen_gradients(uv, a, b);
-        bias = 0.0;
-    }
+    if (lod_gradients()) screen_gradients(uv, a, b);
     vec2 size = vec2(textureSize(t, 0));
     return log2(max(length(a * size), length(b * size))) + bias;
 }

@@ -342,12 +342,14 @@ fn lod_difference(
     s: &Scene,
     layout: Layout,
     mode: LodMode,
+    bias: Option<f32>,
     frame: u32,
 ) -> (f64, f64, f64) {
     let shaders = cbr_render::shader_library();
-    let run = |technique| {
+    let run = |technique, lod_bias| {
         let settings = RenderSettings {
             debug_lod: true,
+            lod_bias,
             ..RenderSettings::new(s.settings.width, s.settings.height, technique)
         };
         Renderer::new(gpu, &shaders, s, settings)
@@ -356,12 +358,15 @@ fn lod_difference(
             .expect("frame")
     };
     let (native, cb) = (
-        run(native()),
-        run({
-            let mut c = CheckerboardConfig::new(layout, None);
-            c.lod_mode = mode;
-            c.spec()
-        }),
+        run(native(), None),
+        run(
+            {
+                let mut c = CheckerboardConfig::new(layout, None);
+                c.lod_mode = mode;
+                c.spec()
+            },
+            bias,
+        ),
     );
     let mask = cb.mask.as_ref().expect("mask");
     let mut d: Vec<f64> = (0..mask.len())
@@ -394,21 +399,46 @@ fn matching_lod_bias_selects_natives_mip_level() {
     // The rotated layout's -0.5 is exact for isotropic footprints only: on the ground plane, seen
     // at a grazing angle, a diagonal texel step already holds the large y derivative, so -0.5
     // over-sharpens (by 0.31 levels here); its gradient mode is exact on average.
+    // Gradients with an explicit bias of -1 (what +taa and fused ask for) must land one level
+    // finer than native on average.
     let cases = [
-        (Layout::Masked, LodMode::Bias, (-1e-6, 1e-6), 1e-6, 1e-6),
-        (Layout::Split, LodMode::Bias, (-0.05, 0.05), 0.15, 0.4),
-        (Layout::Split, LodMode::Gradients, (-0.05, 0.05), 0.15, 0.4),
-        (Layout::Rotated, LodMode::Bias, (-0.5, 0.0), 0.5, 0.6),
+        (
+            Layout::Masked,
+            LodMode::Bias,
+            None,
+            (-1e-6, 1e-6),
+            1e-6,
+            1e-6,
+        ),
+        (Layout::Split, LodMode::Bias, None, (-0.05, 0.05), 0.15, 0.4),
+        (
+            Layout::Split,
+            LodMode::Gradients,
+            None,
+            (-0.05, 0.05),
+            0.15,
+            0.4,
+        ),
+        (Layout::Rotated, LodMode::Bias, None, (-0.5, 0.0), 0.5, 0.6),
         (
             Layout::Rotated,
             LodMode::Gradients,
+            None,
             (-0.05, 0.05),
             0.1,
             0.25,
         ),
+        (
+            Layout::Rotated,
+            LodMode::Gradients,
+            Some(-1.0),
+            (-1.05, -0.95),
+            1.1,
+            1.25,
+        ),
     ];
-    for (layout, mode, (lo, hi), mean_bound, p95_bound) in cases {
-        let (abs_mean, p95, mean) = lod_difference(&gpu, &s, layout, mode, 6);
+    for (layout, mode, bias, (lo, hi), mean_bound, p95_bound) in cases {
+        let (abs_mean, p95, mean) = lod_difference(&gpu, &s, layout, mode, bias, 6);
         eprintln!(
             "{} {mode:?}: mean dLOD {mean:+.4}, mean |dLOD| {abs_mean:.4}, p95 |dLOD| {p95:.4} levels",
             layout.name()
@@ -424,6 +454,56 @@ fn matching_lod_bias_selects_natives_mip_level() {
             layout.name()
         );
     }
+    assert_clean(&gpu);
+}
+
+/// The texture lookups themselves (not the debug LOD): on split, whose samples are 2 px apart on
+/// both axes, gradients mode with a bias b must sample what bias mode does with b - 1, and a
+/// different bias must change the picture. Catches a bias that gradients mode drops.
+#[test]
+fn gradients_mode_adds_the_lod_bias_to_its_footprint() {
+    let gpu = gpu();
+    let mut s = cbr_scene::builtin("demo").expect("demo");
+    s.settings.width = 192;
+    s.settings.height = 108;
+    let shaders = cbr_render::shader_library();
+    let run = |mode, lod_bias| {
+        let mut c = CheckerboardConfig::new(Layout::Split, None);
+        c.lod_mode = mode;
+        let settings = RenderSettings {
+            lod_bias,
+            ..RenderSettings::new(192, 108, c.spec())
+        };
+        Renderer::new(&gpu, &shaders, &s, settings)
+            .expect("renderer")
+            .render(&s, 6)
+            .expect("frame")
+    };
+    let mean_diff = |a: &FrameOutput, b: &FrameOutput| {
+        let mask = a.mask.as_ref().expect("mask");
+        let (mut sum, mut n) = (0.0f64, 0usize);
+        for (i, _) in mask.iter().enumerate().filter(|(_, m)| **m == 1) {
+            for c in 0..3 {
+                sum += f64::from((a.color[4 * i + c].to_f32() - b.color[4 * i + c].to_f32()).abs());
+            }
+            n += 3;
+        }
+        sum / n as f64
+    };
+    let grad = run(LodMode::Gradients, Some(-1.0));
+    let same = mean_diff(&grad, &run(LodMode::Bias, Some(-2.0)));
+    let other = mean_diff(&grad, &run(LodMode::Gradients, Some(0.0)));
+    eprintln!(
+        "gradients at -1 against bias at -2: {same:.2e}; against gradients at 0: {other:.2e}"
+    );
+    assert!(
+        other > 1e-3,
+        "a bias of -1 must change the lookups: {other}"
+    );
+    assert!(
+        same < 0.05 * other,
+        "gradients + bias != bias: {same} (scale {other})"
+    );
     assert_clean(&gpu);
 }
 

@@ -94,8 +94,10 @@ pub enum ResolveArg {
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum LodModeArg {
     /// A mip bias (--lod-bias; default per layout: 0 masked, -1 split and msaa2x, -0.5 rotated).
+    /// The default on masked, split and msaa2x.
     Bias,
-    /// Derivatives scaled to full-resolution pixels (textureGrad).
+    /// Derivatives scaled to full-resolution pixels (textureGrad), times 2^--lod-bias (default
+    /// 0). The default on rotated.
     Gradients,
 }
 
@@ -174,7 +176,8 @@ pub struct RenderArgs {
     /// Texture LOD bias added to every lookup (default: the technique's matching bias).
     #[arg(long, allow_hyphen_values = true, value_parser = crate::finite_f32)]
     lod_bias: Option<f32>,
-    /// How texture LOD follows the checkerboard layout's sample spacing (default bias).
+    /// How texture LOD follows the checkerboard layout's sample spacing (default: gradients on
+    /// rotated, bias on the others).
     #[arg(long, value_enum)]
     lod_mode: Option<LodModeArg>,
     /// Count shaded fragments exactly (atomic counter; reported per frame in run.json).
@@ -439,10 +442,7 @@ impl RenderArgs {
         given("--depth-tolerance", self.depth_tolerance.is_some())?;
         given("--id-prepass", self.id_prepass)?;
         given("--msaa2x-sample-locations", self.msaa2x_sample_locations)?;
-        given(
-            "--lod-mode gradients",
-            matches!(self.lod_mode, Some(LodModeArg::Gradients)),
-        )?;
+        given("--lod-mode", self.lod_mode.is_some())?;
         if self.sample_shading {
             if name != "msaa" {
                 bail!("--sample-shading applies to the msaa technique, not `{name}`");
@@ -508,6 +508,9 @@ impl RenderArgs {
             if !params.is_empty() && c.layout != layout {
                 bail!("--layout {} contradicts `{spec}`", layout.name());
             }
+            if c.layout != layout {
+                c.lod_mode = LodMode::default_for(layout);
+            }
             c.layout = layout;
         }
         if let Some(r) = self.resolve {
@@ -550,8 +553,10 @@ impl RenderArgs {
         }
         c.prepass |= self.id_prepass;
         c.locations |= self.msaa2x_sample_locations;
-        if matches!(self.lod_mode, Some(LodModeArg::Gradients)) {
-            c.lod_mode = LodMode::Gradients;
+        match self.lod_mode {
+            Some(LodModeArg::Gradients) => c.lod_mode = LodMode::Gradients,
+            Some(LodModeArg::Bias) => c.lod_mode = LodMode::Bias,
+            None => {}
         }
         // The edited configuration must still read back (e.g. locations on msaa2x only).
         CheckerboardConfig::parse(&c.params().iter().map(String::as_str).collect::<Vec<_>>())

@@ -137,7 +137,8 @@ fn every_technique_reproduces_its_golden_exrs_bit_for_bit() {
                         // The spec carries the technique; flags that are not part of the spec
                         // grammar (debug views, LOD mode) stay flags.
                         let extra = c.flags.iter().filter(|f| {
-                            ["--resolve-debug", "--lod-mode", "gradients"].contains(&f.as_str())
+                            ["--resolve-debug", "--lod-mode", "gradients", "bias"]
+                                .contains(&f.as_str())
                         });
                         let mut a = vec!["--technique".to_string(), c.spec.clone()];
                         a.extend(extra.cloned());

@@ -14,8 +14,30 @@ use crate::technique::unknown_param;
 pub enum LodMode {
     /// A LOD bias (`lod_bias`, default per layout).
     Bias,
-    /// `textureGrad` with the derivatives turned into full-res screen derivatives.
+    /// `textureGrad` with the derivatives turned into full-res screen derivatives (then scaled by
+    /// 2^`lod_bias`, default 0).
     Gradients,
+}
+
+impl LodMode {
+    /// Each layout's default. Split and msaa2x space their samples 2 px apart on both axes, so a
+    /// bias of -1 gives exactly the full-res footprint. The rotated lattice's neighbours are
+    /// diagonal, sqrt(2) px apart: no isotropic bias matches its footprint, and on alpha-tested
+    /// foliage a bias of -0.5 left the rotated layout at 3.8x split's FLIP where gradients bring
+    /// it to 1.0x (docs/resolve.md). Masked keeps native's quads and derivatives.
+    pub fn default_for(layout: Layout) -> LodMode {
+        match layout {
+            Layout::Rotated => LodMode::Gradients,
+            Layout::Masked | Layout::Split | Layout::Msaa2x => LodMode::Bias,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            LodMode::Bias => "bias",
+            LodMode::Gradients => "gradients",
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -34,13 +56,13 @@ pub struct CheckerboardConfig {
 
 const EXPECTED: &str = "a layout (rotated, split, masked, msaa2x) first, then a resolve mode \
     (ours, fused, pq4k, intel, spatial, temporal, none) and options pixel, quad, 8, 16, fp16, \
-    f32history, debug, prepass, locations, gradients, tol=T, without-velocity|depth|ids|clamp|prepass";
+    f32history, debug, prepass, locations, bias, gradients, tol=T, without-velocity|depth|ids|clamp|prepass";
 
 impl CheckerboardConfig {
     pub fn new(layout: Layout, resolve: Option<ResolveSettings>) -> CheckerboardConfig {
         CheckerboardConfig {
             layout,
-            lod_mode: LodMode::Bias,
+            lod_mode: LodMode::default_for(layout),
             resolve,
             prepass: false,
             locations: false,
@@ -79,6 +101,7 @@ impl CheckerboardConfig {
                 "debug" => r.debug = true,
                 "prepass" => c.prepass = true,
                 "locations" => c.locations = true,
+                "bias" => c.lod_mode = LodMode::Bias,
                 "gradients" => c.lod_mode = LodMode::Gradients,
                 "without-velocity" => a.velocity = false,
                 "without-depth" => a.depth = false,
@@ -133,8 +156,8 @@ impl CheckerboardConfig {
         if self.locations {
             p.push("locations".into());
         }
-        if self.lod_mode == LodMode::Gradients {
-            p.push("gradients".into());
+        if self.lod_mode != LodMode::default_for(self.layout) {
+            p.push(self.lod_mode.name().into());
         }
         if let Some(r) = &self.resolve {
             if r.debug {
@@ -171,13 +194,13 @@ impl CheckerboardConfig {
     }
 
     /// The mip bias that matches the layout's sample spacing: 2 px (split, msaa2x) is one level,
-    /// sqrt(2) px (rotated) half a level; `fused` (jittered, accumulated) looks up one level
-    /// finer, as `+taa` does.
+    /// sqrt(2) px (rotated) half a level; none with gradients, which already are full-res
+    /// pixels'. `fused` (jittered, accumulated) looks up one level finer, as `+taa` does.
     pub fn default_lod_bias(&self) -> f32 {
-        let layout = match self.layout {
-            Layout::Masked => 0.0,
-            Layout::Split | Layout::Msaa2x => -1.0,
-            Layout::Rotated => -0.5,
+        let layout = match (self.lod_mode, self.layout) {
+            (LodMode::Gradients, _) | (_, Layout::Masked) => 0.0,
+            (_, Layout::Split | Layout::Msaa2x) => -1.0,
+            (_, Layout::Rotated) => -0.5,
         };
         let fused = self.resolve.is_some_and(|r| r.fused);
         layout
@@ -199,7 +222,8 @@ mod tests {
             "rotated:ours",
             "split:pq4k:prepass",
             "masked:none",
-            "rotated:ours:pixel:16:fp16:f32history:prepass:gradients:debug:tol=0.1:without-ids:without-clamp",
+            "rotated:ours:pixel:16:fp16:f32history:prepass:bias:debug:tol=0.1:without-ids:without-clamp",
+            "split:ours:gradients",
             "msaa2x:intel:locations",
             "rotated:fused:prepass",
         ] {
@@ -209,6 +233,14 @@ mod tests {
         }
         let c = CheckerboardConfig::parse(&[]).expect("defaults");
         assert_eq!(c.params(), ["rotated", "ours"]);
+        assert_eq!(
+            (c.lod_mode, c.default_lod_bias()),
+            (LodMode::Gradients, 0.0)
+        );
+        let b = CheckerboardConfig::parse(&["rotated", "bias"]).expect("bias");
+        assert_eq!((b.lod_mode, b.default_lod_bias()), (LodMode::Bias, -0.5));
+        let s = CheckerboardConfig::parse(&["split"]).expect("split");
+        assert_eq!((s.lod_mode, s.default_lod_bias()), (LodMode::Bias, -1.0));
         let r = CheckerboardConfig::parse(&["split", "temporal", "quad", "8"])
             .expect("parse")
             .resolve
