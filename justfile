@@ -117,6 +117,7 @@ bench-layouts: setup
 bench-resolve: setup
     python3 scripts/bench-resolve.py cost --cbr ./target/release/cbr -o {{out}}/bench/resolve
     python3 scripts/bench-resolve.py quality --cbr ./target/release/cbr -o {{out}}/bench/resolve
+    python3 scripts/bench-resolve.py moving --cbr ./target/release/cbr -o {{out}}/bench/resolve
 
 # Formatting.
 fmt:
