@@ -77,29 +77,33 @@ def pass_ms(run_json, name, warmup):
     return statistics.median(v) if v else None
 
 
-def quality(a):
+def render_and_compare(a, sub, scenes, configs):
+    """Renders every (label, args) of `configs` (the first labelled "native") on every scene into
+    OUT/sub/SCENE/LABEL and compares each with native: one row per scene and configuration."""
     rows = []
-    for sname, scene in SCENES:
+    for sname, scene in scenes:
         if scene.startswith("scenes/") and not os.path.isdir("../shared/scenes"):
             print(f"skipping {sname}: ../shared/scenes is absent", file=sys.stderr)
             continue
         dirs = {}
-        for label, args in QUALITY:
-            out = os.path.join(a.out, "quality", sname, label.replace(":", "-").replace("+", "-"))
-            r = render(a.cbr, scene, args, a.width, a.height, a.frames, out)
-            dirs[label] = (out, r)
+        for label, args in configs:
+            out = os.path.join(a.out, sub, sname, label.replace(":", "-").replace("+", "-"))
+            dirs[label] = (out, render(a.cbr, scene, args, a.width, a.height, a.frames, out))
             print(f"{sname} {label}: rendered", file=sys.stderr)
-        ref = dirs["native"][0]
         for label, (out, r) in dirs.items():
             if label == "native":
                 continue
-            m = compare(a.cbr, ref, out, a.warmup)
+            m = compare(a.cbr, dirs["native"][0], out, a.warmup)
             m.update(scene=sname, config=label, resolve_ms=pass_ms(r, "resolve", a.warmup),
                      upscale_ms=pass_ms(r, "upscale", a.warmup), device=r["device"]["name"],
                      width=a.width, height=a.height, frames=a.frames, warmup=a.warmup)
             rows.append(m)
-    json.dump(rows, open(os.path.join(a.out, "quality.json"), "w"), indent=1)
-    quality_md(rows, a)
+    json.dump(rows, open(os.path.join(a.out, f"{sub}.json"), "w"), indent=1)
+    return rows
+
+
+def quality(a):
+    quality_md(render_and_compare(a, "quality", SCENES, QUALITY), a)
 
 
 MOVING_SCENES = [
@@ -110,27 +114,8 @@ MOVING_SCENES = [
 
 
 def moving(a):
-    rows = []
-    for sname, scene in MOVING_SCENES:
-        if scene.startswith("scenes/") and not os.path.isdir("../shared/scenes"):
-            print(f"skipping {sname}: ../shared/scenes is absent", file=sys.stderr)
-            continue
-        dirs = {}
-        for spec in ["native"] + [f"checkerboard:{l}:{m}" for l in ["rotated", "split"]
-                                  for m in ["ours", "pq4k"]]:
-            out = os.path.join(a.out, "moving", sname, spec.replace(":", "-"))
-            dirs[spec] = (out, render(a.cbr, scene, ["--technique", spec], a.width, a.height,
-                                      a.frames, out))
-            print(f"{sname} {spec}: rendered", file=sys.stderr)
-        for spec, (out, r) in dirs.items():
-            if spec == "native":
-                continue
-            m = compare(a.cbr, dirs["native"][0], out, a.warmup)
-            m.update(scene=sname, config=spec, resolve_ms=pass_ms(r, "resolve", a.warmup),
-                     device=r["device"]["name"], width=a.width, height=a.height,
-                     frames=a.frames, warmup=a.warmup)
-            rows.append(m)
-    json.dump(rows, open(os.path.join(a.out, "moving.json"), "w"), indent=1)
+    specs = ["native"] + [f"checkerboard:{l}:{m}" for l in ["rotated", "split"] for m in ["ours", "pq4k"]]
+    rows = render_and_compare(a, "moving", MOVING_SCENES, [(s, ["--technique", s]) for s in specs])
     md = [f"`ours` against `pq4k` on moving cameras, against native, {a.width}x{a.height}, frames "
           f"{a.warmup}-{a.frames - 1}; device {rows[0]['device'] if rows else '?'}.", "",
           "| scene | layout | `ours` FLIP | `pq4k` FLIP | ours / pq4k (goal <= 0.7) | "

@@ -335,6 +335,27 @@ fn sibenik_layouts_equal_native() {
     assert_clean(&gpu);
 }
 
+/// One frame of `technique` at the scene's size with a LOD bias (`None`: the technique's own), its
+/// colour the albedo LOD per sample when `debug_lod`.
+fn render_lod(
+    gpu: &Gpu,
+    s: &Scene,
+    technique: Spec,
+    lod_bias: Option<f32>,
+    debug_lod: bool,
+    frame: u32,
+) -> FrameOutput {
+    let settings = RenderSettings {
+        debug_lod,
+        lod_bias,
+        ..RenderSettings::new(s.settings.width, s.settings.height, technique)
+    };
+    Renderer::new(gpu, &cbr_render::shader_library(), s, settings)
+        .expect("renderer")
+        .render(s, frame)
+        .expect("frame")
+}
+
 /// Per-sample albedo LOD of the demo's textured surfaces: layout minus native, over the samples
 /// where both see the same textured object. Returns (mean |diff|, 95th percentile |diff|, mean diff).
 fn lod_difference(
@@ -345,18 +366,7 @@ fn lod_difference(
     bias: Option<f32>,
     frame: u32,
 ) -> (f64, f64, f64) {
-    let shaders = cbr_render::shader_library();
-    let run = |technique, lod_bias| {
-        let settings = RenderSettings {
-            debug_lod: true,
-            lod_bias,
-            ..RenderSettings::new(s.settings.width, s.settings.height, technique)
-        };
-        Renderer::new(gpu, &shaders, s, settings)
-            .expect("renderer")
-            .render(s, frame)
-            .expect("frame")
-    };
+    let run = |technique, lod_bias| render_lod(gpu, s, technique, lod_bias, true, frame);
     let (native, cb) = (
         run(native(), None),
         run(
@@ -466,18 +476,10 @@ fn gradients_mode_adds_the_lod_bias_to_its_footprint() {
     let mut s = cbr_scene::builtin("demo").expect("demo");
     s.settings.width = 192;
     s.settings.height = 108;
-    let shaders = cbr_render::shader_library();
     let run = |mode, lod_bias| {
         let mut c = CheckerboardConfig::new(Layout::Split, None);
         c.lod_mode = mode;
-        let settings = RenderSettings {
-            lod_bias,
-            ..RenderSettings::new(192, 108, c.spec())
-        };
-        Renderer::new(&gpu, &shaders, &s, settings)
-            .expect("renderer")
-            .render(&s, 6)
-            .expect("frame")
+        render_lod(&gpu, &s, c.spec(), lod_bias, false, 6)
     };
     let mean_diff = |a: &FrameOutput, b: &FrameOutput| {
         let mask = a.mask.as_ref().expect("mask");

@@ -23,8 +23,9 @@ impl LodMode {
     /// Each layout's default. Split and msaa2x space their samples 2 px apart on both axes, so a
     /// bias of -1 gives exactly the full-res footprint. The rotated lattice's neighbours are
     /// diagonal, sqrt(2) px apart: no isotropic bias matches its footprint, and on alpha-tested
-    /// foliage a bias of -0.5 left the rotated layout at 3.8x split's FLIP where gradients bring
-    /// it to 1.0x (docs/resolve.md). Masked keeps native's quads and derivatives.
+    /// foliage (1280x720, against native) a bias of -0.5 left the rotated layout at 3.8x split's
+    /// FLIP where gradients bring it to 0.86x (docs/resolve.md). Masked keeps native's quads and
+    /// derivatives.
     pub fn default_for(layout: Layout) -> LodMode {
         match layout {
             Layout::Rotated => LodMode::Gradients,
