@@ -160,19 +160,23 @@ uint tap_reasons(ivec2 t, uint id, float lo, float hi, bool use_ids, bool use_de
     return r;
 }
 
-// History at q validated against object `id` and reverse-Z depths [lo, hi]: the texel
-// containing q must be valid (the reprojected point lands on the surface; checked first, so a
-// rejection costs one texel), then bilinear over the valid taps, renormalised.
-bool history_validated(vec2 q, uint id, float lo, float hi, bool use_ids, bool use_depth,
-                       out real3 h, inout uint why) {
-    h = real3(0.0);
+// Whether the history texel containing q shows object `id` at reverse-Z depths [lo, hi] (the
+// reprojected point lands on the surface); a rejection costs this one texel.
+bool history_covers(vec2 q, uint id, float lo, float hi, bool use_ids, bool use_depth,
+                    inout uint why) {
     ivec2 near = ivec2(floor(q));
     if (!inside(near)) return false;
     uint rn = tap_reasons(near, id, lo, hi, use_ids, use_depth);
-    if (rn != 0u) {
-        why |= rn;
-        return false;
-    }
+    why |= rn;
+    return rn == 0u;
+}
+
+// History at q once history_covers() accepted it: bilinear over the valid taps, renormalised.
+// Kept apart from the test so that `ours` tests its candidates first and resamples once, for the
+// winner: on a SIMD machine a resample inside the candidate loop runs for every candidate on
+// which any lane stops.
+real3 history_resampled(vec2 q, uint id, float lo, float hi, bool use_ids, bool use_depth) {
+    ivec2 near = ivec2(floor(q));
     ivec2 base;
     float w[4];
     bilinear_taps(q, base, w);
@@ -189,7 +193,7 @@ bool history_validated(vec2 q, uint id, float lo, float hi, bool use_ids, bool u
             all_ok = false;
         }
     }
-    h = acc / real(ws);
+    real3 h = acc / real(ws);
     if (all_ok) {
         // All four taps valid: Catmull-Rom over the 4 x 4 texels around q (outer taps clamped to
         // the screen, not validated; the neighbourhood clamp bounds any overshoot), which keeps
@@ -208,6 +212,17 @@ bool history_validated(vec2 q, uint id, float lo, float hi, bool use_ids, bool u
         }
         h = max(c, real3(0.0));
     }
+    return h;
+}
+
+// History at q validated against object `id` and reverse-Z depths [lo, hi]: the texel
+// containing q must be valid (checked first, so a rejection costs one texel), then
+// history_resampled().
+bool history_validated(vec2 q, uint id, float lo, float hi, bool use_ids, bool use_depth,
+                       out real3 h, inout uint why) {
+    h = real3(0.0);
+    if (!history_covers(q, id, lo, hi, use_ids, use_depth, why)) return false;
+    h = history_resampled(q, id, lo, hi, use_ids, use_depth);
     return true;
 }
 
@@ -466,8 +481,13 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
             }
         }
     }
+    // The first candidate whose history covers q - v wins; its history is resampled once, after
+    // the loop.
+    bool covered = false;
+    float win_lo = 0.0;
+    float win_hi = 0.0;
     for (int k = 0; k < 4; k++) {
-        if (reset || found || (k > 0 && !multi)) break;
+        if (reset || found || covered || (k > 0 && !multi)) break;
         bool dup = false;
         for (int j = 0; j < k; j++) dup = dup || c[j].ids.x == c[k].ids.x;
         if (dup) continue;
@@ -486,26 +506,35 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
                 }
             }
         }
-        if (history_validated(q - v, id, lo, hi, use_ids, use_depth, h, why)) {
-            found = true;
+        if (history_covers(q - v, id, lo, hi, use_ids, use_depth, why)) {
+            covered = true;
             r.d = d;
             r.id = id;
             r.v = v;
+            win_lo = lo;
+            win_hi = hi;
         }
     }
+    if (covered) {
+        found = true;
+        h = history_resampled(q - r.v, r.id, win_lo, win_hi, use_ids, use_depth);
+    }
+    // Moving: clamp to the neighbourhood, then average with the spatial estimate (half and half,
+    // as pq4k does with its 4-neighbour mean): resampled history alone is softer and noisier
+    // than fresh neighbours. Without history, the spatial estimate alone. Computed once for both.
+    bool blend = found && !has(F_NO_CLAMP) && length(r.v) > pc.params.y;
+    real3 sp = real3(0.0);
+    if (!found || blend) sp = spatial_fill(n, found ? r.id : ref_id, use_ids, own);
     if (found) {
         r.dbg |= DBG_REPROJECTED;
-        if (!has(F_NO_CLAMP) && length(r.v) > pc.params.y) {
-            // Moving: clamp to the neighbourhood, then average with the spatial estimate (half
-            // and half, as pq4k does with its 4-neighbour mean): resampled history alone is
-            // softer and noisier than fresh neighbours.
+        if (blend) {
             h = clamp_to_box(h, n, r.dbg);
-            h = (spatial_fill(n, r.id, use_ids, own) + h) * real(0.5);
+            h = (sp + h) * real(0.5);
         }
         r.c = h;
     } else {
         r.dbg |= why | DBG_SPATIAL;
-        r.c = spatial_fill(n, ref_id, use_ids, own);
+        r.c = sp;
     }
 #endif
     return r;
