@@ -75,7 +75,11 @@ layout(push_constant) uniform Push {
 } pc;
 
 ivec2 size() { return pc.size_parity_side.xy; }
-bool has(uint f) { return (pc.flags.x & f) != 0u; }
+// Every flag but F_RESET is fixed for the pass's lifetime and compiled in (STATIC_FLAGS, the same
+// bits the push constant carries), so the paths a configuration does not use are not in its
+// pipeline: on a SIMD machine that predicates branches they would cost even when no lane takes
+// them.
+bool has(uint f) { return f == F_RESET ? (pc.flags.x & f) != 0u : (uint(STATIC_FLAGS) & f) != 0u; }
 
 struct Sample {
     real3 c;
@@ -180,6 +184,12 @@ real3 history_resampled(vec2 q, uint id, float lo, float hi, bool use_ids, bool 
     ivec2 base;
     float w[4];
     bilinear_taps(q, base, w);
+    // The four inner texels, clamped to the screen: the bilinear taps (a valid tap is inside, so
+    // the clamp leaves it) and the inner 2 x 2 of the Catmull-Rom window, fetched once for both.
+    real3 inner[4];
+    for (int k = 0; k < 4; k++) {
+        inner[k] = real3(texelFetch(hist_color, clamp(base + TAP[k], ivec2(0), size() - 1), 0).rgb);
+    }
     real3 acc = real3(0.0);
     float ws = 0.0;
     bool all_ok = true;
@@ -187,7 +197,7 @@ real3 history_resampled(vec2 q, uint id, float lo, float hi, bool use_ids, bool 
         ivec2 t = base + TAP[k];
         if (w[k] <= 0.0) continue;
         if (inside(t) && (t == near || tap_reasons(t, id, lo, hi, use_ids, use_depth) == 0u)) {
-            acc += real(w[k]) * real3(texelFetch(hist_color, t, 0).rgb);
+            acc += real(w[k]) * inner[k];
             ws += w[k];
         } else {
             all_ok = false;
@@ -205,8 +215,15 @@ real3 history_resampled(vec2 q, uint id, float lo, float hi, bool use_ids, bool 
         for (int j = 0; j < 4; j++) {
             real3 row = real3(0.0);
             for (int i = 0; i < 4; i++) {
-                ivec2 t = clamp(base + ivec2(i - 1, j - 1), ivec2(0), size() - 1);
-                row += real(wx[i]) * real3(texelFetch(hist_color, t, 0).rgb);
+                real3 t;
+                if ((i == 1 || i == 2) && (j == 1 || j == 2)) {
+                    t = inner[(i - 1) + 2 * (j - 1)];
+                } else {
+                    t = real3(texelFetch(hist_color,
+                                         clamp(base + ivec2(i - 1, j - 1), ivec2(0), size() - 1), 0)
+                                  .rgb);
+                }
+                row += real(wx[i]) * t;
             }
             c += real(wy[j]) * row;
         }

@@ -390,6 +390,11 @@ impl ResolvePass {
             ("OUT_FORMAT", out_format.to_string()),
             ("DEBUG", u32::from(settings.debug).to_string()),
             ("FUSED", u32::from(settings.fused).to_string()),
+            // Every flag but F_RESET, compiled in (resolve.comp `has`).
+            (
+                "STATIC_FLAGS",
+                settings.flags(false, prepass.is_some()).to_string(),
+            ),
             ("FUSED_ALPHA", format!("{FUSED_ALPHA:?}")),
             ("FUSED_ALPHA_MAX", format!("{FUSED_ALPHA_MAX:?}")),
             ("FUSED_SPEED", format!("{FUSED_SPEED:?}")),
