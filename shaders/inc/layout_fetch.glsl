@@ -37,11 +37,14 @@ ivec4 cb_address(ivec2 p, int parity, int tangram_side) {
     return ivec4((p.x + parity + 1 - odd) / 2, p.y / 2, 0, 1 - odd);
 #elif LAYOUT == LAYOUT_ROTATED
     // Tangram texel (i, j) = ((x - y - parity) / 2, (x + y - parity) / 2) mod L; both divisions
-    // are exact (the numerators are even).
+    // are exact (the numerators are even). For p on the W x H screen and L = tangram_side(W, H)
+    // (L >= max(W, H) / 2 and L >= min(W, H)), i lies in [-L, L) and j in [0, 2L), so one
+    // conditional add or subtract is the modulo: integer division has no SIMD instruction on
+    // x86, and llvmpipe would run one scalar division per lane and per modulo.
     int l = tangram_side;
     int i = (p.x - p.y - parity) / 2;
     int j = (p.x + p.y - parity) / 2;
-    return ivec4(((i % l) + l) % l, j % l, 0, 0);
+    return ivec4(i < 0 ? i + l : i, j >= l ? j - l : j, 0, 0);
 #else
     return ivec4(p, 0, 0);
 #endif
