@@ -678,14 +678,24 @@ void main() {
     Sample sb = load_sample(rb);
     if (inside(ra)) write_result(ra, rendered_result(ra, sa));
     if (inside(rb)) write_result(rb, rendered_result(rb, sb));
+    // A missing pixel's horizontal neighbour inside the quad is sa for ma and sb for mb, its
+    // vertical one the other (both parities); only the two outside the quad are loaded. Written
+    // without a per-lane choice between loaded and loading: a SIMD machine that predicates would
+    // otherwise run all four loads.
     for (int m = 0; m < 2; m++) {
         ivec2 p = m == 0 ? ma : mb;
         if (!inside(p)) continue;
+        bool right = (p.x & 1) == 1;  // the pixel is its quad's right column: its outer
+        bool below = (p.y & 1) == 1;  // horizontal neighbour is to the right; likewise rows
+        Sample h_in = m == 0 ? sa : sb;
+        Sample v_in = m == 0 ? sb : sa;
+        Sample h_out = load_sample(p + ivec2(right ? 1 : -1, 0));
+        Sample v_out = load_sample(p + ivec2(0, below ? 1 : -1));
         Sample n[4];
-        for (int i = 0; i < 4; i++) {
-            ivec2 q = p + NEIGHBOUR[i];
-            n[i] = q == ra ? sa : (q == rb ? sb : load_sample(q));
-        }
+        n[0] = right ? h_in : h_out;
+        n[1] = right ? h_out : h_in;
+        n[2] = below ? v_in : v_out;
+        n[3] = below ? v_out : v_in;
         write_result(p, resolve_missing(p, n));
     }
 }

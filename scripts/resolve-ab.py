@@ -1,0 +1,66 @@
+#!/usr/bin/env python3
+"""A/B the resolve's GPU time: two or more (binary, technique) entries, run in alternation.
+
+    scripts/resolve-ab.py SCENE BIN@TECHNIQUE [BIN@TECHNIQUE ...]
+                          [--width 1280 --height 720] [--frames 8] [--rounds 3] [--skip 2]
+
+Each round renders SCENE once per entry (`cbr render ... --technique TECHNIQUE`), in the order
+given, so slow drifts of a shared machine fall on every entry alike; per entry it prints the
+median `resolve` pass time over all rounds' frames from --skip on (the first frames reset the
+history and touch textures for the first time), and its ratio to the first entry. Build each
+version of cbr into its own file (e.g. `cp target/release/cbr /tmp/cbr-before`) and never
+compile while this runs. Times are lavapipe's GPU timestamps: compare entries of one run only."""
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    ap.add_argument("scene")
+    ap.add_argument("entries", nargs="+", metavar="BIN@TECHNIQUE")
+    ap.add_argument("--width", type=int, default=1280)
+    ap.add_argument("--height", type=int, default=720)
+    ap.add_argument("--frames", type=int, default=8)
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--skip", type=int, default=2)
+    a = ap.parse_args()
+    if a.frames <= a.skip:
+        sys.exit("--frames must exceed --skip")
+    entries = []
+    for e in a.entries:
+        if "@" not in e:
+            sys.exit(f"{e}: expected BIN@TECHNIQUE")
+        entries.append(tuple(e.split("@", 1)))
+    times = {e: [] for e in entries}
+    with tempfile.TemporaryDirectory(prefix="resolve-ab-") as tmp:
+        for _ in range(a.rounds):
+            for k, (cbr, technique) in enumerate(entries):
+                out = os.path.join(tmp, str(k))
+                cmd = [cbr, "render", a.scene, "--width", str(a.width), "--height",
+                       str(a.height), "--frames", str(a.frames), "--technique", technique,
+                       "-o", out]
+                p = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                   text=True)
+                if p.returncode != 0:
+                    sys.exit(f"{' '.join(cmd)}: {p.stderr.strip()}")
+                run = json.load(open(os.path.join(out, "run.json")))
+                ms = [t["gpu_ms"] for f in run["frames"][a.skip:] for t in f["passes"]
+                      if t["name"] == "resolve"]
+                if not ms:
+                    sys.exit(f"{technique}: no `resolve` pass in {out}/run.json")
+                times[(cbr, technique)] += ms
+    first = statistics.median(times[entries[0]])
+    print(f"{a.scene}, {a.width}x{a.height}, frames {a.skip}-{a.frames - 1}, {a.rounds} rounds")
+    for cbr, technique in entries:
+        m = statistics.median(times[(cbr, technique)])
+        print(f"{cbr} {technique}: resolve median {m:.2f} ms over "
+              f"{len(times[(cbr, technique)])} frames ({m / first:.2f}x the first)")
+
+
+if __name__ == "__main__":
+    main()
