@@ -685,8 +685,10 @@ void main() {
     for (int m = 0; m < 2; m++) {
         ivec2 p = m == 0 ? ma : mb;
         if (!inside(p)) continue;
-        bool right = (p.x & 1) == 1;  // the pixel is its quad's right column: its outer
-        bool below = (p.y & 1) == 1;  // horizontal neighbour is to the right; likewise rows
+        // In the quad's right column the outer horizontal neighbour is to the right, else to
+        // the left; likewise the bottom row and the vertical one.
+        bool right = (p.x & 1) == 1;
+        bool below = (p.y & 1) == 1;
         Sample h_in = m == 0 ? sa : sb;
         Sample v_in = m == 0 ? sb : sa;
         Sample h_out = load_sample(p + ivec2(right ? 1 : -1, 0));

@@ -11,13 +11,11 @@ mod common;
 use cbr_gpu::{Gpu, Layout};
 use cbr_render::{CheckerboardConfig, FrameOutput, LodMode, RenderSettings, Renderer, Spec};
 use cbr_scene::Scene;
-use common::{assert_clean, gpu, strip_textures};
+use common::{assert_clean, demo, gpu, strip_textures};
 
 /// The demo with textures removed (LOD-independent) at the given size.
 fn untextured_demo(w: u32, h: u32) -> Scene {
-    let mut s = cbr_scene::builtin("demo").expect("demo");
-    s.settings.width = w;
-    s.settings.height = h;
+    let mut s = demo(w, h);
     strip_textures(&mut s);
     s
 }
@@ -401,9 +399,7 @@ fn lod_difference(
 #[test]
 fn matching_lod_bias_selects_natives_mip_level() {
     let gpu = gpu();
-    let mut s = cbr_scene::builtin("demo").expect("demo");
-    s.settings.width = 192;
-    s.settings.height = 108;
+    let s = demo(192, 108);
     // (layout, mode, allowed range of the mean difference, bound on the mean |difference|, bound
     // on its 95th percentile), in levels; measured values in docs/checkerboard-layouts.md.
     // The rotated layout's -0.5 is exact for isotropic footprints only: on the ground plane, seen
@@ -473,9 +469,7 @@ fn matching_lod_bias_selects_natives_mip_level() {
 #[test]
 fn gradients_mode_adds_the_lod_bias_to_its_footprint() {
     let gpu = gpu();
-    let mut s = cbr_scene::builtin("demo").expect("demo");
-    s.settings.width = 192;
-    s.settings.height = 108;
+    let s = demo(192, 108);
     let run = |mode, lod_bias| {
         let mut c = CheckerboardConfig::new(Layout::Split, None);
         c.lod_mode = mode;
@@ -512,13 +506,7 @@ fn gradients_mode_adds_the_lod_bias_to_its_footprint() {
 #[test]
 fn id_prepass_equals_natives_depth_and_ids() {
     let gpu = gpu();
-    let s = cbr_scene::builtin("demo")
-        .map(|mut s| {
-            s.settings.width = 96;
-            s.settings.height = 54;
-            s
-        })
-        .expect("demo");
+    let s = demo(96, 54);
     let shaders = cbr_render::shader_library();
     for layout in [Layout::Split, Layout::Rotated] {
         let mut c = CheckerboardConfig::new(layout, None);
