@@ -13,24 +13,24 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #endif
 
 // Pixel q's estimate from split texel s, with its flags.
-void gather(ivec2 q, ivec2 s) {
-    vec4 e = imageLoad(s_irradiance, s);
+void gather(ivec2 q, uint s) {
+    vec4 e = s_irradiance[s];
     e.a = 0.0;
 #ifdef DEBUG
-    bool same = all(equal(floatBitsToUint(imageLoad(s_position, s)),
+    bool same = all(equal(floatBitsToUint(s_position[s]),
                           floatBitsToUint(texelFetch(g_position, q, 0)))) &&
-                all(equal(floatBitsToUint(imageLoad(s_normal, s)),
+                all(equal(floatBitsToUint(s_normal[s]),
                           floatBitsToUint(texelFetch(g_normal, q, 0))));
     e.a = same ? 0.0 : 1.0;
 #endif
 #ifdef SEED
     if (seed_edge(q)) e.a += 2.0;
 #endif
-    imageStore(irradiance, q, e);
+    irradiance[pixel_word(q)] = e;
 }
 
 void main() {
     ivec2 q = ivec2(gl_GlobalInvocationID.xy);
     if (q.x >= pc.size.x || q.y >= pc.size.y) return;
-    gather(q, split_of(q));
+    gather(q, word_of(split_of(q)));
 }

@@ -28,5 +28,5 @@ void main() {
 #ifdef SEED
     if (seed_edge(q)) flags = 2.0;
 #endif
-    imageStore(irradiance, q, vec4(e, flags));
+    irradiance[pixel_word(q)] = vec4(e, flags);
 }

@@ -13,11 +13,12 @@ layout(local_size_x = 8, local_size_y = 8) in;
 void main() {
     ivec2 s = ivec2(gl_GlobalInvocationID.xy);
     if (s.x >= TILE_M * pc.size.z || s.y >= TILE_N * pc.size.w) return;
-    vec4 p = imageLoad(s_position, s);
+    uint w = word_of(s);
+    vec4 p = s_position[w];
     vec3 e = vec3(0.0);
     if (p.w > 0.0) {
         uint k = subset_of(pixel_of(s));
-        e = subset_irradiance(p.xyz, imageLoad(s_normal, s).xyz, k, pc.counts.x, pc.params.x);
+        e = subset_irradiance(p.xyz, s_normal[w].xyz, k, pc.counts.x, pc.params.x);
     }
-    imageStore(s_irradiance, s, vec4(e, 0.0));
+    s_irradiance[w] = vec4(e, 0.0);
 }

@@ -208,6 +208,13 @@ impl Cmd {
         self.use_buffer(&rb.buffer, Access::HostRead);
     }
 
+    /// Copies the start of `buffer` into `rb` (as many bytes as `rb` holds), visible to the host
+    /// after the submission.
+    pub fn read_buffer(&mut self, buffer: &Buffer, rb: &Readback) {
+        self.copy_buffer(buffer, &rb.buffer, rb.buffer.size());
+        self.use_buffer(&rb.buffer, Access::HostRead);
+    }
+
     /// Begins dynamic rendering into the given attachments over their full extent.
     pub fn begin_rendering(
         &mut self,

@@ -459,6 +459,29 @@ impl Readback {
             height: image.height,
         })
     }
+    /// A readback of `bytes` bytes of a buffer holding `width` x `height` texels
+    /// ([`crate::Cmd::read_buffer`]).
+    pub fn for_buffer(
+        gpu: &Gpu,
+        name: &str,
+        bytes: u64,
+        width: u32,
+        height: u32,
+    ) -> Result<Readback> {
+        let buffer = Buffer::new(
+            gpu,
+            name,
+            bytes,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        Ok(Readback {
+            buffer,
+            width,
+            height,
+        })
+    }
+
     /// The image's texels, rows top to bottom, tightly packed (layers one after another).
     pub fn bytes(&self) -> Result<&[u8]> {
         self.buffer.bytes()

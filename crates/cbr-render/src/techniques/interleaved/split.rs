@@ -8,31 +8,30 @@
 
 use bytemuck::{Pod, Zeroable};
 use cbr_gpu::{
-    Access, BindingDesc, Buffer, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Image, ImageDesc,
+    Access, BindingDesc, Buffer, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Location,
     PassKind, Pipeline, Profiler, Readback, Result, Sampler, SamplerDesc, SetLayout, Write, vk,
 };
 
 use super::{Filter, InterleavedConfig};
 use crate::memory::MemoryEstimate;
 use crate::resolve::CopyFloor;
-use crate::targets::GBUFFER_FORMAT;
 use crate::technique::BuildCtx;
 use crate::techniques::deferred::GBuffer;
 
 /// The passes' set: the one definition of its bindings.
 pub const BINDINGS: [BindingDesc; 9] = {
-    use DescriptorKind::{CombinedImageSampler as S, StorageBuffer as B, StorageImage as I};
+    use DescriptorKind::{CombinedImageSampler as S, StorageBuffer as B};
     [
         BindingDesc::one("position", 0, S),
         BindingDesc::one("normal", 1, S),
         BindingDesc::one("vpls", 2, B),
-        BindingDesc::one("split_position", 3, I),
-        BindingDesc::one("split_normal", 4, I),
-        BindingDesc::one("split_irradiance", 5, I),
-        BindingDesc::one("irradiance", 6, I),
+        BindingDesc::one("split_position", 3, B),
+        BindingDesc::one("split_normal", 4, B),
+        BindingDesc::one("split_irradiance", 5, B),
+        BindingDesc::one("irradiance", 6, B),
         // `seed` only: the horizontal blur's output and the vertical's.
-        BindingDesc::one("seed_tmp", 7, I),
-        BindingDesc::one("seed_out", 8, I),
+        BindingDesc::one("seed_tmp", 7, B),
+        BindingDesc::one("seed_out", 8, B),
     ]
 };
 
@@ -61,17 +60,22 @@ pub fn moved_bytes(width: u32, height: u32) -> (u64, u64) {
     (px * 48, px * 48)
 }
 
+/// Bytes of one texel of the split mosaic and the estimates (a vec4 of f32).
+const MOSAIC_WORD: u64 = 16;
+
 /// The buffers of the `floor` copy kernel.
 const FLOOR: &str = "interleaved.copy_floor";
 
-/// Storage images of `interleaved`'s passes (the split ones absent with `implicit`, the seed's
-/// blur ones present with `seed` only).
-struct Images {
-    split_position: Option<Image>,
-    split_normal: Option<Image>,
-    split_irradiance: Option<Image>,
-    irradiance: Image,
-    seed: Option<(Image, Image)>,
+/// Storage buffers of `interleaved`'s passes, one vec4 of f32 per texel, rows one after another
+/// (the split mosaic's absent with `implicit`, the seed's blur outputs present with `seed` only).
+/// Buffers rather than storage images: on llvmpipe a buffer word costs a fraction of an image
+/// texel to load or store (docs/interleaved.md, split and gather).
+struct Buffers {
+    split_position: Option<Buffer>,
+    split_normal: Option<Buffer>,
+    split_irradiance: Option<Buffer>,
+    irradiance: Buffer,
+    seed: Option<(Buffer, Buffer)>,
 }
 
 pub struct SplitPasses {
@@ -82,7 +86,7 @@ pub struct SplitPasses {
     _layout: SetLayout,
     set: DescriptorSet,
     _sampler: Sampler,
-    images: Images,
+    buffers: Buffers,
     /// `debug`: the split mosaic of the estimates, read back each frame.
     pub mosaic: Option<Readback>,
     tile: (u32, u32),
@@ -95,17 +99,19 @@ impl SplitPasses {
         let (ws, hs) = sub_image(w, h, config.m, config.n);
         let (sw, sh) = (config.m * ws, config.n * hs);
         if !config.implicit {
+            let bytes = u64::from(sw) * u64::from(sh) * MOSAIC_WORD;
             for name in ["split_position", "split_normal", "split_irradiance"] {
-                e.image(format!("interleaved.{name}"), GBUFFER_FORMAT, sw, sh);
+                e.storage_buffer(format!("interleaved.{name}"), bytes, false);
             }
             if config.debug {
-                e.readback("readback.interleaved_mosaic", GBUFFER_FORMAT, sw, sh, 1);
+                e.buffer("readback.interleaved_mosaic", bytes, true);
             }
         }
-        e.image("interleaved.irradiance", GBUFFER_FORMAT, w, h);
+        let full = u64::from(w) * u64::from(h) * MOSAIC_WORD;
+        e.storage_buffer("interleaved.irradiance", full, false);
         if config.filter == Filter::Seed {
-            e.image("interleaved.seed_tmp", GBUFFER_FORMAT, w, h);
-            e.image("interleaved.seed_out", GBUFFER_FORMAT, w, h);
+            e.storage_buffer("interleaved.seed_tmp", full, false);
+            e.storage_buffer("interleaved.seed_out", full, false);
         }
         if config.floor {
             CopyFloor::estimate(e, FLOOR, moved_bytes(w, h));
@@ -166,42 +172,44 @@ impl SplitPasses {
         };
         let (w, h) = (ctx.width, ctx.height);
         let (ws, hs) = sub_image(w, h, m, n);
-        let img = |name: &str, width, height, usage| {
-            let name = format!("interleaved.{name}");
-            let d = ImageDesc::new_2d(&name, GBUFFER_FORMAT, width, height, usage);
-            Image::new(gpu, &d)
-        };
-        let storage = vk::ImageUsageFlags::STORAGE;
-        let sampled = storage | vk::ImageUsageFlags::SAMPLED;
         let read_back = if config.debug {
-            vk::ImageUsageFlags::TRANSFER_SRC
+            vk::BufferUsageFlags::TRANSFER_SRC
         } else {
-            vk::ImageUsageFlags::empty()
+            vk::BufferUsageFlags::empty()
         };
+        let mosaic_bytes = u64::from(m * ws) * u64::from(n * hs) * MOSAIC_WORD;
+        let full_bytes = u64::from(w) * u64::from(h) * MOSAIC_WORD;
+        let buffer = |name: &str, bytes, usage| {
+            let name = format!("interleaved.{name}");
+            let usage = vk::BufferUsageFlags::STORAGE_BUFFER | usage;
+            Buffer::new(gpu, &name, bytes, usage, Location::GpuOnly)
+        };
+        let none = vk::BufferUsageFlags::empty();
         let (split_position, split_normal, split_irradiance) = if config.implicit {
             (None, None, None)
         } else {
             (
-                Some(img("split_position", m * ws, n * hs, storage)?),
-                Some(img("split_normal", m * ws, n * hs, storage)?),
-                Some(img(
-                    "split_irradiance",
-                    m * ws,
-                    n * hs,
-                    storage | read_back,
-                )?),
+                Some(buffer("split_position", mosaic_bytes, none)?),
+                Some(buffer("split_normal", mosaic_bytes, none)?),
+                Some(buffer("split_irradiance", mosaic_bytes, read_back)?),
             )
         };
-        let irradiance = img("irradiance", w, h, sampled)?;
-        let seed_images = match seed {
+        let irradiance = buffer("irradiance", full_bytes, none)?;
+        let seed_buffers = match seed {
             Some(_) => Some((
-                img("seed_tmp", w, h, storage)?,
-                img("seed_out", w, h, sampled)?,
+                buffer("seed_tmp", full_bytes, none)?,
+                buffer("seed_out", full_bytes, none)?,
             )),
             None => None,
         };
         let mosaic = match (&split_irradiance, config.debug) {
-            (Some(s), true) => Some(Readback::for_image(gpu, "readback.interleaved_mosaic", s)?),
+            (Some(_), true) => Some(Readback::for_buffer(
+                gpu,
+                "readback.interleaved_mosaic",
+                mosaic_bytes,
+                m * ws,
+                n * hs,
+            )?),
             _ => None,
         };
         let floor = if config.floor {
@@ -216,12 +224,12 @@ impl SplitPasses {
             None
         };
         let sampler = Sampler::new(gpu, "interleaved.sampler", SamplerDesc::NEAREST)?;
-        // Bindings a mode does not use still hold an image (lavapipe crashes binding a set with
+        // Bindings a mode does not use still hold a buffer (lavapipe crashes binding a set with
         // an unwritten descriptor): the gathered estimates, which every mode has.
-        fn or_else<'a>(i: Option<&'a Image>, fallback: &'a Image) -> &'a Image {
-            i.unwrap_or(fallback)
+        fn or_else<'a>(b: Option<&'a Buffer>, fallback: &'a Buffer) -> &'a Buffer {
+            b.unwrap_or(fallback)
         }
-        let pick = |i| or_else(i, &irradiance);
+        let pick = |b| or_else(b, &irradiance);
         let set = DescriptorSet::new(
             gpu,
             "interleaved.set",
@@ -230,12 +238,12 @@ impl SplitPasses {
                 Write::Sampled(0, vec![(&g.position, &sampler)]),
                 Write::Sampled(1, vec![(&g.normal, &sampler)]),
                 Write::Buffer(2, vpls),
-                Write::Storage(3, pick(split_position.as_ref())),
-                Write::Storage(4, pick(split_normal.as_ref())),
-                Write::Storage(5, pick(split_irradiance.as_ref())),
-                Write::Storage(6, &irradiance),
-                Write::Storage(7, pick(seed_images.as_ref().map(|s| &s.0))),
-                Write::Storage(8, pick(seed_images.as_ref().map(|s| &s.1))),
+                Write::Buffer(3, pick(split_position.as_ref())),
+                Write::Buffer(4, pick(split_normal.as_ref())),
+                Write::Buffer(5, pick(split_irradiance.as_ref())),
+                Write::Buffer(6, &irradiance),
+                Write::Buffer(7, pick(seed_buffers.as_ref().map(|s| &s.0))),
+                Write::Buffer(8, pick(seed_buffers.as_ref().map(|s| &s.1))),
             ],
         )?;
         Ok(SplitPasses {
@@ -246,12 +254,12 @@ impl SplitPasses {
             _layout: layout,
             set,
             _sampler: sampler,
-            images: Images {
+            buffers: Buffers {
                 split_position,
                 split_normal,
                 split_irradiance,
                 irradiance,
-                seed: seed_images,
+                seed: seed_buffers,
             },
             mosaic,
             tile: (m, n),
@@ -261,10 +269,10 @@ impl SplitPasses {
 
     /// The full-resolution estimates the lighting pass filters: the gathered ones, or with `seed`
     /// their blur.
-    pub fn output(&self) -> &Image {
-        match &self.images.seed {
+    pub fn output(&self) -> &Buffer {
+        match &self.buffers.seed {
             Some((_, out)) => out,
-            None => &self.images.irradiance,
+            None => &self.buffers.irradiance,
         }
     }
 
@@ -281,12 +289,12 @@ impl SplitPasses {
         let (sw, sh) = self.mosaic_size();
         let split = u64::from(sw) * u64::from(sh);
         let full = self.size[0] as u64 * self.size[1] as u64;
-        let splits = if self.images.split_position.is_some() {
+        let splits = if self.buffers.split_position.is_some() {
             3
         } else {
             0
         };
-        let seeds = if self.images.seed.is_some() { 2 } else { 0 };
+        let seeds = if self.buffers.seed.is_some() { 2 } else { 0 };
         (splits * split + (1 + seeds) * full) * 16
     }
 
@@ -316,12 +324,12 @@ impl SplitPasses {
             (self.size[0] as u32).div_ceil(8),
             (self.size[1] as u32).div_ceil(8),
         );
-        let im = &self.images;
+        let im = &self.buffers;
         cmd.use_image(&g.position, Access::ComputeSampled);
         cmd.use_image(&g.normal, Access::ComputeSampled);
         cmd.use_buffer(vpls, Access::ComputeSampled);
         if let Some(implicit) = &self.implicit {
-            cmd.use_image(&im.irradiance, Access::ComputeStorageWrite);
+            cmd.use_buffer(&im.irradiance, Access::ComputeStorageWrite);
             self.dispatch(cmd, profiler, implicit, "interleaved.implicit", &push, full);
         }
         if let (Some((split, shade, gather)), Some(sp), Some(sn), Some(si)) = (
@@ -331,8 +339,8 @@ impl SplitPasses {
             &im.split_irradiance,
         ) {
             // Split: G-buffer -> sub-images.
-            cmd.use_image(sp, Access::ComputeStorageWrite);
-            cmd.use_image(sn, Access::ComputeStorageWrite);
+            cmd.use_buffer(sp, Access::ComputeStorageWrite);
+            cmd.use_buffer(sn, Access::ComputeStorageWrite);
             self.dispatch(
                 cmd,
                 profiler,
@@ -342,9 +350,9 @@ impl SplitPasses {
                 split_groups,
             );
             // Shade: sub-image k with subset k.
-            cmd.use_image(sp, Access::ComputeStorageReadWrite);
-            cmd.use_image(sn, Access::ComputeStorageReadWrite);
-            cmd.use_image(si, Access::ComputeStorageWrite);
+            cmd.use_buffer(sp, Access::ComputeStorageReadWrite);
+            cmd.use_buffer(sn, Access::ComputeStorageReadWrite);
+            cmd.use_buffer(si, Access::ComputeStorageWrite);
             self.dispatch(
                 cmd,
                 profiler,
@@ -354,16 +362,16 @@ impl SplitPasses {
                 split_groups,
             );
             // Gather: sub-images -> pixels.
-            cmd.use_image(si, Access::ComputeStorageReadWrite);
-            cmd.use_image(&im.irradiance, Access::ComputeStorageWrite);
+            cmd.use_buffer(si, Access::ComputeStorageReadWrite);
+            cmd.use_buffer(&im.irradiance, Access::ComputeStorageWrite);
             self.dispatch(cmd, profiler, gather, "interleaved.gather", &push, full);
         }
         if let (Some((h, v)), Some((tmp, out))) = (&self.seed, &im.seed) {
-            cmd.use_image(&im.irradiance, Access::ComputeStorageReadWrite);
-            cmd.use_image(tmp, Access::ComputeStorageWrite);
+            cmd.use_buffer(&im.irradiance, Access::ComputeStorageReadWrite);
+            cmd.use_buffer(tmp, Access::ComputeStorageWrite);
             self.dispatch(cmd, profiler, h, "interleaved.seed_blur_h", &push, full);
-            cmd.use_image(tmp, Access::ComputeStorageReadWrite);
-            cmd.use_image(out, Access::ComputeStorageWrite);
+            cmd.use_buffer(tmp, Access::ComputeStorageReadWrite);
+            cmd.use_buffer(out, Access::ComputeStorageWrite);
             self.dispatch(cmd, profiler, v, "interleaved.seed_blur_v", &push, full);
         }
         if let Some(floor) = &self.floor {
@@ -373,8 +381,8 @@ impl SplitPasses {
 
     /// Records the copy of the split mosaic (`debug`, split mode).
     pub fn record_readback(&self, cmd: &mut Cmd) {
-        if let (Some(rb), Some(si)) = (&self.mosaic, &self.images.split_irradiance) {
-            cmd.read_image(si, rb);
+        if let (Some(rb), Some(si)) = (&self.mosaic, &self.buffers.split_irradiance) {
+            cmd.read_buffer(si, rb);
         }
     }
 
