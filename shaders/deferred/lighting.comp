@@ -65,7 +65,7 @@ void main() {
         uint bits;
         c += albedo * interleaved_irradiance(px, object, p, n, bits);
 #ifdef DEBUG
-        if ((int(estimate_at(px).a) & 1) != 0) bits |= DBG_ROUNDTRIP;
+        if ((int(texelFetch(g_irradiance, px, 0).a) & 1) != 0) bits |= DBG_ROUNDTRIP;
         imageStore(debug_bits, px, uvec4(bits));
 #endif
 #else

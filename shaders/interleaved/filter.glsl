@@ -11,12 +11,7 @@
 //     with no such pixel is shaded at p itself (ENOUGH = M N, the default: always). Every subset counts once, so on a smooth surface it is
 //     the box, and at an edge p never mixes in another surface's light; only where its surface
 //     holds no pixel of a subset nearby (thin features) does p pay for that subset.
-// The gathered (or with `seed` blurred) estimates, W x H vec4 row by row (split.rs, `Buffers`).
-layout(std430, set = 0, binding = BINDING_IRRADIANCE) readonly buffer Irradiance { vec4 g_irradiance[]; };
-
-vec4 estimate_at(ivec2 q) {
-    return g_irradiance[q.y * int(pc.counts.z) + q.x];
-}
+layout(set = 0, binding = BINDING_IRRADIANCE) uniform sampler2D g_irradiance;
 #ifdef DEBUG
 // Per pixel (docs/interleaved.md, debug views): bits 0-5 the pixel's subset, bit 6 edge (the
 // window holds a pixel not on p's surface; `seed`: the seed's edge test), bits 8-14 the subsets
@@ -70,7 +65,7 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, out uint bits
         }
     }
 #endif
-    return estimate_at(px).rgb;
+    return texelFetch(g_irradiance, px, 0).rgb;
 #else
     vec3 sum = vec3(0.0);
     uint found = 0u;
@@ -100,7 +95,7 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, out uint bits
             }
 #endif
             if (use) {
-                sum += estimate_at(q).rgb;
+                sum += texelFetch(g_irradiance, q, 0).rgb;
                 found += 1u;
             } else {
                 uint t = uint((oy + (TILE_N - 1) / 2) * TILE_M + ox + (TILE_M - 1) / 2);

@@ -5,7 +5,7 @@
 // same way differs from the G-buffer (position and normal, bit for bit: gather(split(x)) == x at
 // every pixel), + 2 with SEED where the pixel is an edge by the seed's test (seed_edges.glsl), which
 // the seed's blur then reads once per tap.
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = 64, local_size_y = 1) in;
 #include "../inc/scene_types.glsl"
 #include "interleave.glsl"
 #ifdef SEED
@@ -26,11 +26,19 @@ void gather(ivec2 q, uint s) {
 #ifdef SEED
     if (seed_edge(q)) e.a += 2.0;
 #endif
-    irradiance[pixel_word(q)] = e;
+    imageStore(irradiance, q, e);
 }
 
 void main() {
-    ivec2 q = ivec2(gl_GlobalInvocationID.xy);
-    if (q.x >= pc.size.x || q.y >= pc.size.y) return;
-    gather(q, word_of(split_of(q)));
+    // Invocation (t, y): texel t of row y / N of the M sub-images (i, y mod N), i = 0 .. M-1, to
+    // pixels (t M + i, y). A SIMD group's lanes read consecutive texels of one sub-image row per
+    // step and together write whole runs of pixels.
+    int t = int(gl_GlobalInvocationID.x);
+    int y = int(gl_GlobalInvocationID.y);
+    if (t >= pc.size.z || y >= pc.size.y) return;
+    ivec2 s = ivec2(t, (y % TILE_N) * pc.size.w + y / TILE_N);
+    for (int i = 0; i < TILE_M; ++i) {
+        ivec2 q = ivec2(t * TILE_M + i, y);
+        if (q.x < pc.size.x) gather(q, word_of(s + ivec2(i * pc.size.z, 0)));
+    }
 }

@@ -28,5 +28,5 @@ void main() {
 #ifdef SEED
     if (seed_edge(q)) flags = 2.0;
 #endif
-    irradiance[pixel_word(q)] = vec4(e, flags);
+    imageStore(irradiance, q, vec4(e, flags));
 }

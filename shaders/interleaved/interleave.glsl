@@ -3,15 +3,16 @@
 // (i, j) holds the pixels (x, y) with x mod M = i, y mod N = j, so neighbouring texels of a
 // sub-image are M (N) pixels apart on screen (Segovia et al. 2006's "split" of the G-buffer).
 // The mosaic (M Ws x N Hs texels) is stored row by row in storage buffers of vec4, one per
-// quantity, as are the full-resolution estimates (split.rs, `Buffers`).
+// quantity (split.rs, `Storage`).
 layout(set = 0, binding = BINDING_POSITION) uniform sampler2D g_position;
 layout(set = 0, binding = BINDING_NORMAL) uniform sampler2D g_normal;
 layout(std430, set = 0, binding = BINDING_VPLS) readonly buffer Vpls { Vpl vpls[]; };
 layout(std430, set = 0, binding = BINDING_SPLIT_POSITION) buffer SplitPosition { vec4 s_position[]; };
 layout(std430, set = 0, binding = BINDING_SPLIT_NORMAL) buffer SplitNormal { vec4 s_normal[]; };
 layout(std430, set = 0, binding = BINDING_SPLIT_IRRADIANCE) buffer SplitIrradiance { vec4 s_irradiance[]; };
-// The full-resolution estimates (W x H vec4, rows one after another): the gather's output.
-layout(std430, set = 0, binding = BINDING_IRRADIANCE) buffer Irradiance { vec4 irradiance[]; };
+// The full-resolution estimates: an image, as the lighting pass's filter reads them at
+// data-dependent pixels, which llvmpipe's texel fetches gather faster than buffer loads.
+layout(set = 0, binding = BINDING_IRRADIANCE, rgba32f) uniform image2D irradiance;
 
 layout(push_constant) uniform Push {
     ivec4 size;    // W, H, Ws, Hs
@@ -29,11 +30,6 @@ ivec2 pixel_of(ivec2 s) {
 // The word of split texel s in the mosaic's buffers.
 uint word_of(ivec2 s) {
     return uint(s.y * (TILE_M * pc.size.z) + s.x);
-}
-
-// The word of on-screen pixel q in the full-resolution buffers.
-uint pixel_word(ivec2 q) {
-    return uint(q.y * pc.size.x + q.x);
 }
 
 // Whether pixel q lies on the screen.

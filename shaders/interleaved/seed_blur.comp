@@ -12,19 +12,20 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "../inc/scene_types.glsl"
 #include "interleave.glsl"
 
-layout(std430, set = 0, binding = BINDING_SEED_TMP) buffer SeedTmp { vec4 seed_tmp[]; };
-layout(std430, set = 0, binding = BINDING_SEED_OUT) buffer SeedOut { vec4 seed_out[]; };
+layout(set = 0, binding = BINDING_SEED_TMP, rgba32f) uniform image2D seed_tmp;
+layout(set = 0, binding = BINDING_SEED_OUT, rgba32f) uniform image2D seed_out;
+
 
 #ifdef HORIZONTAL
 #define PERIOD TILE_M
 #define STEP ivec2(1, 0)
-vec4 load(ivec2 q) { return irradiance[pixel_word(q)]; }
-void store(ivec2 q, vec4 v) { seed_tmp[pixel_word(q)] = v; }
+vec4 load(ivec2 q) { return imageLoad(irradiance, q); }
+void store(ivec2 q, vec4 v) { imageStore(seed_tmp, q, v); }
 #else
 #define PERIOD TILE_N
 #define STEP ivec2(0, 1)
-vec4 load(ivec2 q) { return seed_tmp[pixel_word(q)]; }
-void store(ivec2 q, vec4 v) { seed_out[pixel_word(q)] = v; }
+vec4 load(ivec2 q) { return imageLoad(seed_tmp, q); }
+void store(ivec2 q, vec4 v) { imageStore(seed_out, q, v); }
 #endif
 
 bool edge(vec4 v) { return (int(v.a) & 2) != 0; }

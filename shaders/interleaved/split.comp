@@ -1,19 +1,25 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// `interleaved.split`: the G-buffer's position and normal into the M x N sub-images (a scatter:
-// each pixel of the screen padded to the mosaic's size, M Ws x N Hs, writes its split texel; the
-// padding's texels, past the screen's edge, hold nothing: w = 0). One invocation per pixel rather
-// than per split texel: the pixel's split texel divides by the constants M and N, where a texel's
-// pixel divides by the sub-image's size, a per-lane integer division on a CPU device.
-layout(local_size_x = 8, local_size_y = 8) in;
+// `interleaved.split`: the G-buffer's position and normal into the M x N sub-images. Invocation
+// (t, y), y over the screen's rows padded to N Hs: pixels (t M + i, y), i = 0 .. M-1, to texel t of
+// row y / N of sub-images (i, y mod N). A SIMD group's lanes then write consecutive texels of one
+// sub-image row per step, and no lane divides by the sub-image's size (constant divisors only: a
+// per-lane integer division is a scalar loop on a CPU device). Texels of pixels past the screen's
+// edge hold nothing (w = 0).
+layout(local_size_x = 64, local_size_y = 1) in;
 #include "../inc/scene_types.glsl"
 #include "interleave.glsl"
 
 void main() {
-    ivec2 q = ivec2(gl_GlobalInvocationID.xy);
-    if (q.x >= TILE_M * pc.size.z || q.y >= TILE_N * pc.size.w) return;
-    uint s = word_of(split_of(q));
-    bool on = q.x < pc.size.x && q.y < pc.size.y;
-    s_position[s] = on ? texelFetch(g_position, q, 0) : vec4(0.0);
-    s_normal[s] = on ? texelFetch(g_normal, q, 0) : vec4(0.0);
+    int t = int(gl_GlobalInvocationID.x);
+    int y = int(gl_GlobalInvocationID.y);
+    if (t >= pc.size.z || y >= TILE_N * pc.size.w) return;
+    ivec2 s = ivec2(t, (y % TILE_N) * pc.size.w + y / TILE_N);
+    for (int i = 0; i < TILE_M; ++i) {
+        ivec2 q = ivec2(t * TILE_M + i, y);
+        bool on = q.x < pc.size.x && q.y < pc.size.y;
+        uint w = word_of(s + ivec2(i * pc.size.z, 0));
+        s_position[w] = on ? texelFetch(g_position, q, 0) : vec4(0.0);
+        s_normal[w] = on ? texelFetch(g_normal, q, 0) : vec4(0.0);
+    }
 }

@@ -32,7 +32,7 @@ pub const BINDINGS: [BindingDesc; 14] = {
         BindingDesc::one("ids", 10, S),
         BindingDesc::one("out_color", 11, I),
         // `interleaved` only: the gathered sub-image estimates of the VPLs' irradiance.
-        BindingDesc::one("irradiance", 12, B),
+        BindingDesc::one("irradiance", 12, S),
         // `interleaved:...:debug` only: the debug bits (shaders/interleaved/filter.glsl).
         BindingDesc::one("debug_bits", 13, I),
     ]
@@ -83,7 +83,7 @@ pub struct Interleaving<'a> {
     /// The FILTER define: 0 none (each pixel its own subset), 1 box over the M x N window,
     /// 2 ours (geometry-aware), 3 seed (the image is already the seed's blur).
     pub filter: u32,
-    pub irradiance: &'a Buffer,
+    pub irradiance: &'a Image,
     /// `debug`: the R32UI image the pass writes its debug bits to.
     pub debug: Option<&'a Image>,
 }
@@ -161,10 +161,10 @@ impl LightingPass {
             Write::Sampled(10, vec![(&g.ids, &sampler)]),
             Write::Storage(11, &g.color),
         ];
-        // Without interleaving the binding is never read, but it holds a buffer: lavapipe crashes
-        // binding a set with an unwritten descriptor.
-        let irradiance = interleaving.map_or(sources.vpls, |i| i.irradiance);
-        writes.push(Write::Buffer(12, irradiance));
+        // Without interleaving the binding is never read, but it holds an image: lavapipe crashes
+        // binding a set with an unwritten sampler.
+        let irradiance = interleaving.map_or(&g.albedo, |i| i.irradiance);
+        writes.push(Write::Sampled(12, vec![(irradiance, &sampler)]));
         // Likewise the debug bits: the frame (a storage image) where there are none.
         let debug = interleaving.and_then(|i| i.debug).unwrap_or(&g.color);
         writes.push(Write::Storage(13, debug));
@@ -193,7 +193,7 @@ impl LightingPass {
             cmd.use_image(img, Access::ComputeSampled);
         }
         if let Some(i) = interleaving {
-            cmd.use_buffer(i.irradiance, Access::ComputeSampled);
+            cmd.use_image(i.irradiance, Access::ComputeSampled);
             if let Some(d) = i.debug {
                 cmd.use_image(d, Access::ComputeStorageWrite);
             }

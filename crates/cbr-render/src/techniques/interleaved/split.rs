@@ -8,19 +8,21 @@
 
 use bytemuck::{Pod, Zeroable};
 use cbr_gpu::{
-    Access, BindingDesc, Buffer, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Location,
-    PassKind, Pipeline, Profiler, Readback, Result, Sampler, SamplerDesc, SetLayout, Write, vk,
+    Access, BindingDesc, Buffer, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Image, ImageDesc,
+    Location, PassKind, Pipeline, Profiler, Readback, Result, Sampler, SamplerDesc, SetLayout,
+    Write, vk,
 };
 
 use super::{Filter, InterleavedConfig};
 use crate::memory::MemoryEstimate;
 use crate::resolve::CopyFloor;
+use crate::targets::GBUFFER_FORMAT;
 use crate::technique::BuildCtx;
 use crate::techniques::deferred::GBuffer;
 
 /// The passes' set: the one definition of its bindings.
 pub const BINDINGS: [BindingDesc; 9] = {
-    use DescriptorKind::{CombinedImageSampler as S, StorageBuffer as B};
+    use DescriptorKind::{CombinedImageSampler as S, StorageBuffer as B, StorageImage as I};
     [
         BindingDesc::one("position", 0, S),
         BindingDesc::one("normal", 1, S),
@@ -28,10 +30,10 @@ pub const BINDINGS: [BindingDesc; 9] = {
         BindingDesc::one("split_position", 3, B),
         BindingDesc::one("split_normal", 4, B),
         BindingDesc::one("split_irradiance", 5, B),
-        BindingDesc::one("irradiance", 6, B),
+        BindingDesc::one("irradiance", 6, I),
         // `seed` only: the horizontal blur's output and the vertical's.
-        BindingDesc::one("seed_tmp", 7, B),
-        BindingDesc::one("seed_out", 8, B),
+        BindingDesc::one("seed_tmp", 7, I),
+        BindingDesc::one("seed_out", 8, I),
     ]
 };
 
@@ -60,22 +62,24 @@ pub fn moved_bytes(width: u32, height: u32) -> (u64, u64) {
     (px * 48, px * 48)
 }
 
-/// Bytes of one texel of the split mosaic and the estimates (a vec4 of f32).
+/// Bytes of one texel of the split mosaic (a vec4 of f32).
 const MOSAIC_WORD: u64 = 16;
 
 /// The buffers of the `floor` copy kernel.
 const FLOOR: &str = "interleaved.copy_floor";
 
-/// Storage buffers of `interleaved`'s passes, one vec4 of f32 per texel, rows one after another
-/// (the split mosaic's absent with `implicit`, the seed's blur outputs present with `seed` only).
-/// Buffers rather than storage images: on llvmpipe a buffer word costs a fraction of an image
-/// texel to load or store (docs/interleaved.md, split and gather).
-struct Buffers {
+/// `interleaved`'s storage: the split mosaic in storage buffers, one vec4 of f32 per texel, rows
+/// one after another (absent with `implicit`); the full-resolution estimates in storage images
+/// (the seed's blur ones present with `seed` only). The mosaic is only read and written in
+/// runs (split.comp, gather.comp), where on llvmpipe a buffer word costs a fraction of an image
+/// texel; the lighting pass's filter reads the estimates at data-dependent pixels, where
+/// llvmpipe's texel fetches are faster (docs/interleaved.md, split and gather).
+struct Storage {
     split_position: Option<Buffer>,
     split_normal: Option<Buffer>,
     split_irradiance: Option<Buffer>,
-    irradiance: Buffer,
-    seed: Option<(Buffer, Buffer)>,
+    irradiance: Image,
+    seed: Option<(Image, Image)>,
 }
 
 pub struct SplitPasses {
@@ -86,7 +90,7 @@ pub struct SplitPasses {
     _layout: SetLayout,
     set: DescriptorSet,
     _sampler: Sampler,
-    buffers: Buffers,
+    storage: Storage,
     /// `debug`: the split mosaic of the estimates, read back each frame.
     pub mosaic: Option<Readback>,
     tile: (u32, u32),
@@ -107,11 +111,10 @@ impl SplitPasses {
                 e.buffer("readback.interleaved_mosaic", bytes, true);
             }
         }
-        let full = u64::from(w) * u64::from(h) * MOSAIC_WORD;
-        e.storage_buffer("interleaved.irradiance", full, false);
+        e.image("interleaved.irradiance", GBUFFER_FORMAT, w, h);
         if config.filter == Filter::Seed {
-            e.storage_buffer("interleaved.seed_tmp", full, false);
-            e.storage_buffer("interleaved.seed_out", full, false);
+            e.image("interleaved.seed_tmp", GBUFFER_FORMAT, w, h);
+            e.image("interleaved.seed_out", GBUFFER_FORMAT, w, h);
         }
         if config.floor {
             CopyFloor::estimate(e, FLOOR, moved_bytes(w, h));
@@ -178,7 +181,6 @@ impl SplitPasses {
             vk::BufferUsageFlags::empty()
         };
         let mosaic_bytes = u64::from(m * ws) * u64::from(n * hs) * MOSAIC_WORD;
-        let full_bytes = u64::from(w) * u64::from(h) * MOSAIC_WORD;
         let buffer = |name: &str, bytes, usage| {
             let name = format!("interleaved.{name}");
             let usage = vk::BufferUsageFlags::STORAGE_BUFFER | usage;
@@ -194,12 +196,15 @@ impl SplitPasses {
                 Some(buffer("split_irradiance", mosaic_bytes, read_back)?),
             )
         };
-        let irradiance = buffer("irradiance", full_bytes, none)?;
-        let seed_buffers = match seed {
-            Some(_) => Some((
-                buffer("seed_tmp", full_bytes, none)?,
-                buffer("seed_out", full_bytes, none)?,
-            )),
+        let img = |name: &str, usage| {
+            let name = format!("interleaved.{name}");
+            Image::new(gpu, &ImageDesc::new_2d(&name, GBUFFER_FORMAT, w, h, usage))
+        };
+        let storage = vk::ImageUsageFlags::STORAGE;
+        let sampled = storage | vk::ImageUsageFlags::SAMPLED;
+        let irradiance = img("irradiance", sampled)?;
+        let seed_images = match seed {
+            Some(_) => Some((img("seed_tmp", storage)?, img("seed_out", sampled)?)),
             None => None,
         };
         let mosaic = match (&split_irradiance, config.debug) {
@@ -224,12 +229,14 @@ impl SplitPasses {
             None
         };
         let sampler = Sampler::new(gpu, "interleaved.sampler", SamplerDesc::NEAREST)?;
-        // Bindings a mode does not use still hold a buffer (lavapipe crashes binding a set with
-        // an unwritten descriptor): the gathered estimates, which every mode has.
-        fn or_else<'a>(b: Option<&'a Buffer>, fallback: &'a Buffer) -> &'a Buffer {
-            b.unwrap_or(fallback)
+        // Bindings a mode does not use still hold a resource (lavapipe crashes binding a set
+        // with an unwritten descriptor): images the gathered estimates, which every mode has;
+        // buffers the VPLs (`implicit`'s mosaic, never accessed).
+        fn or_else<'a, T>(r: Option<&'a T>, fallback: &'a T) -> &'a T {
+            r.unwrap_or(fallback)
         }
-        let pick = |b| or_else(b, &irradiance);
+        let pick = |i| or_else(i, &irradiance);
+        let pick_buffer = |b| or_else(b, vpls);
         let set = DescriptorSet::new(
             gpu,
             "interleaved.set",
@@ -238,12 +245,12 @@ impl SplitPasses {
                 Write::Sampled(0, vec![(&g.position, &sampler)]),
                 Write::Sampled(1, vec![(&g.normal, &sampler)]),
                 Write::Buffer(2, vpls),
-                Write::Buffer(3, pick(split_position.as_ref())),
-                Write::Buffer(4, pick(split_normal.as_ref())),
-                Write::Buffer(5, pick(split_irradiance.as_ref())),
-                Write::Buffer(6, &irradiance),
-                Write::Buffer(7, pick(seed_buffers.as_ref().map(|s| &s.0))),
-                Write::Buffer(8, pick(seed_buffers.as_ref().map(|s| &s.1))),
+                Write::Buffer(3, pick_buffer(split_position.as_ref())),
+                Write::Buffer(4, pick_buffer(split_normal.as_ref())),
+                Write::Buffer(5, pick_buffer(split_irradiance.as_ref())),
+                Write::Storage(6, &irradiance),
+                Write::Storage(7, pick(seed_images.as_ref().map(|s| &s.0))),
+                Write::Storage(8, pick(seed_images.as_ref().map(|s| &s.1))),
             ],
         )?;
         Ok(SplitPasses {
@@ -254,12 +261,12 @@ impl SplitPasses {
             _layout: layout,
             set,
             _sampler: sampler,
-            buffers: Buffers {
+            storage: Storage {
                 split_position,
                 split_normal,
                 split_irradiance,
                 irradiance,
-                seed: seed_buffers,
+                seed: seed_images,
             },
             mosaic,
             tile: (m, n),
@@ -269,10 +276,10 @@ impl SplitPasses {
 
     /// The full-resolution estimates the lighting pass filters: the gathered ones, or with `seed`
     /// their blur.
-    pub fn output(&self) -> &Buffer {
-        match &self.buffers.seed {
+    pub fn output(&self) -> &Image {
+        match &self.storage.seed {
             Some((_, out)) => out,
-            None => &self.buffers.irradiance,
+            None => &self.storage.irradiance,
         }
     }
 
@@ -289,12 +296,12 @@ impl SplitPasses {
         let (sw, sh) = self.mosaic_size();
         let split = u64::from(sw) * u64::from(sh);
         let full = self.size[0] as u64 * self.size[1] as u64;
-        let splits = if self.buffers.split_position.is_some() {
+        let splits = if self.storage.split_position.is_some() {
             3
         } else {
             0
         };
-        let seeds = if self.buffers.seed.is_some() { 2 } else { 0 };
+        let seeds = if self.storage.seed.is_some() { 2 } else { 0 };
         (splits * split + (1 + seeds) * full) * 16
     }
 
@@ -320,16 +327,17 @@ impl SplitPasses {
         // block of pixels, each lane group then reading and writing whole rows, measured 7x
         // slower for the split on llvmpipe: docs/interleaved.md.)
         let split_groups = (sw.div_ceil(8), sh.div_ceil(8));
+        let rows = ((self.size[2] as u32).div_ceil(64), self.size[1] as u32);
         let full = (
             (self.size[0] as u32).div_ceil(8),
             (self.size[1] as u32).div_ceil(8),
         );
-        let im = &self.buffers;
+        let im = &self.storage;
         cmd.use_image(&g.position, Access::ComputeSampled);
         cmd.use_image(&g.normal, Access::ComputeSampled);
         cmd.use_buffer(vpls, Access::ComputeSampled);
         if let Some(implicit) = &self.implicit {
-            cmd.use_buffer(&im.irradiance, Access::ComputeStorageWrite);
+            cmd.use_image(&im.irradiance, Access::ComputeStorageWrite);
             self.dispatch(cmd, profiler, implicit, "interleaved.implicit", &push, full);
         }
         if let (Some((split, shade, gather)), Some(sp), Some(sn), Some(si)) = (
@@ -347,7 +355,7 @@ impl SplitPasses {
                 split,
                 "interleaved.split",
                 &push,
-                split_groups,
+                (rows.0, sh),
             );
             // Shade: sub-image k with subset k.
             cmd.use_buffer(sp, Access::ComputeStorageReadWrite);
@@ -363,15 +371,15 @@ impl SplitPasses {
             );
             // Gather: sub-images -> pixels.
             cmd.use_buffer(si, Access::ComputeStorageReadWrite);
-            cmd.use_buffer(&im.irradiance, Access::ComputeStorageWrite);
-            self.dispatch(cmd, profiler, gather, "interleaved.gather", &push, full);
+            cmd.use_image(&im.irradiance, Access::ComputeStorageWrite);
+            self.dispatch(cmd, profiler, gather, "interleaved.gather", &push, rows);
         }
         if let (Some((h, v)), Some((tmp, out))) = (&self.seed, &im.seed) {
-            cmd.use_buffer(&im.irradiance, Access::ComputeStorageReadWrite);
-            cmd.use_buffer(tmp, Access::ComputeStorageWrite);
+            cmd.use_image(&im.irradiance, Access::ComputeStorageReadWrite);
+            cmd.use_image(tmp, Access::ComputeStorageWrite);
             self.dispatch(cmd, profiler, h, "interleaved.seed_blur_h", &push, full);
-            cmd.use_buffer(tmp, Access::ComputeStorageReadWrite);
-            cmd.use_buffer(out, Access::ComputeStorageWrite);
+            cmd.use_image(tmp, Access::ComputeStorageReadWrite);
+            cmd.use_image(out, Access::ComputeStorageWrite);
             self.dispatch(cmd, profiler, v, "interleaved.seed_blur_v", &push, full);
         }
         if let Some(floor) = &self.floor {
@@ -381,7 +389,7 @@ impl SplitPasses {
 
     /// Records the copy of the split mosaic (`debug`, split mode).
     pub fn record_readback(&self, cmd: &mut Cmd) {
-        if let (Some(rb), Some(si)) = (&self.mosaic, &self.buffers.split_irradiance) {
+        if let (Some(rb), Some(si)) = (&self.mosaic, &self.storage.split_irradiance) {
             cmd.read_buffer(si, rb);
         }
     }
