@@ -8,9 +8,11 @@
 //     (same object, normals within ~25 degrees, on p's tangent plane within 2% of p's distance),
 //     with SEARCH 1 else the nearest pixel holding it one period (M or N pixels) further that does;
 //     when at least ENOUGH subsets were found (`enough=K`), their mean; otherwise every subset
-//     with no such pixel is shaded at p itself (ENOUGH = M N, the default: always). Every subset counts once, so on a smooth surface it is
-//     the box, and at an edge p never mixes in another surface's light; only where its surface
-//     holds no pixel of a subset nearby (thin features) does p pay for that subset.
+//     with no such pixel is shaded at p itself (ENOUGH = M N, the default: always). Every subset
+//     counts once, so on a smooth surface it is the box, and at an edge p never mixes in another
+//     surface's light; only where its surface holds no pixel of a subset nearby (thin features)
+//     does p pay for that subset. With EXACT_EDGES 1 (`exact-edges`), a pixel with a 4-neighbour
+//     off its surface shades every subset at p.
 layout(set = 0, binding = BINDING_IRRADIANCE) uniform sampler2D g_irradiance;
 #ifdef DEBUG
 // Per pixel (docs/interleaved.md, debug views): bits 0-5 the pixel's subset, bit 6 edge (the
@@ -103,6 +105,22 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, out uint bits
             }
         }
     }
+#if FILTER == 2 && EXACT_EDGES
+    // `exact-edges`: a pixel with a 4-neighbour off its surface (the boundaries that FLIP's edge
+    // features magnify) shades every subset itself, the reference's value there.
+    bool boundary = false;
+    const ivec2 around[4] = ivec2[4](ivec2(-1, 0), ivec2(1, 0), ivec2(0, -1), ivec2(0, 1));
+    for (int k = 0; k < 4; ++k) {
+        ivec2 q = px + around[k];
+        if (on_screen(q) && !same_surface(q, object, p, n)) boundary = true;
+    }
+    if (boundary) {
+        sum = vec3(0.0);
+        found = 0u;
+        missing = uvec2(SUBSETS >= 32u ? ~0u : (1u << SUBSETS) - 1u,
+                        SUBSETS > 32u ? (SUBSETS == 64u ? ~0u : (1u << (SUBSETS - 32u)) - 1u) : 0u);
+    }
+#endif
 #if FILTER == 2
     // Enough of p's own surface in the window: the mean of what it holds (each estimate is
     // one subset's, so any of them estimates all the VPLs).

@@ -137,10 +137,12 @@ fn raw_pixels_hold_their_own_subset() {
 enum Mode {
     None,
     Box,
-    /// `enough`: found subsets that spare the fallback (M N: always shade the missing ones).
+    /// `enough`: found subsets that spare the fallback (M N: always shade the missing ones);
+    /// `exact_edges`: a pixel with a 4-neighbour off its surface shades every subset.
     Ours {
         search: bool,
         enough: usize,
+        exact_edges: bool,
     },
     Seed,
 }
@@ -251,6 +253,19 @@ impl Frame<'_> {
                 }
             }
         }
+        if let Mode::Ours {
+            exact_edges: true, ..
+        } = mode
+        {
+            let boundary = [(-1, 0), (1, 0), (0, -1), (0, 1)].iter().any(|&(dx, dy)| {
+                let q = (p.0 + dx, p.1 + dy);
+                self.on(q) && !((self.drawn)(q) && (self.same)(p, q))
+            });
+            if boundary {
+                let every: f64 = (0..(m * n) as usize).map(|k| (self.at_p)(p, k)).sum();
+                return (every / (m * n) as f64, (m * n) as u32);
+            }
+        }
         if let Mode::Ours { enough, .. } = mode
             && count >= enough
         {
@@ -291,6 +306,7 @@ fn the_filters_match_their_cpu_model() {
                 Mode::Ours {
                     search: false,
                     enough: subsets,
+                    exact_edges: false,
                 },
                 "ours",
             ),
@@ -298,6 +314,7 @@ fn the_filters_match_their_cpu_model() {
                 Mode::Ours {
                     search: true,
                     enough: subsets,
+                    exact_edges: false,
                 },
                 "search=1",
             ),
@@ -305,8 +322,17 @@ fn the_filters_match_their_cpu_model() {
                 Mode::Ours {
                     search: false,
                     enough: subsets / 2,
+                    exact_edges: false,
                 },
                 "enough=HALF",
+            ),
+            (
+                Mode::Ours {
+                    search: false,
+                    enough: subsets,
+                    exact_edges: true,
+                },
+                "exact-edges",
             ),
             (Mode::Seed, "seed"),
         ] {
@@ -436,18 +462,27 @@ fn the_filters_are_the_identity_on_a_constant_image() {
             Mode::Ours {
                 search: false,
                 enough: all,
+                exact_edges: false,
             },
             Mode::Ours {
                 search: true,
                 enough: all,
+                exact_edges: false,
             },
             Mode::Ours {
                 search: false,
                 enough: all.div_ceil(2),
+                exact_edges: false,
             },
             Mode::Ours {
                 search: true,
                 enough: 1,
+                exact_edges: false,
+            },
+            Mode::Ours {
+                search: false,
+                enough: all,
+                exact_edges: true,
             },
             Mode::Seed,
         ] {
@@ -638,6 +673,10 @@ fn bad_tiles_and_counts_are_refused() {
         ("interleaved:4x4:enough=17", "K from 1 to 16"),
         ("interleaved:2x2:enough=0", "K from 1 to 4"),
         ("interleaved:4x4:implicit:floor", "`implicit` does not have"),
+        (
+            "interleaved:4x4:box:exact-edges",
+            "a variant of the `ours` filter",
+        ),
     ] {
         let err = Spec::parse(spec).expect_err(spec);
         assert!(err.contains(needle), "{spec}: {err}");
@@ -647,4 +686,5 @@ fn bad_tiles_and_counts_are_refused() {
     assert!(Spec::parse("interleaved:4x4:seed:debug:floor").is_ok());
     assert!(Spec::parse("interleaved:4x4:raw:none").is_ok());
     assert!(Spec::parse("interleaved:8x8:enough=32:search=1:implicit").is_ok());
+    assert!(Spec::parse("interleaved:4x4:exact-edges:search=1").is_ok());
 }

@@ -78,6 +78,9 @@ pub struct Interleaving<'a> {
     pub n: u32,
     /// The SEARCH define (`ours` only): 1 looks one period beyond the window.
     pub search: u32,
+    /// The EXACT_EDGES define (`ours` only): 1 makes a pixel with a 4-neighbour off its surface
+    /// shade every subset itself.
+    pub exact_edges: u32,
     /// The ENOUGH define (`ours` only): found subsets that spare the fallback.
     pub enough: u32,
     /// The FILTER define: 0 none (each pixel its own subset), 1 box over the M x N window,
@@ -127,6 +130,7 @@ impl LightingPass {
                 ("TILE_N", i.n),
                 ("FILTER", i.filter),
                 ("SEARCH", i.search),
+                ("EXACT_EDGES", i.exact_edges),
                 ("ENOUGH", i.enough),
             ] {
                 defines.push((k.into(), v.to_string()));

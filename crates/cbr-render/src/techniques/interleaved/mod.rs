@@ -1,5 +1,5 @@
 //! `interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D][:ours|seed|box|none]
-//! [:search=S][:enough=K][:implicit][:debug][:floor]`: interleaved many-light shading (Segovia et al. 2006;
+//! [:search=S][:enough=K][:exact-edges][:implicit][:debug][:floor]`: interleaved many-light shading (Segovia et al. 2006;
 //! docs/interleaved.md) on `deferred`'s G-buffer and VPLs.
 //!
 //! Passes per frame, one submission: `interleaved.gbuffer` (deferred's G-buffer pass), the sun's
@@ -29,7 +29,7 @@ use split::SplitPasses;
 pub const REGISTRATION: Registration = Registration {
     name: "interleaved",
     grammar: "interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D]\
-              [:ours|seed|box|none][:search=S][:enough=K][:implicit][:debug][:floor]",
+              [:ours|seed|box|none][:search=S][:enough=K][:exact-edges][:implicit][:debug][:floor]",
     about: "deferred's VPLs, interleaved: the G-buffer split into M x N sub-images, sub-image k \
             shaded with the k-th block of N / (M N) VPLs, gathered back, filtered (ours: \
             geometry-aware, missing subsets shaded at the pixel; seed: the seed's edge-skipping \
@@ -102,6 +102,10 @@ pub struct InterleavedConfig {
     /// `enough=K` (`ours`): a pixel that finds at least K subsets on its surface takes their
     /// mean; with fewer it shades the missing ones itself. M N unless set.
     pub enough: u32,
+    /// `exact-edges` (`ours`): a pixel with a 4-neighbour off its surface (another object, a
+    /// crease, the background) shades every subset itself: the reference's value on the
+    /// boundaries, at the cost of M N subsets there.
+    pub exact_edges: bool,
     /// `floor`: also run a copy kernel moving the split and gather passes' bytes (their
     /// bandwidth floor), timed as `interleaved.copy_floor`.
     pub floor: bool,
@@ -125,7 +129,7 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
     };
     let (m, n) = tile(first)?;
     let mut filter = None;
-    let (mut implicit, mut debug, mut floor) = (false, false, false);
+    let (mut implicit, mut debug, mut floor, mut exact_edges) = (false, false, false, false);
     let mut search = DEFAULT_SEARCH;
     let mut enough = None;
     let mut light_params = Vec::new();
@@ -146,6 +150,10 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
             }
             "floor" => {
                 floor = true;
+                None
+            }
+            "exact-edges" => {
+                exact_edges = true;
                 None
             }
             "search" => {
@@ -175,7 +183,7 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
                     "interleaved",
                     p,
                     "vpls=N, points=N, rsm=R, reach=D, clamp=D, one filter of none (raw), box, \
-                     ours, seed, and search=0|1, enough=K, implicit, debug, floor",
+                     ours, seed, and search=0|1, enough=K, exact-edges, implicit, debug, floor",
                 ));
             }
         };
@@ -204,6 +212,13 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
             lights.vpls
         ));
     }
+    let filter = filter.unwrap_or(Filter::Ours);
+    if exact_edges && filter != Filter::Ours {
+        return Err(format!(
+            "interleaved: `exact-edges` is a variant of the `ours` filter, not of `{}`",
+            filter.name()
+        ));
+    }
     if implicit && floor {
         return Err(
             "interleaved: `floor` measures the split and gather passes, which `implicit` does not \
@@ -214,11 +229,12 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
     Ok(InterleavedConfig {
         m,
         n,
-        filter: filter.unwrap_or(Filter::Ours),
+        filter,
         implicit,
         debug,
         search,
         enough: enough.unwrap_or(m * n),
+        exact_edges,
         floor,
         lights,
     })
@@ -282,6 +298,7 @@ impl Interleaved {
             n: config.n,
             search: config.search,
             enough: config.enough,
+            exact_edges: u32::from(config.exact_edges),
             filter: config.filter as u32,
             irradiance: split.output(),
             debug: debug.as_ref().map(|d| &d.0),
@@ -365,6 +382,7 @@ impl Technique for Interleaved {
                 n: this.config.n,
                 search: this.config.search,
                 enough: this.config.enough,
+                exact_edges: u32::from(this.config.exact_edges),
                 filter: this.config.filter as u32,
                 irradiance: this.split.output(),
                 debug: this.debug.as_ref().map(|d| &d.0),
