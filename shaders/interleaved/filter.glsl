@@ -11,8 +11,8 @@
 //     with no such pixel is shaded at p itself (ENOUGH = M N, the default: always). Every subset
 //     counts once, so on a smooth surface it is the box, and at an edge p never mixes in another
 //     surface's light; only where its surface holds no pixel of a subset nearby (thin features)
-//     does p pay for that subset. With EXACT_EDGES 1 (`exact-edges`), a pixel with a 4-neighbour
-//     off its surface shades every subset at p.
+//     does p pay for that subset. With EXACT_EDGES R > 0 (`exact-edges=R`), a pixel with a pixel
+//     off its surface within R (the square of side 2R+1) shades every subset at p.
 layout(set = 0, binding = BINDING_IRRADIANCE) uniform sampler2D g_irradiance;
 #ifdef DEBUG
 // Per pixel (docs/interleaved.md, debug views): bits 0-5 the pixel's subset, bit 6 edge (the
@@ -105,13 +105,14 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, out uint bits
             }
         }
     }
-#if FILTER == 2 && EXACT_EDGES
-    // `exact-edges`: a pixel with a 4-neighbour off its surface (the boundaries that FLIP's edge
-    // features magnify) shades every subset itself, the reference's value there.
+#if FILTER == 2 && EXACT_EDGES > 0
+    // `exact-edges=R`: a pixel with a pixel off its surface in the (2R+1) x (2R+1) square around
+    // it (a band of R pixels along every boundary, which FLIP's edge features magnify) shades
+    // every subset itself, the reference's value there.
     bool boundary = false;
-    const ivec2 around[4] = ivec2[4](ivec2(-1, 0), ivec2(1, 0), ivec2(0, -1), ivec2(0, 1));
-    for (int k = 0; k < 4; ++k) {
-        ivec2 q = px + around[k];
+    const int side = 2 * EXACT_EDGES + 1;
+    for (int k = 0; k < side * side; ++k) {
+        ivec2 q = px + ivec2(k % side - EXACT_EDGES, k / side - EXACT_EDGES);
         if (on_screen(q) && !same_surface(q, object, p, n)) boundary = true;
     }
     if (boundary) {

@@ -138,11 +138,12 @@ enum Mode {
     None,
     Box,
     /// `enough`: found subsets that spare the fallback (M N: always shade the missing ones);
-    /// `exact_edges`: a pixel with a 4-neighbour off its surface shades every subset.
+    /// `exact_edges`: R > 0, a pixel with a pixel off its surface within R (a square) shades
+    /// every subset.
     Ours {
         search: bool,
         enough: usize,
-        exact_edges: bool,
+        exact_edges: i64,
     },
     Seed,
 }
@@ -253,13 +254,14 @@ impl Frame<'_> {
                 }
             }
         }
-        if let Mode::Ours {
-            exact_edges: true, ..
-        } = mode
+        if let Mode::Ours { exact_edges: r, .. } = mode
+            && r > 0
         {
-            let boundary = [(-1, 0), (1, 0), (0, -1), (0, 1)].iter().any(|&(dx, dy)| {
-                let q = (p.0 + dx, p.1 + dy);
-                self.on(q) && !((self.drawn)(q) && (self.same)(p, q))
+            let boundary = (-r..=r).any(|dy| {
+                (-r..=r).any(|dx| {
+                    let q = (p.0 + dx, p.1 + dy);
+                    self.on(q) && !((self.drawn)(q) && (self.same)(p, q))
+                })
             });
             if boundary {
                 let every: f64 = (0..(m * n) as usize).map(|k| (self.at_p)(p, k)).sum();
@@ -306,7 +308,7 @@ fn the_filters_match_their_cpu_model() {
                 Mode::Ours {
                     search: false,
                     enough: subsets,
-                    exact_edges: false,
+                    exact_edges: 0,
                 },
                 "ours",
             ),
@@ -314,7 +316,7 @@ fn the_filters_match_their_cpu_model() {
                 Mode::Ours {
                     search: true,
                     enough: subsets,
-                    exact_edges: false,
+                    exact_edges: 0,
                 },
                 "search=1",
             ),
@@ -322,7 +324,7 @@ fn the_filters_match_their_cpu_model() {
                 Mode::Ours {
                     search: false,
                     enough: subsets / 2,
-                    exact_edges: false,
+                    exact_edges: 0,
                 },
                 "enough=HALF",
             ),
@@ -330,9 +332,17 @@ fn the_filters_match_their_cpu_model() {
                 Mode::Ours {
                     search: false,
                     enough: subsets,
-                    exact_edges: true,
+                    exact_edges: 1,
                 },
                 "exact-edges",
+            ),
+            (
+                Mode::Ours {
+                    search: true,
+                    enough: subsets,
+                    exact_edges: 2,
+                },
+                "exact-edges=2:search=1",
             ),
             (Mode::Seed, "seed"),
         ] {
@@ -462,27 +472,27 @@ fn the_filters_are_the_identity_on_a_constant_image() {
             Mode::Ours {
                 search: false,
                 enough: all,
-                exact_edges: false,
+                exact_edges: 0,
             },
             Mode::Ours {
                 search: true,
                 enough: all,
-                exact_edges: false,
+                exact_edges: 0,
             },
             Mode::Ours {
                 search: false,
                 enough: all.div_ceil(2),
-                exact_edges: false,
+                exact_edges: 0,
             },
             Mode::Ours {
                 search: true,
                 enough: 1,
-                exact_edges: false,
+                exact_edges: 0,
             },
             Mode::Ours {
                 search: false,
                 enough: all,
-                exact_edges: true,
+                exact_edges: 1,
             },
             Mode::Seed,
         ] {
@@ -687,4 +697,6 @@ fn bad_tiles_and_counts_are_refused() {
     assert!(Spec::parse("interleaved:4x4:raw:none").is_ok());
     assert!(Spec::parse("interleaved:8x8:enough=32:search=1:implicit").is_ok());
     assert!(Spec::parse("interleaved:4x4:exact-edges:search=1").is_ok());
+    let err = Spec::parse("interleaved:4x4:exact-edges=4").expect_err("R = 4");
+    assert!(err.contains("R from 0 to 3"), "{err}");
 }

@@ -78,8 +78,8 @@ pub struct Interleaving<'a> {
     pub n: u32,
     /// The SEARCH define (`ours` only): 1 looks one period beyond the window.
     pub search: u32,
-    /// The EXACT_EDGES define (`ours` only): 1 makes a pixel with a 4-neighbour off its surface
-    /// shade every subset itself.
+    /// The EXACT_EDGES define (`ours` only): R > 0 makes a pixel with a pixel off its surface
+    /// within R (a square) shade every subset itself; 0 off.
     pub exact_edges: u32,
     /// The ENOUGH define (`ours` only): found subsets that spare the fallback.
     pub enough: u32,

@@ -1,5 +1,5 @@
 //! `interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D][:ours|seed|box|none]
-//! [:search=S][:enough=K][:exact-edges][:implicit][:debug][:floor]`: interleaved many-light shading (Segovia et al. 2006;
+//! [:search=S][:enough=K][:exact-edges[=R]][:implicit][:debug][:floor]`: interleaved many-light shading (Segovia et al. 2006;
 //! docs/interleaved.md) on `deferred`'s G-buffer and VPLs.
 //!
 //! Passes per frame, one submission: `interleaved.gbuffer` (deferred's G-buffer pass), the sun's
@@ -29,7 +29,7 @@ use split::SplitPasses;
 pub const REGISTRATION: Registration = Registration {
     name: "interleaved",
     grammar: "interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D]\
-              [:ours|seed|box|none][:search=S][:enough=K][:exact-edges][:implicit][:debug][:floor]",
+              [:ours|seed|box|none][:search=S][:enough=K][:exact-edges[=R]][:implicit][:debug][:floor]",
     about: "deferred's VPLs, interleaved: the G-buffer split into M x N sub-images, sub-image k \
             shaded with the k-th block of N / (M N) VPLs, gathered back, filtered (ours: \
             geometry-aware, missing subsets shaded at the pixel; seed: the seed's edge-skipping \
@@ -54,6 +54,8 @@ pub fn subset_range(k: u32, count: u32, subsets: u32) -> std::ops::Range<usize> 
     k as usize * size..(k as usize + 1) * size
 }
 
+/// The widest band `exact-edges=R` shades exactly.
+pub const MAX_EXACT_EDGES: u32 = 3;
 /// `ours`' search beyond the window unless `search=K` says otherwise.
 pub const DEFAULT_SEARCH: u32 = 0;
 /// VPLs unless `vpls=N` says otherwise.
@@ -102,10 +104,11 @@ pub struct InterleavedConfig {
     /// `enough=K` (`ours`): a pixel that finds at least K subsets on its surface takes their
     /// mean; with fewer it shades the missing ones itself. M N unless set.
     pub enough: u32,
-    /// `exact-edges` (`ours`): a pixel with a 4-neighbour off its surface (another object, a
-    /// crease, the background) shades every subset itself: the reference's value on the
-    /// boundaries, at the cost of M N subsets there.
-    pub exact_edges: bool,
+    /// `exact-edges=R` (`ours`; R from 1 to [`MAX_EXACT_EDGES`], 0 off): a pixel with a pixel
+    /// off its surface (another object, a crease, the background) within R, in the square of
+    /// side 2R + 1, shades every subset itself: the reference's value in a band of R pixels
+    /// along the boundaries, at the cost of M N subsets there.
+    pub exact_edges: u32,
     /// `floor`: also run a copy kernel moving the split and gather passes' bytes (their
     /// bandwidth floor), timed as `interleaved.copy_floor`.
     pub floor: bool,
@@ -129,7 +132,8 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
     };
     let (m, n) = tile(first)?;
     let mut filter = None;
-    let (mut implicit, mut debug, mut floor, mut exact_edges) = (false, false, false, false);
+    let (mut implicit, mut debug, mut floor) = (false, false, false);
+    let mut exact_edges = 0;
     let mut search = DEFAULT_SEARCH;
     let mut enough = None;
     let mut light_params = Vec::new();
@@ -153,7 +157,16 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
                 None
             }
             "exact-edges" => {
-                exact_edges = true;
+                let r = p.split_once('=').map(|(_, v)| v.parse::<u32>().ok());
+                exact_edges = match r {
+                    None => 1,
+                    Some(Some(r)) if r <= MAX_EXACT_EDGES => r,
+                    Some(_) => {
+                        return Err(format!(
+                            "interleaved `{p}`: exact-edges=R with R from 0 to {MAX_EXACT_EDGES}                              (`exact-edges` alone: 1)"
+                        ));
+                    }
+                };
                 None
             }
             "search" => {
@@ -183,7 +196,7 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
                     "interleaved",
                     p,
                     "vpls=N, points=N, rsm=R, reach=D, clamp=D, one filter of none (raw), box, \
-                     ours, seed, and search=0|1, enough=K, exact-edges, implicit, debug, floor",
+                     ours, seed, and search=0|1, enough=K, exact-edges[=R], implicit, debug, floor",
                 ));
             }
         };
@@ -213,7 +226,7 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
         ));
     }
     let filter = filter.unwrap_or(Filter::Ours);
-    if exact_edges && filter != Filter::Ours {
+    if exact_edges > 0 && filter != Filter::Ours {
         return Err(format!(
             "interleaved: `exact-edges` is a variant of the `ours` filter, not of `{}`",
             filter.name()
@@ -298,7 +311,7 @@ impl Interleaved {
             n: config.n,
             search: config.search,
             enough: config.enough,
-            exact_edges: u32::from(config.exact_edges),
+            exact_edges: config.exact_edges,
             filter: config.filter as u32,
             irradiance: split.output(),
             debug: debug.as_ref().map(|d| &d.0),
@@ -382,7 +395,7 @@ impl Technique for Interleaved {
                 n: this.config.n,
                 search: this.config.search,
                 enough: this.config.enough,
-                exact_edges: u32::from(this.config.exact_edges),
+                exact_edges: this.config.exact_edges,
                 filter: this.config.filter as u32,
                 irradiance: this.split.output(),
                 debug: this.debug.as_ref().map(|d| &d.0),
