@@ -30,15 +30,12 @@ void gather(ivec2 q, uint s) {
 }
 
 void main() {
-    // Invocation (t, y): texel t of row y / N of the M sub-images (i, y mod N), i = 0 .. M-1, to
-    // pixels (t M + i, y). A SIMD group's lanes read consecutive texels of one sub-image row per
-    // step and together write whole runs of pixels.
+    // Invocation (t, y): pixels (t M + i, y), i = 0 .. M-1, from their texels (row_word).
     int t = int(gl_GlobalInvocationID.x);
     int y = int(gl_GlobalInvocationID.y);
     if (t >= pc.size.z || y >= pc.size.y) return;
-    ivec2 s = ivec2(t, (y % TILE_N) * pc.size.w + y / TILE_N);
     for (int i = 0; i < TILE_M; ++i) {
         ivec2 q = ivec2(t * TILE_M + i, y);
-        if (q.x < pc.size.x) gather(q, word_of(s + ivec2(i * pc.size.z, 0)));
+        if (q.x < pc.size.x) gather(q, row_word(t, y, i));
     }
 }

@@ -37,8 +37,9 @@ bool on_screen(ivec2 q) {
     return q.x >= 0 && q.y >= 0 && q.x < pc.size.x && q.y < pc.size.y;
 }
 
-// The split texel of screen pixel q.
-ivec2 split_of(ivec2 q) {
-    ivec2 sub = q % ivec2(TILE_M, TILE_N);
-    return sub * pc.size.zw + q / ivec2(TILE_M, TILE_N);
+// The mosaic word of pixel (t M + i, y): texel t of row y / N of sub-image (i, y mod N). The split
+// and the gather walk the screen this way, invocation (t, y) taking i = 0 .. M-1: per step a SIMD
+// group's lanes touch consecutive texels of one sub-image row, and every divisor is a constant.
+uint row_word(int t, int y, int i) {
+    return word_of(ivec2(i * pc.size.z + t, (y % TILE_N) * pc.size.w + y / TILE_N));
 }

@@ -14,11 +14,10 @@ void main() {
     int t = int(gl_GlobalInvocationID.x);
     int y = int(gl_GlobalInvocationID.y);
     if (t >= pc.size.z || y >= TILE_N * pc.size.w) return;
-    ivec2 s = ivec2(t, (y % TILE_N) * pc.size.w + y / TILE_N);
     for (int i = 0; i < TILE_M; ++i) {
         ivec2 q = ivec2(t * TILE_M + i, y);
         bool on = q.x < pc.size.x && q.y < pc.size.y;
-        uint w = word_of(s + ivec2(i * pc.size.z, 0));
+        uint w = row_word(t, y, i);
         s_position[w] = on ? texelFetch(g_position, q, 0) : vec4(0.0);
         s_normal[w] = on ? texelFetch(g_normal, q, 0) : vec4(0.0);
     }

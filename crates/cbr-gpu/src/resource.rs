@@ -459,6 +459,7 @@ impl Readback {
             height: image.height,
         })
     }
+
     /// A readback of `bytes` bytes of a buffer holding `width` x `height` texels
     /// ([`crate::Cmd::read_buffer`]).
     pub fn for_buffer(

@@ -1,6 +1,6 @@
 //! `interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D][:ours|seed|box|none]
-//! [:search=S][:enough=K][:exact-edges[=R]][:implicit][:debug][:floor]`: interleaved many-light shading (Segovia et al. 2006;
-//! docs/interleaved.md) on `deferred`'s G-buffer and VPLs.
+//! [:search=S][:enough=K][:exact-edges[=R]][:implicit][:debug][:floor]`: interleaved many-light
+//! shading (Segovia et al. 2006; docs/interleaved.md) on `deferred`'s G-buffer and VPLs.
 //!
 //! Passes per frame, one submission: `interleaved.gbuffer` (deferred's G-buffer pass), the sun's
 //! map and the VPLs (deferred::lights), then (split.rs) `interleaved.split` (the G-buffer into
@@ -163,7 +163,8 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
                     Some(Some(r)) if r <= MAX_EXACT_EDGES => r,
                     Some(_) => {
                         return Err(format!(
-                            "interleaved `{p}`: exact-edges=R with R from 0 to {MAX_EXACT_EDGES}                              (`exact-edges` alone: 1)"
+                            "interleaved `{p}`: exact-edges=R with R from 0 to {MAX_EXACT_EDGES} \
+                             (`exact-edges` alone: 1)"
                         ));
                     }
                 };

@@ -323,9 +323,9 @@ impl SplitPasses {
             params: [clamp_d2, 0.0, 0.0, 0.0],
         };
         let (sw, sh) = self.mosaic_size();
-        // One invocation per split texel (split, shade) and per pixel (gather). (One per M x N
-        // block of pixels, each lane group then reading and writing whole rows, measured 7x
-        // slower for the split on llvmpipe: docs/interleaved.md.)
+        // Shade: one invocation per split texel. Split and gather: one per M pixels of a row
+        // (interleave.glsl's row_word), groups of 64 along the row; the split also covers the
+        // padding rows up to N Hs, whose texels it clears.
         let split_groups = (sw.div_ceil(8), sh.div_ceil(8));
         let rows = ((self.size[2] as u32).div_ceil(64), self.size[1] as u32);
         let full = (
