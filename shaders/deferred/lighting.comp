@@ -5,7 +5,8 @@
 // the forward pass's `shade` (shaders/inc/shading.glsl), then the extra point lights
 // (`points=N`) through the same light term, then the one-bounce indirect light of the VPLs
 // (`vpls=N`): albedo x their summed irradiance (with INTERLEAVED, `interleaved`'s filtered
-// estimate instead: shaders/interleaved/filter.glsl). NaN/Inf shading is written black and
+// estimate instead: shaders/interleaved/filter.glsl; with DIRECT the point lights' too, the pass
+// then shading the directional lights only). NaN/Inf shading is written black and
 // counted, as the forward pass does; background pixels get the background radiance.
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "../inc/scene_types.glsl"
@@ -56,14 +57,24 @@ void main() {
         return;
     }
     MaterialData m = materials[objects[object - 1u].ids.y];
+#ifdef DIRECT
+    // `interleaved:...:direct`: the point lights come filtered with the VPLs, below.
+    vec3 c = shade_lights(p, n, albedo, m, frame, frame.counts.x);
+#else
     vec3 c = shade(p, n, albedo, m, frame);
     vec3 v = normalize(-p);
     for (uint i = 0u; i < pc.counts.x; ++i) add_light(c, p, n, v, albedo, m, points[i]);
+#endif
     if (pc.counts.y > 0u) {
 #ifdef INTERLEAVED
-        // `interleaved`: the filtered sub-image estimates, then (as below) times albedo.
+        // `interleaved`: the filtered sub-image estimates, then (as below) times albedo; with
+        // DIRECT the point lights' diffuse term is in them, and their specular term comes apart.
         uint bits;
-        c += albedo * interleaved_irradiance(px, object, p, n, bits);
+        vec3 spec;
+        c += albedo * interleaved_irradiance(px, object, p, n, m.ks.w, bits, spec);
+#ifdef DIRECT
+        c += m.ks.rgb * spec;
+#endif
 #ifdef DEBUG
         if ((int(texelFetch(g_irradiance, px, 0).a) & 1) != 0) bits |= DBG_ROUNDTRIP;
         imageStore(debug_bits, px, uvec4(bits));

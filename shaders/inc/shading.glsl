@@ -4,8 +4,8 @@
 #define SHADING_GLSL
 #include "scene_types.glsl"
 
-// VPLS_ONLY: only vpl_irradiance (passes without the scene's `lights` buffer: interleaved's).
-#ifndef VPLS_ONLY
+// Needs the scene's `lights` buffer declared (only `shade` reads it).
+
 // Smooth window that takes a point light to zero at its range (1 well inside it).
 float range_window(float dist, float range) {
     if (range <= 0.0) return 1.0;
@@ -14,12 +14,8 @@ float range_window(float dist, float range) {
     return w * w;
 }
 
-// Adds what `light` reflects towards the camera (unit direction v from p) to `radiance`: Lambert
-// without 1/pi (a white surface facing a light of irradiance E returns E) plus Blinn-Phong
-// specular (n.h)^ns, unnormalised, both masked by n.l > 0.
-void add_light(inout vec3 radiance, vec3 p, vec3 n, vec3 v, vec3 albedo, MaterialData m,
-               LightData light) {
-    vec3 l;
+// The irradiance `light` delivers at p on a surface facing it, and the unit direction l towards it.
+vec3 incident(vec3 p, LightData light, out vec3 l) {
     vec3 irradiance = light.color.rgb;
     if (light.position.w == 0.0) {
         l = -normalize(light.position.xyz);
@@ -30,6 +26,16 @@ void add_light(inout vec3 radiance, vec3 p, vec3 n, vec3 v, vec3 albedo, Materia
         l = d / dist;
         irradiance *= range_window(dist, light.color.w) / dist2;
     }
+    return irradiance;
+}
+
+// Adds what `light` reflects towards the camera (unit direction v from p) to `radiance`: Lambert
+// without 1/pi (a white surface facing a light of irradiance E returns E) plus Blinn-Phong
+// specular (n.h)^ns, unnormalised, both masked by n.l > 0.
+void add_light(inout vec3 radiance, vec3 p, vec3 n, vec3 v, vec3 albedo, MaterialData m,
+               LightData light) {
+    vec3 l;
+    vec3 irradiance = incident(p, light, l);
     float ndl = dot(n, l);
     if (ndl <= 0.0) return;
     vec3 h = normalize(l + v);
@@ -37,16 +43,35 @@ void add_light(inout vec3 radiance, vec3 p, vec3 n, vec3 v, vec3 albedo, Materia
     radiance += (albedo * ndl + m.ks.rgb * spec * ndl) * irradiance;
 }
 
-// Outgoing radiance towards the camera at camera-relative position p with normal n (facing the
-// camera): emission, ambient, and every light of the scene's `lights` buffer (directional first).
-vec3 shade(vec3 p, vec3 n, vec3 albedo, MaterialData m, FrameConstants frame) {
+// add_light's two terms before the material's colours (`interleaved:...:direct`, which filters
+// them apart): adds n.l E to `diffuse` and (n.h)^ns n.l E to `specular` (ns <= 0: none), so that
+// albedo diffuse + ks specular is add_light's radiance.
+void add_light_terms(inout vec3 diffuse, inout vec3 specular, vec3 p, vec3 n, vec3 v, float ns,
+                     LightData light) {
+    vec3 l;
+    vec3 irradiance = incident(p, light, l);
+    float ndl = dot(n, l);
+    if (ndl <= 0.0) return;
+    vec3 h = normalize(l + v);
+    float spec = ns > 0.0 ? pow(max(dot(n, h), 0.0), ns) : 0.0;
+    diffuse += ndl * irradiance;
+    specular += spec * ndl * irradiance;
+}
+
+// Emission, ambient and the first `count` lights of the scene's `lights` buffer (directional
+// first) reflected towards the camera at camera-relative position p with normal n (facing the
+// camera).
+vec3 shade_lights(vec3 p, vec3 n, vec3 albedo, MaterialData m, FrameConstants frame, uint count) {
     vec3 v = normalize(-p);
     vec3 radiance = m.ke.rgb + frame.ambient.rgb * albedo;
-    uint count = frame.counts.x + frame.counts.y;
     for (uint i = 0u; i < count; ++i) add_light(radiance, p, n, v, albedo, m, lights[i]);
     return radiance;
 }
-#endif  // VPLS_ONLY
+
+// Outgoing radiance towards the camera: emission, ambient, and every light of the scene.
+vec3 shade(vec3 p, vec3 n, vec3 albedo, MaterialData m, FrameConstants frame) {
+    return shade_lights(p, n, albedo, m, frame, frame.counts.x + frame.counts.y);
+}
 
 // Irradiance at p (normal n) from one virtual point light (Dachsbacher & Stamminger 2005):
 // flux * max(0, n_vpl.(p - x)) * max(0, n.(x - p)) / (pi * d^2 * max(d^2, clamp_d2)), d = |p - x|:

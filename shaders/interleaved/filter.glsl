@@ -13,7 +13,10 @@
 //     surface's light; only where its surface holds no pixel of a subset nearby (thin features)
 //     does p pay for that subset. With EXACT_EDGES R > 0 (`exact-edges=R`), a pixel with a pixel
 //     off its surface within R (the square of side 2R+1) shades every subset at p.
+// With DIRECT (`direct`) the specular estimates of the point lights go through the same filter
+// with the same choices (the same pixels, weights and fallback subsets), into `specular`.
 layout(set = 0, binding = BINDING_IRRADIANCE) uniform sampler2D g_irradiance;
+layout(set = 0, binding = BINDING_SPECULAR) uniform sampler2D g_specular;
 #ifdef DEBUG
 // Per pixel (docs/interleaved.md, debug views): bits 0-5 the pixel's subset, bit 6 edge (the
 // window holds a pixel not on p's surface; `seed`: the seed's edge test), bits 8-14 the subsets
@@ -53,9 +56,12 @@ int candidate(int o, int period, int i) {
     return i == 1 ? -period : period;
 }
 
-// The filtered irradiance; `bits` gets the debug bits (edge, fallback count).
-vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, out uint bits) {
+// The filtered irradiance; `bits` gets the debug bits (edge, fallback count), `specular` the
+// filtered specular estimate (DIRECT; 0 otherwise). ns: p's specular exponent.
+vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, float ns, out uint bits,
+                            out vec3 specular) {
     bits = subset_of(px);
+    specular = vec3(0.0);
 #if FILTER == 0 || FILTER == 3
 #if defined(DEBUG) && FILTER == 3
     if (seed_edge(px)) bits |= DBG_EDGE;
@@ -67,9 +73,13 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, out uint bits
         }
     }
 #endif
+#ifdef DIRECT
+    specular = texelFetch(g_specular, px, 0).rgb;
+#endif
     return texelFetch(g_irradiance, px, 0).rgb;
 #else
     vec3 sum = vec3(0.0);
+    vec3 sum_spec = vec3(0.0);
     uint found = 0u;
     uvec2 missing = uvec2(0u);  // window slots (t = row M + column) with no estimate to use
     for (int oy = -(TILE_N - 1) / 2; oy <= TILE_N / 2; ++oy) {
@@ -98,6 +108,9 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, out uint bits
 #endif
             if (use) {
                 sum += texelFetch(g_irradiance, q, 0).rgb;
+#ifdef DIRECT
+                sum_spec += texelFetch(g_specular, q, 0).rgb;
+#endif
                 found += 1u;
             } else {
                 uint t = uint((oy + (TILE_N - 1) / 2) * TILE_M + ox + (TILE_M - 1) / 2);
@@ -117,6 +130,7 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, out uint bits
     }
     if (boundary) {
         sum = vec3(0.0);
+        sum_spec = vec3(0.0);
         found = 0u;
         missing = uvec2(SUBSETS >= 32u ? ~0u : (1u << SUBSETS) - 1u,
                         SUBSETS > 32u ? (SUBSETS == 64u ? ~0u : (1u << (SUBSETS - 32u)) - 1u) : 0u);
@@ -125,7 +139,10 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, out uint bits
 #if FILTER == 2
     // Enough of p's own surface in the window: the mean of what it holds (each estimate is
     // one subset's, so any of them estimates all the VPLs).
-    if (found >= uint(ENOUGH)) return sum / float(found);
+    if (found >= uint(ENOUGH)) {
+        specular = sum_spec / float(found);
+        return sum / float(found);
+    }
 #endif
     // Otherwise p shades the missing subsets itself, each invocation walking its own list (lowest
     // slot first): a SIMD group or warp then pays for its longest list, not for the union of its
@@ -138,10 +155,15 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, out uint bits
         t += 32u * word;
         ivec2 o = ivec2(int(t % uint(TILE_M)) - (TILE_M - 1) / 2,
                         int(t / uint(TILE_M)) - (TILE_N - 1) / 2);
-        sum += subset_irradiance(p, n, subset_of(px + o), pc.counts.y, pc.params.x);
+        uint k = subset_of(px + o);
+        sum += subset_irradiance(p, n, k, pc.counts.y, pc.params.x);
+#ifdef DIRECT
+        subset_direct(sum, sum_spec, p, n, ns, k, uvec3(frame.counts.xy, pc.counts.x));
+#endif
         fallback += 1u;
     }
     bits |= fallback << DBG_FALLBACK_SHIFT;
+    specular = sum_spec / float(SUBSETS);
     return sum / float(SUBSETS);
 #endif
 }

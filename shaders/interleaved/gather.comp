@@ -1,6 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// `interleaved.gather`: the sub-images' estimates back to their pixels (the inverse of the split).
+// `interleaved.gather`: the sub-images' estimates back to their pixels (the inverse of the split);
+// with DIRECT the specular estimates too.
 // The alpha channel holds flags (as a float): 1 with DEBUG where the split G-buffer gathered back the
 // same way differs from the G-buffer (position and normal, bit for bit: gather(split(x)) == x at
 // every pixel), + 2 with SEED where the pixel is an edge by the seed's test (seed_edges.glsl), which
@@ -27,6 +28,9 @@ void gather(ivec2 q, uint s) {
     if (seed_edge(q)) e.a += 2.0;
 #endif
     imageStore(irradiance, q, e);
+#ifdef DIRECT
+    imageStore(specular, q, s_specular[s]);
+#endif
 }
 
 void main() {

@@ -10,13 +10,20 @@ layout(std430, set = 0, binding = BINDING_VPLS) readonly buffer Vpls { Vpl vpls[
 layout(std430, set = 0, binding = BINDING_SPLIT_POSITION) buffer SplitPosition { vec4 s_position[]; };
 layout(std430, set = 0, binding = BINDING_SPLIT_NORMAL) buffer SplitNormal { vec4 s_normal[]; };
 layout(std430, set = 0, binding = BINDING_SPLIT_IRRADIANCE) buffer SplitIrradiance { vec4 s_irradiance[]; };
+// `direct`: the scene's lights (directional first, then its point lights) and the extra point
+// lights (`points=N`), whose point lights the sub-images shade in subsets too; the specular
+// estimates beside the diffuse ones (the split mosaic's and the gathered).
+layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
+layout(std430, set = 0, binding = BINDING_POINTS) readonly buffer Points { LightData points[]; };
+layout(std430, set = 0, binding = BINDING_SPLIT_SPECULAR) buffer SplitSpecular { vec4 s_specular[]; };
 // The full-resolution estimates: an image, as the lighting pass's filter reads them at
 // data-dependent pixels, which llvmpipe's texel fetches gather faster than buffer loads.
 layout(set = 0, binding = BINDING_IRRADIANCE, rgba32f) uniform image2D irradiance;
+layout(set = 0, binding = BINDING_SPECULAR, rgba32f) uniform image2D specular;
 
 layout(push_constant) uniform Push {
     ivec4 size;    // W, H, Ws, Hs
-    uvec4 counts;  // x: VPLs
+    uvec4 counts;  // x: VPLs; `direct`: y directional lights, z the scene's point lights, w extra ones
     vec4 params;   // x: the VPL clamp c (m^2)
 } pc;
 

@@ -14,6 +14,9 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 0, binding = BINDING_SEED_TMP, rgba32f) uniform image2D seed_tmp;
 layout(set = 0, binding = BINDING_SEED_OUT, rgba32f) uniform image2D seed_out;
+// DIRECT: the specular estimates, blurred with the same taps and weights.
+layout(set = 0, binding = BINDING_SEED_TMP_SPECULAR, rgba32f) uniform image2D seed_tmp_spec;
+layout(set = 0, binding = BINDING_SEED_OUT_SPECULAR, rgba32f) uniform image2D seed_out_spec;
 
 
 #ifdef HORIZONTAL
@@ -21,11 +24,15 @@ layout(set = 0, binding = BINDING_SEED_OUT, rgba32f) uniform image2D seed_out;
 #define STEP ivec2(1, 0)
 vec4 load(ivec2 q) { return imageLoad(irradiance, q); }
 void store(ivec2 q, vec4 v) { imageStore(seed_tmp, q, v); }
+vec3 load_spec(ivec2 q) { return imageLoad(specular, q).rgb; }
+void store_spec(ivec2 q, vec3 v) { imageStore(seed_tmp_spec, q, vec4(v, 0.0)); }
 #else
 #define PERIOD TILE_N
 #define STEP ivec2(0, 1)
 vec4 load(ivec2 q) { return imageLoad(seed_tmp, q); }
 void store(ivec2 q, vec4 v) { imageStore(seed_out, q, v); }
+vec3 load_spec(ivec2 q) { return imageLoad(seed_tmp_spec, q).rgb; }
+void store_spec(ivec2 q, vec3 v) { imageStore(seed_out_spec, q, vec4(v, 0.0)); }
 #endif
 
 bool edge(vec4 v) { return (int(v.a) & 2) != 0; }
@@ -36,10 +43,14 @@ void main() {
     vec4 own = load(px);
     if (edge(own)) {
         store(px, own);
+#ifdef DIRECT
+        store_spec(px, load_spec(px));
+#endif
         return;
     }
     float sigma = 0.5 * float(PERIOD);
     vec3 sum = vec3(0.0);
+    vec3 sum_spec = vec3(0.0);
     float weights = 0.0;
     for (int d = -(PERIOD - 1); d <= PERIOD - 1; ++d) {
         ivec2 q = px + d * STEP;
@@ -48,7 +59,13 @@ void main() {
         if (edge(v)) continue;
         float w = exp(-float(d * d) / (2.0 * sigma * sigma));
         sum += w * v.rgb;
+#ifdef DIRECT
+        sum_spec += w * load_spec(q);
+#endif
         weights += w;
     }
     store(px, vec4(sum / weights, own.a));
+#ifdef DIRECT
+    store_spec(px, sum_spec / weights);
+#endif
 }

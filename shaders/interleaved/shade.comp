@@ -2,11 +2,12 @@
 #extension GL_GOOGLE_include_directive : require
 // `interleaved.shade`: sub-image k = j M + i shades its texels with VPL subset k only, times M N
 // (subsets.glsl): the irradiance estimate that the gather puts back at each pixel and the
-// lighting pass filters. Texels without a surface (background, past the edge) get 0.
+// lighting pass filters; with DIRECT also point-light subset k, its diffuse term into the same
+// estimate and its specular term into s_specular (the split normal's w is the specular exponent,
+// written by the G-buffer pass). Texels without a surface (background, past the edge) get 0.
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "../inc/scene_types.glsl"
 #include "interleave.glsl"
-#define VPLS_ONLY
 #include "../inc/shading.glsl"
 #include "subsets.glsl"
 
@@ -16,9 +17,17 @@ void main() {
     uint w = word_of(s);
     vec4 p = s_position[w];
     vec3 e = vec3(0.0);
+    vec3 spec = vec3(0.0);
     if (p.w > 0.0) {
         uint k = subset_of(pixel_of(s));
-        e = subset_irradiance(p.xyz, s_normal[w].xyz, k, pc.counts.x, pc.params.x);
+        vec4 n = s_normal[w];
+        e = subset_irradiance(p.xyz, n.xyz, k, pc.counts.x, pc.params.x);
+#ifdef DIRECT
+        subset_direct(e, spec, p.xyz, n.xyz, n.w, k, pc.counts.yzw);
+#endif
     }
     s_irradiance[w] = vec4(e, 0.0);
+#ifdef DIRECT
+    s_specular[w] = vec4(spec, 0.0);
+#endif
 }

@@ -7,6 +7,12 @@
 // a subset lies in one 1/16 strip of the map; crates/cbr-render/src/techniques/interleaved/mod.rs,
 // `subset_range`, and its test.) Its irradiance times M N estimates that of all the VPLs. Needs
 // `vpls` and shading.glsl's vpl_irradiance.
+//
+// With DIRECT (`direct`) the point lights are shaded in subsets too: the scene's point lights
+// (lights[dirs + j], j < scene) then the extra ones (points[j - scene]), light j in subset
+// j mod (M N) (a stride: the lights are random, not a low-discrepancy pattern, and any count
+// works), times M N; their diffuse term n.l E joins the VPLs' irradiance and their specular term
+// (n.h)^ns n.l E is estimated apart (shading.glsl, add_light_terms). Needs `lights` and `points`.
 #ifndef SUBSETS_GLSL
 #define SUBSETS_GLSL
 
@@ -25,4 +31,25 @@ vec3 subset_irradiance(vec3 p, vec3 n, uint k, uint count, float clamp_d2) {
     for (uint i = k * size; i < (k + 1u) * size; ++i) e += vpl_irradiance(p, n, vpls[i], clamp_d2);
     return e * float(SUBSETS);
 }
+
+#ifdef DIRECT
+// Adds subset k of the point lights, times M N, to `diffuse` and `specular` at p (normal n,
+// specular exponent ns) seen from the camera at the origin; `counts`: directional lights, the
+// scene's point lights, extra point lights.
+void subset_direct(inout vec3 diffuse, inout vec3 specular, vec3 p, vec3 n, float ns, uint k,
+                   uvec3 counts) {
+    vec3 v = normalize(-p);
+    vec3 d = vec3(0.0);
+    vec3 s = vec3(0.0);
+    for (uint j = k; j < counts.y + counts.z; j += SUBSETS) {
+        if (j < counts.y) {
+            add_light_terms(d, s, p, n, v, ns, lights[counts.x + j]);
+        } else {
+            add_light_terms(d, s, p, n, v, ns, points[j - counts.y]);
+        }
+    }
+    diffuse += d * float(SUBSETS);
+    specular += s * float(SUBSETS);
+}
+#endif
 #endif

@@ -43,7 +43,7 @@ layout(location = 0) out uvec2 o_ids;
 #elif defined(GBUFFER)
 // `deferred`'s G-buffer, f32 so that the lighting pass shades exactly these inputs.
 layout(location = 0) out vec4 o_position;  // xyz: camera-relative world position; w: 1
-layout(location = 1) out vec4 o_normal;    // xyz: shading normal (facing the camera, bumped)
+layout(location = 1) out vec4 o_normal;    // xyz: shading normal (facing the camera, bumped); w: ns
 layout(location = 2) out vec4 o_albedo;    // rgb: kd x albedo texture (FLAG_DEBUG_LOD: r = LOD)
 layout(location = 3) out vec2 o_velocity;
 layout(location = 4) out uvec2 o_ids;      // the material is objects[x - 1].ids.y
@@ -148,7 +148,7 @@ void main() {
     }
 #ifdef GBUFFER
     o_position = vec4(v_world, 1.0);
-    o_normal = vec4(n, 0.0);
+    o_normal = vec4(n, m.ks.w);
     o_albedo = vec4(albedo, 1.0);
     if ((frame.counts.w & FLAG_DEBUG_LOD) != 0u) {
         o_albedo = vec4(m.tex.x >= 0 ? lod_of(albedo_tex, v_uv) : -100.0, 0.0, 0.0, 1.0);

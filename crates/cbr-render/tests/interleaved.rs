@@ -26,7 +26,8 @@ fn render(gpu: &Gpu, shaders: &cbr_gpu::Shaders, s: &Scene, spec: &str) -> Frame
 }
 
 /// 1x1: one sub-image, every VPL, a window of one pixel: `deferred` within fp16 rounding (and
-/// the same VPLs bit for bit).
+/// the same VPLs bit for bit); with `direct` too (every point light in the one subset, through
+/// the split, the gather, `implicit` and the seed's blur, which at 1x1 has one tap).
 #[test]
 fn one_by_one_is_deferred() {
     let gpu = gpu();
@@ -34,7 +35,13 @@ fn one_by_one_is_deferred() {
     let mut s = cbr_scene::builtin("demo").expect("demo");
     (s.settings.width, s.settings.height) = (96, 54);
     let reference = render(&gpu, &shaders, &s, "deferred:vpls=256");
-    for spec in ["interleaved:1x1:vpls=256", "interleaved:1x1:vpls=256:raw"] {
+    for spec in [
+        "interleaved:1x1:vpls=256",
+        "interleaved:1x1:vpls=256:raw",
+        "interleaved:1x1:vpls=256:direct",
+        "interleaved:1x1:vpls=256:direct:implicit",
+        "interleaved:1x1:vpls=256:direct:seed",
+    ] {
         let got = render(&gpu, &shaders, &s, spec);
         assert!(got.vpls == reference.vpls, "{spec}: other VPLs");
         let diff = compare(spec, &reference, &got);

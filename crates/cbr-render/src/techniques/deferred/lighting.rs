@@ -14,7 +14,7 @@ use super::{DeferredConfig, GBuffer};
 use crate::technique::{BuildCtx, FrameCtx};
 
 /// The lighting pass's set: the one definition of its bindings.
-pub const BINDINGS: [BindingDesc; 14] = {
+pub const BINDINGS: [BindingDesc; 15] = {
     use DescriptorKind::{
         CombinedImageSampler as S, StorageBuffer as B, StorageImage as I, UniformBuffer as U,
     };
@@ -35,6 +35,8 @@ pub const BINDINGS: [BindingDesc; 14] = {
         BindingDesc::one("irradiance", 12, S),
         // `interleaved:...:debug` only: the debug bits (shaders/interleaved/filter.glsl).
         BindingDesc::one("debug_bits", 13, I),
+        // `interleaved:...:direct` only: the point lights' specular estimates.
+        BindingDesc::one("specular", 14, S),
     ]
 };
 
@@ -87,6 +89,8 @@ pub struct Interleaving<'a> {
     /// 2 ours (geometry-aware), 3 seed (the image is already the seed's blur).
     pub filter: u32,
     pub irradiance: &'a Image,
+    /// `direct`: the point lights' specular estimates (the DIRECT define).
+    pub specular: Option<&'a Image>,
     /// `debug`: the R32UI image the pass writes its debug bits to.
     pub debug: Option<&'a Image>,
 }
@@ -138,6 +142,9 @@ impl LightingPass {
             if i.debug.is_some() {
                 defines.push(("DEBUG".into(), "1".into()));
             }
+            if i.specular.is_some() {
+                defines.push(("DIRECT".into(), "1".into()));
+            }
         }
         let cs = ctx.shaders.compile("deferred/lighting.comp", &defines)?;
         let pipeline = Pipeline::compute(
@@ -172,6 +179,8 @@ impl LightingPass {
         // Likewise the debug bits: the frame (a storage image) where there are none.
         let debug = interleaving.and_then(|i| i.debug).unwrap_or(&g.color);
         writes.push(Write::Storage(13, debug));
+        let specular = interleaving.and_then(|i| i.specular).unwrap_or(irradiance);
+        writes.push(Write::Sampled(14, vec![(specular, &sampler)]));
         let set = DescriptorSet::new(gpu, &format!("{name}.set"), &layout, &writes)?;
         Ok(LightingPass {
             pipeline,
@@ -198,6 +207,9 @@ impl LightingPass {
         }
         if let Some(i) = interleaving {
             cmd.use_image(i.irradiance, Access::ComputeSampled);
+            if let Some(s) = i.specular {
+                cmd.use_image(s, Access::ComputeSampled);
+            }
             if let Some(d) = i.debug {
                 cmd.use_image(d, Access::ComputeStorageWrite);
             }

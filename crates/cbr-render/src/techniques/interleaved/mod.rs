@@ -1,5 +1,5 @@
 //! `interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D][:ours|seed|box|none]
-//! [:search=S][:enough=K][:exact-edges[=R]][:implicit][:debug][:floor]`: interleaved many-light
+//! [:search=S][:enough=K][:exact-edges[=R]][:direct][:implicit][:debug][:floor]`: interleaved many-light
 //! shading (Segovia et al. 2006; docs/interleaved.md) on `deferred`'s G-buffer and VPLs.
 //!
 //! Passes per frame, one submission: `interleaved.gbuffer` (deferred's G-buffer pass), the sun's
@@ -10,7 +10,10 @@
 //! `seed` the seed's blur; and `interleaved.lighting`: deferred's lighting pass, whose VPL term
 //! becomes the filter (shaders/interleaved/filter.glsl) times albedo. Each pixel evaluates
 //! N / (M N) VPLs instead of N, plus what `ours` shades for subsets its surface lacks nearby;
-//! `deferred:vpls=N` is the reference.
+//! `deferred:vpls=N` is the reference. With `direct` the point lights (the scene's and
+//! `points=N`) are shaded in subsets as well (light j in subset j mod M N), their diffuse term
+//! filtered with the VPLs' irradiance and their specular term beside it; the lighting pass then
+//! shades the directional lights only.
 
 pub mod split;
 
@@ -29,11 +32,13 @@ use split::SplitPasses;
 pub const REGISTRATION: Registration = Registration {
     name: "interleaved",
     grammar: "interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D]\
-              [:ours|seed|box|none][:search=S][:enough=K][:exact-edges[=R]][:implicit][:debug][:floor]",
+              [:ours|seed|box|none][:search=S][:enough=K][:exact-edges[=R]][:direct][:implicit][:debug]\
+              [:floor]",
     about: "deferred's VPLs, interleaved: the G-buffer split into M x N sub-images, sub-image k \
             shaded with the k-th block of N / (M N) VPLs, gathered back, filtered (ours: \
             geometry-aware, missing subsets shaded at the pixel; seed: the seed's edge-skipping \
-            Gaussian; box; none), times albedo; implicit: no split",
+            Gaussian; box; none), times albedo; direct: the point lights in subsets too; implicit: \
+            no split",
     layers: &["interleaved (debug)"],
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
@@ -112,6 +117,10 @@ pub struct InterleavedConfig {
     /// `floor`: also run a copy kernel moving the split and gather passes' bytes (their
     /// bandwidth floor), timed as `interleaved.copy_floor`.
     pub floor: bool,
+    /// `direct`: the point lights (the scene's and `points=N`) are shaded in subsets too, light
+    /// j by the sub-image of subset j mod M N, times M N; their diffuse term joins the VPLs'
+    /// estimate and their specular term is filtered beside it with the same choices.
+    pub direct: bool,
     pub lights: DeferredConfig,
 }
 
@@ -132,7 +141,7 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
     };
     let (m, n) = tile(first)?;
     let mut filter = None;
-    let (mut implicit, mut debug, mut floor) = (false, false, false);
+    let (mut implicit, mut debug, mut floor, mut direct) = (false, false, false, false);
     let mut exact_edges = 0;
     let mut search = DEFAULT_SEARCH;
     let mut enough = None;
@@ -154,6 +163,10 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
             }
             "floor" => {
                 floor = true;
+                None
+            }
+            "direct" => {
+                direct = true;
                 None
             }
             "exact-edges" => {
@@ -197,7 +210,8 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
                     "interleaved",
                     p,
                     "vpls=N, points=N, rsm=R, reach=D, clamp=D, one filter of none (raw), box, \
-                     ours, seed, and search=0|1, enough=K, exact-edges[=R], implicit, debug, floor",
+                     ours, seed, and search=0|1, enough=K, exact-edges[=R], direct, implicit, debug, \
+                     floor",
                 ));
             }
         };
@@ -250,6 +264,7 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
         enough: enough.unwrap_or(m * n),
         exact_edges,
         floor,
+        direct,
         lights,
     })
 }
@@ -291,7 +306,7 @@ impl Interleaved {
         let lights = ManyLights::new(ctx, &config.lights, "interleaved")?;
         let (raster, gbuffer_pass, g) = deferred::gbuffer(ctx, "interleaved")?;
         let sources = lights.sources();
-        let split = SplitPasses::new(ctx, &g, sources.vpls, &config)?;
+        let split = SplitPasses::new(ctx, &g, &sources, &config)?;
         let debug = if config.debug {
             let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
             let d = ImageDesc::new_2d(
@@ -315,6 +330,7 @@ impl Interleaved {
             exact_edges: config.exact_edges,
             filter: config.filter as u32,
             irradiance: split.output(),
+            specular: split.specular_output(),
             debug: debug.as_ref().map(|d| &d.0),
         };
         let lighting = LightingPass::new(ctx, &g, &sources, Some(&interleaving))?;
@@ -369,6 +385,7 @@ impl Technique for Interleaved {
         let sun = self.lights.prepare(ctx)?;
         let push = LightingPush::new(ctx, &self.config.lights, self.size, sun.as_ref());
         let counter = ctx.counter;
+        let ctx_lights = ctx.gpu_scene.light_count;
         let this = &*self;
         ctx.submit("frame", |cmd, profiler, gs| {
             let g = &this.g;
@@ -383,12 +400,14 @@ impl Technique for Interleaved {
             );
             this.lights.record(cmd, profiler, gs, sun.as_ref());
             let sources = this.lights.sources();
+            let (dirs, scene_points) = ctx_lights;
             this.split.record(
                 cmd,
                 profiler,
                 g,
-                sources.vpls,
+                &sources,
                 this.config.lights.vpls,
+                [dirs, scene_points, this.config.lights.points],
                 push.params[0],
             );
             let interleaving = Interleaving {
@@ -399,6 +418,7 @@ impl Technique for Interleaved {
                 exact_edges: this.config.exact_edges,
                 filter: this.config.filter as u32,
                 irradiance: this.split.output(),
+                specular: this.split.specular_output(),
                 debug: this.debug.as_ref().map(|d| &d.0),
             };
             this.lighting.record(

@@ -19,9 +19,10 @@ use crate::resolve::CopyFloor;
 use crate::targets::GBUFFER_FORMAT;
 use crate::technique::BuildCtx;
 use crate::techniques::deferred::GBuffer;
+use crate::techniques::deferred::lighting::LightSources;
 
 /// The passes' set: the one definition of its bindings.
-pub const BINDINGS: [BindingDesc; 9] = {
+pub const BINDINGS: [BindingDesc; 15] = {
     use DescriptorKind::{CombinedImageSampler as S, StorageBuffer as B, StorageImage as I};
     [
         BindingDesc::one("position", 0, S),
@@ -34,6 +35,14 @@ pub const BINDINGS: [BindingDesc; 9] = {
         // `seed` only: the horizontal blur's output and the vertical's.
         BindingDesc::one("seed_tmp", 7, I),
         BindingDesc::one("seed_out", 8, I),
+        // `direct` only: the scene's lights and the extra point lights, the specular estimates
+        // (the mosaic's, the gathered ones, the seed's blur's two).
+        BindingDesc::one("lights", 9, B),
+        BindingDesc::one("points", 10, B),
+        BindingDesc::one("split_specular", 11, B),
+        BindingDesc::one("specular", 12, I),
+        BindingDesc::one("seed_tmp_specular", 13, I),
+        BindingDesc::one("seed_out_specular", 14, I),
     ]
 };
 
@@ -43,7 +52,8 @@ pub const BINDINGS: [BindingDesc; 9] = {
 pub struct SplitPush {
     /// W, H, Ws, Hs.
     pub size: [i32; 4],
-    /// x: VPLs.
+    /// x: VPLs; with `direct`: y the scene's directional lights, z its point lights, w the
+    /// extra point lights (`points=N`).
     pub counts: [u32; 4],
     /// x: the VPL clamp c (m^2).
     pub params: [f32; 4],
@@ -80,6 +90,15 @@ struct Storage {
     split_irradiance: Option<Buffer>,
     irradiance: Image,
     seed: Option<(Image, Image)>,
+    /// `direct`: the point lights' specular estimates beside the irradiance (split mosaic,
+    /// gathered, the seed's blur's).
+    specular: Option<Specular>,
+}
+
+struct Specular {
+    split: Option<Buffer>,
+    gathered: Image,
+    seed: Option<(Image, Image)>,
 }
 
 pub struct SplitPasses {
@@ -107,14 +126,24 @@ impl SplitPasses {
             for name in ["split_position", "split_normal", "split_irradiance"] {
                 e.storage_buffer(format!("interleaved.{name}"), bytes, false);
             }
+            if config.direct {
+                e.storage_buffer("interleaved.split_specular".to_string(), bytes, false);
+            }
             if config.debug {
                 e.buffer("readback.interleaved_mosaic", bytes, true);
             }
         }
         e.image("interleaved.irradiance", GBUFFER_FORMAT, w, h);
+        if config.direct {
+            e.image("interleaved.specular", GBUFFER_FORMAT, w, h);
+        }
         if config.filter == Filter::Seed {
             e.image("interleaved.seed_tmp", GBUFFER_FORMAT, w, h);
             e.image("interleaved.seed_out", GBUFFER_FORMAT, w, h);
+            if config.direct {
+                e.image("interleaved.seed_tmp_specular", GBUFFER_FORMAT, w, h);
+                e.image("interleaved.seed_out_specular", GBUFFER_FORMAT, w, h);
+            }
         }
         if config.floor {
             CopyFloor::estimate(e, FLOOR, moved_bytes(w, h));
@@ -124,15 +153,19 @@ impl SplitPasses {
     pub fn new(
         ctx: &BuildCtx,
         g: &GBuffer,
-        vpls: &Buffer,
+        sources: &LightSources,
         config: &InterleavedConfig,
     ) -> Result<SplitPasses> {
+        let vpls = sources.vpls;
         let gpu = ctx.gpu;
         let (m, n) = (config.m, config.n);
         let layout = SetLayout::new(gpu, "interleaved.set_layout", &BINDINGS)?;
         let mut defines: Vec<(String, String)> = BINDINGS.iter().map(BindingDesc::define).collect();
         defines.push(("TILE_M".into(), m.to_string()));
         defines.push(("TILE_N".into(), n.to_string()));
+        if config.direct {
+            defines.push(("DIRECT".into(), "1".into()));
+        }
         let pipeline = |name: &str, file: &str, extra: &[&str]| {
             let mut d = defines.clone();
             d.extend(extra.iter().map(|k| (k.to_string(), "1".to_string())));
@@ -207,6 +240,24 @@ impl SplitPasses {
             Some(_) => Some((img("seed_tmp", storage)?, img("seed_out", sampled)?)),
             None => None,
         };
+        let specular = if config.direct {
+            Some(Specular {
+                split: match config.implicit {
+                    true => None,
+                    false => Some(buffer("split_specular", mosaic_bytes, none)?),
+                },
+                gathered: img("specular", sampled)?,
+                seed: match seed {
+                    Some(_) => Some((
+                        img("seed_tmp_specular", storage)?,
+                        img("seed_out_specular", sampled)?,
+                    )),
+                    None => None,
+                },
+            })
+        } else {
+            None
+        };
         let mosaic = match (&split_irradiance, config.debug) {
             (Some(_), true) => Some(Readback::for_buffer(
                 gpu,
@@ -251,6 +302,29 @@ impl SplitPasses {
                 Write::Storage(6, &irradiance),
                 Write::Storage(7, pick(seed_images.as_ref().map(|s| &s.0))),
                 Write::Storage(8, pick(seed_images.as_ref().map(|s| &s.1))),
+                Write::Buffer(9, &ctx.scene.lights),
+                Write::Buffer(10, sources.points),
+                Write::Buffer(
+                    11,
+                    pick_buffer(specular.as_ref().and_then(|s| s.split.as_ref())),
+                ),
+                Write::Storage(12, pick(specular.as_ref().map(|s| &s.gathered))),
+                Write::Storage(
+                    13,
+                    pick(
+                        specular
+                            .as_ref()
+                            .and_then(|s| s.seed.as_ref().map(|s| &s.0)),
+                    ),
+                ),
+                Write::Storage(
+                    14,
+                    pick(
+                        specular
+                            .as_ref()
+                            .and_then(|s| s.seed.as_ref().map(|s| &s.1)),
+                    ),
+                ),
             ],
         )?;
         Ok(SplitPasses {
@@ -267,6 +341,7 @@ impl SplitPasses {
                 split_irradiance,
                 irradiance,
                 seed: seed_images,
+                specular,
             },
             mosaic,
             tile: (m, n),
@@ -281,6 +356,16 @@ impl SplitPasses {
             Some((_, out)) => out,
             None => &self.storage.irradiance,
         }
+    }
+
+    /// `direct`: the full-resolution specular estimates the lighting pass filters (the gathered
+    /// ones, or with `seed` their blur).
+    pub fn specular_output(&self) -> Option<&Image> {
+        let s = self.storage.specular.as_ref()?;
+        Some(match &s.seed {
+            Some((_, out)) => out,
+            None => &s.gathered,
+        })
     }
 
     /// The split mosaic's side (M Ws x N Hs).
@@ -302,24 +387,32 @@ impl SplitPasses {
             0
         };
         let seeds = if self.storage.seed.is_some() { 2 } else { 0 };
-        (splits * split + (1 + seeds) * full) * 16
+        // `direct`: the specular estimates double the estimates (mosaic, gathered, blurred).
+        let (estimates, splits_spec) = match &self.storage.specular {
+            Some(s) => (2, u64::from(s.split.is_some())),
+            None => (1, 0),
+        };
+        ((splits + splits_spec) * split + estimates * (1 + seeds) * full) * 16
     }
 
-    /// Split, shade (with `count` VPLs, clamp `clamp_d2`) and gather, or the implicit pass; then
-    /// the seed's blur, and the copy floor.
+    /// Split, shade (with `count` VPLs, clamp `clamp_d2`; with `direct`, the point lights of
+    /// `lights`: directional lights, the scene's point lights, extra ones) and gather, or the
+    /// implicit pass; then the seed's blur, and the copy floor.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         cmd: &mut Cmd,
         profiler: &mut Profiler,
         g: &GBuffer,
-        vpls: &Buffer,
+        sources: &LightSources,
         count: u32,
+        lights: [u32; 3],
         clamp_d2: f32,
     ) {
+        let vpls = sources.vpls;
         let push = SplitPush {
             size: self.size,
-            counts: [count, 0, 0, 0],
+            counts: [count, lights[0], lights[1], lights[2]],
             params: [clamp_d2, 0.0, 0.0, 0.0],
         };
         let (sw, sh) = self.mosaic_size();
@@ -333,11 +426,18 @@ impl SplitPasses {
             (self.size[1] as u32).div_ceil(8),
         );
         let im = &self.storage;
+        let spec = im.specular.as_ref();
         cmd.use_image(&g.position, Access::ComputeSampled);
         cmd.use_image(&g.normal, Access::ComputeSampled);
         cmd.use_buffer(vpls, Access::ComputeSampled);
+        if spec.is_some() {
+            cmd.use_buffer(sources.points, Access::ComputeSampled);
+        }
         if let Some(implicit) = &self.implicit {
             cmd.use_image(&im.irradiance, Access::ComputeStorageWrite);
+            if let Some(s) = spec {
+                cmd.use_image(&s.gathered, Access::ComputeStorageWrite);
+            }
             self.dispatch(cmd, profiler, implicit, "interleaved.implicit", &push, full);
         }
         if let (Some((split, shade, gather)), Some(sp), Some(sn), Some(si)) = (
@@ -361,6 +461,9 @@ impl SplitPasses {
             cmd.use_buffer(sp, Access::ComputeStorageReadWrite);
             cmd.use_buffer(sn, Access::ComputeStorageReadWrite);
             cmd.use_buffer(si, Access::ComputeStorageWrite);
+            if let Some(b) = spec.and_then(|s| s.split.as_ref()) {
+                cmd.use_buffer(b, Access::ComputeStorageWrite);
+            }
             self.dispatch(
                 cmd,
                 profiler,
@@ -372,14 +475,29 @@ impl SplitPasses {
             // Gather: sub-images -> pixels.
             cmd.use_buffer(si, Access::ComputeStorageReadWrite);
             cmd.use_image(&im.irradiance, Access::ComputeStorageWrite);
+            if let Some(s) = spec {
+                if let Some(b) = &s.split {
+                    cmd.use_buffer(b, Access::ComputeStorageReadWrite);
+                }
+                cmd.use_image(&s.gathered, Access::ComputeStorageWrite);
+            }
             self.dispatch(cmd, profiler, gather, "interleaved.gather", &push, rows);
         }
         if let (Some((h, v)), Some((tmp, out))) = (&self.seed, &im.seed) {
+            let spec_seed = spec.and_then(|s| s.seed.as_ref().map(|t| (&s.gathered, t)));
             cmd.use_image(&im.irradiance, Access::ComputeStorageReadWrite);
             cmd.use_image(tmp, Access::ComputeStorageWrite);
+            if let Some((gathered, (stmp, _))) = spec_seed {
+                cmd.use_image(gathered, Access::ComputeStorageReadWrite);
+                cmd.use_image(stmp, Access::ComputeStorageWrite);
+            }
             self.dispatch(cmd, profiler, h, "interleaved.seed_blur_h", &push, full);
             cmd.use_image(tmp, Access::ComputeStorageReadWrite);
             cmd.use_image(out, Access::ComputeStorageWrite);
+            if let Some((_, (stmp, sout))) = spec_seed {
+                cmd.use_image(stmp, Access::ComputeStorageReadWrite);
+                cmd.use_image(sout, Access::ComputeStorageWrite);
+            }
             self.dispatch(cmd, profiler, v, "interleaved.seed_blur_v", &push, full);
         }
         if let Some(floor) = &self.floor {
