@@ -6,7 +6,9 @@ that deal with the VPLs: the reference's lighting pass less `deferred`'s lightin
 run, i.e. the VPL sum; interleaved's split, shade, gather or implicit, the seed's blur, and its
 lighting pass less `deferred`'s), both as ratios to the reference's, FLIP (mean, edge pixels,
 interior pixels and their ratio) and PSNR against the reference; then, for rows run with `floor`,
-the split and gather passes against their copy kernel. Every number comes from the one run named
+the split and gather passes against their copy kernel. Rows with `direct` have no VPL work
+figure (their lighting pass no longer shades the point lights, which `deferred`'s does, so the
+difference would not be the VPLs' work). Every number comes from the one run named
 in its heading: ratios are taken within a run, never across runs.
 """
 import json
@@ -63,7 +65,8 @@ def table(path):
     for cfg, r in rows.items():
         e = r.get("error") or {}
         frame = r["frame_ms"]["median"]
-        vw = vpl_work(r, base_light) if cfg.startswith(("interleaved", "deferred:")) else None
+        many = cfg.startswith(("interleaved", "deferred:")) and ":direct" not in cfg
+        vw = vpl_work(r, base_light) if many else None
         ratio = ref_frame / frame if ref_frame and cfg != ref else None
         vratio = ref_vpl / vw if (ref_vpl and vw and cfg != ref) else None
         edge, interior = e.get("flip_edge_mean"), e.get("flip_interior_mean")

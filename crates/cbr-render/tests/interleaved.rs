@@ -15,8 +15,9 @@ use cbr_gpu::Gpu;
 use cbr_render::gpu_types::Vpl;
 use cbr_render::{FrameOutput, RenderSettings, Renderer, Spec};
 use cbr_scene::Scene;
-use common::lighting::{compare, direct, floor_and_wall, fp16_step, irradiance, surface};
+use common::lighting::{SUN, compare, direct, floor_and_wall, fp16_step, irradiance, surface};
 use common::{assert_clean, gpu};
+use glam::DVec3;
 
 fn render(gpu: &Gpu, shaders: &cbr_gpu::Shaders, s: &Scene, spec: &str) -> FrameOutput {
     let (w, h) = (s.settings.width, s.settings.height);
@@ -437,6 +438,165 @@ fn the_filters_match_their_cpu_model() {
     assert_clean(&gpu);
 }
 
+/// The point lights of `direct_scene`: world position and red irradiance at 1 m.
+const POINTS: [([f64; 3], f32); 7] = [
+    ([0.5, 0.6, -1.0], 1.0),
+    ([2.0, 0.4, 1.0], 0.8),
+    ([-0.5, 1.5, 0.5], 1.2),
+    ([1.0, 1.0, 0.0], 0.6),
+    ([0.0, 0.3, 1.5], 0.9),
+    ([2.5, 1.2, -1.5], 1.5),
+    ([-0.7, 0.5, -0.5], 0.7),
+];
+/// The specular colour (red) and exponent of the wall (object 1) and the floor (object 2).
+const SPECULAR: [(f32, f32); 2] = [(0.3, 8.0), (0.5, 20.0)];
+
+/// The floor and wall with the point lights of POINTS (no range window) and specular materials.
+fn direct_scene(w: u32, h: u32) -> Scene {
+    let mut s = floor_and_wall(true, w, h);
+    for (material, (ks, ns)) in [(1, SPECULAR[0]), (0, SPECULAR[1])] {
+        s.materials[material].ks = [ks; 3];
+        s.materials[material].ns = ns;
+    }
+    s.points = POINTS
+        .iter()
+        .map(|&(position, red)| cbr_scene::PointLight {
+            position,
+            color: [red, 0.5, 0.25],
+            intensity: 1.0,
+            range: 0.0,
+        })
+        .collect();
+    s
+}
+
+/// The diffuse n.l E and specular (n.h)^ns n.l E terms (red) at camera-relative p, normal n, of
+/// the point lights of subset k of `subsets` (light j in subset j mod subsets), times `subsets`,
+/// in f64 (shading.glsl's add_light_terms).
+fn direct_terms(s: &Scene, p: DVec3, n: DVec3, ns: f64, k: usize, subsets: usize) -> (f64, f64) {
+    let camera = DVec3::from(s.camera.at(0.0).position);
+    let v = (-p).normalize();
+    let (mut diffuse, mut specular) = (0.0, 0.0);
+    for (position, red) in POINTS.iter().skip(k).step_by(subsets) {
+        let d = DVec3::from(*position) - camera - p;
+        let dist2 = d.length_squared().max(1e-8);
+        let l = d / dist2.sqrt();
+        let e = f64::from(*red) / dist2;
+        let ndl = n.dot(l);
+        if ndl <= 0.0 {
+            continue;
+        }
+        let h = (l + v).normalize();
+        diffuse += ndl * e;
+        specular += n.dot(h).max(0.0).powf(ns) * ndl * e;
+    }
+    (diffuse * subsets as f64, specular * subsets as f64)
+}
+
+/// `direct` against the f64 model on the floor and wall with 7 point lights and specular
+/// materials (at 4x4, 3x2): the sub-images shade point-light subset k with VPL subset k; the
+/// diffuse term filtered with the VPLs' irradiance and the specular term beside it, by the same
+/// choices (`none`, `box`, `ours`, `exact-edges`, `seed`, and `implicit`): each pixel is
+/// the sun + albedo x filtered (VPL + point diffuse) + ks x filtered specular, within 1.05 fp16
+/// steps, and `ours`' fallback counts are the model's exactly.
+#[test]
+fn direct_matches_its_cpu_model() {
+    let gpu = gpu();
+    let shaders = cbr_render::shader_library();
+    let (w, h) = (64i64, 48i64);
+    let s = direct_scene(w as u32, h as u32);
+    let clamp_d2 = f64::from(CLAMP * CLAMP);
+    for (m, n) in [(4i64, 4i64), (3, 2)] {
+        let subsets = (m * n) as usize;
+        let ours = |exact_edges| Mode::Ours {
+            search: false,
+            enough: subsets,
+            exact_edges,
+        };
+        for (mode, param) in [
+            (Mode::None, "none"),
+            (Mode::Box, "box"),
+            (ours(0), "ours"),
+            (ours(0), "ours:implicit"),
+            (ours(1), "exact-edges"),
+            (Mode::Seed, "seed"),
+        ] {
+            let spec =
+                format!("interleaved:{m}x{n}:vpls=96:rsm=64:clamp={CLAMP}:{param}:direct:debug");
+            let out = render(&gpu, &shaders, &s, &spec);
+            let vpls = out.vpls.clone().expect("VPLs");
+            let layers = out.interleaved.clone().expect("debug layers");
+            let id = |(x, y): Px| out.ids[(y * w + x) as usize][0];
+            let surf = |q: Px| surface(&s, id(q), q.0 as u32, q.1 as u32);
+            let ns = |q: Px| f64::from(SPECULAR[id(q) as usize - 1].1);
+            let drawn = |q: Px| id(q) != 0;
+            let same = |p: Px, q: Px| id(p) == id(q);
+            let gpu_edge = |(x, y): Px| layers.edge[(y * w + x) as usize] != 0;
+            // Subset k's terms at drawn pixel q: (VPLs + point diffuse, point specular).
+            let terms = |q: Px, k: usize| {
+                let (pq, nq, _) = surf(q).expect("drawn");
+                let vpl = subsets as f64 * irradiance(pq, nq, subset(&vpls, k, subsets), clamp_d2);
+                let (d, sp) = direct_terms(&s, pq, nq, ns(q), k, subsets);
+                (vpl + d, sp)
+            };
+            let own = |q: Px| match drawn(q) {
+                true => terms(q, subset_of(q.0, q.1, m, n)),
+                false => (0.0, 0.0),
+            };
+            let diffuse = |q: Px| own(q).0;
+            let specular = |q: Px| own(q).1;
+            let diffuse_at_p = |p: Px, k: usize| terms(p, k).0;
+            let specular_at_p = |p: Px, k: usize| terms(p, k).1;
+            let diffuse_frame = Frame {
+                w,
+                h,
+                m,
+                n,
+                drawn: &drawn,
+                same: &same,
+                edge: &gpu_edge,
+                estimate: &diffuse,
+                at_p: &diffuse_at_p,
+            };
+            let specular_frame = Frame {
+                estimate: &specular,
+                at_p: &specular_at_p,
+                ..diffuse_frame
+            };
+            let worst = check(&s, &out, |x, y| {
+                let p = (i64::from(x), i64::from(y));
+                let (pp, normal, albedo) = surf(p)?;
+                let (e, fallback) = diffuse_frame.filter(mode, p);
+                let (sp, _) = specular_frame.filter(mode, p);
+                // The sun (straight down) is shaded in full at the pixel, specular term included.
+                let sun = {
+                    let (l, v) = (DVec3::Y, (-pp).normalize());
+                    let ndl = normal.dot(l).max(0.0);
+                    normal.dot((l + v).normalize()).max(0.0).powf(ns(p)) * ndl * f64::from(SUN)
+                };
+                if matches!(mode, Mode::Ours { .. }) {
+                    assert_eq!(
+                        fallback_of(&out, p.0, p.1),
+                        fallback,
+                        "{spec}: subsets shaded at ({x}, {y})"
+                    );
+                }
+                let ks = f64::from(SPECULAR[id(p) as usize - 1].0);
+                Some(direct(normal, albedo) + albedo * e + ks * (sp + sun))
+            });
+            // The specular term matters: pixels where it is above 1e-3.
+            let lit = (0..h)
+                .flat_map(|y| (0..w).map(move |x| (x, y)))
+                .filter(|&q| drawn(q) && specular_frame.filter(mode, q).0 > 1e-3)
+                .count();
+            // (`none` at 4x4: 7 of the 16 subsets hold a light.)
+            assert!(lit > 400, "{spec}: {lit} pixels with a specular term");
+            println!("{spec}: worst {worst:.3} fp16 steps from the f64 model");
+        }
+    }
+    assert_clean(&gpu);
+}
+
 /// The filters' model on a constant image is the identity, whatever the geometry: every pixel's
 /// estimate and every subset shaded anywhere equal to c, on a frame of random objects (with
 /// background pixels, which `box` counts as an estimate, and `seed` skips), random seed edges,
@@ -590,7 +750,11 @@ fn implicit_equals_the_split() {
     let shaders = cbr_render::shader_library();
     let mut s = cbr_scene::builtin("demo").expect("demo");
     (s.settings.width, s.settings.height) = (96, 54);
-    for base in ["interleaved:4x4:vpls=256", "interleaved:3x2:vpls=96:none"] {
+    for base in [
+        "interleaved:4x4:vpls=256",
+        "interleaved:3x2:vpls=96:none",
+        "interleaved:4x4:vpls=256:direct",
+    ] {
         let split = render(&gpu, &shaders, &s, base);
         let implicit = render(&gpu, &shaders, &s, &format!("{base}:implicit"));
         let diff = compare(base, &split, &implicit);
