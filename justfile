@@ -67,14 +67,15 @@ bench-analytic: setup
 
 # Interleaved many-light shading (docs/interleaved.md): every VPL at every pixel
 # (deferred:vpls=1024, the reference; ~3 s a frame at 1280x720 on lavapipe, cached in out/cache)
-# against interleaved:4x4 with each filter, implicit, and the split+gather copy floor, on the demo
+# against interleaved:4x4 with each filter, implicit, exact-edges, direct (the point lights
+# interleaved too) with four filters, and the split+gather copy floor, on the demo
 # and Sibenik at 1280x720 (1 warm-up + 2 frames); then the sweep over M x N (2x2, 4x4, 8x8) and
 # the VPL count (256, 1024, 4096) on the demo at 320x180 against deferred:vpls=4096, with its
 # report (the speed-vs-error chart). The tables: scripts/interleaved-table.py.
 bench-interleaved: setup
     for s in builtin:demo scenes/sibenik.toml; do \
         n=$(basename "$s" .toml | sed 's/builtin://'); \
-        CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench "$s" --width 1280 --height 720 --warmup 1 --frames 2 --reference deferred:vpls=1024 --techniques deferred,interleaved:4x4:floor,interleaved:4x4:implicit,interleaved:4x4:seed,interleaved:4x4:box,interleaved:4x4:none,interleaved:4x4:enough=8,interleaved:4x4:exact-edges,interleaved:4x4:exact-edges=2 -o {{out}}/bench/interleaved/$n || exit 1; \
+        CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench "$s" --width 1280 --height 720 --warmup 1 --frames 2 --reference deferred:vpls=1024 --techniques deferred,interleaved:4x4:floor,interleaved:4x4:implicit,interleaved:4x4:seed,interleaved:4x4:box,interleaved:4x4:none,interleaved:4x4:enough=8,interleaved:4x4:exact-edges,interleaved:4x4:exact-edges=2,interleaved:4x4:direct,interleaved:4x4:direct:seed,interleaved:4x4:direct:box,interleaved:4x4:direct:none,interleaved:4x4:direct:enough=8 -o {{out}}/bench/interleaved/$n || exit 1; \
     done
     CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench builtin:demo --width 320 --height 180 --warmup 1 --frames 2 --reference deferred:vpls=4096 --techniques deferred:vpls=256,deferred:vpls=1024,interleaved:2x2:vpls=256,interleaved:4x4:vpls=256,interleaved:8x8:vpls=256,interleaved:2x2:vpls=1024,interleaved:4x4:vpls=1024,interleaved:8x8:vpls=1024,interleaved:2x2:vpls=4096,interleaved:4x4:vpls=4096,interleaved:8x8:vpls=4096,interleaved:4x4:vpls=1024:seed,interleaved:4x4:vpls=1024:box -o {{out}}/bench/interleaved/sweep
     ./target/release/cbr report {{out}}/bench/interleaved/sweep -o {{out}}/bench/interleaved/sweep/report.html

@@ -47,6 +47,8 @@ const SPECS: &[&str] = &[
     "interleaved:2x3:vpls=48:points=4:rsm=64:box",
     "interleaved:4x4:vpls=64:rsm=128:seed:debug:floor",
     "interleaved:3x2:vpls=48:rsm=64:implicit:debug",
+    "interleaved:4x4:vpls=64:points=4:rsm=128:seed:direct:debug",
+    "interleaved:3x2:vpls=48:rsm=64:implicit:direct",
     "native+taa",
     "native+fxaa+sharpen",
     "checkerboard:rotated:ours+taa",
