@@ -474,7 +474,7 @@ fn direct_scene(w: u32, h: u32) -> Scene {
 /// the point lights of subset k of `subsets` (light j in subset j mod subsets), times `subsets`,
 /// in f64 (shading.glsl's add_light_terms).
 fn direct_terms(s: &Scene, p: DVec3, n: DVec3, ns: f64, k: usize, subsets: usize) -> (f64, f64) {
-    let camera = DVec3::from(s.camera.at(0.0).position);
+    let camera = s.camera.at(0.0).position;
     let v = (-p).normalize();
     let (mut diffuse, mut specular) = (0.0, 0.0);
     for (position, red) in POINTS.iter().skip(k).step_by(subsets) {
