@@ -29,31 +29,40 @@ vec3 incident(vec3 p, LightData light, out vec3 l) {
     return irradiance;
 }
 
+// The factors of `light`'s term at p (normal n, unit direction v to the camera, specular exponent
+// ns <= 0: none): false where it does not reach the surface's front (n.l <= 0); else n.l, the
+// Blinn-Phong (n.h)^ns and the irradiance E facing it.
+bool light_factors(vec3 p, vec3 n, vec3 v, float ns, LightData light, out float ndl,
+                   out float spec, out vec3 irradiance) {
+    vec3 l;
+    irradiance = incident(p, light, l);
+    ndl = dot(n, l);
+    spec = 0.0;
+    if (ndl <= 0.0) return false;
+    vec3 h = normalize(l + v);
+    spec = ns > 0.0 ? pow(max(dot(n, h), 0.0), ns) : 0.0;
+    return true;
+}
+
 // Adds what `light` reflects towards the camera (unit direction v from p) to `radiance`: Lambert
 // without 1/pi (a white surface facing a light of irradiance E returns E) plus Blinn-Phong
 // specular (n.h)^ns, unnormalised, both masked by n.l > 0.
 void add_light(inout vec3 radiance, vec3 p, vec3 n, vec3 v, vec3 albedo, MaterialData m,
                LightData light) {
-    vec3 l;
-    vec3 irradiance = incident(p, light, l);
-    float ndl = dot(n, l);
-    if (ndl <= 0.0) return;
-    vec3 h = normalize(l + v);
-    float spec = m.ks.w > 0.0 ? pow(max(dot(n, h), 0.0), m.ks.w) : 0.0;
+    float ndl, spec;
+    vec3 irradiance;
+    if (!light_factors(p, n, v, m.ks.w, light, ndl, spec, irradiance)) return;
     radiance += (albedo * ndl + m.ks.rgb * spec * ndl) * irradiance;
 }
 
 // add_light's two terms before the material's colours (`interleaved:...:direct`, which filters
-// them apart): adds n.l E to `diffuse` and (n.h)^ns n.l E to `specular` (ns <= 0: none), so that
+// them apart): adds n.l E to `diffuse` and (n.h)^ns n.l E to `specular`, so that
 // albedo diffuse + ks specular is add_light's radiance.
 void add_light_terms(inout vec3 diffuse, inout vec3 specular, vec3 p, vec3 n, vec3 v, float ns,
                      LightData light) {
-    vec3 l;
-    vec3 irradiance = incident(p, light, l);
-    float ndl = dot(n, l);
-    if (ndl <= 0.0) return;
-    vec3 h = normalize(l + v);
-    float spec = ns > 0.0 ? pow(max(dot(n, h), 0.0), ns) : 0.0;
+    float ndl, spec;
+    vec3 irradiance;
+    if (!light_factors(p, n, v, ns, light, ndl, spec, irradiance)) return;
     diffuse += ndl * irradiance;
     specular += spec * ndl * irradiance;
 }
