@@ -322,17 +322,7 @@ impl Interleaved {
         } else {
             None
         };
-        let interleaving = Interleaving {
-            m: config.m,
-            n: config.n,
-            search: config.search,
-            enough: config.enough,
-            exact_edges: config.exact_edges,
-            filter: config.filter as u32,
-            irradiance: split.output(),
-            specular: split.specular_output(),
-            debug: debug.as_ref().map(|d| &d.0),
-        };
+        let interleaving = interleaving(&config, &split, debug.as_ref());
         let lighting = LightingPass::new(ctx, &g, &sources, Some(&interleaving))?;
         let readbacks = LayerReadbacks::new(ctx.gpu, g.layers())?;
         Ok(Interleaved {
@@ -374,6 +364,25 @@ impl Interleaved {
     }
 }
 
+/// The lighting pass's view of `config`'s filter over `split`'s estimates.
+fn interleaving<'a>(
+    config: &InterleavedConfig,
+    split: &'a SplitPasses,
+    debug: Option<&'a (Image, Readback)>,
+) -> Interleaving<'a> {
+    Interleaving {
+        m: config.m,
+        n: config.n,
+        search: config.search,
+        enough: config.enough,
+        exact_edges: config.exact_edges,
+        filter: config.filter as u32,
+        irradiance: split.output(),
+        specular: split.specular_output(),
+        debug: debug.map(|d| &d.0),
+    }
+}
+
 /// filter.glsl's debug bits: bits 0-5 the subset, 6 edge, 8-14 fallback subsets, 16 round trip.
 const DBG_EDGE: u32 = 1 << 6;
 const DBG_ROUNDTRIP: u32 = 1 << 16;
@@ -385,7 +394,9 @@ impl Technique for Interleaved {
         let sun = self.lights.prepare(ctx)?;
         let push = LightingPush::new(ctx, &self.config.lights, self.size, sun.as_ref());
         let counter = ctx.counter;
-        let ctx_lights = ctx.gpu_scene.light_count;
+        // `direct`'s lights: directional, the scene's point lights, `points=N`'s.
+        let (dirs, scene_points) = ctx.gpu_scene.light_count;
+        let lights = [dirs, scene_points, self.config.lights.points];
         let this = &*self;
         ctx.submit("frame", |cmd, profiler, gs| {
             let g = &this.g;
@@ -400,27 +411,16 @@ impl Technique for Interleaved {
             );
             this.lights.record(cmd, profiler, gs, sun.as_ref());
             let sources = this.lights.sources();
-            let (dirs, scene_points) = ctx_lights;
             this.split.record(
                 cmd,
                 profiler,
                 g,
                 &sources,
                 this.config.lights.vpls,
-                [dirs, scene_points, this.config.lights.points],
+                lights,
                 push.params[0],
             );
-            let interleaving = Interleaving {
-                m: this.config.m,
-                n: this.config.n,
-                search: this.config.search,
-                enough: this.config.enough,
-                exact_edges: this.config.exact_edges,
-                filter: this.config.filter as u32,
-                irradiance: this.split.output(),
-                specular: this.split.specular_output(),
-                debug: this.debug.as_ref().map(|d| &d.0),
-            };
+            let interleaving = interleaving(&this.config, &this.split, this.debug.as_ref());
             this.lighting.record(
                 cmd,
                 profiler,

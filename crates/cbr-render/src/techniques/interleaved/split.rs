@@ -87,18 +87,27 @@ const FLOOR: &str = "interleaved.copy_floor";
 struct Storage {
     split_position: Option<Buffer>,
     split_normal: Option<Buffer>,
-    split_irradiance: Option<Buffer>,
-    irradiance: Image,
-    seed: Option<(Image, Image)>,
-    /// `direct`: the point lights' specular estimates beside the irradiance (split mosaic,
-    /// gathered, the seed's blur's).
-    specular: Option<Specular>,
+    irradiance: Estimate,
+    /// `direct`: the point lights' specular estimates beside the irradiance.
+    specular: Option<Estimate>,
 }
 
-struct Specular {
+/// One estimate through the passes: the shade pass's split mosaic (absent with `implicit`), the
+/// gathered full-resolution image, and with `seed` its blur's two images (horizontal, vertical).
+struct Estimate {
     split: Option<Buffer>,
     gathered: Image,
     seed: Option<(Image, Image)>,
+}
+
+impl Estimate {
+    /// What the lighting pass filters: the gathered image, or with `seed` its blur.
+    fn output(&self) -> &Image {
+        match &self.seed {
+            Some((_, out)) => out,
+            None => &self.gathered,
+        }
+    }
 }
 
 pub struct SplitPasses {
@@ -220,45 +229,39 @@ impl SplitPasses {
             Buffer::new(gpu, &name, bytes, usage, Location::GpuOnly)
         };
         let none = vk::BufferUsageFlags::empty();
-        let (split_position, split_normal, split_irradiance) = if config.implicit {
-            (None, None, None)
-        } else {
-            (
-                Some(buffer("split_position", mosaic_bytes, none)?),
-                Some(buffer("split_normal", mosaic_bytes, none)?),
-                Some(buffer("split_irradiance", mosaic_bytes, read_back)?),
-            )
+        let split_buffer = |name: &str, usage| match config.implicit {
+            true => Ok(None),
+            false => buffer(name, mosaic_bytes, usage).map(Some),
         };
+        let split_position = split_buffer("split_position", none)?;
+        let split_normal = split_buffer("split_normal", none)?;
         let img = |name: &str, usage| {
             let name = format!("interleaved.{name}");
             Image::new(gpu, &ImageDesc::new_2d(&name, GBUFFER_FORMAT, w, h, usage))
         };
         let storage = vk::ImageUsageFlags::STORAGE;
         let sampled = storage | vk::ImageUsageFlags::SAMPLED;
-        let irradiance = img("irradiance", sampled)?;
-        let seed_images = match seed {
-            Some(_) => Some((img("seed_tmp", storage)?, img("seed_out", sampled)?)),
-            None => None,
-        };
-        let specular = if config.direct {
-            Some(Specular {
-                split: match config.implicit {
-                    true => None,
-                    false => Some(buffer("split_specular", mosaic_bytes, none)?),
-                },
-                gathered: img("specular", sampled)?,
+        // An estimate's buffer and images: `split_NAME`, `NAME`, and `seed_tmp`, `seed_out` with
+        // `suffix` (none for the irradiance, `_specular` for `direct`'s).
+        let estimate = |name: &str, suffix: &str, usage| -> Result<Estimate> {
+            Ok(Estimate {
+                split: split_buffer(&format!("split_{name}"), usage)?,
+                gathered: img(name, sampled)?,
                 seed: match seed {
                     Some(_) => Some((
-                        img("seed_tmp_specular", storage)?,
-                        img("seed_out_specular", sampled)?,
+                        img(&format!("seed_tmp{suffix}"), storage)?,
+                        img(&format!("seed_out{suffix}"), sampled)?,
                     )),
                     None => None,
                 },
             })
-        } else {
-            None
         };
-        let mosaic = match (&split_irradiance, config.debug) {
+        let irradiance = estimate("irradiance", "", read_back)?;
+        let specular = match config.direct {
+            true => Some(estimate("specular", "_specular", none)?),
+            false => None,
+        };
+        let mosaic = match (&irradiance.split, config.debug) {
             (Some(_), true) => Some(Readback::for_buffer(
                 gpu,
                 "readback.interleaved_mosaic",
@@ -286,7 +289,13 @@ impl SplitPasses {
         fn or_else<'a, T>(r: Option<&'a T>, fallback: &'a T) -> &'a T {
             r.unwrap_or(fallback)
         }
-        let pick = |i| or_else(i, &irradiance);
+        let pick = |i| or_else(i, &irradiance.gathered);
+        // An estimate's seed blur image i (0 horizontal, 1 vertical), or the fallback.
+        fn seed_of<'a>(e: Option<&'a Estimate>, i: usize, fallback: &'a Image) -> &'a Image {
+            e.and_then(|e| e.seed.as_ref())
+                .map_or(fallback, |(h, v)| if i == 0 { h } else { v })
+        }
+        let specular_ref = specular.as_ref();
         let pick_buffer = |b| or_else(b, vpls);
         let set = DescriptorSet::new(
             gpu,
@@ -298,33 +307,16 @@ impl SplitPasses {
                 Write::Buffer(2, vpls),
                 Write::Buffer(3, pick_buffer(split_position.as_ref())),
                 Write::Buffer(4, pick_buffer(split_normal.as_ref())),
-                Write::Buffer(5, pick_buffer(split_irradiance.as_ref())),
-                Write::Storage(6, &irradiance),
-                Write::Storage(7, pick(seed_images.as_ref().map(|s| &s.0))),
-                Write::Storage(8, pick(seed_images.as_ref().map(|s| &s.1))),
+                Write::Buffer(5, pick_buffer(irradiance.split.as_ref())),
+                Write::Storage(6, &irradiance.gathered),
+                Write::Storage(7, seed_of(Some(&irradiance), 0, &irradiance.gathered)),
+                Write::Storage(8, seed_of(Some(&irradiance), 1, &irradiance.gathered)),
                 Write::Buffer(9, &ctx.scene.lights),
                 Write::Buffer(10, sources.points),
-                Write::Buffer(
-                    11,
-                    pick_buffer(specular.as_ref().and_then(|s| s.split.as_ref())),
-                ),
-                Write::Storage(12, pick(specular.as_ref().map(|s| &s.gathered))),
-                Write::Storage(
-                    13,
-                    pick(
-                        specular
-                            .as_ref()
-                            .and_then(|s| s.seed.as_ref().map(|s| &s.0)),
-                    ),
-                ),
-                Write::Storage(
-                    14,
-                    pick(
-                        specular
-                            .as_ref()
-                            .and_then(|s| s.seed.as_ref().map(|s| &s.1)),
-                    ),
-                ),
+                Write::Buffer(11, pick_buffer(specular_ref.and_then(|s| s.split.as_ref()))),
+                Write::Storage(12, pick(specular_ref.map(|s| &s.gathered))),
+                Write::Storage(13, seed_of(specular_ref, 0, &irradiance.gathered)),
+                Write::Storage(14, seed_of(specular_ref, 1, &irradiance.gathered)),
             ],
         )?;
         Ok(SplitPasses {
@@ -338,9 +330,7 @@ impl SplitPasses {
             storage: Storage {
                 split_position,
                 split_normal,
-                split_irradiance,
                 irradiance,
-                seed: seed_images,
                 specular,
             },
             mosaic,
@@ -352,20 +342,18 @@ impl SplitPasses {
     /// The full-resolution estimates the lighting pass filters: the gathered ones, or with `seed`
     /// their blur.
     pub fn output(&self) -> &Image {
-        match &self.storage.seed {
-            Some((_, out)) => out,
-            None => &self.storage.irradiance,
-        }
+        self.storage.irradiance.output()
     }
 
     /// `direct`: the full-resolution specular estimates the lighting pass filters (the gathered
     /// ones, or with `seed` their blur).
     pub fn specular_output(&self) -> Option<&Image> {
-        let s = self.storage.specular.as_ref()?;
-        Some(match &s.seed {
-            Some((_, out)) => out,
-            None => &s.gathered,
-        })
+        self.storage.specular.as_ref().map(Estimate::output)
+    }
+
+    /// The estimates: the irradiance, and with `direct` the specular.
+    fn estimates(&self) -> impl Iterator<Item = &Estimate> {
+        std::iter::once(&self.storage.irradiance).chain(&self.storage.specular)
     }
 
     /// The split mosaic's side (M Ws x N Hs).
@@ -381,18 +369,14 @@ impl SplitPasses {
         let (sw, sh) = self.mosaic_size();
         let split = u64::from(sw) * u64::from(sh);
         let full = self.size[0] as u64 * self.size[1] as u64;
-        let splits = if self.storage.split_position.is_some() {
-            3
-        } else {
-            0
-        };
-        let seeds = if self.storage.seed.is_some() { 2 } else { 0 };
-        // `direct`: the specular estimates double the estimates (mosaic, gathered, blurred).
-        let (estimates, splits_spec) = match &self.storage.specular {
-            Some(s) => (2, u64::from(s.split.is_some())),
-            None => (1, 0),
-        };
-        ((splits + splits_spec) * split + estimates * (1 + seeds) * full) * 16
+        // Position and normal, then each estimate's mosaic, gathered image and blur images.
+        let mut splits = 2 * u64::from(self.storage.split_position.is_some());
+        let mut fulls = 0;
+        for e in self.estimates() {
+            splits += u64::from(e.split.is_some());
+            fulls += 1 + 2 * u64::from(e.seed.is_some());
+        }
+        (splits * split + fulls * full) * 16
     }
 
     /// Split, shade (with `count` VPLs, clamp `clamp_d2`; with `direct`, the point lights of
@@ -426,26 +410,21 @@ impl SplitPasses {
             (self.size[1] as u32).div_ceil(8),
         );
         let im = &self.storage;
-        let spec = im.specular.as_ref();
         cmd.use_image(&g.position, Access::ComputeSampled);
         cmd.use_image(&g.normal, Access::ComputeSampled);
         cmd.use_buffer(vpls, Access::ComputeSampled);
-        if spec.is_some() {
+        if im.specular.is_some() {
             cmd.use_buffer(sources.points, Access::ComputeSampled);
         }
         if let Some(implicit) = &self.implicit {
-            cmd.use_image(&im.irradiance, Access::ComputeStorageWrite);
-            if let Some(s) = spec {
-                cmd.use_image(&s.gathered, Access::ComputeStorageWrite);
+            for e in self.estimates() {
+                cmd.use_image(&e.gathered, Access::ComputeStorageWrite);
             }
             self.dispatch(cmd, profiler, implicit, "interleaved.implicit", &push, full);
         }
-        if let (Some((split, shade, gather)), Some(sp), Some(sn), Some(si)) = (
-            &self.split,
-            &im.split_position,
-            &im.split_normal,
-            &im.split_irradiance,
-        ) {
+        if let (Some((split, shade, gather)), Some(sp), Some(sn)) =
+            (&self.split, &im.split_position, &im.split_normal)
+        {
             // Split: G-buffer -> sub-images.
             cmd.use_buffer(sp, Access::ComputeStorageWrite);
             cmd.use_buffer(sn, Access::ComputeStorageWrite);
@@ -460,8 +439,7 @@ impl SplitPasses {
             // Shade: sub-image k with subset k.
             cmd.use_buffer(sp, Access::ComputeStorageReadWrite);
             cmd.use_buffer(sn, Access::ComputeStorageReadWrite);
-            cmd.use_buffer(si, Access::ComputeStorageWrite);
-            if let Some(b) = spec.and_then(|s| s.split.as_ref()) {
+            for b in self.estimates().filter_map(|e| e.split.as_ref()) {
                 cmd.use_buffer(b, Access::ComputeStorageWrite);
             }
             self.dispatch(
@@ -473,30 +451,27 @@ impl SplitPasses {
                 split_groups,
             );
             // Gather: sub-images -> pixels.
-            cmd.use_buffer(si, Access::ComputeStorageReadWrite);
-            cmd.use_image(&im.irradiance, Access::ComputeStorageWrite);
-            if let Some(s) = spec {
-                if let Some(b) = &s.split {
+            for e in self.estimates() {
+                if let Some(b) = &e.split {
                     cmd.use_buffer(b, Access::ComputeStorageReadWrite);
                 }
-                cmd.use_image(&s.gathered, Access::ComputeStorageWrite);
+                cmd.use_image(&e.gathered, Access::ComputeStorageWrite);
             }
             self.dispatch(cmd, profiler, gather, "interleaved.gather", &push, rows);
         }
-        if let (Some((h, v)), Some((tmp, out))) = (&self.seed, &im.seed) {
-            let spec_seed = spec.and_then(|s| s.seed.as_ref().map(|t| (&s.gathered, t)));
-            cmd.use_image(&im.irradiance, Access::ComputeStorageReadWrite);
-            cmd.use_image(tmp, Access::ComputeStorageWrite);
-            if let Some((gathered, (stmp, _))) = spec_seed {
+        if let Some((h, v)) = &self.seed {
+            let blurs = || {
+                self.estimates()
+                    .filter_map(|e| Some((&e.gathered, e.seed.as_ref()?)))
+            };
+            for (gathered, (tmp, _)) in blurs() {
                 cmd.use_image(gathered, Access::ComputeStorageReadWrite);
-                cmd.use_image(stmp, Access::ComputeStorageWrite);
+                cmd.use_image(tmp, Access::ComputeStorageWrite);
             }
             self.dispatch(cmd, profiler, h, "interleaved.seed_blur_h", &push, full);
-            cmd.use_image(tmp, Access::ComputeStorageReadWrite);
-            cmd.use_image(out, Access::ComputeStorageWrite);
-            if let Some((_, (stmp, sout))) = spec_seed {
-                cmd.use_image(stmp, Access::ComputeStorageReadWrite);
-                cmd.use_image(sout, Access::ComputeStorageWrite);
+            for (_, (tmp, out)) in blurs() {
+                cmd.use_image(tmp, Access::ComputeStorageReadWrite);
+                cmd.use_image(out, Access::ComputeStorageWrite);
             }
             self.dispatch(cmd, profiler, v, "interleaved.seed_blur_v", &push, full);
         }
@@ -507,7 +482,7 @@ impl SplitPasses {
 
     /// Records the copy of the split mosaic (`debug`, split mode).
     pub fn record_readback(&self, cmd: &mut Cmd) {
-        if let (Some(rb), Some(si)) = (&self.mosaic, &self.storage.split_irradiance) {
+        if let (Some(rb), Some(si)) = (&self.mosaic, &self.storage.irradiance.split) {
             cmd.read_buffer(si, rb);
         }
     }
