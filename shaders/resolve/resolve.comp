@@ -175,12 +175,33 @@ bool history_covers(vec2 q, uint id, float lo, float hi, bool use_ids, bool use_
     return rn == 0u;
 }
 
-// History at q once history_covers() accepted it: bilinear over the valid taps, renormalised.
-// Kept apart from the test so that `ours` tests its candidates first and resamples once, for the
-// winner: on a SIMD machine a resample inside the candidate loop runs for every candidate on
-// which any lane stops.
+// The share of the bilinear footprint at q on history texels showing object `id` at reverse-Z
+// depths [lo, hi] (off-screen taps count as invalid). `ours` accepts a hypothesis when more than
+// half of it is valid: the footprint locates an edge of the object to a fraction of a texel,
+// where the texel containing q alone (history_covers) is off by up to half a texel.
+float history_weight(vec2 q, uint id, float lo, float hi, bool use_ids, bool use_depth,
+                     inout uint why) {
+    ivec2 base;
+    float w[4];
+    bilinear_taps(q, base, w);
+    float ws = 0.0;
+    for (int k = 0; k < 4; k++) {
+        ivec2 t = base + TAP[k];
+        if (w[k] <= 0.0 || !inside(t)) continue;
+        uint rn = tap_reasons(t, id, lo, hi, use_ids, use_depth);
+        if (rn == 0u) {
+            ws += w[k];
+        } else {
+            why |= rn;
+        }
+    }
+    return ws;
+}
+
+// History at q once accepted: bilinear over the valid taps, renormalised. Kept apart from the
+// test so that `ours` tests its candidates first and resamples once, for the winner: on a SIMD
+// machine a resample inside the candidate loop runs for every candidate on which any lane stops.
 real3 history_resampled(vec2 q, uint id, float lo, float hi, bool use_ids, bool use_depth) {
-    ivec2 near = ivec2(floor(q));
     ivec2 base;
     float w[4];
     bilinear_taps(q, base, w);
@@ -196,7 +217,7 @@ real3 history_resampled(vec2 q, uint id, float lo, float hi, bool use_ids, bool 
     for (int k = 0; k < 4; k++) {
         ivec2 t = base + TAP[k];
         if (w[k] <= 0.0) continue;
-        if (inside(t) && (t == near || tap_reasons(t, id, lo, hi, use_ids, use_depth) == 0u)) {
+        if (inside(t) && tap_reasons(t, id, lo, hi, use_ids, use_depth) == 0u) {
             acc += real(w[k]) * inner[k];
             ws += w[k];
         } else {
@@ -456,6 +477,28 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
     // among them is tried, else only c[0].
     Sample c[4] = use_depth ? sorted : n;
     bool multi = use_ids && !own;
+    // With every neighbour's object known: when exactly one of the two opposite pairs (left and
+    // right; up and down) shows a single object, p lies between those two samples, most likely
+    // on that object, whatever the depths: its hypothesis goes first (one pass moving its
+    // samples forward; the others keep their order). `fb` is the surface a pixel whose every
+    // hypothesis fails takes: that object, else the farthest neighbour's (the nearest surfaces'
+    // histories would have been valid had they covered p: a failure is a disocclusion).
+    Sample fb = sorted[3];
+    if (multi) {
+        bool hp = n[0].ids.x == n[1].ids.x;
+        bool vp = n[2].ids.x == n[3].ids.x;
+        if (hp != vp) {
+            uint pid = hp ? n[0].ids.x : n[2].ids.x;
+            for (int k = 3; k > 0; k--) {
+                if (c[k].ids.x == pid && c[k - 1].ids.x != pid) {
+                    Sample t = c[k];
+                    c[k] = c[k - 1];
+                    c[k - 1] = t;
+                }
+            }
+            fb = c[0];
+        }
+    }
     if (own) {
         Sample best = n[0];
         float best_diff = abs(n[0].d - own_d);
@@ -498,8 +541,8 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
             }
         }
     }
-    // The first candidate whose history covers q - v wins; its history is resampled once, after
-    // the loop.
+    // The first candidate with more than half of its bilinear footprint at q - v valid wins; its
+    // history is resampled once, after the loop.
     bool covered = false;
     float win_lo = 0.0;
     float win_hi = 0.0;
@@ -523,7 +566,7 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
                 }
             }
         }
-        if (history_covers(q - v, id, lo, hi, use_ids, use_depth, why)) {
+        if (history_weight(q - v, id, lo, hi, use_ids, use_depth, why) > 0.5) {
             covered = true;
             r.d = d;
             r.id = id;
@@ -536,17 +579,23 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
         found = true;
         h = history_resampled(q - r.v, r.id, win_lo, win_hi, use_ids, use_depth);
     }
-    // Moving: clamp to the neighbourhood, then average with the spatial estimate (half and half,
-    // as pq4k does with its 4-neighbour mean): resampled history alone is softer and noisier
-    // than fresh neighbours. Without history, the spatial estimate alone. Computed once for both.
+    // Moving: clamp to the neighbourhood, then blend with the spatial estimate, the history
+    // weighted HISTORY_WEIGHT (resolve/mod.rs; pq4k takes its 4-neighbour mean half and half):
+    // resampled history alone is softer and noisier than fresh neighbours. Without history, the
+    // spatial estimate alone, of `fb`'s surface when every hypothesis failed. Computed once.
     bool blend = found && !has(F_NO_CLAMP) && length(r.v) > pc.params.y;
+    if (!found && multi && !reset) {
+        r.id = fb.ids.x;
+        r.d = fb.d;
+        r.v = use_v ? fb.v : vec2(0.0);
+    }
     real3 sp = real3(0.0);
-    if (!found || blend) sp = spatial_fill(n, found ? r.id : ref_id, use_ids, own);
+    if (!found || blend) sp = spatial_fill(n, found || (multi && !reset) ? r.id : ref_id, use_ids, own);
     if (found) {
         r.dbg |= DBG_REPROJECTED;
         if (blend) {
             h = clamp_to_box(h, n, r.dbg);
-            h = (sp + h) * real(0.5);
+            h = mix(sp, h, real(HISTORY_WEIGHT));
         }
         r.c = h;
     } else {

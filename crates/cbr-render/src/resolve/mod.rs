@@ -147,6 +147,9 @@ pub const FUSED_ALPHA: f32 = 0.2;
 /// FUSED_SPEED pixels per frame (`+taa`'s speed term and values).
 pub const FUSED_ALPHA_MAX: f32 = 0.5;
 pub const FUSED_SPEED: f32 = 2.0;
+/// `ours`: the history's share in the moving blend with the spatial estimate (resolve.comp, where
+/// docs/resolve.md says how it was chosen).
+pub const HISTORY_WEIGHT: f32 = 0.65;
 
 /// `fused`: the frame's jitter (pixels): Halton(2, 3) of length 8 advancing every second frame, so
 /// each parity's pixels see the whole sequence.
@@ -398,6 +401,7 @@ impl ResolvePass {
             ("FUSED_ALPHA", format!("{FUSED_ALPHA:?}")),
             ("FUSED_ALPHA_MAX", format!("{FUSED_ALPHA_MAX:?}")),
             ("FUSED_SPEED", format!("{FUSED_SPEED:?}")),
+            ("HISTORY_WEIGHT", format!("{HISTORY_WEIGHT:?}")),
             (
                 "OUT_VELOCITY",
                 u32::from(settings.debug || settings.velocity).to_string(),

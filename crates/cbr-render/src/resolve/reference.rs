@@ -158,6 +158,48 @@ impl Ctx<'_> {
             *why |= rn;
             return None;
         }
+        Some(self.history_resampled(q, id, lo, hi, use_ids, use_depth))
+    }
+
+    /// The share of the bilinear footprint at q on valid history texels (`history_weight`).
+    #[allow(clippy::too_many_arguments)]
+    fn history_weight(
+        &self,
+        q: [f32; 2],
+        id: u32,
+        lo: f32,
+        hi: f32,
+        use_ids: bool,
+        use_depth: bool,
+        why: &mut u32,
+    ) -> f32 {
+        let (base, w) = Self::taps(q);
+        let mut ws = 0.0f32;
+        for k in 0..4 {
+            let (tx, ty) = (base[0] + TAP[k][0], base[1] + TAP[k][1]);
+            if w[k] <= 0.0 || !self.inside(tx, ty) {
+                continue;
+            }
+            let rn = self.tap_reasons(self.idx(tx, ty), id, lo, hi, use_ids, use_depth);
+            if rn == 0 {
+                ws += w[k];
+            } else {
+                *why |= rn;
+            }
+        }
+        ws
+    }
+
+    /// History at q over its valid taps (bilinear, renormalised), Catmull-Rom when all four are.
+    fn history_resampled(
+        &self,
+        q: [f32; 2],
+        id: u32,
+        lo: f32,
+        hi: f32,
+        use_ids: bool,
+        use_depth: bool,
+    ) -> V3 {
         let hist = self.hist();
         let (base, w) = Self::taps(q);
         let mut acc = [0.0; 3];
@@ -169,8 +211,7 @@ impl Ctx<'_> {
                 continue;
             }
             if self.inside(tx, ty)
-                && ([tx, ty] == near
-                    || self.tap_reasons(self.idx(tx, ty), id, lo, hi, use_ids, use_depth) == 0)
+                && self.tap_reasons(self.idx(tx, ty), id, lo, hi, use_ids, use_depth) == 0
             {
                 acc = add(acc, scale(hist.color[self.idx(tx, ty)], w[k]));
                 ws += w[k];
@@ -195,7 +236,7 @@ impl Ctx<'_> {
             }
             h = c.map(|v| v.max(0.0));
         }
-        Some(h)
+        h
     }
 
     /// A rendered pixel: its sample, or with `fused` the sample blended into its history
@@ -495,6 +536,18 @@ impl Ctx<'_> {
                         }
                     }
                 }
+                // Exactly one opposite pair showing one object: that object's hypothesis first,
+                // and the surface a pixel takes when every hypothesis fails; else the farthest.
+                let multi = use_ids && !own;
+                let mut fallback = o[3];
+                let (hp, vp) = (n[0].ids[0] == n[1].ids[0], n[2].ids[0] == n[3].ids[0]);
+                if multi && hp != vp {
+                    let pid = if hp { n[0].ids[0] } else { n[2].ids[0] };
+                    if let Some(j) = cand[..nc].iter().position(|&c| n[c].ids[0] == pid) {
+                        cand[..=j].rotate_right(1);
+                    }
+                    fallback = cand[0];
+                }
                 let first = n[cand[0]];
                 r.d = if own { own_d } else { first.d };
                 r.id = if own { own_id } else { first.ids[0] };
@@ -529,10 +582,9 @@ impl Ctx<'_> {
                                 }
                             }
                         }
-                        if let Some(h) =
-                            self.history_validated(qv, id, lo, hi, use_ids, use_depth, &mut why)
-                        {
-                            found = Some(h);
+                        if self.history_weight(qv, id, lo, hi, use_ids, use_depth, &mut why) > 0.5 {
+                            found =
+                                Some(self.history_resampled(qv, id, lo, hi, use_ids, use_depth));
                             r.d = d;
                             r.id = id;
                             r.v = v;
@@ -546,13 +598,22 @@ impl Ctx<'_> {
                         if a.clamp && length(r.v) > self.s.static_threshold {
                             h = self.clamp_to_box(h, n, &mut r.dbg);
                             let sp = self.spatial_fill(n, r.id, use_ids, own);
-                            h = scale(add(sp, h), 0.5);
+                            let w = super::HISTORY_WEIGHT;
+                            h = [0, 1, 2].map(|k| sp[k] * (1.0 - w) + h[k] * w);
                         }
                         r.c = h;
                     }
                     None => {
                         r.dbg |= why | DBG_SPATIAL;
-                        r.c = self.spatial_fill(n, ref_id, use_ids, own);
+                        let mut fill_id = ref_id;
+                        if multi && !self.reset {
+                            let f = n[fallback];
+                            r.id = f.ids[0];
+                            r.d = f.d;
+                            r.v = if use_v { f.v } else { [0.0; 2] };
+                            fill_id = r.id;
+                        }
+                        r.c = self.spatial_fill(n, fill_id, use_ids, own);
                     }
                 }
             }
