@@ -178,19 +178,22 @@ bool history_covers(vec2 q, uint id, float lo, float hi, bool use_ids, bool use_
 // The share of the bilinear footprint at q on history texels showing object `id` at reverse-Z
 // depths [lo, hi] (off-screen taps count as invalid). `ours` accepts a hypothesis when more than
 // half of it is valid: the footprint locates an edge of the object to a fraction of a texel,
-// where the texel containing q alone (history_covers) is off by up to half a texel.
+// where the texel containing q alone (history_covers) is off by up to half a texel. `valid`
+// gets bit k for each valid tap k (TAP order), for history_resampled.
 float history_weight(vec2 q, uint id, float lo, float hi, bool use_ids, bool use_depth,
-                     inout uint why) {
+                     out uint valid, inout uint why) {
     ivec2 base;
     float w[4];
     bilinear_taps(q, base, w);
     float ws = 0.0;
+    valid = 0u;
     for (int k = 0; k < 4; k++) {
         ivec2 t = base + TAP[k];
         if (w[k] <= 0.0 || !inside(t)) continue;
         uint rn = tap_reasons(t, id, lo, hi, use_ids, use_depth);
         if (rn == 0u) {
             ws += w[k];
+            valid |= 1u << k;
         } else {
             why |= rn;
         }
@@ -198,10 +201,11 @@ float history_weight(vec2 q, uint id, float lo, float hi, bool use_ids, bool use
     return ws;
 }
 
-// History at q once accepted: bilinear over the valid taps, renormalised. Kept apart from the
-// test so that `ours` tests its candidates first and resamples once, for the winner: on a SIMD
-// machine a resample inside the candidate loop runs for every candidate on which any lane stops.
-real3 history_resampled(vec2 q, uint id, float lo, float hi, bool use_ids, bool use_depth) {
+// History at q once accepted: bilinear over the valid taps (history_weight's `valid`),
+// renormalised. Kept apart from the test so that `ours` tests its candidates first and resamples
+// once, for the winner: on a SIMD machine a resample inside the candidate loop runs for every
+// candidate on which any lane stops.
+real3 history_resampled(vec2 q, uint valid) {
     ivec2 base;
     float w[4];
     bilinear_taps(q, base, w);
@@ -215,9 +219,8 @@ real3 history_resampled(vec2 q, uint id, float lo, float hi, bool use_ids, bool 
     float ws = 0.0;
     bool all_ok = true;
     for (int k = 0; k < 4; k++) {
-        ivec2 t = base + TAP[k];
         if (w[k] <= 0.0) continue;
-        if (inside(t) && tap_reasons(t, id, lo, hi, use_ids, use_depth) == 0u) {
+        if ((valid & (1u << k)) != 0u) {
             acc += real(w[k]) * inner[k];
             ws += w[k];
         } else {
@@ -260,7 +263,9 @@ bool history_validated(vec2 q, uint id, float lo, float hi, bool use_ids, bool u
                        out real3 h, inout uint why) {
     h = real3(0.0);
     if (!history_covers(q, id, lo, hi, use_ids, use_depth, why)) return false;
-    h = history_resampled(q, id, lo, hi, use_ids, use_depth);
+    uint valid;
+    history_weight(q, id, lo, hi, use_ids, use_depth, valid, why);
+    h = history_resampled(q, valid);
     return true;
 }
 
@@ -278,10 +283,13 @@ real3 history_plain(vec2 q) {
 }
 
 // Neighbours: 0 left, 1 right, 2 up, 3 down. Sorted by depth, nearest (largest reverse-Z)
-// first, ties in neighbour order: a five-comparator network on a total order (so it equals a
+// first, ties in neighbour order; with `pref`, the samples showing object `pid` before all others
+// (`ours`' pair preference, below). A five-comparator network on a total order (so it equals a
 // stable sort) with constant indices, which keeps the samples in registers.
-void cswap(inout Sample a, inout int ia, inout Sample b, inout int ib) {
-    if (a.d < b.d || (a.d == b.d && ia > ib)) {
+void cswap(inout Sample a, inout int ia, inout Sample b, inout int ib, bool pref, uint pid) {
+    bool pa = pref && a.ids.x == pid;
+    bool pb = pref && b.ids.x == pid;
+    if (pa != pb ? pb : (a.d < b.d || (a.d == b.d && ia > ib))) {
         Sample t = a;
         a = b;
         b = t;
@@ -290,14 +298,14 @@ void cswap(inout Sample a, inout int ia, inout Sample b, inout int ib) {
         ib = ti;
     }
 }
-void depth_sorted(Sample n[4], out Sample s[4]) {
+void depth_sorted(Sample n[4], bool pref, uint pid, out Sample s[4]) {
     s = n;
     int o[4] = int[4](0, 1, 2, 3);
-    cswap(s[0], o[0], s[1], o[1]);
-    cswap(s[2], o[2], s[3], o[3]);
-    cswap(s[0], o[0], s[2], o[2]);
-    cswap(s[1], o[1], s[3], o[3]);
-    cswap(s[1], o[1], s[2], o[2]);
+    cswap(s[0], o[0], s[1], o[1], pref, pid);
+    cswap(s[2], o[2], s[3], o[3], pref, pid);
+    cswap(s[0], o[0], s[2], o[2], pref, pid);
+    cswap(s[1], o[1], s[3], o[3], pref, pid);
+    cswap(s[1], o[1], s[2], o[2], pref, pid);
 }
 
 // Weights of the differential blend: 1 / (BLEND_EPS + luminance difference of the pair), in
@@ -389,8 +397,21 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
         own_d = texelFetch(pre_depth, p, 0).x;
         own_id = texelFetch(pre_ids, p, 0).x;
     }
+    // `ours` with every neighbour's object and depth known: when exactly one of the two opposite
+    // pairs (left and right; up and down) shows a single object, p lies between those two
+    // samples, most likely on that object whatever the depths, so its samples sort first.
+    bool pref = false;
+    uint pid = 0u;
+#if MODE == MODE_OURS
+    if (!own && !has(F_NO_IDS) && !has(F_NO_DEPTH)) {
+        bool hp = n[0].ids.x == n[1].ids.x;
+        bool vp = n[2].ids.x == n[3].ids.x;
+        pref = hp != vp;
+        pid = hp ? n[0].ids.x : n[2].ids.x;
+    }
+#endif
     Sample sorted[4];
-    depth_sorted(n, sorted);
+    depth_sorted(n, pref, pid, sorted);
     Sample near = sorted[0];
     uint ref_id = own ? own_id : near.ids.x;
 #if MODE == MODE_PQ4K
@@ -477,28 +498,10 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
     // among them is tried, else only c[0].
     Sample c[4] = use_depth ? sorted : n;
     bool multi = use_ids && !own;
-    // With every neighbour's object known: when exactly one of the two opposite pairs (left and
-    // right; up and down) shows a single object, p lies between those two samples, most likely
-    // on that object, whatever the depths: its hypothesis goes first (one pass moving its
-    // samples forward; the others keep their order). `fb` is the surface a pixel whose every
-    // hypothesis fails takes: that object, else the farthest neighbour's (the nearest surfaces'
-    // histories would have been valid had they covered p: a failure is a disocclusion).
-    Sample fb = sorted[3];
-    if (multi) {
-        bool hp = n[0].ids.x == n[1].ids.x;
-        bool vp = n[2].ids.x == n[3].ids.x;
-        if (hp != vp) {
-            uint pid = hp ? n[0].ids.x : n[2].ids.x;
-            for (int k = 3; k > 0; k--) {
-                if (c[k].ids.x == pid && c[k - 1].ids.x != pid) {
-                    Sample t = c[k];
-                    c[k] = c[k - 1];
-                    c[k - 1] = t;
-                }
-            }
-            fb = c[0];
-        }
-    }
+    // The surface a pixel takes when every hypothesis fails: the preferred pair's object, else
+    // the farthest neighbour's (the nearer surfaces' histories would have been valid had they
+    // covered p: a failure is a disocclusion).
+    Sample fb = pref ? sorted[0] : sorted[3];
     if (own) {
         Sample best = n[0];
         float best_diff = abs(n[0].d - own_d);
@@ -544,8 +547,7 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
     // The first candidate with more than half of its bilinear footprint at q - v valid wins; its
     // history is resampled once, after the loop.
     bool covered = false;
-    float win_lo = 0.0;
-    float win_hi = 0.0;
+    uint win_valid = 0u;
     for (int k = 0; k < 4; k++) {
         if (reset || found || covered || (k > 0 && !multi)) break;
         bool dup = false;
@@ -566,18 +568,18 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
                 }
             }
         }
-        if (history_weight(q - v, id, lo, hi, use_ids, use_depth, why) > 0.5) {
+        uint valid;
+        if (history_weight(q - v, id, lo, hi, use_ids, use_depth, valid, why) > 0.5) {
             covered = true;
             r.d = d;
             r.id = id;
             r.v = v;
-            win_lo = lo;
-            win_hi = hi;
+            win_valid = valid;
         }
     }
     if (covered) {
         found = true;
-        h = history_resampled(q - r.v, r.id, win_lo, win_hi, use_ids, use_depth);
+        h = history_resampled(q - r.v, win_valid);
     }
     // Moving: clamp to the neighbourhood, then blend with the spatial estimate, the history
     // weighted HISTORY_WEIGHT (resolve/mod.rs; pq4k takes its 4-neighbour mean half and half):

@@ -377,11 +377,18 @@ impl Ctx<'_> {
             _ => (0.0, 0),
         };
         let own = self.own;
+        let a = &self.s.ablation;
+        // `ours`' pair preference: exactly one opposite pair showing one object sorts its samples
+        // first.
+        let (hp, vp) = (n[0].ids[0] == n[1].ids[0], n[2].ids[0] == n[3].ids[0]);
+        let pref = self.s.mode == ResolveMode::Ours && !own && a.ids && a.depth && hp != vp;
+        let pid = if hp { n[0].ids[0] } else { n[2].ids[0] };
+        let key = |s: &Sample| pref && s.ids[0] == pid;
         let mut o = [0usize, 1, 2, 3];
         for i in 1..4 {
             let k = o[i];
             let mut j = i as i32 - 1;
-            while j >= 0 && n[o[j as usize]].d < n[k].d {
+            while j >= 0 && (key(&n[o[j as usize]]), n[o[j as usize]].d) < (key(&n[k]), n[k].d) {
                 o[(j + 1) as usize] = o[j as usize];
                 j -= 1;
             }
@@ -397,7 +404,6 @@ impl Ctx<'_> {
             v: [0.0; 2],
             dbg: DBG_MISSING,
         };
-        let a = &self.s.ablation;
         match self.s.mode {
             ResolveMode::Pq4k => {
                 let p = n[partner];
@@ -536,18 +542,10 @@ impl Ctx<'_> {
                         }
                     }
                 }
-                // Exactly one opposite pair showing one object: that object's hypothesis first,
-                // and the surface a pixel takes when every hypothesis fails; else the farthest.
+                // The surface a pixel takes when every hypothesis fails: the preferred pair's
+                // object, else the farthest neighbour's.
                 let multi = use_ids && !own;
-                let mut fallback = o[3];
-                let (hp, vp) = (n[0].ids[0] == n[1].ids[0], n[2].ids[0] == n[3].ids[0]);
-                if multi && hp != vp {
-                    let pid = if hp { n[0].ids[0] } else { n[2].ids[0] };
-                    if let Some(j) = cand[..nc].iter().position(|&c| n[c].ids[0] == pid) {
-                        cand[..=j].rotate_right(1);
-                    }
-                    fallback = cand[0];
-                }
+                let fallback = if pref { o[0] } else { o[3] };
                 let first = n[cand[0]];
                 r.d = if own { own_d } else { first.d };
                 r.id = if own { own_id } else { first.ids[0] };
