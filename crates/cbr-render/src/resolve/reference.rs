@@ -50,6 +50,16 @@ pub struct Output {
 
 use crate::cpu_math::{V3, catmull_rom, depth_rel_diff, from_ycocg, length, luma, to_ycocg};
 
+/// What a history texel must show for a hypothesis: object `id` (when `ids`) at a reverse-Z depth
+/// in [lo, hi] or within the depth tolerance of either end (when `depth`).
+struct Test {
+    id: u32,
+    lo: f32,
+    hi: f32,
+    ids: bool,
+    depth: bool,
+}
+
 fn add(a: V3, b: V3) -> V3 {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
@@ -126,80 +136,57 @@ impl Ctx<'_> {
         (hd >= lo && hd <= hi) || depth_rel_diff(hd, lo) <= tol || depth_rel_diff(hd, hi) <= tol
     }
 
-    fn tap_reasons(&self, t: usize, id: u32, lo: f32, hi: f32, ids: bool, depth: bool) -> u32 {
+    fn tap_reasons(&self, i: usize, t: &Test) -> u32 {
         let hist = self.hist();
         let mut r = 0;
-        if ids && hist.ids[t] & ID_MASK != id {
+        if t.ids && hist.ids[i] & ID_MASK != t.id {
             r |= DBG_REJECT_ID;
         }
-        if depth && !self.depth_agrees(hist.depth[t], lo, hi) {
+        if t.depth && !self.depth_agrees(hist.depth[i], t.lo, t.hi) {
             r |= DBG_REJECT_DEPTH;
         }
         r
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn history_validated(
-        &self,
-        q: [f32; 2],
-        id: u32,
-        lo: f32,
-        hi: f32,
-        use_ids: bool,
-        use_depth: bool,
-        why: &mut u32,
-    ) -> Option<V3> {
+    /// History at q for `t` when the texel containing q is valid (`fused`'s test).
+    fn history_validated(&self, q: [f32; 2], t: &Test, why: &mut u32) -> Option<V3> {
         let near = [q[0].floor() as i32, q[1].floor() as i32];
         if !self.inside(near[0], near[1]) {
             return None;
         }
-        let rn = self.tap_reasons(self.idx(near[0], near[1]), id, lo, hi, use_ids, use_depth);
+        let rn = self.tap_reasons(self.idx(near[0], near[1]), t);
         if rn != 0 {
             *why |= rn;
             return None;
         }
-        Some(self.history_resampled(q, id, lo, hi, use_ids, use_depth))
+        let (_, valid) = self.history_weight(q, t, why);
+        Some(self.history_resampled(q, valid))
     }
 
-    /// The share of the bilinear footprint at q on valid history texels (`history_weight`).
-    #[allow(clippy::too_many_arguments)]
-    fn history_weight(
-        &self,
-        q: [f32; 2],
-        id: u32,
-        lo: f32,
-        hi: f32,
-        use_ids: bool,
-        use_depth: bool,
-        why: &mut u32,
-    ) -> f32 {
+    /// The share of the bilinear footprint at q on history texels valid for `t`, and the mask of
+    /// those taps (`history_weight`).
+    fn history_weight(&self, q: [f32; 2], t: &Test, why: &mut u32) -> (f32, u32) {
         let (base, w) = Self::taps(q);
-        let mut ws = 0.0f32;
+        let (mut ws, mut valid) = (0.0f32, 0u32);
         for k in 0..4 {
             let (tx, ty) = (base[0] + TAP[k][0], base[1] + TAP[k][1]);
             if w[k] <= 0.0 || !self.inside(tx, ty) {
                 continue;
             }
-            let rn = self.tap_reasons(self.idx(tx, ty), id, lo, hi, use_ids, use_depth);
+            let rn = self.tap_reasons(self.idx(tx, ty), t);
             if rn == 0 {
                 ws += w[k];
+                valid |= 1 << k;
             } else {
                 *why |= rn;
             }
         }
-        ws
+        (ws, valid)
     }
 
-    /// History at q over its valid taps (bilinear, renormalised), Catmull-Rom when all four are.
-    fn history_resampled(
-        &self,
-        q: [f32; 2],
-        id: u32,
-        lo: f32,
-        hi: f32,
-        use_ids: bool,
-        use_depth: bool,
-    ) -> V3 {
+    /// History at q over the taps in `valid` (bilinear, renormalised), Catmull-Rom when all four
+    /// with weight are.
+    fn history_resampled(&self, q: [f32; 2], valid: u32) -> V3 {
         let hist = self.hist();
         let (base, w) = Self::taps(q);
         let mut acc = [0.0; 3];
@@ -210,9 +197,7 @@ impl Ctx<'_> {
             if w[k] <= 0.0 {
                 continue;
             }
-            if self.inside(tx, ty)
-                && self.tap_reasons(self.idx(tx, ty), id, lo, hi, use_ids, use_depth) == 0
-            {
+            if valid & (1 << k) != 0 {
                 acc = add(acc, scale(hist.color[self.idx(tx, ty)], w[k]));
                 ws += w[k];
             } else {
@@ -262,7 +247,14 @@ impl Ctx<'_> {
         } else {
             let q = [x as f32 + 0.5 - s.v[0], y as f32 + 0.5 - s.v[1]];
             let a = &self.s.ablation;
-            self.history_validated(q, s.ids[0], s.d, s.d, a.ids, a.depth, &mut why)
+            let t = Test {
+                id: s.ids[0],
+                lo: s.d,
+                hi: s.d,
+                ids: a.ids,
+                depth: a.depth,
+            };
+            self.history_validated(q, &t, &mut why)
         };
         let Some(mut h) = h else {
             r.dbg |= why;
@@ -580,9 +572,16 @@ impl Ctx<'_> {
                                 }
                             }
                         }
-                        if self.history_weight(qv, id, lo, hi, use_ids, use_depth, &mut why) > 0.5 {
-                            found =
-                                Some(self.history_resampled(qv, id, lo, hi, use_ids, use_depth));
+                        let t = Test {
+                            id,
+                            lo,
+                            hi,
+                            ids: use_ids,
+                            depth: use_depth,
+                        };
+                        let (weight, valid) = self.history_weight(qv, &t, &mut why);
+                        if weight > 0.5 {
+                            found = Some(self.history_resampled(qv, valid));
                             r.d = d;
                             r.id = id;
                             r.v = v;
