@@ -164,21 +164,10 @@ uint tap_reasons(ivec2 t, uint id, float lo, float hi, bool use_ids, bool use_de
     return r;
 }
 
-// Whether the history texel containing q shows object `id` at reverse-Z depths [lo, hi] (the
-// reprojected point lands on the surface); a rejection costs this one texel.
-bool history_covers(vec2 q, uint id, float lo, float hi, bool use_ids, bool use_depth,
-                    inout uint why) {
-    ivec2 near = ivec2(floor(q));
-    if (!inside(near)) return false;
-    uint rn = tap_reasons(near, id, lo, hi, use_ids, use_depth);
-    why |= rn;
-    return rn == 0u;
-}
-
 // The share of the bilinear footprint at q on history texels showing object `id` at reverse-Z
 // depths [lo, hi] (off-screen taps count as invalid). `ours` accepts a hypothesis when more than
 // half of it is valid: the footprint locates an edge of the object to a fraction of a texel,
-// where the texel containing q alone (history_covers) is off by up to half a texel. `valid`
+// where the texel containing q alone (`fused`'s test) is off by up to half a texel. `valid`
 // gets bit k for each valid tap k (TAP order), for history_resampled.
 float history_weight(vec2 q, uint id, float lo, float hi, bool use_ids, bool use_depth,
                      out uint valid, inout uint why) {
@@ -256,15 +245,23 @@ real3 history_resampled(vec2 q, uint valid) {
     return h;
 }
 
-// History at q validated against object `id` and reverse-Z depths [lo, hi]: the texel
-// containing q must be valid (checked first, so a rejection costs one texel), then
-// history_resampled().
+// History at q validated against object `id` and reverse-Z depths [lo, hi] (`fused`): the texel
+// containing q must be valid (the reprojected point lands on the surface), then
+// history_resampled(). That texel is one of the bilinear taps, always with weight at least 1/4,
+// so history_weight's mask holds its verdict; only a rejection reads its reasons.
 bool history_validated(vec2 q, uint id, float lo, float hi, bool use_ids, bool use_depth,
                        out real3 h, inout uint why) {
     h = real3(0.0);
-    if (!history_covers(q, id, lo, hi, use_ids, use_depth, why)) return false;
+    ivec2 near = ivec2(floor(q));
+    if (!inside(near)) return false;
     uint valid;
-    history_weight(q, id, lo, hi, use_ids, use_depth, valid, why);
+    uint tap_why = 0u;
+    history_weight(q, id, lo, hi, use_ids, use_depth, valid, tap_why);
+    ivec2 k = near - ivec2(floor(q - 0.5));
+    if ((valid & (1u << (k.x + 2 * k.y))) == 0u) {
+        why |= tap_reasons(near, id, lo, hi, use_ids, use_depth);
+        return false;
+    }
     h = history_resampled(q, valid);
     return true;
 }
