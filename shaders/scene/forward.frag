@@ -37,7 +37,16 @@ layout(location = 2) INTERP in vec2 v_uv;
 layout(location = 3) INTERP in vec4 v_clip;
 layout(location = 4) INTERP in vec4 v_prev_clip;
 
-#ifdef ID_ONLY
+#ifdef EARLY_TESTS
+// The G-buffer pass after its depth pre-pass (DEPTH_ONLY): the depth test is EQUAL and writes
+// nothing, so testing before the shader (which the counter store below would otherwise prevent)
+// only skips the fragments the late test would have thrown away, and each pixel is shaded once.
+layout(early_fragment_tests) in;
+#endif
+
+#ifdef DEPTH_ONLY
+// The G-buffer's depth pre-pass: the alpha test, nothing written but depth.
+#elif defined(ID_ONLY)
 // The native-resolution depth + ID prepass (--id-prepass): visibility only, no shading.
 layout(location = 0) out uvec2 o_ids;
 #elif defined(GBUFFER)
@@ -134,7 +143,8 @@ void main() {
         float a = tex(mask_tex, v_uv)[m.tex.z];
         if (a < 0.5) demote;
     }
-#ifdef ID_ONLY
+#ifdef DEPTH_ONLY
+#elif defined(ID_ONLY)
     o_ids = uvec2(o.ids.x, uint(gl_PrimitiveID));
 #else
     vec3 albedo = m.kd.rgb;

@@ -28,6 +28,8 @@ pub struct GpuScene {
     pub white: Image,
     /// Per material: the textures of its albedo, mask and bump slots.
     pub material_textures: Vec<[Option<u32>; 3]>,
+    /// Per material: bump mapping on (a height map and the scene's `bump` setting).
+    pub material_bumped: Vec<bool>,
     pub sampler: Sampler,
     pub draws: Vec<Draw>,
     pub objects: Buffer,
@@ -271,6 +273,7 @@ impl GpuScene {
                 [m.kd_tex, mask, m.bump_tex]
             })
             .collect();
+        let material_bumped = mats.iter().map(|m| m.tex[3] >= 0).collect();
         let sampler = Sampler::new(
             gpu,
             "scene.sampler",
@@ -310,6 +313,7 @@ impl GpuScene {
             textures,
             white,
             material_textures,
+            material_bumped,
             sampler,
             draws,
             objects,

@@ -92,6 +92,10 @@ pub struct RasterConfig {
     /// `deferred`'s G-buffer: the surface (position, shading normal, albedo) instead of its
     /// shading, then velocity and IDs (the GBUFFER define of shaders/scene/forward.frag).
     pub gbuffer: bool,
+    /// A depth pre-pass first (the alpha test, depth only), then the pass proper with an EQUAL
+    /// depth test made before the fragment shader: every pixel's surface is shaded once instead
+    /// of every fragment. Only with `gbuffer` (whose outputs do not depend on the shading order).
+    pub depth_prepass: bool,
 }
 
 impl RasterConfig {
@@ -107,6 +111,7 @@ impl RasterConfig {
             sample_shading: false,
             sample_locations: None,
             gbuffer: false,
+            depth_prepass: false,
         }
     }
 
@@ -133,12 +138,25 @@ impl RasterConfig {
             sample_shading: plan.samples > 1,
             sample_locations: plan.sample_locations,
             gbuffer: false,
+            depth_prepass: false,
         }
     }
 }
 
+/// The G-buffer pass's colour attachments: position, normal, albedo, velocity, IDs.
+const GBUFFER_FORMATS: [vk::Format; 5] = [
+    GBUFFER_FORMAT,
+    GBUFFER_FORMAT,
+    GBUFFER_FORMAT,
+    VELOCITY_FORMAT,
+    ID_FORMAT,
+];
+
 pub struct ScenePass {
     pipeline: Pipeline,
+    /// `RasterConfig::depth_prepass`: the depth-only pipeline drawn first, and the pass proper
+    /// with late tests for bump-mapped materials (below).
+    prepass: Option<(Pipeline, Pipeline)>,
     _layouts: [SetLayout; 2],
     set: DescriptorSet,
     material_sets: Vec<DescriptorSet>,
@@ -172,6 +190,54 @@ impl ScenePass {
             defines.push(("GBUFFER".into(), "1".into()));
         }
         let vs = shaders.compile("scene/forward.vert", &defines)?;
+        let prepass = if config.depth_prepass {
+            if !config.gbuffer || config.samples != 1 {
+                return Err(cbr_gpu::GpuError::Other(format!(
+                    "{name}: a depth pre-pass is built for the single-sample G-buffer pass only"
+                )));
+            }
+            let mut depth_defines = defines.clone();
+            depth_defines.push(("DEPTH_ONLY".into(), "1".into()));
+            let depth_fs = shaders.compile("scene/forward.frag", &depth_defines)?;
+            let late_fs = shaders.compile("scene/forward.frag", &defines)?;
+            defines.push(("EARLY_TESTS".into(), "1".into()));
+            // The same vertex shader bits in every pipeline: the EQUAL test needs the same depths.
+            let desc = |name: &str, fragment: &[u32], prepass: bool| {
+                Pipeline::graphics(
+                    gpu,
+                    &GraphicsDesc {
+                        name,
+                        vertex: &vs,
+                        geometry: None,
+                        fragment,
+                        set_layouts: &[&layout, &material_layout],
+                        push_constant_bytes: std::mem::size_of::<ScenePush>() as u32,
+                        color_formats: if prepass { &[] } else { &GBUFFER_FORMATS },
+                        depth_format: Some(DEPTH_FORMAT),
+                        depth_compare: if prepass {
+                            vk::CompareOp::GREATER
+                        } else {
+                            vk::CompareOp::EQUAL
+                        },
+                        depth_write: prepass,
+                        samples: 1,
+                        min_sample_shading: None,
+                        cull_back_faces: false,
+                        sample_locations: false,
+                    },
+                )
+            };
+            // Bump mapping differentiates a texture lookup, and on llvmpipe a lane that fails an
+            // early depth test does not take part in that derivative (tests/deferred.rs,
+            // bump_mapping_matches_native, saw up to 1072 fp16 ulps): bump-mapped materials keep
+            // late tests, EQUAL against the pre-pass's depth.
+            Some((
+                desc(&format!("{name}.depth"), &depth_fs, true)?,
+                desc(&format!("{name}.late"), &late_fs, false)?,
+            ))
+        } else {
+            None
+        };
         let fs = shaders.compile("scene/forward.frag", &defines)?;
         let pipeline = Pipeline::graphics(
             gpu,
@@ -184,20 +250,18 @@ impl ScenePass {
                 push_constant_bytes: std::mem::size_of::<ScenePush>() as u32,
                 color_formats: match (config.id_only, config.gbuffer, config.write_ids) {
                     (true, _, _) => &[ID_FORMAT],
-                    (false, true, _) => &[
-                        GBUFFER_FORMAT,
-                        GBUFFER_FORMAT,
-                        GBUFFER_FORMAT,
-                        VELOCITY_FORMAT,
-                        ID_FORMAT,
-                    ],
+                    (false, true, _) => &GBUFFER_FORMATS,
                     (false, false, false) => &[COLOR_FORMAT, VELOCITY_FORMAT],
                     (false, false, true) => &[COLOR_FORMAT, VELOCITY_FORMAT, ID_FORMAT],
                 },
                 depth_format: Some(DEPTH_FORMAT),
-                // Reverse-Z: nearer is larger.
-                depth_compare: vk::CompareOp::GREATER,
-                depth_write: true,
+                // Reverse-Z: nearer is larger. After a depth pre-pass, only its surface passes.
+                depth_compare: if prepass.is_some() {
+                    vk::CompareOp::EQUAL
+                } else {
+                    vk::CompareOp::GREATER
+                },
+                depth_write: prepass.is_none(),
                 samples: config.samples,
                 min_sample_shading: config.sample_shading.then_some(1.0),
                 cull_back_faces: false,
@@ -208,6 +272,7 @@ impl ScenePass {
         let material_sets = material_sets(gpu, name, &material_layout, scene)?;
         Ok(ScenePass {
             pipeline,
+            prepass,
             _layouts: [layout, material_layout],
             set,
             material_sets,
@@ -243,7 +308,6 @@ impl ScenePass {
         counter: &Buffer,
         config: &RasterConfig,
     ) {
-        let scope = profiler.begin(cmd, &self.name, PassKind::Graphics);
         use_scene_buffers(cmd, scene);
         cmd.use_buffer(counter, cbr_gpu::Access::FragmentStorageWrite);
         let bg = scene.background;
@@ -274,28 +338,46 @@ impl ScenePass {
                 stencil: 0,
             },
         };
+        let [x, y, w, h] = config.viewport;
+        if let Some((prepass, _)) = &self.prepass {
+            let scope = profiler.begin(cmd, &format!("{}.depth", self.name), PassKind::Graphics);
+            cmd.begin_rendering(
+                &[],
+                Some(Attachment {
+                    image: depth,
+                    clear: Some(depth_clear),
+                }),
+                config.layers,
+            );
+            cmd.set_viewport(x, y, w, h);
+            cmd.bind_pipeline(prepass);
+            cmd.bind_set(prepass, 0, &self.set);
+            draw_scene(cmd, scene, &self.material_sets, config.instances, |_| prepass);
+            cmd.end_rendering();
+            profiler.end(cmd, scope);
+        }
+        let scope = profiler.begin(cmd, &self.name, PassKind::Graphics);
         cmd.begin_rendering(
             &attachments,
             Some(Attachment {
                 image: depth,
-                clear: Some(depth_clear),
+                // After the pre-pass, its depths.
+                clear: self.prepass.is_none().then_some(depth_clear),
             }),
             config.layers,
         );
-        let [x, y, w, h] = config.viewport;
         cmd.set_viewport(x, y, w, h);
         cmd.bind_pipeline(&self.pipeline);
         if let Some(l) = config.sample_locations {
             cmd.set_sample_locations(depth, l);
         }
         cmd.bind_set(&self.pipeline, 0, &self.set);
-        draw_scene(
-            cmd,
-            &self.pipeline,
-            scene,
-            &self.material_sets,
-            config.instances,
-        );
+        draw_scene(cmd, scene, &self.material_sets, config.instances, |m| {
+            match &self.prepass {
+                Some((_, late)) if scene.material_bumped[m as usize] => late,
+                _ => &self.pipeline,
+            }
+        });
         cmd.end_rendering();
         profiler.end(cmd, scope);
     }
@@ -372,22 +454,30 @@ pub fn material_sets(
         .collect()
 }
 
-/// Draws every object of `scene` with `pipeline` (set 0 bound by the caller; set 1 per material,
-/// the object index as push constant), `instances` instances each.
-pub fn draw_scene(
+/// Draws every object of `scene` with the pipeline `pipeline` picks for its material (set 0
+/// and the first pipeline bound by the caller, all pipelines' layouts alike, so that a switch
+/// keeps set 0; set 1 per material, the object index as push constant), `instances` instances
+/// each.
+pub fn draw_scene<'a>(
     cmd: &mut Cmd,
-    pipeline: &Pipeline,
     scene: &GpuScene,
     material_sets: &[DescriptorSet],
     instances: u32,
+    pipeline: impl Fn(u32) -> &'a Pipeline,
 ) {
     cmd.bind_index_buffer(&scene.indices);
+    let mut bound: Option<&Pipeline> = None;
     for d in &scene.draws {
-        cmd.bind_set(pipeline, 1, &material_sets[d.material as usize]);
+        let p = pipeline(d.material);
+        if !bound.is_some_and(|b| std::ptr::eq(b, p)) {
+            cmd.bind_pipeline(p);
+            bound = Some(p);
+        }
+        cmd.bind_set(p, 1, &material_sets[d.material as usize]);
         let push = ScenePush {
             object_index: d.object,
         };
-        cmd.push_constants(pipeline, bytemuck::bytes_of(&push));
+        cmd.push_constants(p, bytemuck::bytes_of(&push));
         cmd.draw_indexed(d.index_count, instances, d.first_index, 0);
     }
 }

@@ -584,7 +584,7 @@ impl Analytic {
         cmd.bind_pipeline(&r.pipeline);
         cmd.bind_set(&r.pipeline, 0, &self.scene_set);
         cmd.bind_set(&r.pipeline, 2, &self.raster_set);
-        scene_pass::draw_scene(cmd, &r.pipeline, scene, &self.material_sets, 1);
+        scene_pass::draw_scene(cmd, scene, &self.material_sets, 1, |_| &r.pipeline);
         cmd.end_rendering();
         profiler.end(cmd, scope);
     }

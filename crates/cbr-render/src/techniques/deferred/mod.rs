@@ -298,6 +298,7 @@ pub fn gbuffer(ctx: &BuildCtx, name: &str) -> Result<(RasterConfig, ScenePass, G
     let (w, h) = (ctx.width, ctx.height);
     let raster = RasterConfig {
         gbuffer: true,
+        depth_prepass: true,
         ..RasterConfig::native(w, h)
     };
     let pass = ScenePass::new(
