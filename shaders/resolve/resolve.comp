@@ -354,6 +354,22 @@ real3 spatial_fill(Sample n[4], uint ref_id, bool use_ids, bool own) {
     return untonemap(r);
 }
 
+// The history's share in `ours`' moving blend, from the tonemapped luminance differences of the
+// two opposite pairs: HISTORY_WEIGHT, up to HISTORY_WEIGHT_DETAIL where both pairs differ (detail
+// or a corner: the spatial estimate guesses), down to 0 where one differs much more than the
+// other (an edge through p: the differential blend follows it, while the resampled history is
+// the softer and the likelier to be off by a fraction of a pixel there).
+real history_share(Sample n[4]) {
+    real dh = abs(luma(tonemap(n[0].c)) - luma(tonemap(n[1].c)));
+    real dv = abs(luma(tonemap(n[2].c)) - luma(tonemap(n[3].c)));
+    real lo = min(dh, dv);
+    real detail = clamp(lo / real(DETAIL_CONTRAST), real(0.0), real(1.0));
+    real edge = clamp((max(dh, dv) - lo) / real(EDGE_CONTRAST), real(0.0), real(1.0));
+    real w = real(HISTORY_WEIGHT) + real(HISTORY_WEIGHT_DETAIL - HISTORY_WEIGHT) * detail
+        - real(HISTORY_WEIGHT) * edge;
+    return clamp(w, real(0.0), real(1.0));
+}
+
 // The same-quad horizontal neighbour (x xor 1): rendered whenever the pixel is missing.
 int quad_partner(ivec2 p) { return (p.x & 1) == 0 ? 1 : 0; }
 
@@ -579,7 +595,8 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
         h = history_resampled(q - r.v, win_valid);
     }
     // Moving: clamp to the neighbourhood, then blend with the spatial estimate, the history
-    // weighted HISTORY_WEIGHT (resolve/mod.rs; pq4k takes its 4-neighbour mean half and half):
+    // weighted by history_share (resolve/mod.rs's constants; pq4k takes its 4-neighbour mean half
+    // and half):
     // resampled history alone is softer and noisier than fresh neighbours. Without history, the
     // spatial estimate alone, of `fb`'s surface when every hypothesis failed. Computed once.
     bool blend = found && !has(F_NO_CLAMP) && length(r.v) > pc.params.y;
@@ -594,7 +611,7 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
         r.dbg |= DBG_REPROJECTED;
         if (blend) {
             h = clamp_to_box(h, n, r.dbg);
-            h = mix(sp, h, real(HISTORY_WEIGHT));
+            h = mix(sp, h, history_share(n));
         }
         r.c = h;
     } else {

@@ -147,9 +147,15 @@ pub const FUSED_ALPHA: f32 = 0.2;
 /// FUSED_SPEED pixels per frame (`+taa`'s speed term and values).
 pub const FUSED_ALPHA_MAX: f32 = 0.5;
 pub const FUSED_SPEED: f32 = 2.0;
-/// `ours`: the history's share in the moving blend with the spatial estimate (resolve.comp, where
-/// docs/resolve.md says how it was chosen).
+/// `ours`: the history's share in the moving blend with the spatial estimate (resolve.comp's
+/// `history_share`; docs/resolve.md says how these were chosen): HISTORY_WEIGHT, raised towards
+/// HISTORY_WEIGHT_DETAIL as the smaller of the two opposite pairs' tonemapped luminance
+/// differences reaches DETAIL_CONTRAST, lowered to 0 as the larger exceeds the smaller by
+/// EDGE_CONTRAST.
 pub const HISTORY_WEIGHT: f32 = 0.65;
+pub const HISTORY_WEIGHT_DETAIL: f32 = 0.9;
+pub const DETAIL_CONTRAST: f32 = 0.1;
+pub const EDGE_CONTRAST: f32 = 0.2;
 
 /// `fused`: the frame's jitter (pixels): Halton(2, 3) of length 8 advancing every second frame, so
 /// each parity's pixels see the whole sequence.
@@ -402,6 +408,9 @@ impl ResolvePass {
             ("FUSED_ALPHA_MAX", format!("{FUSED_ALPHA_MAX:?}")),
             ("FUSED_SPEED", format!("{FUSED_SPEED:?}")),
             ("HISTORY_WEIGHT", format!("{HISTORY_WEIGHT:?}")),
+            ("HISTORY_WEIGHT_DETAIL", format!("{HISTORY_WEIGHT_DETAIL:?}")),
+            ("DETAIL_CONTRAST", format!("{DETAIL_CONTRAST:?}")),
+            ("EDGE_CONTRAST", format!("{EDGE_CONTRAST:?}")),
             (
                 "OUT_VELOCITY",
                 u32::from(settings.debug || settings.velocity).to_string(),

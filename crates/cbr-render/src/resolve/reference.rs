@@ -76,6 +76,22 @@ pub fn untonemap(t: V3) -> V3 {
     div(t, (1.0 - luma(t)).max(1e-3))
 }
 
+/// `ours`' history share in the moving blend (resolve.comp's `history_share`): from the
+/// tonemapped luminance differences of the horizontal and vertical pairs, more history where both
+/// differ (detail), none where one differs much more than the other (an edge through the pixel).
+fn history_share(n: &[Sample; 4]) -> f32 {
+    use super::{DETAIL_CONTRAST, EDGE_CONTRAST, HISTORY_WEIGHT, HISTORY_WEIGHT_DETAIL};
+    let l = |i: usize| luma(tonemap(n[i].c));
+    let dh = (l(0) - l(1)).abs();
+    let dv = (l(2) - l(3)).abs();
+    let lo = dh.min(dv);
+    let detail = (lo / DETAIL_CONTRAST).clamp(0.0, 1.0);
+    let edge = ((dh.max(dv) - lo) / EDGE_CONTRAST).clamp(0.0, 1.0);
+    let w = HISTORY_WEIGHT + (HISTORY_WEIGHT_DETAIL - HISTORY_WEIGHT) * detail
+        - HISTORY_WEIGHT * edge;
+    w.clamp(0.0, 1.0)
+}
+
 /// The differential blend's weight offset (BLEND_EPS in resolve.comp).
 pub const BLEND_EPS: f32 = 1.0 / 64.0;
 
@@ -595,7 +611,7 @@ impl Ctx<'_> {
                         if a.clamp && length(r.v) > self.s.static_threshold {
                             h = self.clamp_to_box(h, n, &mut r.dbg);
                             let sp = self.spatial_fill(n, r.id, use_ids, own);
-                            let w = super::HISTORY_WEIGHT;
+                            let w = history_share(n);
                             h = [0, 1, 2].map(|k| sp[k] * (1.0 - w) + h[k] * w);
                         }
                         r.c = h;
