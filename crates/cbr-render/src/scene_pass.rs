@@ -352,7 +352,9 @@ impl ScenePass {
             cmd.set_viewport(x, y, w, h);
             cmd.bind_pipeline(prepass);
             cmd.bind_set(prepass, 0, &self.set);
-            draw_scene(cmd, scene, &self.material_sets, config.instances, |_| prepass);
+            draw_scene(cmd, scene, &self.material_sets, config.instances, |_| {
+                prepass
+            });
             cmd.end_rendering();
             profiler.end(cmd, scope);
         }
@@ -372,12 +374,16 @@ impl ScenePass {
             cmd.set_sample_locations(depth, l);
         }
         cmd.bind_set(&self.pipeline, 0, &self.set);
-        draw_scene(cmd, scene, &self.material_sets, config.instances, |m| {
-            match &self.prepass {
+        draw_scene(
+            cmd,
+            scene,
+            &self.material_sets,
+            config.instances,
+            |m| match &self.prepass {
                 Some((_, late)) if scene.material_bumped[m as usize] => late,
                 _ => &self.pipeline,
-            }
-        });
+            },
+        );
         cmd.end_rendering();
         profiler.end(cmd, scope);
     }

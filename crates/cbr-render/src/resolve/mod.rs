@@ -408,7 +408,10 @@ impl ResolvePass {
             ("FUSED_ALPHA_MAX", format!("{FUSED_ALPHA_MAX:?}")),
             ("FUSED_SPEED", format!("{FUSED_SPEED:?}")),
             ("HISTORY_WEIGHT", format!("{HISTORY_WEIGHT:?}")),
-            ("HISTORY_WEIGHT_DETAIL", format!("{HISTORY_WEIGHT_DETAIL:?}")),
+            (
+                "HISTORY_WEIGHT_DETAIL",
+                format!("{HISTORY_WEIGHT_DETAIL:?}"),
+            ),
             ("DETAIL_CONTRAST", format!("{DETAIL_CONTRAST:?}")),
             ("EDGE_CONTRAST", format!("{EDGE_CONTRAST:?}")),
             (

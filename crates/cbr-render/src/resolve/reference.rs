@@ -87,8 +87,8 @@ fn history_share(n: &[Sample; 4]) -> f32 {
     let lo = dh.min(dv);
     let detail = (lo / DETAIL_CONTRAST).clamp(0.0, 1.0);
     let edge = ((dh.max(dv) - lo) / EDGE_CONTRAST).clamp(0.0, 1.0);
-    let w = HISTORY_WEIGHT + (HISTORY_WEIGHT_DETAIL - HISTORY_WEIGHT) * detail
-        - HISTORY_WEIGHT * edge;
+    let w =
+        HISTORY_WEIGHT + (HISTORY_WEIGHT_DETAIL - HISTORY_WEIGHT) * detail - HISTORY_WEIGHT * edge;
     w.clamp(0.0, 1.0)
 }
 
