@@ -165,10 +165,11 @@ void main() {
     }
     o_velocity = to_pixels(v_clip) - to_pixels(v_prev_clip);
     o_ids = uvec2(o.ids.x, uint(gl_PrimitiveID));
-    // The forward shader writes storage (the counters), so it runs with late depth tests; this
-    // variant must too: on llvmpipe an early depth test changes the derivatives in partly
-    // covered quads (bump mapping on the demo's foliage moved by up to 291 fp16 ulps). The
-    // condition never holds (object IDs start at 1); the store it guards keeps the late tests.
+    // Without EARLY_TESTS (bump-mapped materials after the pre-pass) this variant keeps late
+    // depth tests, as the forward shader's counter stores do: on llvmpipe a lane that fails an
+    // early depth test takes no part in a texture result's derivative, which the bump map takes
+    // (bump_mapping_matches_native, tests/deferred.rs). The condition never holds (object IDs
+    // start at 1); the store it guards keeps the late tests.
     if (o.ids.x == 0u) atomicAdd(nonfinite_fragments, 1u);
 #else
     vec3 c = shade(v_world, n, albedo, m, frame);
