@@ -155,31 +155,37 @@ vec4 catmull_rom(float f) {
                 -1.5 * f3 + 2.0 * f2 + 0.5 * f, 0.5 * f3 - 0.5 * f2);
 }
 
-// Why history texel t does not show object `id` at reverse-Z depths [lo, hi] (0: it does).
-uint tap_reasons(ivec2 t, uint id, float lo, float hi, bool use_ids, bool use_depth) {
+// Why history geometry g does not show object `id` at reverse-Z depths [lo, hi] (0: it does).
+uint geom_reasons(uvec2 g, uint id, float lo, float hi, bool use_ids, bool use_depth) {
     uint r = 0u;
-    uvec2 g = texelFetch(hist_geom, t, 0).xy;
     if (use_ids && (g.x & ID_MASK) != id) r |= DBG_REJECT_ID;
     if (use_depth && !depth_agrees(uintBitsToFloat(g.y), lo, hi)) r |= DBG_REJECT_DEPTH;
     return r;
+}
+uint tap_reasons(ivec2 t, uint id, float lo, float hi, bool use_ids, bool use_depth) {
+    return geom_reasons(texelFetch(hist_geom, t, 0).xy, id, lo, hi, use_ids, use_depth);
 }
 
 // The share of the bilinear footprint at q on history texels showing object `id` at reverse-Z
 // depths [lo, hi] (off-screen taps count as invalid). `ours` accepts a hypothesis when more than
 // half of it is valid: the footprint locates an edge of the object to a fraction of a texel,
 // where the texel containing q alone (`fused`'s test) is off by up to half a texel. `valid`
-// gets bit k for each valid tap k (TAP order), for history_resampled.
+// gets bit k for each valid tap k (TAP order), for history_resampled; `g0` the geometry of tap 0
+// (the texel containing q when q is a texel centre; zero if that tap was not read).
 float history_weight(vec2 q, uint id, float lo, float hi, bool use_ids, bool use_depth,
-                     out uint valid, inout uint why) {
+                     out uint valid, inout uint why, out uvec2 g0) {
     ivec2 base;
     float w[4];
     bilinear_taps(q, base, w);
     float ws = 0.0;
     valid = 0u;
+    g0 = uvec2(0u);
     for (int k = 0; k < 4; k++) {
         ivec2 t = base + TAP[k];
         if (w[k] <= 0.0 || !inside(t)) continue;
-        uint rn = tap_reasons(t, id, lo, hi, use_ids, use_depth);
+        uvec2 g = texelFetch(hist_geom, t, 0).xy;
+        if (k == 0) g0 = g;
+        uint rn = geom_reasons(g, id, lo, hi, use_ids, use_depth);
         if (rn == 0u) {
             ws += w[k];
             valid |= 1u << k;
@@ -191,10 +197,10 @@ float history_weight(vec2 q, uint id, float lo, float hi, bool use_ids, bool use
 }
 
 // History at q once accepted: bilinear over the valid taps (history_weight's `valid`),
-// renormalised. Kept apart from the test so that `ours` tests its candidates first and resamples
+// renormalised; with `exact`, the texel q lies in, as it is (the still rule). Kept apart from the test so that `ours` tests its candidates first and resamples
 // once, for the winner: on a SIMD machine a resample inside the candidate loop runs for every
 // candidate on which any lane stops.
-real3 history_resampled(vec2 q, uint valid) {
+real3 history_resampled(vec2 q, uint valid, bool exact) {
     ivec2 base;
     float w[4];
     bilinear_taps(q, base, w);
@@ -242,7 +248,7 @@ real3 history_resampled(vec2 q, uint valid) {
         }
         h = max(c, real3(0.0));
     }
-    return h;
+    return exact ? inner[0] : h;
 }
 
 // History at q validated against object `id` and reverse-Z depths [lo, hi] (`fused`): the texel
@@ -256,13 +262,14 @@ bool history_validated(vec2 q, uint id, float lo, float hi, bool use_ids, bool u
     if (!inside(near)) return false;
     uint valid;
     uint tap_why = 0u;
-    history_weight(q, id, lo, hi, use_ids, use_depth, valid, tap_why);
+    uvec2 g0;
+    history_weight(q, id, lo, hi, use_ids, use_depth, valid, tap_why, g0);
     ivec2 k = near - ivec2(floor(q - 0.5));
     if ((valid & (1u << (k.x + 2 * k.y))) == 0u) {
         why |= tap_reasons(near, id, lo, hi, use_ids, use_depth);
         return false;
     }
-    h = history_resampled(q, valid);
+    h = history_resampled(q, valid, false);
     return true;
 }
 
@@ -537,38 +544,39 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
     bool found = false;
     uint why = 0u;
     real3 h = real3(0.0);
-    // A still neighbourhood (every neighbour below the static threshold) and a history pixel
-    // that did not move either: nothing can have covered or uncovered p, so its history stands
-    // as it is (with the prepass: if it shows the pixel's own object). This keeps thin features
-    // that no neighbour shows; a disoccluded pixel's history moved, so it is not taken.
+    // The hypotheses are tested in one loop, so that a SIMD machine that predicates branches
+    // (llvmpipe runs both sides of every `if`, but leaves a loop once no lane goes on) fetches
+    // history only in the iterations some lane needs:
+    // - First, where the neighbourhood is still (every neighbour below the static threshold): the
+    //   history at p, if it did not move either (with the prepass: if it shows the pixel's own
+    //   object). Nothing can have covered or uncovered p, so its history stands as it is. This
+    //   keeps thin features that no neighbour shows; a disoccluded pixel's history moved, so it is
+    //   not taken. Its fetch is tap 0 of the footprint at p's centre.
+    // - Then the candidates: the first with more than half of its bilinear footprint at q - v
+    //   valid wins.
+    // The winner's history is resampled once, after the loop.
+    bool still = false;
     if (!reset && use_v) {
-        bool still = true;
+        still = true;
         for (int i = 0; i < 4; i++) still = still && length(n[i].v) <= pc.params.y;
-        if (still) {
-            uvec2 g = texelFetch(hist_geom, p, 0).xy;
-            uint hid = g.x;
-            if ((hid & ID_MOVED) == 0u && (!own || hid == own_id)) {
-                found = true;
-                h = real3(texelFetch(hist_color, p, 0).rgb);
-                r.d = uintBitsToFloat(g.y);
-                r.id = hid;
-                r.v = vec2(0.0);
-                r.dbg |= DBG_STILL;
-            }
-        }
     }
-    // The first candidate with more than half of its bilinear footprint at q - v valid wins; its
-    // history is resampled once, after the loop.
     bool covered = false;
+    bool still_won = false;
     uint win_valid = 0u;
-    for (int k = 0; k < 4; k++) {
-        if (reset || found || covered || (k > 0 && !multi)) break;
+    int k = still ? -1 : 0;  // this lane's hypothesis: -1 the still one, then candidate k
+    for (int it = 0; it < 5; it++, k++) {
+        if (reset || covered || k > 3 || (k > 0 && !multi)) break;
+        Sample ck = c[0];
+        if (k == 1) ck = c[1];
+        if (k == 2) ck = c[2];
+        if (k == 3) ck = c[3];
         bool dup = false;
-        for (int j = 0; j < k; j++) dup = dup || c[j].ids.x == c[k].ids.x;
+        for (int j = 0; j < 3; j++) dup = dup || (j < k && c[j].ids.x == ck.ids.x);
         if (dup) continue;
-        vec2 v = use_v ? c[k].v : vec2(0.0);
-        uint id = own ? own_id : c[k].ids.x;
-        float d = own ? own_d : c[k].d;
+        bool is_still = k < 0;
+        vec2 v = use_v && !is_still ? ck.v : vec2(0.0);
+        uint id = own ? own_id : ck.ids.x;
+        float d = own ? own_d : ck.d;
         // The depth span of the neighbours showing this object (with the prepass, the pixel's
         // own depth).
         float lo = d;
@@ -582,17 +590,33 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
             }
         }
         uint valid;
-        if (history_weight(q - v, id, lo, hi, use_ids, use_depth, valid, why) > 0.5) {
-            covered = true;
-            r.d = d;
-            r.id = id;
-            r.v = v;
-            win_valid = valid;
+        uint tap_why = 0u;
+        uvec2 g0;
+        float wsum = history_weight(q - v, id, lo, hi, use_ids, use_depth, valid, tap_why, g0);
+        if (is_still) {
+            if ((g0.x & ID_MOVED) == 0u && (!own || g0.x == own_id)) {
+                covered = true;
+                still_won = true;
+                r.d = uintBitsToFloat(g0.y);
+                r.id = g0.x;
+                r.v = vec2(0.0);
+                r.dbg |= DBG_STILL;
+                win_valid = 1u;
+            }
+        } else {
+            why |= tap_why;
+            if (wsum > 0.5) {
+                covered = true;
+                r.d = d;
+                r.id = id;
+                r.v = v;
+                win_valid = valid;
+            }
         }
     }
     if (covered) {
         found = true;
-        h = history_resampled(q - r.v, win_valid);
+        h = history_resampled(q - r.v, win_valid, still_won);
     }
     // Moving: clamp to the neighbourhood, then blend with the spatial estimate, the history
     // weighted by history_share (resolve/mod.rs's constants; pq4k takes its 4-neighbour mean half
