@@ -197,9 +197,9 @@ float history_weight(vec2 q, uint id, float lo, float hi, bool use_ids, bool use
 }
 
 // History at q once accepted: bilinear over the valid taps (history_weight's `valid`),
-// renormalised; with `exact`, the texel q lies in, as it is (the still rule). Kept apart from the test so that `ours` tests its candidates first and resamples
-// once, for the winner: on a SIMD machine a resample inside the candidate loop runs for every
-// candidate on which any lane stops.
+// renormalised; with `exact`, the texel q lies in, as it is (the still rule). Kept apart from the
+// test so that `ours` tests its candidates first and resamples once, for the winner: on a SIMD
+// machine a resample inside the candidate loop runs for every candidate on which any lane stops.
 real3 history_resampled(vec2 q, uint valid, bool exact) {
     ivec2 base;
     float w[4];
