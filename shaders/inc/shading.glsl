@@ -4,7 +4,7 @@
 #define SHADING_GLSL
 #include "scene_types.glsl"
 
-// Needs the scene's `lights` buffer declared (only `shade` reads it).
+// Needs the scene's `lights` buffer declared (`shade_lights` and `shade` read it).
 
 // Smooth window that takes a point light to zero at its range (1 well inside it).
 float range_window(float dist, float range) {

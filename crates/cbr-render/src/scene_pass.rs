@@ -350,7 +350,6 @@ impl ScenePass {
                 config.layers,
             );
             cmd.set_viewport(x, y, w, h);
-            cmd.bind_pipeline(prepass);
             cmd.bind_set(prepass, 0, &self.set);
             draw_scene(cmd, scene, &self.material_sets, config.instances, |_| {
                 prepass
@@ -369,7 +368,6 @@ impl ScenePass {
             config.layers,
         );
         cmd.set_viewport(x, y, w, h);
-        cmd.bind_pipeline(&self.pipeline);
         if let Some(l) = config.sample_locations {
             cmd.set_sample_locations(depth, l);
         }
@@ -460,10 +458,9 @@ pub fn material_sets(
         .collect()
 }
 
-/// Draws every object of `scene` with the pipeline `pipeline` picks for its material (set 0
-/// and the first pipeline bound by the caller, all pipelines' layouts alike, so that a switch
-/// keeps set 0; set 1 per material, the object index as push constant), `instances` instances
-/// each.
+/// Draws every object of `scene` with the pipeline `pipeline` picks for its material, bound here
+/// when it changes (set 0 bound by the caller; all pipelines' layouts alike, so that a switch
+/// keeps it; set 1 per material, the object index as push constant), `instances` instances each.
 pub fn draw_scene<'a>(
     cmd: &mut Cmd,
     scene: &GpuScene,

@@ -581,7 +581,6 @@ impl Analytic {
             1,
         );
         cmd.set_viewport(0.0, 0.0, t.depth.width as f32, t.depth.height as f32);
-        cmd.bind_pipeline(&r.pipeline);
         cmd.bind_set(&r.pipeline, 0, &self.scene_set);
         cmd.bind_set(&r.pipeline, 2, &self.raster_set);
         scene_pass::draw_scene(cmd, scene, &self.material_sets, 1, |_| &r.pipeline);
