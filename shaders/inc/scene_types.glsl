@@ -14,7 +14,7 @@
 // counts.w flags
 #define FLAG_PARITY 1u          // the frame's parity: checkerboard (x + y) mod 2, interlaced y mod 2
 #define FLAG_COUNT_SHADED 2u    // count shaded (non-helper) fragments in the counter buffer
-#define FLAG_LOD_GRADIENTS 4u   // textureGrad with derivatives scaled to full-res pixels
+// 4u: free (was the LOD-gradients flag, now the LOD_GRADIENTS define of the scene pass)
 #define FLAG_DEBUG_LOD 8u       // write the albedo lookup's level of detail to colour.r
 
 struct FrameConstants {

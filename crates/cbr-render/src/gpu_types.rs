@@ -22,7 +22,6 @@ pub const MAX_PIECES: usize = 8;
 /// `counts.w` flags and `LAYOUT` values, as in scene_types.glsl.
 pub const FLAG_PARITY: u32 = 1;
 pub const FLAG_COUNT_SHADED: u32 = 2;
-pub const FLAG_LOD_GRADIENTS: u32 = 4;
 pub const FLAG_DEBUG_LOD: u32 = 8;
 
 #[repr(C)]

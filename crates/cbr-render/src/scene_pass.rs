@@ -96,6 +96,11 @@ pub struct RasterConfig {
     /// depth test made before the fragment shader: every pixel's surface is shaded once instead
     /// of every fragment. Only with `gbuffer` (whose outputs do not depend on the shading order).
     pub depth_prepass: bool,
+    /// Textures looked up with the screen derivatives rebuilt from the layout's lattice
+    /// (`textureGrad`, the LOD_GRADIENTS define) instead of the implicit derivatives plus the
+    /// frame's LOD bias. Compiled in, not a frame flag: llvmpipe runs both sides of a branch on a
+    /// uniform flag, so a flag would pay for both lookups at every texture tap (docs/OVERVIEW.md).
+    pub lod_gradients: bool,
 }
 
 impl RasterConfig {
@@ -112,6 +117,7 @@ impl RasterConfig {
             sample_locations: None,
             gbuffer: false,
             depth_prepass: false,
+            lod_gradients: false,
         }
     }
 
@@ -139,6 +145,7 @@ impl RasterConfig {
             sample_locations: plan.sample_locations,
             gbuffer: false,
             depth_prepass: false,
+            lod_gradients: false,
         }
     }
 }
@@ -188,6 +195,9 @@ impl ScenePass {
         }
         if config.gbuffer {
             defines.push(("GBUFFER".into(), "1".into()));
+        }
+        if config.lod_gradients {
+            defines.push(("LOD_GRADIENTS".into(), "1".into()));
         }
         let vs = shaders.compile("scene/forward.vert", &defines)?;
         let prepass = if config.depth_prepass {

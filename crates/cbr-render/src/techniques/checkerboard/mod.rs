@@ -14,7 +14,7 @@ use unpack::{UnpackPass, UnpackedPixel};
 
 use super::{IdPass, linear_depths};
 use crate::gpu_scene::{FrameView, RasterUniforms};
-use crate::gpu_types::{FLAG_LOD_GRADIENTS, FLAG_PARITY};
+use crate::gpu_types::FLAG_PARITY;
 use crate::layouts::LayoutPlan;
 use crate::memory::MemoryEstimate;
 use crate::renderer::{FrameOutput, ResolveOutput};
@@ -119,9 +119,16 @@ impl Checkerboard {
         if config.locations {
             plans = plans.map(LayoutPlan::with_sample_locations);
         }
+        let gradients = config.lod_mode == LodMode::Gradients;
         let configs = [
-            RasterConfig::for_plan(&plans[0]),
-            RasterConfig::for_plan(&plans[1]),
+            RasterConfig {
+                lod_gradients: gradients,
+                ..RasterConfig::for_plan(&plans[0])
+            },
+            RasterConfig {
+                lod_gradients: gradients,
+                ..RasterConfig::for_plan(&plans[1])
+            },
         ];
         let name = format!("checkerboard.{}.raster", layout.name());
         let pass = ScenePass::new(gpu, shaders, ctx.scene, &name, &configs[0], ctx.counter)?;
@@ -167,10 +174,7 @@ impl Checkerboard {
     /// The frame's view in the layout's raster target: parity, viewport, jitter, tangram.
     fn view(&self, base: &FrameView, parity: u32) -> FrameView {
         let plan = &self.plans[parity as usize];
-        let mut flags = base.raster.flags | (plan.parity * FLAG_PARITY);
-        if self.config.lod_mode == LodMode::Gradients {
-            flags |= FLAG_LOD_GRADIENTS;
-        }
+        let flags = base.raster.flags | (plan.parity * FLAG_PARITY);
         let vp = self.configs[parity as usize].viewport;
         FrameView {
             raster: RasterUniforms {
