@@ -17,6 +17,17 @@
 // 4u: free (was the LOD-gradients flag, now the LOD_GRADIENTS define of the scene pass)
 #define FLAG_DEBUG_LOD 8u       // write the albedo lookup's level of detail to colour.r
 
+// A material's texture paths (gpu_types.rs MAT_*). MAT_FEATURES, a define of the scene raster's
+// pipelines, compiles in only the paths of the materials drawn with it (scene_pass.rs builds one
+// pipeline per combination the scene uses): llvmpipe runs the body of every branch for every
+// fragment, even when no fragment of the draw takes it. Without the define, every path.
+#define MAT_ALBEDO 1
+#define MAT_MASK 2
+#define MAT_BUMP 4
+#ifndef MAT_FEATURES
+#define MAT_FEATURES 7
+#endif
+
 struct FrameConstants {
     vec4 viewport;      // the viewport NDC maps to, in target pixels: width, height, 1/width, 1/height
     vec4 output_size;   // full-resolution W, H, 1/W, 1/H (velocity is in these pixels)

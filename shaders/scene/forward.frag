@@ -145,23 +145,29 @@ void main() {
     // Rows of the other parity: every 2x2 quad keeps one row, whose derivatives stay native's.
     if ((int(gl_FragCoord.y) & 1) != int(frame.counts.w & FLAG_PARITY)) demote;
 #endif
+#if (MAT_FEATURES & MAT_MASK) != 0
     if (m.tex.y >= 0) {
         float a = tex(mask_tex, v_uv)[m.tex.z];
         if (a < 0.5) demote;
     }
+#endif
 #ifdef DEPTH_ONLY
 #elif defined(ID_ONLY)
     o_ids = uvec2(o.ids.x, uint(gl_PrimitiveID));
 #else
     vec3 albedo = m.kd.rgb;
+#if (MAT_FEATURES & MAT_ALBEDO) != 0
     if (m.tex.x >= 0) albedo *= tex(albedo_tex, v_uv).rgb;
+#endif
     vec3 n = normalize(v_normal);
     // Double-sided: OBJ winding is unreliable, so face the normal towards the camera.
     if (dot(n, -v_world) < 0.0) n = -n;
+#if (MAT_FEATURES & MAT_BUMP) != 0
     if (m.tex.w >= 0) {
         float h = tex(bump_tex, v_uv).r * m.ke.w;
         n = bump(n, v_world, h);
     }
+#endif
 #ifdef GBUFFER
     o_position = vec4(v_world, 1.0);
     o_normal = vec4(n, m.ks.w);

@@ -7,7 +7,9 @@ use cbr_gpu::{
 use cbr_scene::{AlphaSource, Camera, Scene};
 use glam::{DMat3, DMat4, DVec3};
 
-use crate::gpu_types::{FrameConstants, LightData, MAX_PIECES, MaterialData, ObjectData};
+use crate::gpu_types::{
+    FrameConstants, LightData, MAT_ALBEDO, MAT_BUMP, MAT_MASK, MAX_PIECES, MaterialData, ObjectData,
+};
 use crate::memory::MemoryEstimate;
 
 /// One draw: an object's index range in the shared index buffer.
@@ -28,8 +30,9 @@ pub struct GpuScene {
     pub white: Image,
     /// Per material: the textures of its albedo, mask and bump slots.
     pub material_textures: Vec<[Option<u32>; 3]>,
-    /// Per material: bump mapping on (a height map and the scene's `bump` setting).
-    pub material_bumped: Vec<bool>,
+    /// Per material: its texture paths (MAT_ALBEDO | MAT_MASK | MAT_BUMP; bump only with a
+    /// height map and the scene's `bump` setting), from the material data the shaders read.
+    pub material_features: Vec<u32>,
     pub sampler: Sampler,
     pub draws: Vec<Draw>,
     pub objects: Buffer,
@@ -273,7 +276,16 @@ impl GpuScene {
                 [m.kd_tex, mask, m.bump_tex]
             })
             .collect();
-        let material_bumped = mats.iter().map(|m| m.tex[3] >= 0).collect();
+        let material_features = mats
+            .iter()
+            .map(|m| {
+                [MAT_ALBEDO, MAT_MASK, 0, MAT_BUMP]
+                    .iter()
+                    .zip(m.tex)
+                    .filter(|&(_, t)| t >= 0)
+                    .fold(0, |f, (bit, _)| f | bit)
+            })
+            .collect();
         let sampler = Sampler::new(
             gpu,
             "scene.sampler",
@@ -313,7 +325,7 @@ impl GpuScene {
             textures,
             white,
             material_textures,
-            material_bumped,
+            material_features,
             sampler,
             draws,
             objects,

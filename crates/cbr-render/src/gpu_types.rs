@@ -24,6 +24,13 @@ pub const FLAG_PARITY: u32 = 1;
 pub const FLAG_COUNT_SHADED: u32 = 2;
 pub const FLAG_DEBUG_LOD: u32 = 8;
 
+/// A material's texture paths (scene_types.glsl's MAT_*): the MAT_FEATURES define of a scene
+/// pipeline compiles in only these, and a scene pass builds one pipeline per combination its
+/// materials use.
+pub const MAT_ALBEDO: u32 = 1;
+pub const MAT_MASK: u32 = 2;
+pub const MAT_BUMP: u32 = 4;
+
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct ObjectData {

@@ -7,7 +7,7 @@ use cbr_gpu::{
 };
 
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::ScenePush;
+use crate::gpu_types::{MAT_ALBEDO, MAT_BUMP, MAT_MASK, ScenePush};
 use crate::layouts::LayoutPlan;
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, GBUFFER_FORMAT, ID_FORMAT, VELOCITY_FORMAT};
 
@@ -159,11 +159,35 @@ const GBUFFER_FORMATS: [vk::Format; 5] = [
     ID_FORMAT,
 ];
 
-pub struct ScenePass {
+/// The pipelines of one combination of material features (MAT_FEATURES).
+struct Variant {
     pipeline: Pipeline,
-    /// `RasterConfig::depth_prepass`: the depth-only pipeline drawn first, and the pass proper
-    /// with late tests for bump-mapped materials (below).
-    prepass: Option<(Pipeline, Pipeline)>,
+    /// `RasterConfig::depth_prepass`: the depth-only pipeline drawn first, and for bump-mapped
+    /// materials the pass proper with late tests (below).
+    depth: Option<Pipeline>,
+    late: Option<Pipeline>,
+}
+
+/// The distinct feature combinations of `features` (sorted) and each entry's index among them;
+/// one combination (every path) when there is none.
+pub fn feature_variants(features: &[u32]) -> (Vec<u32>, Vec<usize>) {
+    let mut keys: Vec<u32> = features.to_vec();
+    keys.sort_unstable();
+    keys.dedup();
+    if keys.is_empty() {
+        keys.push(MAT_ALBEDO | MAT_MASK | MAT_BUMP);
+    }
+    let index = features
+        .iter()
+        .map(|f| keys.binary_search(f).unwrap_or(0))
+        .collect();
+    (keys, index)
+}
+
+pub struct ScenePass {
+    /// One per feature combination of the scene's materials; `of_material` picks a draw's.
+    variants: Vec<Variant>,
+    of_material: Vec<usize>,
     _layouts: [SetLayout; 2],
     set: DescriptorSet,
     material_sets: Vec<DescriptorSet>,
@@ -200,89 +224,100 @@ impl ScenePass {
             defines.push(("LOD_GRADIENTS".into(), "1".into()));
         }
         let vs = shaders.compile("scene/forward.vert", &defines)?;
-        let prepass = if config.depth_prepass {
-            if !config.gbuffer || config.samples != 1 {
-                return Err(cbr_gpu::GpuError::Other(format!(
-                    "{name}: a depth pre-pass is built for the single-sample G-buffer pass only"
-                )));
+        if config.depth_prepass && (!config.gbuffer || config.samples != 1) {
+            return Err(cbr_gpu::GpuError::Other(format!(
+                "{name}: a depth pre-pass is built for the single-sample G-buffer pass only"
+            )));
+        }
+        let with_features = |defines: &[(String, String)], f: u32, extra: Option<&str>| {
+            let mut d = defines.to_vec();
+            d.push(("MAT_FEATURES".into(), f.to_string()));
+            if let Some(e) = extra {
+                d.push((e.into(), "1".into()));
             }
-            let mut depth_defines = defines.clone();
-            depth_defines.push(("DEPTH_ONLY".into(), "1".into()));
-            let depth_fs = shaders.compile("scene/forward.frag", &depth_defines)?;
-            let late_fs = shaders.compile("scene/forward.frag", &defines)?;
-            defines.push(("EARLY_TESTS".into(), "1".into()));
-            // The same vertex shader bits in every pipeline: the EQUAL test needs the same depths.
-            let desc = |name: &str, fragment: &[u32], prepass: bool| {
-                Pipeline::graphics(
-                    gpu,
-                    &GraphicsDesc {
-                        name,
-                        vertex: &vs,
-                        geometry: None,
-                        fragment,
-                        set_layouts: &[&layout, &material_layout],
-                        push_constant_bytes: std::mem::size_of::<ScenePush>() as u32,
-                        color_formats: if prepass { &[] } else { &GBUFFER_FORMATS },
-                        depth_format: Some(DEPTH_FORMAT),
-                        depth_compare: if prepass {
-                            vk::CompareOp::GREATER
-                        } else {
-                            vk::CompareOp::EQUAL
-                        },
-                        depth_write: prepass,
-                        samples: 1,
-                        min_sample_shading: None,
-                        cull_back_faces: false,
-                        sample_locations: false,
-                    },
-                )
-            };
-            // Bump mapping differentiates a texture lookup, and on llvmpipe a lane that fails an
-            // early depth test does not take part in that derivative (tests/deferred.rs,
-            // bump_mapping_matches_native, saw up to 1072 fp16 ulps): bump-mapped materials keep
-            // late tests, EQUAL against the pre-pass's depth.
-            Some((
-                desc(&format!("{name}.depth"), &depth_fs, true)?,
-                desc(&format!("{name}.late"), &late_fs, false)?,
-            ))
-        } else {
-            None
+            d
         };
-        let fs = shaders.compile("scene/forward.frag", &defines)?;
-        let pipeline = Pipeline::graphics(
-            gpu,
-            &GraphicsDesc {
-                name,
-                vertex: &vs,
-                geometry: None,
-                fragment: &fs,
-                set_layouts: &[&layout, &material_layout],
-                push_constant_bytes: std::mem::size_of::<ScenePush>() as u32,
-                color_formats: match (config.id_only, config.gbuffer, config.write_ids) {
-                    (true, _, _) => &[ID_FORMAT],
-                    (false, true, _) => &GBUFFER_FORMATS,
-                    (false, false, false) => &[COLOR_FORMAT, VELOCITY_FORMAT],
-                    (false, false, true) => &[COLOR_FORMAT, VELOCITY_FORMAT, ID_FORMAT],
+        // Reverse-Z: nearer is larger. After a depth pre-pass (GREATER, writing), the pass proper
+        // tests EQUAL against its depths, so only its surface passes. The same vertex shader bits
+        // in every pipeline: the EQUAL test needs the same depths.
+        let desc = |name: &str, fragment: &[u32], depth_only: bool| {
+            Pipeline::graphics(
+                gpu,
+                &GraphicsDesc {
+                    name,
+                    vertex: &vs,
+                    geometry: None,
+                    fragment,
+                    set_layouts: &[&layout, &material_layout],
+                    push_constant_bytes: std::mem::size_of::<ScenePush>() as u32,
+                    color_formats: match (depth_only, config.id_only, config.gbuffer) {
+                        (true, _, _) => &[],
+                        (false, true, _) => &[ID_FORMAT],
+                        (false, false, true) => &GBUFFER_FORMATS,
+                        (false, false, false) if config.write_ids => {
+                            &[COLOR_FORMAT, VELOCITY_FORMAT, ID_FORMAT]
+                        }
+                        (false, false, false) => &[COLOR_FORMAT, VELOCITY_FORMAT],
+                    },
+                    depth_format: Some(DEPTH_FORMAT),
+                    depth_compare: if config.depth_prepass && !depth_only {
+                        vk::CompareOp::EQUAL
+                    } else {
+                        vk::CompareOp::GREATER
+                    },
+                    depth_write: depth_only || !config.depth_prepass,
+                    samples: config.samples,
+                    min_sample_shading: (config.sample_shading && !depth_only).then_some(1.0),
+                    cull_back_faces: false,
+                    sample_locations: config.sample_locations.is_some(),
                 },
-                depth_format: Some(DEPTH_FORMAT),
-                // Reverse-Z: nearer is larger. After a depth pre-pass, only its surface passes.
-                depth_compare: if prepass.is_some() {
-                    vk::CompareOp::EQUAL
+            )
+        };
+        let (keys, of_material) = feature_variants(&scene.material_features);
+        let mut variants = Vec::with_capacity(keys.len());
+        for &f in &keys {
+            let vname = format!("{name}.mat{f}");
+            let v = if config.depth_prepass {
+                let depth_fs = shaders.compile(
+                    "scene/forward.frag",
+                    &with_features(&defines, f, Some("DEPTH_ONLY")),
+                )?;
+                let early_fs = shaders.compile(
+                    "scene/forward.frag",
+                    &with_features(&defines, f, Some("EARLY_TESTS")),
+                )?;
+                // Bump mapping differentiates a texture lookup, and on llvmpipe a lane that fails
+                // an early depth test does not take part in that derivative (tests/deferred.rs,
+                // bump_mapping_matches_native, saw up to 1072 fp16 ulps): bump-mapped materials
+                // keep late tests, EQUAL against the pre-pass's depth.
+                let late = if f & MAT_BUMP != 0 {
+                    let late_fs =
+                        shaders.compile("scene/forward.frag", &with_features(&defines, f, None))?;
+                    Some(desc(&format!("{vname}.late"), &late_fs, false)?)
                 } else {
-                    vk::CompareOp::GREATER
-                },
-                depth_write: prepass.is_none(),
-                samples: config.samples,
-                min_sample_shading: config.sample_shading.then_some(1.0),
-                cull_back_faces: false,
-                sample_locations: config.sample_locations.is_some(),
-            },
-        )?;
+                    None
+                };
+                Variant {
+                    pipeline: desc(&vname, &early_fs, false)?,
+                    depth: Some(desc(&format!("{vname}.depth"), &depth_fs, true)?),
+                    late,
+                }
+            } else {
+                let fs =
+                    shaders.compile("scene/forward.frag", &with_features(&defines, f, None))?;
+                Variant {
+                    pipeline: desc(&vname, &fs, false)?,
+                    depth: None,
+                    late: None,
+                }
+            };
+            variants.push(v);
+        }
         let set = scene_set(gpu, name, &layout, scene, counter)?;
         let material_sets = material_sets(gpu, name, &material_layout, scene)?;
         Ok(ScenePass {
-            pipeline,
-            prepass,
+            variants,
+            of_material,
             _layouts: [layout, material_layout],
             set,
             material_sets,
@@ -349,7 +384,9 @@ impl ScenePass {
             },
         };
         let [x, y, w, h] = config.viewport;
-        if let Some((prepass, _)) = &self.prepass {
+        let prepass = self.variants[0].depth.is_some();
+        let variant = |m: u32| &self.variants[self.of_material[m as usize]];
+        if let Some(depth_pipeline) = &self.variants[0].depth {
             let scope = profiler.begin(cmd, &format!("{}.depth", self.name), PassKind::Graphics);
             cmd.begin_rendering(
                 &[],
@@ -360,9 +397,10 @@ impl ScenePass {
                 config.layers,
             );
             cmd.set_viewport(x, y, w, h);
-            cmd.bind_set(prepass, 0, &self.set);
-            draw_scene(cmd, scene, &self.material_sets, config.instances, |_| {
-                prepass
+            // Set 0 once: every variant's pipeline layout is the same (compatible for binding).
+            cmd.bind_set(depth_pipeline, 0, &self.set);
+            draw_scene(cmd, scene, &self.material_sets, config.instances, |m| {
+                variant(m).depth.as_ref().unwrap_or(depth_pipeline)
             });
             cmd.end_rendering();
             profiler.end(cmd, scope);
@@ -373,7 +411,7 @@ impl ScenePass {
             Some(Attachment {
                 image: depth,
                 // After the pre-pass, its depths.
-                clear: self.prepass.is_none().then_some(depth_clear),
+                clear: (!prepass).then_some(depth_clear),
             }),
             config.layers,
         );
@@ -381,17 +419,11 @@ impl ScenePass {
         if let Some(l) = config.sample_locations {
             cmd.set_sample_locations(depth, l);
         }
-        cmd.bind_set(&self.pipeline, 0, &self.set);
-        draw_scene(
-            cmd,
-            scene,
-            &self.material_sets,
-            config.instances,
-            |m| match &self.prepass {
-                Some((_, late)) if scene.material_bumped[m as usize] => late,
-                _ => &self.pipeline,
-            },
-        );
+        cmd.bind_set(&self.variants[0].pipeline, 0, &self.set);
+        draw_scene(cmd, scene, &self.material_sets, config.instances, |m| {
+            let v = variant(m);
+            v.late.as_ref().unwrap_or(&v.pipeline)
+        });
         cmd.end_rendering();
         profiler.end(cmd, scope);
     }
@@ -492,5 +524,31 @@ pub fn draw_scene<'a>(
         };
         cmd.push_constants(p, bytemuck::bytes_of(&push));
         cmd.draw_indexed(d.index_count, instances, d.first_index, 0);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_material_gets_the_variant_of_its_own_features() {
+        let features = [
+            MAT_ALBEDO | MAT_BUMP,
+            0,
+            MAT_ALBEDO,
+            MAT_ALBEDO | MAT_BUMP,
+            MAT_MASK,
+        ];
+        let (keys, of) = feature_variants(&features);
+        assert_eq!(keys, vec![0, MAT_ALBEDO, MAT_MASK, MAT_ALBEDO | MAT_BUMP]);
+        for (f, &i) in features.iter().zip(&of) {
+            assert_eq!(keys[i], *f);
+        }
+        // No material: one variant with every path, so the pass still has a pipeline to bind.
+        assert_eq!(
+            feature_variants(&[]),
+            (vec![MAT_ALBEDO | MAT_MASK | MAT_BUMP], vec![])
+        );
     }
 }
