@@ -243,11 +243,14 @@ void main() {
         if (near < occ * (1.0 - 1e-5)) discard;
     }
 #endif
+    // MAT_FEATURES (scene_types.glsl): only the texture paths of this pipeline's materials.
+#if (MAT_FEATURES & MAT_MASK) != 0
     if (mat.tex.y >= 0) {
         geo_mask = sample_mask(p, n, orient);
         alpha_mask = alpha_test(geo_mask, uv, dx, dy, gx, gy, cov.mean_point, mat.tex.z, alpha_pass);
         if (alpha_pass <= 0.0) discard;
     }
+#endif
 #ifdef SELECT_PASS
     // The samples where this fragment is opaque (an alpha-tested one's passing samples) are
     // hidden behind its farthest depth in the pixel; each keeps the nearest such depth.
@@ -281,7 +284,9 @@ void main() {
     if (slot >= 0 || counts[pixel] > uint(K_SLOTS)) {
     // (the payload block is not indented: it is the whole shading path)
     vec3 albedo = mat.kd.rgb;
+#if (MAT_FEATURES & MAT_ALBEDO) != 0
     if (mat.tex.x >= 0) albedo *= texture_aniso(albedo_tex, uv, gx, gy).rgb;
+#endif
     vec3 world = world_at(b);
     vec3 nrm = normalize(b.x * g_normal[0] + b.y * g_normal[1] + b.z * g_normal[2]);
     // Facing away: the back of a surface (of a closed mesh, behind its front); shaded from the
@@ -290,12 +295,14 @@ void main() {
     if (facing_away) nrm = -nrm;
     // The height's change over one pixel step (isotropic: anisotropic taps here cost on lavapipe
     // and changed no measured error).
+#if (MAT_FEATURES & MAT_BUMP) != 0
     if (mat.tex.w >= 0) {
         float h = textureGrad(bump_tex, uv, gx, gy).r * mat.ke.w;
         float hx = textureGrad(bump_tex, uv + gx, gx, gy).r * mat.ke.w;
         float hy = textureGrad(bump_tex, uv + gy, gx, gy).r * mat.ke.w;
         nrm = bump_from(nrm, world_at(bx) - world, world_at(by) - world, hx - h, hy - h);
     }
+#endif
     vec3 color = shade(world, nrm, albedo, mat, frame);
     bool finite = !any(isnan(color)) && !any(isinf(color));
 
