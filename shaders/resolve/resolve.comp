@@ -318,9 +318,16 @@ void depth_sorted(Sample n[4], bool pref, uint pid, out Sample s[4]) {
 
 // The differential blend of the vertical and horizontal pairs in tonemapped space; pairs that
 // cross an object-ID edge (or do not show `ref_id`, with the prepass) are rejected.
-real3 spatial_fill(Sample n[4], uint ref_id, bool use_ids, bool own) {
-    real3 t[4];
-    for (int i = 0; i < 4; i++) t[i] = tonemap(n[i].c);
+// The neighbours' colours tonemapped, and their luminances: computed once per pixel for
+// spatial_fill and history_share (divisions are dear on a CPU's vector units).
+void toned(Sample n[4], out real3 t[4], out real l[4]) {
+    for (int i = 0; i < 4; i++) {
+        t[i] = tonemap(n[i].c);
+        l[i] = luma(t[i]);
+    }
+}
+
+real3 spatial_fill(Sample n[4], real3 t[4], real l[4], uint ref_id, bool use_ids, bool own) {
     bool h_ok = true;
     bool v_ok = true;
     if (use_ids) {
@@ -336,8 +343,8 @@ real3 spatial_fill(Sample n[4], uint ref_id, bool use_ids, bool own) {
     real3 vm = (t[2] + t[3]) * real(0.5);
     real3 r;
     if (h_ok && v_ok) {
-        real wh = real(1.0) / (real(BLEND_EPS) + abs(luma(t[0]) - luma(t[1])));
-        real wv = real(1.0) / (real(BLEND_EPS) + abs(luma(t[2]) - luma(t[3])));
+        real wh = real(1.0) / (real(BLEND_EPS) + abs(l[0] - l[1]));
+        real wv = real(1.0) / (real(BLEND_EPS) + abs(l[2] - l[3]));
         r = (wh * hm + wv * vm) / (wh + wv);
     } else if (h_ok) {
         r = hm;
@@ -366,9 +373,9 @@ real3 spatial_fill(Sample n[4], uint ref_id, bool use_ids, bool own) {
 // or a corner: the spatial estimate guesses), down to 0 where one differs much more than the
 // other (an edge through p: the differential blend follows it, while the resampled history is
 // the softer and the likelier to be off by a fraction of a pixel there).
-real history_share(Sample n[4]) {
-    real dh = abs(luma(tonemap(n[0].c)) - luma(tonemap(n[1].c)));
-    real dv = abs(luma(tonemap(n[2].c)) - luma(tonemap(n[3].c)));
+real history_share(real l[4]) {
+    real dh = abs(l[0] - l[1]);
+    real dv = abs(l[2] - l[3]);
     real lo = min(dh, dv);
     real detail = clamp(lo / real(DETAIL_CONTRAST), real(0.0), real(1.0));
     real edge = clamp((max(dh, dv) - lo) / real(EDGE_CONTRAST), real(0.0), real(1.0));
@@ -491,7 +498,10 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
         r.dbg |= DBG_SPATIAL;
     }
 #elif MODE == MODE_SPATIAL
-    r.c = spatial_fill(n, ref_id, !has(F_NO_IDS), own);
+    real3 t[4];
+    real l[4];
+    toned(n, t, l);
+    r.c = spatial_fill(n, t, l, ref_id, !has(F_NO_IDS), own);
     r.d = own ? own_d : near.d;
     r.id = ref_id;
     r.v = near.v;
@@ -501,7 +511,10 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
     r.id = ref_id;
     r.v = near.v;
     if (reset) {
-        r.c = spatial_fill(n, ref_id, true, own);
+        real3 t[4];
+        real l[4];
+        toned(n, t, l);
+        r.c = spatial_fill(n, t, l, ref_id, true, own);
         r.dbg |= DBG_SPATIAL;
     } else {
         r.c = history_plain(q - near.v);
@@ -630,12 +643,17 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
         r.v = use_v ? fb.v : vec2(0.0);
     }
     real3 sp = real3(0.0);
-    if (!found || blend) sp = spatial_fill(n, found || (multi && !reset) ? r.id : ref_id, use_ids, own);
+    real3 t[4];
+    real l[4];
+    toned(n, t, l);
+    if (!found || blend) {
+        sp = spatial_fill(n, t, l, found || (multi && !reset) ? r.id : ref_id, use_ids, own);
+    }
     if (found) {
         r.dbg |= DBG_REPROJECTED;
         if (blend) {
             h = clamp_to_box(h, n, r.dbg);
-            h = mix(sp, h, history_share(n));
+            h = mix(sp, h, history_share(l));
         }
         r.c = h;
     } else {
