@@ -279,6 +279,7 @@ impl GpuScene {
         let material_features = mats
             .iter()
             .map(|m| {
+                // tex: albedo, mask, the mask's channel (no path of its own), bump; -1 = none.
                 [MAT_ALBEDO, MAT_MASK, 0, MAT_BUMP]
                     .iter()
                     .zip(m.tex)
