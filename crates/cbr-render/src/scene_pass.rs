@@ -170,7 +170,7 @@ struct Variant {
 
 /// The distinct feature combinations of `features` (sorted) and each entry's index among them;
 /// one combination (every path) when there is none.
-pub fn feature_variants(features: &[u32]) -> (Vec<u32>, Vec<usize>) {
+fn feature_variants(features: &[u32]) -> (Vec<u32>, Vec<usize>) {
     let mut keys: Vec<u32> = features.to_vec();
     keys.sort_unstable();
     keys.dedup();
@@ -184,10 +184,36 @@ pub fn feature_variants(features: &[u32]) -> (Vec<u32>, Vec<usize>) {
     (keys, index)
 }
 
-pub struct ScenePass {
-    /// One per feature combination of the scene's materials; `of_material` picks a draw's.
-    variants: Vec<Variant>,
+/// One item (a pipeline, or a pass's pipelines) per combination of material texture paths a
+/// scene uses (the MAT_FEATURES define), and which one each material draws with.
+pub struct MaterialVariants<P> {
+    items: Vec<P>,
     of_material: Vec<usize>,
+}
+
+impl<P> MaterialVariants<P> {
+    /// `make(f)` builds the item of feature combination f, once per combination in `features`
+    /// (one per material).
+    pub fn build(features: &[u32], make: impl FnMut(u32) -> Result<P>) -> Result<Self> {
+        let (keys, of_material) = feature_variants(features);
+        let items = keys.into_iter().map(make).collect::<Result<_>>()?;
+        Ok(MaterialVariants { items, of_material })
+    }
+
+    /// The item material `m` draws with.
+    pub fn of(&self, m: u32) -> &P {
+        &self.items[self.of_material[m as usize]]
+    }
+
+    /// Any item (there is always one): every variant's pipeline layout is the same, so descriptor
+    /// sets bound through one serve them all.
+    pub fn first(&self) -> &P {
+        &self.items[0]
+    }
+}
+
+pub struct ScenePass {
+    variants: MaterialVariants<Variant>,
     _layouts: [SetLayout; 2],
     set: DescriptorSet,
     material_sets: Vec<DescriptorSet>,
@@ -229,8 +255,8 @@ impl ScenePass {
                 "{name}: a depth pre-pass is built for the single-sample G-buffer pass only"
             )));
         }
-        let with_features = |defines: &[(String, String)], f: u32, extra: Option<&str>| {
-            let mut d = defines.to_vec();
+        let with_features = |f: u32, extra: Option<&str>| {
+            let mut d = defines.clone();
             d.push(("MAT_FEATURES".into(), f.to_string()));
             if let Some(e) = extra {
                 d.push((e.into(), "1".into()));
@@ -273,26 +299,19 @@ impl ScenePass {
                 },
             )
         };
-        let (keys, of_material) = feature_variants(&scene.material_features);
-        let mut variants = Vec::with_capacity(keys.len());
-        for &f in &keys {
+        let variants = MaterialVariants::build(&scene.material_features, |f| {
             let vname = format!("{name}.mat{f}");
-            let v = if config.depth_prepass {
-                let depth_fs = shaders.compile(
-                    "scene/forward.frag",
-                    &with_features(&defines, f, Some("DEPTH_ONLY")),
-                )?;
-                let early_fs = shaders.compile(
-                    "scene/forward.frag",
-                    &with_features(&defines, f, Some("EARLY_TESTS")),
-                )?;
+            Ok(if config.depth_prepass {
+                let depth_fs =
+                    shaders.compile("scene/forward.frag", &with_features(f, Some("DEPTH_ONLY")))?;
+                let early_fs = shaders
+                    .compile("scene/forward.frag", &with_features(f, Some("EARLY_TESTS")))?;
                 // Bump mapping differentiates a texture lookup, and on llvmpipe a lane that fails
                 // an early depth test does not take part in that derivative (tests/deferred.rs,
                 // bump_mapping_matches_native, saw up to 1072 fp16 ulps): bump-mapped materials
                 // keep late tests, EQUAL against the pre-pass's depth.
                 let late = if f & MAT_BUMP != 0 {
-                    let late_fs =
-                        shaders.compile("scene/forward.frag", &with_features(&defines, f, None))?;
+                    let late_fs = shaders.compile("scene/forward.frag", &with_features(f, None))?;
                     Some(desc(&format!("{vname}.late"), &late_fs, false)?)
                 } else {
                     None
@@ -303,21 +322,18 @@ impl ScenePass {
                     late,
                 }
             } else {
-                let fs =
-                    shaders.compile("scene/forward.frag", &with_features(&defines, f, None))?;
+                let fs = shaders.compile("scene/forward.frag", &with_features(f, None))?;
                 Variant {
                     pipeline: desc(&vname, &fs, false)?,
                     depth: None,
                     late: None,
                 }
-            };
-            variants.push(v);
-        }
+            })
+        })?;
         let set = scene_set(gpu, name, &layout, scene, counter)?;
         let material_sets = material_sets(gpu, name, &material_layout, scene)?;
         Ok(ScenePass {
             variants,
-            of_material,
             _layouts: [layout, material_layout],
             set,
             material_sets,
@@ -384,9 +400,8 @@ impl ScenePass {
             },
         };
         let [x, y, w, h] = config.viewport;
-        let prepass = self.variants[0].depth.is_some();
-        let variant = |m: u32| &self.variants[self.of_material[m as usize]];
-        if let Some(depth_pipeline) = &self.variants[0].depth {
+        let prepass = self.variants.first().depth.is_some();
+        if let Some(depth_pipeline) = &self.variants.first().depth {
             let scope = profiler.begin(cmd, &format!("{}.depth", self.name), PassKind::Graphics);
             cmd.begin_rendering(
                 &[],
@@ -397,10 +412,9 @@ impl ScenePass {
                 config.layers,
             );
             cmd.set_viewport(x, y, w, h);
-            // Set 0 once: every variant's pipeline layout is the same (compatible for binding).
             cmd.bind_set(depth_pipeline, 0, &self.set);
             draw_scene(cmd, scene, &self.material_sets, config.instances, |m| {
-                variant(m).depth.as_ref().unwrap_or(depth_pipeline)
+                self.variants.of(m).depth.as_ref().unwrap_or(depth_pipeline)
             });
             cmd.end_rendering();
             profiler.end(cmd, scope);
@@ -419,9 +433,9 @@ impl ScenePass {
         if let Some(l) = config.sample_locations {
             cmd.set_sample_locations(depth, l);
         }
-        cmd.bind_set(&self.variants[0].pipeline, 0, &self.set);
+        cmd.bind_set(&self.variants.first().pipeline, 0, &self.set);
         draw_scene(cmd, scene, &self.material_sets, config.instances, |m| {
-            let v = variant(m);
+            let v = self.variants.of(m);
             v.late.as_ref().unwrap_or(&v.pipeline)
         });
         cmd.end_rendering();

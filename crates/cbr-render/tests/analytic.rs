@@ -1200,7 +1200,9 @@ fn textures_are_filtered_over_the_anisotropic_footprint() {
     let mut m = Material::named("stripes");
     m.kd = [1.0; 3];
     m.kd_tex = Some(0);
-    let mut s = scene(vec![floor], vec![m], [0.0; 3]);
+    // A second material without textures (unused): the raster passes then build two pipeline
+    // variants (MAT_FEATURES), and the floor must draw with its own, the one with the albedo path.
+    let mut s = scene(vec![floor], vec![m, Material::named("plain")], [0.0; 3]);
     s.textures = vec![Texture::from_rgba8("stripes", texels, 4, rgba, false)];
     s.settings.ambient = [1.0; 3];
     let out = render(&gpu, &s, "analytic");

@@ -235,10 +235,9 @@ struct Targets {
 }
 
 /// One raster pass (select or shade): a pipeline per combination of material texture paths the
-/// scene uses (MAT_FEATURES, as the scene pass: scene_pass::feature_variants).
+/// scene uses (MAT_FEATURES, as the scene pass).
 struct Raster {
-    pipelines: Vec<Pipeline>,
-    of_material: Vec<usize>,
+    pipelines: scene_pass::MaterialVariants<Pipeline>,
     name: &'static str,
 }
 
@@ -356,45 +355,40 @@ impl Analytic {
         let vs = ctx.shaders.compile("scene/forward.vert", &defines)?;
         let gs = ctx.shaders.compile("analytic/raster.geom", &defines)?;
         let layouts = [&scene_layout, &material_layout, &raster_layout];
-        let (keys, of_material) = scene_pass::feature_variants(&ctx.scene.material_features);
         let graphics = |name: &'static str, select: bool| -> Result<Raster> {
-            let mut pipelines = Vec::with_capacity(keys.len());
-            for &f in &keys {
-                let mut d = defines.clone();
-                d.push(("MAT_FEATURES".into(), f.to_string()));
-                if select {
-                    d.push(("SELECT_PASS".into(), "1".into()));
-                }
-                let fs = ctx.shaders.compile("analytic/raster.frag", &d)?;
-                pipelines.push(Pipeline::graphics(
-                    gpu,
-                    &GraphicsDesc {
-                        name: &format!("{name}.mat{f}"),
-                        vertex: &vs,
-                        geometry: Some(&gs),
-                        fragment: &fs,
-                        set_layouts: &layouts,
-                        push_constant_bytes: 4,
-                        color_formats: &[VELOCITY_FORMAT, ID_FORMAT],
-                        depth_format: Some(DEPTH_FORMAT),
-                        depth_compare: if select {
-                            vk::CompareOp::ALWAYS
-                        } else {
-                            vk::CompareOp::GREATER
+            let pipelines =
+                scene_pass::MaterialVariants::build(&ctx.scene.material_features, |f| {
+                    let mut d = defines.clone();
+                    d.push(("MAT_FEATURES".into(), f.to_string()));
+                    if select {
+                        d.push(("SELECT_PASS".into(), "1".into()));
+                    }
+                    let fs = ctx.shaders.compile("analytic/raster.frag", &d)?;
+                    Pipeline::graphics(
+                        gpu,
+                        &GraphicsDesc {
+                            name: &format!("{name}.mat{f}"),
+                            vertex: &vs,
+                            geometry: Some(&gs),
+                            fragment: &fs,
+                            set_layouts: &layouts,
+                            push_constant_bytes: 4,
+                            color_formats: &[VELOCITY_FORMAT, ID_FORMAT],
+                            depth_format: Some(DEPTH_FORMAT),
+                            depth_compare: if select {
+                                vk::CompareOp::ALWAYS
+                            } else {
+                                vk::CompareOp::GREATER
+                            },
+                            depth_write: !select,
+                            samples: 1,
+                            min_sample_shading: None,
+                            cull_back_faces: false,
+                            sample_locations: false,
                         },
-                        depth_write: !select,
-                        samples: 1,
-                        min_sample_shading: None,
-                        cull_back_faces: false,
-                        sample_locations: false,
-                    },
-                )?);
-            }
-            Ok(Raster {
-                pipelines,
-                of_material: of_material.clone(),
-                name,
-            })
+                    )
+                })?;
+            Ok(Raster { pipelines, name })
         };
         let raster = graphics("analytic.raster", false)?;
         let select = graphics("analytic.select", true)?;
@@ -592,12 +586,9 @@ impl Analytic {
             1,
         );
         cmd.set_viewport(0.0, 0.0, t.depth.width as f32, t.depth.height as f32);
-        // Sets 0 and 2 once: every variant's pipeline layout is the same.
-        cmd.bind_set(&r.pipelines[0], 0, &self.scene_set);
-        cmd.bind_set(&r.pipelines[0], 2, &self.raster_set);
-        scene_pass::draw_scene(cmd, scene, &self.material_sets, 1, |m| {
-            &r.pipelines[r.of_material[m as usize]]
-        });
+        cmd.bind_set(r.pipelines.first(), 0, &self.scene_set);
+        cmd.bind_set(r.pipelines.first(), 2, &self.raster_set);
+        scene_pass::draw_scene(cmd, scene, &self.material_sets, 1, |m| r.pipelines.of(m));
         cmd.end_rendering();
         profiler.end(cmd, scope);
     }

@@ -120,16 +120,10 @@ impl Checkerboard {
             plans = plans.map(LayoutPlan::with_sample_locations);
         }
         let gradients = config.lod_mode == LodMode::Gradients;
-        let configs = [
-            RasterConfig {
-                lod_gradients: gradients,
-                ..RasterConfig::for_plan(&plans[0])
-            },
-            RasterConfig {
-                lod_gradients: gradients,
-                ..RasterConfig::for_plan(&plans[1])
-            },
-        ];
+        let configs = plans.each_ref().map(|plan| RasterConfig {
+            lod_gradients: gradients,
+            ..RasterConfig::for_plan(plan)
+        });
         let name = format!("checkerboard.{}.raster", layout.name());
         let pass = ScenePass::new(gpu, shaders, ctx.scene, &name, &configs[0], ctx.counter)?;
         let (tw, th) = plans[0].target;
