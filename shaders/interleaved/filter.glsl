@@ -3,7 +3,8 @@
 // -(M-1)/2 .. M/2 (and likewise for N), holds one pixel of each subset.
 //   FILTER 0 (`none`) and 3 (`seed`: the image bound here is already the seed's blur,
 //     seed_blur.comp): p's own texel.
-//   FILTER 1 (`box`): the window's mean.
+//   FILTER 1 (`box`): the window's mean; with BOX_ROWS (the split passes) the gather has summed
+//     each pixel's window row, and the window takes one tap per row.
 //   FILTER 2 (`ours`): for each subset, the window's pixel holding it if it lies on p's surface
 //     (same object, normals within ~25 degrees, on p's tangent plane within 2% of p's distance),
 //     with SEARCH 1 else the nearest pixel holding it one period (M or N pixels) further that does;
@@ -82,6 +83,31 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, float ns, out
     vec3 sum_spec = vec3(0.0);
     uint found = 0u;
     uvec2 missing = uvec2(0u);  // window slots (t = row M + column) with no estimate to use
+#if FILTER == 1 && defined(BOX_ROWS)
+    // The gather's window rows (gather.comp, BOX_ROWS): each row's on-screen pixels summed, so the
+    // window takes N taps, not M N. Off-screen slots are missing, as below.
+    for (int oy = -(TILE_N - 1) / 2; oy <= TILE_N / 2; ++oy) {
+        ivec2 q = px + ivec2(0, oy);
+        if (q.y >= 0 && q.y < int(pc.counts.w)) {
+            sum += texelFetch(g_irradiance, q, 0).rgb;
+#ifdef DIRECT
+            sum_spec += texelFetch(g_specular, q, 0).rgb;
+#endif
+        }
+    }
+    for (int oy = -(TILE_N - 1) / 2; oy <= TILE_N / 2; ++oy) {
+        for (int ox = -(TILE_M - 1) / 2; ox <= TILE_M / 2; ++ox) {
+            ivec2 q = px + ivec2(ox, oy);
+            if (!on_screen(q)) {
+                uint t = uint((oy + (TILE_N - 1) / 2) * TILE_M + ox + (TILE_M - 1) / 2);
+                missing[t >> 5] |= 1u << (t & 31u);
+            }
+#ifdef DEBUG
+            else if (!same_surface(q, object, p, n)) bits |= DBG_EDGE;
+#endif
+        }
+    }
+#else
     for (int oy = -(TILE_N - 1) / 2; oy <= TILE_N / 2; ++oy) {
         for (int ox = -(TILE_M - 1) / 2; ox <= TILE_M / 2; ++ox) {
             ivec2 q = px + ivec2(ox, oy);
@@ -118,6 +144,7 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, float ns, out
             }
         }
     }
+#endif
 #if FILTER == 2 && EXACT_EDGES > 0
     // `exact-edges=R`: a pixel with a pixel off its surface in the (2R+1) x (2R+1) square around
     // it (a band of R pixels along every boundary, which FLIP's edge features magnify) shades

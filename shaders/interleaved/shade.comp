@@ -11,15 +11,18 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "../inc/shading.glsl"
 #include "subsets.glsl"
 
+// Workgroup z is the sub-image k = j M + i, (x, y) its texel: no per-lane division by the
+// sub-image's size (pixel_of), which a CPU device runs as a scalar loop.
 void main() {
-    ivec2 s = ivec2(gl_GlobalInvocationID.xy);
-    if (s.x >= TILE_M * pc.size.z || s.y >= TILE_N * pc.size.w) return;
+    uint k = gl_WorkGroupID.z;
+    ivec2 t = ivec2(gl_GlobalInvocationID.xy);
+    if (t.x >= pc.size.z || t.y >= pc.size.w) return;
+    ivec2 s = ivec2(int(k) % TILE_M, int(k) / TILE_M) * pc.size.zw + t;
     uint w = word_of(s);
     vec4 p = s_position[w];
     vec3 e = vec3(0.0);
     vec3 spec = vec3(0.0);
     if (p.w > 0.0) {
-        uint k = subset_of(pixel_of(s));
         vec4 n = s_normal[w];
         e = subset_irradiance(p.xyz, n.xyz, k, pc.counts.x, pc.params.x);
 #ifdef DIRECT

@@ -41,12 +41,13 @@ void subset_direct(inout vec3 diffuse, inout vec3 specular, vec3 p, vec3 n, floa
     vec3 v = normalize(-p);
     vec3 d = vec3(0.0);
     vec3 s = vec3(0.0);
-    for (uint j = k; j < counts.y + counts.z; j += SUBSETS) {
-        if (j < counts.y) {
-            add_light_terms(d, s, p, n, v, ns, lights[counts.x + j]);
-        } else {
-            add_light_terms(d, s, p, n, v, ns, points[j - counts.y]);
-        }
+    // Two loops over the one sequence j = k, k + M N, ...: the scene's lights, then the extra
+    // ones from the first such j past them (one loop with an if/else would evaluate both light
+    // terms for every light on SIMD hardware that runs both sides of a branch, as llvmpipe does).
+    uint j = k;
+    for (; j < counts.y; j += SUBSETS) add_light_terms(d, s, p, n, v, ns, lights[counts.x + j]);
+    for (; j < counts.y + counts.z; j += SUBSETS) {
+        add_light_terms(d, s, p, n, v, ns, points[j - counts.y]);
     }
     diffuse += d * float(SUBSETS);
     specular += s * float(SUBSETS);

@@ -88,6 +88,9 @@ pub struct Interleaving<'a> {
     /// The FILTER define: 0 none (each pixel its own subset), 1 box over the M x N window,
     /// 2 ours (geometry-aware), 3 seed (the image is already the seed's blur).
     pub filter: u32,
+    /// The BOX_ROWS define (`box` with the split passes): `irradiance` (and `specular`) hold
+    /// each pixel's window row summed by the gather, not its own estimate.
+    pub box_rows: bool,
     pub irradiance: &'a Image,
     /// `direct`: the point lights' specular estimates (the DIRECT define).
     pub specular: Option<&'a Image>,
@@ -141,6 +144,9 @@ impl LightingPass {
             }
             if i.debug.is_some() {
                 defines.push(("DEBUG".into(), "1".into()));
+            }
+            if i.box_rows {
+                defines.push(("BOX_ROWS".into(), "1".into()));
             }
             if i.specular.is_some() {
                 defines.push(("DIRECT".into(), "1".into()));

@@ -377,6 +377,7 @@ fn interleaving<'a>(
         enough: config.enough,
         exact_edges: config.exact_edges,
         filter: config.filter as u32,
+        box_rows: config.filter == Filter::Box && !config.implicit,
         irradiance: split.output(),
         specular: split.specular_output(),
         debug: debug.map(|d| &d.0),

@@ -197,12 +197,17 @@ impl SplitPasses {
         if config.filter == Filter::Seed {
             flags.push("SEED");
         }
+
         let (split, implicit) = if config.implicit {
             let p = pipeline("interleaved.implicit", "interleaved/implicit.comp", &flags)?;
             (None, Some(p))
         } else {
             let split = pipeline("interleaved.split", "interleaved/split.comp", &[])?;
             let shade = pipeline("interleaved.shade", "interleaved/shade.comp", &[])?;
+            // `box`: the gather sums each pixel's window row (the lighting pass's BOX_ROWS).
+            if config.filter == Filter::Box {
+                flags.push("BOX_ROWS");
+            }
             let gather = pipeline("interleaved.gather", "interleaved/gather.comp", &flags)?;
             (Some((split, shade, gather)), None)
         };
@@ -399,11 +404,16 @@ impl SplitPasses {
             counts: [count, lights[0], lights[1], lights[2]],
             params: [clamp_d2, 0.0, 0.0, 0.0],
         };
-        let (sw, sh) = self.mosaic_size();
-        // Shade: one invocation per split texel. Split and gather: one per M pixels of a row
-        // (interleave.glsl's row_word), groups of 64 along the row; the split also covers the
-        // padding rows up to N Hs, whose texels it clears.
-        let split_groups = (sw.div_ceil(8), sh.div_ceil(8));
+        let sh = self.mosaic_size().1;
+        // Shade: one invocation per split texel, groups of 8 x 8 texels of one sub-image, z the
+        // sub-image (shade.comp). Split and gather: one per M pixels of a row (interleave.glsl's
+        // row_word), groups of 64 along the row; the split also covers the padding rows up to
+        // N Hs, whose texels it clears.
+        let shade_groups = (
+            (self.size[2] as u32).div_ceil(8),
+            (self.size[3] as u32).div_ceil(8),
+            self.tile.0 * self.tile.1,
+        );
         let rows = ((self.size[2] as u32).div_ceil(64), self.size[1] as u32);
         let full = (
             (self.size[0] as u32).div_ceil(8),
@@ -420,7 +430,7 @@ impl SplitPasses {
             for e in self.estimates() {
                 cmd.use_image(&e.gathered, Access::ComputeStorageWrite);
             }
-            self.dispatch(cmd, profiler, implicit, "interleaved.implicit", &push, full);
+            self.dispatch(cmd, profiler, implicit, "interleaved.implicit", &push, (full.0, full.1, 1));
         }
         if let (Some((split, shade, gather)), Some(sp), Some(sn)) =
             (&self.split, &im.split_position, &im.split_normal)
@@ -434,7 +444,7 @@ impl SplitPasses {
                 split,
                 "interleaved.split",
                 &push,
-                (rows.0, sh),
+                (rows.0, sh, 1),
             );
             // Shade: sub-image k with subset k.
             cmd.use_buffer(sp, Access::ComputeStorageReadWrite);
@@ -448,7 +458,7 @@ impl SplitPasses {
                 shade,
                 "interleaved.shade",
                 &push,
-                split_groups,
+                shade_groups,
             );
             // Gather: sub-images -> pixels.
             for e in self.estimates() {
@@ -457,7 +467,7 @@ impl SplitPasses {
                 }
                 cmd.use_image(&e.gathered, Access::ComputeStorageWrite);
             }
-            self.dispatch(cmd, profiler, gather, "interleaved.gather", &push, rows);
+            self.dispatch(cmd, profiler, gather, "interleaved.gather", &push, (rows.0, rows.1, 1));
         }
         if let Some((h, v)) = &self.seed {
             let blurs = || {
@@ -468,12 +478,12 @@ impl SplitPasses {
                 cmd.use_image(gathered, Access::ComputeStorageReadWrite);
                 cmd.use_image(tmp, Access::ComputeStorageWrite);
             }
-            self.dispatch(cmd, profiler, h, "interleaved.seed_blur_h", &push, full);
+            self.dispatch(cmd, profiler, h, "interleaved.seed_blur_h", &push, (full.0, full.1, 1));
             for (_, (tmp, out)) in blurs() {
                 cmd.use_image(tmp, Access::ComputeStorageReadWrite);
                 cmd.use_image(out, Access::ComputeStorageWrite);
             }
-            self.dispatch(cmd, profiler, v, "interleaved.seed_blur_v", &push, full);
+            self.dispatch(cmd, profiler, v, "interleaved.seed_blur_v", &push, (full.0, full.1, 1));
         }
         if let Some(floor) = &self.floor {
             floor.record(cmd, profiler);
@@ -494,13 +504,13 @@ impl SplitPasses {
         pipeline: &Pipeline,
         name: &str,
         push: &SplitPush,
-        (x, y): (u32, u32),
+        (x, y, z): (u32, u32, u32),
     ) {
         let scope = profiler.begin(cmd, name, PassKind::Compute);
         cmd.bind_pipeline(pipeline);
         cmd.bind_set(pipeline, 0, &self.set);
         cmd.push_constants(pipeline, bytemuck::bytes_of(push));
-        cmd.dispatch(x, y, 1);
+        cmd.dispatch(x, y, z);
         profiler.end(cmd, scope);
     }
 }
