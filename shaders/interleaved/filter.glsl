@@ -3,8 +3,9 @@
 // -(M-1)/2 .. M/2 (and likewise for N), holds one pixel of each subset.
 //   FILTER 0 (`none`) and 3 (`seed`: the image bound here is already the seed's blur,
 //     seed_blur.comp): p's own texel.
-//   FILTER 1 (`box`): the window's mean; with BOX_ROWS (the split passes) the gather has summed
-//     each pixel's window row, and the window takes one tap per row.
+//   FILTER 1 (`box`): the mean of the window's on-screen pixels (near the screen's edge fewer
+//     than M N: each estimates all the VPLs); with BOX_ROWS (the split passes) the gather has
+//     summed each pixel's window row, and the window takes one tap per row.
 //   FILTER 2 (`ours`): for each subset, the window's pixel holding it if it lies on p's surface
 //     (same object, normals within ~25 degrees, on p's tangent plane within 2% of p's distance),
 //     with SEARCH 1 else the nearest pixel holding it one period (M or N pixels) further that does;
@@ -85,7 +86,7 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, float ns, out
     uvec2 missing = uvec2(0u);  // window slots (t = row M + column) with no estimate to use
 #if FILTER == 1 && defined(BOX_ROWS)
     // The gather's window rows (gather.comp, BOX_ROWS): each row's on-screen pixels summed, so the
-    // window takes N taps, not M N. Off-screen slots are missing, as below.
+    // window takes N taps, not M N. The on-screen slots are a rectangle: count them.
     for (int oy = -(TILE_N - 1) / 2; oy <= TILE_N / 2; ++oy) {
         ivec2 q = px + ivec2(0, oy);
         if (q.y >= 0 && q.y < int(pc.counts.w)) {
@@ -95,18 +96,17 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, float ns, out
 #endif
         }
     }
+    ivec2 lo = max(px - ivec2((TILE_M - 1) / 2, (TILE_N - 1) / 2), ivec2(0));
+    ivec2 hi = min(px + ivec2(TILE_M / 2, TILE_N / 2), ivec2(pc.counts.zw) - 1);
+    found = uint((hi.x - lo.x + 1) * (hi.y - lo.y + 1));
+#ifdef DEBUG
     for (int oy = -(TILE_N - 1) / 2; oy <= TILE_N / 2; ++oy) {
         for (int ox = -(TILE_M - 1) / 2; ox <= TILE_M / 2; ++ox) {
             ivec2 q = px + ivec2(ox, oy);
-            if (!on_screen(q)) {
-                uint t = uint((oy + (TILE_N - 1) / 2) * TILE_M + ox + (TILE_M - 1) / 2);
-                missing[t >> 5] |= 1u << (t & 31u);
-            }
-#ifdef DEBUG
-            else if (!same_surface(q, object, p, n)) bits |= DBG_EDGE;
-#endif
+            if (on_screen(q) && !same_surface(q, object, p, n)) bits |= DBG_EDGE;
         }
     }
+#endif
 #else
     for (int oy = -(TILE_N - 1) / 2; oy <= TILE_N / 2; ++oy) {
         for (int ox = -(TILE_M - 1) / 2; ox <= TILE_M / 2; ++ox) {
@@ -162,6 +162,11 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, float ns, out
         missing = uvec2(SUBSETS >= 32u ? ~0u : (1u << SUBSETS) - 1u,
                         SUBSETS > 32u ? (SUBSETS == 64u ? ~0u : (1u << (SUBSETS - 32u)) - 1u) : 0u);
     }
+#endif
+#if FILTER == 1
+    // `box`: the mean of the window's on-screen pixels (p's own among them).
+    specular = sum_spec / float(found);
+    return sum / float(found);
 #endif
 #if FILTER == 2
     // Enough of p's own surface in the window: the mean of what it holds (each estimate is

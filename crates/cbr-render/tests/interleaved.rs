@@ -276,6 +276,10 @@ impl Frame<'_> {
                 return (every / (m * n) as f64, (m * n) as u32);
             }
         }
+        // `box`: the mean of the window's on-screen pixels (p's own among them).
+        if let Mode::Box = mode {
+            return (sum / count as f64, 0);
+        }
         if let Mode::Ours { enough, .. } = mode
             && count >= enough
         {

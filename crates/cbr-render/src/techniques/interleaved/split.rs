@@ -430,7 +430,14 @@ impl SplitPasses {
             for e in self.estimates() {
                 cmd.use_image(&e.gathered, Access::ComputeStorageWrite);
             }
-            self.dispatch(cmd, profiler, implicit, "interleaved.implicit", &push, (full.0, full.1, 1));
+            self.dispatch(
+                cmd,
+                profiler,
+                implicit,
+                "interleaved.implicit",
+                &push,
+                (full.0, full.1, 1),
+            );
         }
         if let (Some((split, shade, gather)), Some(sp), Some(sn)) =
             (&self.split, &im.split_position, &im.split_normal)
@@ -467,7 +474,14 @@ impl SplitPasses {
                 }
                 cmd.use_image(&e.gathered, Access::ComputeStorageWrite);
             }
-            self.dispatch(cmd, profiler, gather, "interleaved.gather", &push, (rows.0, rows.1, 1));
+            self.dispatch(
+                cmd,
+                profiler,
+                gather,
+                "interleaved.gather",
+                &push,
+                (rows.0, rows.1, 1),
+            );
         }
         if let Some((h, v)) = &self.seed {
             let blurs = || {
@@ -478,12 +492,26 @@ impl SplitPasses {
                 cmd.use_image(gathered, Access::ComputeStorageReadWrite);
                 cmd.use_image(tmp, Access::ComputeStorageWrite);
             }
-            self.dispatch(cmd, profiler, h, "interleaved.seed_blur_h", &push, (full.0, full.1, 1));
+            self.dispatch(
+                cmd,
+                profiler,
+                h,
+                "interleaved.seed_blur_h",
+                &push,
+                (full.0, full.1, 1),
+            );
             for (_, (tmp, out)) in blurs() {
                 cmd.use_image(tmp, Access::ComputeStorageReadWrite);
                 cmd.use_image(out, Access::ComputeStorageWrite);
             }
-            self.dispatch(cmd, profiler, v, "interleaved.seed_blur_v", &push, (full.0, full.1, 1));
+            self.dispatch(
+                cmd,
+                profiler,
+                v,
+                "interleaved.seed_blur_v",
+                &push,
+                (full.0, full.1, 1),
+            );
         }
         if let Some(floor) = &self.floor {
             floor.record(cmd, profiler);
