@@ -754,28 +754,20 @@ fn implicit_equals_the_split() {
     let shaders = cbr_render::shader_library();
     let mut s = cbr_scene::builtin("demo").expect("demo");
     (s.settings.width, s.settings.height) = (96, 54);
-    for base in [
-        "interleaved:4x4:vpls=256",
-        "interleaved:3x2:vpls=96:none",
-        "interleaved:4x4:vpls=256:direct",
-    ] {
-        let split = render(&gpu, &shaders, &s, base);
-        let implicit = render(&gpu, &shaders, &s, &format!("{base}:implicit"));
-        let diff = compare(base, &split, &implicit);
-        println!("{base}: implicit against the split: {diff:?}");
-        assert_eq!(diff.max_ulps, 0, "{base}: {diff:?}");
-    }
     // `box`: the split's gather sums each window row first (BOX_ROWS), `implicit` adds the M N
     // taps in one run: the same terms in another order, within an fp16 step (0 seen).
-    for base in [
-        "interleaved:4x4:vpls=256:box",
-        "interleaved:3x2:vpls=96:box:direct",
+    for (base, ulps) in [
+        ("interleaved:4x4:vpls=256", 0),
+        ("interleaved:3x2:vpls=96:none", 0),
+        ("interleaved:4x4:vpls=256:direct", 0),
+        ("interleaved:4x4:vpls=256:box", 1),
+        ("interleaved:3x2:vpls=96:box:direct", 1),
     ] {
         let split = render(&gpu, &shaders, &s, base);
         let implicit = render(&gpu, &shaders, &s, &format!("{base}:implicit"));
         let diff = compare(base, &split, &implicit);
         println!("{base}: implicit against the split: {diff:?}");
-        assert!(diff.max_ulps <= 1, "{base}: {diff:?}");
+        assert!(diff.max_ulps <= ulps, "{base}: {diff:?}");
     }
     assert_clean(&gpu);
 }
