@@ -14,17 +14,23 @@ layout(local_size_x = 64, local_size_y = 1) in;
 #include "seed_edges.glsl"
 #endif
 
-// Pixel q's estimate from split texel s, with its flags.
-void gather(ivec2 q, uint s) {
-    vec4 e = s_irradiance[s];
-    e.a = 0.0;
+// DEBUG: 1 where split texel s does not hold pixel q's position and normal bit for bit, else 0.
+float roundtrip_flag(ivec2 q, uint s) {
 #ifdef DEBUG
     bool same = all(equal(floatBitsToUint(s_position[s]),
                           floatBitsToUint(texelFetch(g_position, q, 0)))) &&
                 all(equal(floatBitsToUint(s_normal[s]),
                           floatBitsToUint(texelFetch(g_normal, q, 0))));
-    e.a = same ? 0.0 : 1.0;
+    return same ? 0.0 : 1.0;
+#else
+    return 0.0;
 #endif
+}
+
+// Pixel q's estimate from split texel s, with its flags.
+void gather(ivec2 q, uint s) {
+    vec4 e = s_irradiance[s];
+    e.a = roundtrip_flag(q, s);
 #ifdef SEED
     if (seed_edge(q)) e.a += 2.0;
 #endif
@@ -73,16 +79,7 @@ void main() {
             sum_spec += sp[i + o];
 #endif
         }
-        float flags = 0.0;
-#ifdef DEBUG
-        uint w = row_word(t, y, i);
-        bool same = all(equal(floatBitsToUint(s_position[w]),
-                              floatBitsToUint(texelFetch(g_position, q, 0)))) &&
-                    all(equal(floatBitsToUint(s_normal[w]),
-                              floatBitsToUint(texelFetch(g_normal, q, 0))));
-        flags = same ? 0.0 : 1.0;
-#endif
-        imageStore(irradiance, q, vec4(sum, flags));
+        imageStore(irradiance, q, vec4(sum, roundtrip_flag(q, row_word(t, y, i))));
 #ifdef DIRECT
         imageStore(specular, q, vec4(sum_spec, 0.0));
 #endif
