@@ -27,13 +27,6 @@ layout(push_constant) uniform Push {
     vec4 params;   // x: the VPL clamp c (m^2)
 } pc;
 
-// The screen pixel of split texel s (may lie past the screen's edge when M or N does not divide
-// W or H).
-ivec2 pixel_of(ivec2 s) {
-    ivec2 sub = s / pc.size.zw;
-    return (s - sub * pc.size.zw) * ivec2(TILE_M, TILE_N) + sub;
-}
-
 // The word of split texel s in the mosaic's buffers.
 uint word_of(ivec2 s) {
     return uint(s.y * (TILE_M * pc.size.z) + s.x);

@@ -11,8 +11,9 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "../inc/shading.glsl"
 #include "subsets.glsl"
 
-// Workgroup z is the sub-image k = j M + i, (x, y) its texel: no per-lane division by the
-// sub-image's size (pixel_of), which a CPU device runs as a scalar loop.
+// Workgroup z is the sub-image k = j M + i, (x, y) its texel: the subset is known without a
+// per-lane division of the mosaic position by the sub-image's size, which a CPU device runs as a
+// scalar loop.
 void main() {
     uint k = gl_WorkGroupID.z;
     ivec2 t = ivec2(gl_GlobalInvocationID.xy);

@@ -124,6 +124,14 @@ pub struct InterleavedConfig {
     pub lights: DeferredConfig,
 }
 
+impl InterleavedConfig {
+    /// `box` with the split passes: the gather sums each pixel's window row and the lighting pass
+    /// adds the rows (the BOX_ROWS define of both); `implicit` has no gather.
+    pub fn box_rows(&self) -> bool {
+        self.filter == Filter::Box && !self.implicit
+    }
+}
+
 fn tile(p: &str) -> std::result::Result<(u32, u32), String> {
     let bad = || {
         format!(
@@ -377,7 +385,7 @@ fn interleaving<'a>(
         enough: config.enough,
         exact_edges: config.exact_edges,
         filter: config.filter as u32,
-        box_rows: config.filter == Filter::Box && !config.implicit,
+        box_rows: config.box_rows(),
         irradiance: split.output(),
         specular: split.specular_output(),
         debug: debug.map(|d| &d.0),

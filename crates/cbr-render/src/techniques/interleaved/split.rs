@@ -197,7 +197,6 @@ impl SplitPasses {
         if config.filter == Filter::Seed {
             flags.push("SEED");
         }
-
         let (split, implicit) = if config.implicit {
             let p = pipeline("interleaved.implicit", "interleaved/implicit.comp", &flags)?;
             (None, Some(p))
@@ -205,7 +204,7 @@ impl SplitPasses {
             let split = pipeline("interleaved.split", "interleaved/split.comp", &[])?;
             let shade = pipeline("interleaved.shade", "interleaved/shade.comp", &[])?;
             // `box`: the gather sums each pixel's window row (the lighting pass's BOX_ROWS).
-            if config.filter == Filter::Box {
+            if config.box_rows() {
                 flags.push("BOX_ROWS");
             }
             let gather = pipeline("interleaved.gather", "interleaved/gather.comp", &flags)?;
@@ -414,10 +413,11 @@ impl SplitPasses {
             (self.size[3] as u32).div_ceil(8),
             self.tile.0 * self.tile.1,
         );
-        let rows = ((self.size[2] as u32).div_ceil(64), self.size[1] as u32);
+        let rows = ((self.size[2] as u32).div_ceil(64), self.size[1] as u32, 1);
         let full = (
             (self.size[0] as u32).div_ceil(8),
             (self.size[1] as u32).div_ceil(8),
+            1,
         );
         let im = &self.storage;
         cmd.use_image(&g.position, Access::ComputeSampled);
@@ -430,14 +430,7 @@ impl SplitPasses {
             for e in self.estimates() {
                 cmd.use_image(&e.gathered, Access::ComputeStorageWrite);
             }
-            self.dispatch(
-                cmd,
-                profiler,
-                implicit,
-                "interleaved.implicit",
-                &push,
-                (full.0, full.1, 1),
-            );
+            self.dispatch(cmd, profiler, implicit, "interleaved.implicit", &push, full);
         }
         if let (Some((split, shade, gather)), Some(sp), Some(sn)) =
             (&self.split, &im.split_position, &im.split_normal)
@@ -474,14 +467,7 @@ impl SplitPasses {
                 }
                 cmd.use_image(&e.gathered, Access::ComputeStorageWrite);
             }
-            self.dispatch(
-                cmd,
-                profiler,
-                gather,
-                "interleaved.gather",
-                &push,
-                (rows.0, rows.1, 1),
-            );
+            self.dispatch(cmd, profiler, gather, "interleaved.gather", &push, rows);
         }
         if let Some((h, v)) = &self.seed {
             let blurs = || {
@@ -492,26 +478,12 @@ impl SplitPasses {
                 cmd.use_image(gathered, Access::ComputeStorageReadWrite);
                 cmd.use_image(tmp, Access::ComputeStorageWrite);
             }
-            self.dispatch(
-                cmd,
-                profiler,
-                h,
-                "interleaved.seed_blur_h",
-                &push,
-                (full.0, full.1, 1),
-            );
+            self.dispatch(cmd, profiler, h, "interleaved.seed_blur_h", &push, full);
             for (_, (tmp, out)) in blurs() {
                 cmd.use_image(tmp, Access::ComputeStorageReadWrite);
                 cmd.use_image(out, Access::ComputeStorageWrite);
             }
-            self.dispatch(
-                cmd,
-                profiler,
-                v,
-                "interleaved.seed_blur_v",
-                &push,
-                (full.0, full.1, 1),
-            );
+            self.dispatch(cmd, profiler, v, "interleaved.seed_blur_v", &push, full);
         }
         if let Some(floor) = &self.floor {
             floor.record(cmd, profiler);
