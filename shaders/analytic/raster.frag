@@ -24,6 +24,11 @@ layout(set = 1, binding = BINDING_ALBEDO) uniform sampler2D albedo_tex;
 layout(set = 1, binding = BINDING_MASK) uniform sampler2D mask_tex;
 layout(set = 1, binding = BINDING_BUMP) uniform sampler2D bump_tex;
 layout(std430, set = 2, binding = BINDING_KEYS) buffer Keys { uint64_t keys[]; };
+#ifdef SELECT_PASS
+// The same keys as 32-bit words (little-endian: word 2 i + 1 is key i's high word, its depth
+// part), for the select pass's plain reads: a 32-bit read is never torn.
+layout(std430, set = 2, binding = BINDING_KEYS) buffer KeyWords { uint key_words[]; };
+#endif
 // A kept fragment's slot, in two buffers (each must fit maxStorageBufferRange): coverage and
 // sample mask; colour (3 x f16), flags (8 bits) and the passing share of an alpha-tested
 // fragment without samples (8 bits, for the resolve's transmittance).
@@ -47,10 +52,13 @@ layout(std430, set = 2, binding = BINDING_TAIL_MASKS) buffer TailMasks { uint ta
 // only by fragments opaque at the whole group.
 #define OCCLUDER_WORDS (MASK_SAMPLES / OCCLUDER_GROUP)
 layout(std430, set = 2, binding = BINDING_OCCLUDERS) buffer Occluders { uint occluders[]; };
+// A kept fragment's shading normal and point, for the shading pass (surface.glsl).
+layout(std430, set = 2, binding = BINDING_SURFACES) buffer Surfaces { uvec2 surfaces[]; };
 layout(push_constant) uniform Push { uint object_index; } pc;
 
 #include "../inc/shading.glsl"
 #include "coverage.glsl"
+#include "surface.glsl"
 #define RASTER_IO in
 #include "raster_io.glsl"
 
@@ -223,10 +231,13 @@ void main() {
     vec4 zc4 = vec4(depth_at(corner), depth_at(corner + vec2(1.0, 0.0)),
                     depth_at(corner + vec2(0.0, 1.0)), depth_at(corner + 1.0));
 #ifndef SELECT_PASS
-    int slot = -1;
-    for (int i = 0; i < K_SLOTS; ++i) {
-        if (keys[base + uint(i)] == key) slot = i;
+    // The slots hold the K nearest keys sorted (the select pass): a binary search.
+    int first = 0;
+    for (int step = K_SLOTS; step > 0; step >>= 1) {
+        int probe = first + step - 1;
+        if (probe < K_SLOTS && keys[base + uint(probe)] < key) first = probe + 1;
     }
+    int slot = first < K_SLOTS && keys[base + uint(first)] == key ? first : -1;
     // A fragment beyond the K nearest whose nearest depth in the pixel lies behind every
     // sample's occluder is hidden at every sample (and behind an opaque fragment at the centre,
     // so native's layers do not need it either): it is not shaded into the tails. The kept ones
@@ -264,7 +275,10 @@ void main() {
             while (left != 0u) {
                 uint g = uint(findLSB(left)) / uint(OCCLUDER_GROUP);
                 uint gm = (0xFFFFFFFFu >> uint(32 - OCCLUDER_GROUP)) << (g * uint(OCCLUDER_GROUP));
-                if ((opaque & gm) == gm) atomicMax(occluders[pixel * uint(OCCLUDER_WORDS) + g], fb);
+                // The words only grow: one already at or beyond fb needs no atomic (a plain
+                // 32-bit read, never torn; a stale one is only smaller).
+                uint word = pixel * uint(OCCLUDER_WORDS) + g;
+                if ((opaque & gm) == gm && occluders[word] < fb) atomicMax(occluders[word], fb);
                 left &= ~gm;
             }
         }
@@ -272,8 +286,22 @@ void main() {
 #endif
 #ifdef SELECT_PASS
     atomicAdd(counts[pixel], 1u);
+    // The chain needs no atomic at a slot holding a key below the fragment's: atomicMin there
+    // returns that key and passes the fragment's on unchanged. The slots are sorted at every
+    // moment (each atomicMin puts a key no smaller than the slots before it) and only decrease,
+    // so a slot read once below the key stays below, and so do the slots before it. A binary
+    // search over plain reads of the slots' high words (the depth part; strictly below is below
+    // whatever the low words) finds where the chain's first change can be, and the chain starts
+    // there: the same K keys, in the same order, as the chain from slot 0, with no atomic at all
+    // for a fragment behind a full pixel's K nearest.
+    uint hi = uint(key >> 32);
+    int first = 0;
+    for (int step = K_SLOTS; step > 0; step >>= 1) {
+        int probe = first + step - 1;
+        if (probe < K_SLOTS && key_words[(base + uint(probe)) * 2u + 1u] < hi) first = probe + 1;
+    }
     uint64_t cand = key;
-    for (int i = 0; i < K_SLOTS; ++i) {
+    for (int i = first; i < K_SLOTS; ++i) {
         uint64_t old = atomicMin(keys[base + uint(i)], cand);
         if (old == EMPTY_KEY) break;
         cand = max(old, cand);
@@ -303,7 +331,13 @@ void main() {
         nrm = bump_from(nrm, world_at(bx) - world, world_at(by) - world, hx - h, hy - h);
     }
 #endif
-    vec3 color = shade(world, nrm, albedo, mat, frame);
+    // A kept fragment leaves its albedo, normal and shading point in its slot, and the shading
+    // pass (shade.comp) adds the light: a compute pass shades only the kept fragments, where
+    // here every SIMD group holding one would run the light loop for all its lanes, most of them
+    // outside the triangle (the grown polygon's pixels it does not touch). The tails are shaded
+    // here, as they are summed.
+    vec3 color = albedo;
+    if (slot < 0) color = shade(world, nrm, albedo, mat, frame);
     bool finite = !any(isnan(color)) && !any(isinf(color));
 
     // The mask: for the resolve's per-sample visibility (a slot) or the tail's (beyond the K), and
@@ -340,6 +374,7 @@ void main() {
         planes[base + uint(slot)] = floatBitsToUint(plane.xy);
         planes_y[base + uint(slot)] = floatBitsToUint(plane.z);
         slots[base + uint(slot)] = uvec2(floatBitsToUint(coverage), mask);
+        surfaces[base + uint(slot)] = pack_surface(nrm, cov.mean_point);
         colors[base + uint(slot)] = uvec2(packHalf2x16(color.rg),
                                           (packHalf2x16(vec2(color.b, 0.0)) & 0xFFFFu) | (flags << 16u)
                                           | (uint(round(alpha_pass * 255.0)) << 24u));

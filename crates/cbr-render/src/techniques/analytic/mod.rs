@@ -7,9 +7,11 @@
 //! (shaders/analytic/coverage.glsl) and sort key; the pixel keeps its K nearest keys (a 64-bit
 //! atomicMin chain, sorted and independent of the order of arrival) and counts every fragment;
 //! (2) `analytic.raster`: the fragments among their pixel's K are shaded once, at the centroid of
-//! the covered part, into their slot; fragments holding the pixel centre also write native's
-//! depth, velocity and IDs; (3) `analytic.resolve`: front to back per pixel (resolve.comp
-//! states the model). `:seed` replaces the exact area by the seed's column shortcut and flags
+//! the covered part: each leaves its albedo, normal and shading point in its slot (the fragments
+//! beyond the K are shaded there, into the pixel's tails); fragments holding the pixel centre
+//! also write native's depth, velocity and IDs; (3) `analytic.shade`, a compute pass: the kept
+//! fragments' light, per pixel and slot (shaders/analytic/shade.comp); (4) `analytic.resolve`:
+//! front to back per pixel (resolve.comp states the model). `:seed` replaces the exact area by the seed's column shortcut and flags
 //! where it is off; `:frags=K` keeps K fragments per pixel (default 16, lowered to what the
 //! device's largest storage buffer holds).
 
@@ -59,7 +61,8 @@ pub const REGISTRATION: Registration = Registration {
 };
 
 /// Bytes of one kept fragment: its 64-bit key (depth, object, primitive), its slot (coverage,
-/// mask, colour as 3 x f16, flags) and its depth plane ([`PLANE_BYTES`]).
+/// mask, colour as 3 x f16, flags), its depth plane ([`PLANE_BYTES`]) and its surface
+/// ([`SURFACE_BYTES`]).
 pub const KEY_BYTES: u64 = 8;
 /// A slot is two 8-byte halves in two buffers (coverage + mask; colour + flags), so that each
 /// buffer holds K x 8 bytes per pixel under `maxStorageBufferRange`.
@@ -70,6 +73,11 @@ const HALF_SLOT_BYTES: u64 = SLOT_BYTES / 2;
 const PLANE_XY_BYTES: u64 = 8;
 const PLANE_Y_BYTES: u64 = 4;
 pub const PLANE_BYTES: u64 = PLANE_XY_BYTES + PLANE_Y_BYTES;
+/// A kept fragment's shading normal (octahedral, 2 x snorm16) and shading point in the pixel
+/// (2 x unorm16), from the raster pass to the shading pass (shaders/analytic/surface.glsl).
+pub const SURFACE_BYTES: u64 = 8;
+/// All of one kept fragment's bytes.
+pub const FRAGMENT_BYTES: u64 = KEY_BYTES + SLOT_BYTES + PLANE_BYTES + SURFACE_BYTES;
 /// Per pixel and tail, the fixed-point sums of the fragments beyond the K nearest (4 x u64); two
 /// tails (facing the camera, facing away), each in its own buffer.
 pub const TAIL_BYTES: u64 = 32;
@@ -162,7 +170,10 @@ pub fn plan_lists(
     max_range: u32,
 ) -> std::result::Result<u32, String> {
     let px = u64::from(width) * u64::from(height);
-    let widest = KEY_BYTES.max(HALF_SLOT_BYTES).max(PLANE_XY_BYTES);
+    let widest = KEY_BYTES
+        .max(HALF_SLOT_BYTES)
+        .max(PLANE_XY_BYTES)
+        .max(SURFACE_BYTES);
     let fit = (u64::from(max_range) / (px * widest).max(1)).min(16) as u32;
     let refuse = |k: u32| {
         format!(
@@ -170,8 +181,8 @@ pub fn plan_lists(
              lists ({k} x {} bytes per pixel), the largest buffer {} bytes; this device binds at \
              most {max_range} bytes in one storage buffer (maxStorageBufferRange): lower the \
              resolution or frags=K (at most {fit} fits)",
-            px * u64::from(k) * (KEY_BYTES + SLOT_BYTES + PLANE_BYTES),
-            KEY_BYTES + SLOT_BYTES + PLANE_BYTES,
+            px * u64::from(k) * FRAGMENT_BYTES,
+            FRAGMENT_BYTES,
             px * u64::from(k) * widest
         )
     };
@@ -184,7 +195,7 @@ pub fn plan_lists(
 }
 
 /// Set 2 of the raster passes (set 0: the scene's, set 1: the material's).
-pub const RASTER_BINDINGS: [BindingDesc; 10] = {
+pub const RASTER_BINDINGS: [BindingDesc; 11] = {
     use DescriptorKind::StorageBuffer as B;
     [
         BindingDesc::one("keys", 0, B),
@@ -197,6 +208,7 @@ pub const RASTER_BINDINGS: [BindingDesc; 10] = {
         BindingDesc::one("tail_back", 7, B),
         BindingDesc::one("tail_masks", 8, B),
         BindingDesc::one("occluders", 9, B),
+        BindingDesc::one("surfaces", 10, B),
     ]
 };
 
@@ -247,6 +259,7 @@ pub struct Analytic {
     occluder_group: u32,
     select: Raster,
     raster: Raster,
+    shade: Pipeline,
     _layouts: Vec<SetLayout>,
     scene_set: DescriptorSet,
     material_sets: Vec<DescriptorSet>,
@@ -263,6 +276,7 @@ pub struct Analytic {
     colors: Buffer,
     planes: Buffer,
     planes_y: Buffer,
+    surfaces: Buffer,
     targets: Targets,
     color: Image,
     coverage: Image,
@@ -285,6 +299,7 @@ impl Analytic {
         e.storage_buffer("analytic.colors", kept * HALF_SLOT_BYTES, false);
         e.storage_buffer("analytic.planes", kept * PLANE_XY_BYTES, false);
         e.storage_buffer("analytic.planes_y", kept * PLANE_Y_BYTES, false);
+        e.storage_buffer("analytic.surfaces", kept * SURFACE_BYTES, false);
         e.storage_buffer("analytic.counts_buffer", px * 4, false);
         e.storage_buffer("analytic.tail", px * TAIL_BYTES, false);
         e.storage_buffer("analytic.tail_back", px * TAIL_BYTES, false);
@@ -396,6 +411,22 @@ impl Analytic {
         let mut rdefines: Vec<(String, String)> =
             RESOLVE_BINDINGS.iter().map(BindingDesc::define).collect();
         rdefines.extend(common.iter().cloned());
+        // The shading pass: the scene's set 0 and the raster passes' set 2 (as set 1).
+        let sdefines: Vec<(String, String)> = defines
+            .iter()
+            .filter(|(k, _)| k != "SEED")
+            .cloned()
+            .collect();
+        let shade_cs = ctx.shaders.compile("analytic/shade.comp", &sdefines)?;
+        let shade = Pipeline::compute(
+            gpu,
+            &ComputeDesc {
+                name: "analytic.shade",
+                shader: &shade_cs,
+                set_layouts: &[&scene_layout, &raster_layout],
+                push_constant_bytes: 64,
+            },
+        )?;
         let cs = ctx.shaders.compile("analytic/resolve.comp", &rdefines)?;
         let resolve = Pipeline::compute(
             gpu,
@@ -416,6 +447,7 @@ impl Analytic {
         let colors = buffer("analytic.colors", kept * HALF_SLOT_BYTES, storage)?;
         let planes = buffer("analytic.planes", kept * PLANE_XY_BYTES, storage)?;
         let planes_y = buffer("analytic.planes_y", kept * PLANE_Y_BYTES, storage)?;
+        let surfaces = buffer("analytic.surfaces", kept * SURFACE_BYTES, storage)?;
         let counts_buf = buffer("analytic.counts_buffer", px * 4, storage)?;
         let tail = buffer("analytic.tail", px * TAIL_BYTES, storage)?;
         let tail_back = buffer("analytic.tail_back", px * TAIL_BYTES, storage)?;
@@ -462,6 +494,7 @@ impl Analytic {
                 Write::Buffer(7, &tail_back),
                 Write::Buffer(8, &tail_masks),
                 Write::Buffer(9, &occluders),
+                Write::Buffer(10, &surfaces),
             ],
         )?;
         let resolve_set = DescriptorSet::new(
@@ -498,6 +531,7 @@ impl Analytic {
             occluder_group,
             select,
             raster,
+            shade,
             _layouts: vec![scene_layout, material_layout, raster_layout, resolve_layout],
             scene_set,
             material_sets,
@@ -514,6 +548,7 @@ impl Analytic {
             colors,
             planes,
             planes_y,
+            surfaces,
             targets,
             color,
             coverage,
@@ -549,6 +584,7 @@ impl Analytic {
             &self.tail_back,
             &self.tail_masks,
             &self.occluders,
+            &self.surfaces,
         ] {
             cmd.use_buffer(buf, Access::FragmentStorageWrite);
         }
@@ -598,6 +634,13 @@ impl Technique for Analytic {
     fn render(&mut self, ctx: &mut FrameCtx) -> Result<()> {
         let view = ctx.view.clone();
         ctx.upload(&view)?;
+        // Camera-relative world from unjittered clip space, the inverse of what gpu_scene.rs
+        // builds every object's clip_from_local from (f64, then f32).
+        let cam = &view.camera;
+        let world_from_clip = (cam.projection(view.aspect) * cam.rotation())
+            .inverse()
+            .to_cols_array()
+            .map(|v| v as f32);
         let this = &*self;
         let counter = ctx.counter;
         ctx.submit("frame", |cmd, profiler, scene| {
@@ -614,6 +657,22 @@ impl Technique for Analytic {
             // clears and writes them.
             this.record_raster(cmd, profiler, scene, &this.select, false);
             this.record_raster(cmd, profiler, scene, &this.raster, true);
+
+            // The kept fragments' light (shade.comp).
+            for buf in [&this.keys, &this.planes, &this.planes_y, &this.surfaces] {
+                cmd.use_buffer(buf, Access::ComputeSampled);
+            }
+            for buf in [&this.slots, &this.colors] {
+                cmd.use_buffer(buf, Access::ComputeStorageReadWrite);
+            }
+            let scope = profiler.begin(cmd, "analytic.shade", PassKind::Compute);
+            cmd.bind_pipeline(&this.shade);
+            cmd.bind_set(&this.shade, 0, &this.scene_set);
+            cmd.bind_set(&this.shade, 1, &this.raster_set);
+            cmd.push_constants(&this.shade, bytemuck::cast_slice(&world_from_clip));
+            let (w, h) = (this.color.width, this.color.height);
+            cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
+            profiler.end(cmd, scope);
 
             for buf in [
                 &this.keys,
@@ -709,10 +768,10 @@ impl Technique for Analytic {
 
     fn target_bytes(&self) -> u64 {
         let px = u64::from(self.color.width) * u64::from(self.color.height);
-        // K x (key + slot + plane) + the fragment count (4), tails (2 x 32) and their masks (8),
+        // K x (key + slot + plane + surface) + the fragment count (4), tails (2 x 32) and their masks (8),
         // the occluder words (4 x 32 / group) + colour (8), coverage (4), counts (16), depth (4),
         // velocity (8), IDs (8).
-        px * (u64::from(self.frags) * (KEY_BYTES + SLOT_BYTES + PLANE_BYTES)
+        px * (u64::from(self.frags) * FRAGMENT_BYTES
             + 4
             + 2 * TAIL_BYTES
             + TAIL_MASK_BYTES

@@ -1,0 +1,32 @@
+// `analytic`: what a kept fragment's shading needs, left in its slot by the raster pass
+// (raster.frag) for the shading pass (shade.comp): the albedo in the colour's place (3 x f16,
+// which the shading pass overwrites with the colour) and, in `surfaces`, the shading normal
+// (octahedral, 2 x snorm16: within about 3e-5 radians) and the shading point in the pixel
+// (2 x unorm16: within 1e-5 pixel). The point's position is then that of the slot's depth plane
+// there, unprojected.
+#ifndef SURFACE_GLSL
+#define SURFACE_GLSL
+
+// Octahedral encoding of a unit vector (Meyer et al. 2010) into [-1, 1]^2, and back.
+vec2 oct_encode(vec3 n) {
+    n /= abs(n.x) + abs(n.y) + abs(n.z);
+    vec2 e = n.xy;
+    if (n.z < 0.0) e = (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
+    return e;
+}
+
+vec3 oct_decode(vec2 e) {
+    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    if (n.z < 0.0) n.xy = (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
+    return normalize(n);
+}
+
+uvec2 pack_surface(vec3 normal, vec2 point) {
+    return uvec2(packSnorm2x16(oct_encode(normal)), packUnorm2x16(point));
+}
+
+void unpack_surface(uvec2 s, out vec3 normal, out vec2 point) {
+    normal = oct_decode(unpackSnorm2x16(s.x));
+    point = unpackUnorm2x16(s.y);
+}
+#endif
