@@ -28,6 +28,13 @@
 //    through the mean transmittance of its samples that no opaque winner in front of it holds,
 //    an opaque one through that of the samples it keeps. Then v is clamped to what nearer ones
 //    left, v = min(v, 1 - sum): colour += v c.
+//    Only the fragments composited with v > 0 are lit, here, after the visibility (shaders
+//    /inc/shading.glsl's `shade` at the fragment's shading point: the albedo, normal and point
+//    the raster pass left in its slot, surface.glsl; the point's camera-relative position is its
+//    depth plane there, unprojected by pc.world_from_clip, the inverse of the camera's unjittered
+//    projection, made in f64 on the CPU, after the jitter is taken off). A non-finite colour
+//    drops the fragment as the raster pass drops one (coverage 0, holes, flagged) and the
+//    visibility is settled again without it.
 // 4. Only the K nearest fragments of a pixel are kept (the select pass); those beyond count as
 //    overflow and are merged into two tail fragments (coverage-weighted mean colour, summed
 //    coverage, union of masks), those facing the camera, then those facing away, composited
@@ -40,6 +47,7 @@
 #define EMPTY_KEY 0xFFFFFFFFFFFFFFFFul  // a slot no fragment took
 #include "../inc/scene_types.glsl"
 #include "coverage.glsl"
+#include "surface.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -52,13 +60,22 @@ layout(std430, set = 0, binding = BINDING_TAIL_BACK) readonly buffer TailBack { 
 layout(std430, set = 0, binding = BINDING_TAIL_MASKS) readonly buffer TailMasks { uint tail_masks[]; };
 layout(std430, set = 0, binding = BINDING_PLANES) readonly buffer Planes { vec2 planes[]; };
 layout(std430, set = 0, binding = BINDING_PLANES_Y) readonly buffer PlanesY { float planes_y[]; };
+layout(std430, set = 0, binding = BINDING_SURFACES) readonly buffer Surfaces { uvec2 surfaces[]; };
+// The scene's set, for the lighting.
+layout(set = 1, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
+layout(std430, set = 1, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
+layout(std430, set = 1, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
+layout(std430, set = 1, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
 layout(set = 0, binding = BINDING_OUT_COLOR, rgba16f) uniform writeonly image2D out_color;
 layout(set = 0, binding = BINDING_OUT_COVERAGE, r32f) uniform writeonly image2D out_coverage;
 layout(set = 0, binding = BINDING_OUT_COUNTS, rgba32ui) uniform writeonly uimage2D out_counts;
 layout(push_constant) uniform Push {
     vec4 background;  // rgb
     uvec4 size;       // width, height
+    mat4 world_from_clip;
 } pc;
+
+#include "../inc/shading.glsl"
 
 // Counts' channels: fragments that touched the pixel, overflow (beyond the K nearest), flags,
 // visible fragments.
@@ -76,6 +93,22 @@ layout(push_constant) uniform Push {
 float plane_depth(uint slot, vec2 q) {
     vec2 p = planes[slot];
     return p.x + p.y * (q.x - 0.5) + planes_y[slot] * (q.y - 0.5);
+}
+
+// The light of the fragment in `slot` (of object `object`) at pixel px.
+vec3 shade_slot(uint slot, uint object, ivec2 px) {
+    uvec2 cl = colors[slot];
+    vec3 albedo = vec3(unpackHalf2x16(cl.x), unpackHalf2x16(cl.y).x);
+    vec3 nrm;
+    vec2 point;
+    unpack_surface(surfaces[slot], nrm, point);
+    vec2 plane = planes[slot];
+    float z = plane.x + plane.y * (point.x - 0.5) + planes_y[slot] * (point.y - 0.5);
+    vec2 jitter = frame.screen_jitter.xy * 2.0 * frame.output_size.zw;
+    vec2 ndc = (vec2(px) + point) * frame.output_size.zw * 2.0 - 1.0 - jitter;
+    vec4 h = pc.world_from_clip * vec4(ndc, z, 1.0);
+    MaterialData mat = materials[objects[object - 1u].ids.y];
+    return shade(h.xyz / h.w, nrm, albedo, mat, frame);
 }
 
 void main() {
@@ -104,6 +137,15 @@ void main() {
         ++count;
     }
 
+    float trans[MASK_SAMPLES];
+    float sum;
+    vec3 color;
+    uint flags;
+    uint visible;
+    // Settled again without a fragment whose light turned out non-finite (at most once per
+    // fragment).
+    for (int attempt = 0; attempt <= K_SLOTS; ++attempt) {
+    // (steps 1-3 are not indented: the attempt loop is their whole body)
     // 1. Each mask sample's winner (a slot index, 0xFF for none) and its depth there.
     uint winner[MASK_SAMPLES];
     float wz[MASK_SAMPLES];
@@ -185,13 +227,14 @@ void main() {
     // fragment shows through its samples' transmittance where no opaque winner lies in front of
     // it; an opaque one through the mean transmittance over the samples it keeps. Then clamped to
     // what nearer ones left, v = min(v, 1 - sum).
-    float trans[MASK_SAMPLES];
     for (int s = 0; s < MASK_SAMPLES; ++s) trans[s] = 1.0;
     bool any_holes = false;
-    float sum = 0.0;
-    vec3 color = vec3(0.0);
-    uint flags = 0u;
-    uint visible = 0u;
+    sum = 0.0;
+    color = vec3(0.0);
+    flags = 0u;
+    visible = 0u;
+    float shown[K_SLOTS];  // the composited v of the fragments in `show`
+    uint show = 0u;
     for (int k = 0; k < count; ++k) {
         uint fflags = fl[k];
         float a = area[k];
@@ -220,12 +263,28 @@ void main() {
         }
         v = min(v, 1.0 - sum);
         if (v <= 0.0) continue;
-        uvec2 cl = colors[base + uint(k)];
-        vec3 c = vec3(unpackHalf2x16(cl.x), unpackHalf2x16(cl.y & 0xFFFFu).x);
-        color += v * c;
+        shown[k] = v;
+        show |= 1u << uint(k);
         sum += v;
         ++visible;
         if (a < 1.0 - 1e-6) flags |= FLAG_EDGE;
+    }
+    // The light of the composited fragments only, in key order; each invocation walks its own
+    // list (a SIMD group pays for its longest, not for every slot).
+    bool again = false;
+    while (show != 0u) {
+        int k = findLSB(show);
+        show &= show - 1u;
+        vec3 c = shade_slot(base + uint(k), objs[k], px);
+        if (any(isnan(c)) || any(isinf(c))) {
+            fl[k] |= FRAG_HOLES | FRAG_NONFINITE;
+            area[k] = 0.0;
+            again = true;
+        } else {
+            color += shown[k] * c;
+        }
+    }
+    if (!again) break;
     }
     uint seen = counts[pixel];
     uint overflow = seen - uint(count);

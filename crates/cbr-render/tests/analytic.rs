@@ -1359,3 +1359,65 @@ fn kept_fragments_are_lit_at_their_own_point_as_native_shades_the_pixel() {
     );
     assert_clean(&gpu);
 }
+
+/// The resolve lights only the fragments it composites; one whose light is not finite (here an
+/// emission and a sun each near f32's largest value, which sum to infinity) is dropped as the
+/// raster pass drops one with a non-finite albedo: what lies behind shows through, and the pixel
+/// is flagged.
+#[test]
+fn a_fragment_whose_light_is_not_finite_is_dropped_and_what_is_behind_shows() {
+    let gpu = gpu();
+    let back = mesh(
+        "back",
+        &[
+            [-9.0, -9.0, -1.0],
+            [9.0, -9.0, -1.0],
+            [9.0, 9.0, -1.0],
+            [-9.0, 9.0, -1.0],
+        ],
+        vec![0, 1, 2, 0, 2, 3],
+        1,
+    );
+    let front = mesh(
+        "front",
+        &[
+            [-1.0, -1.0, 0.5],
+            [1.0, -1.0, 0.5],
+            [1.0, 1.0, 0.5],
+            [-1.0, 1.0, 0.5],
+        ],
+        vec![0, 1, 2, 0, 2, 3],
+        0,
+    );
+    let mut hot = Material::named("hot");
+    hot.kd = [1.0; 3];
+    hot.ke = [3.0e38, 0.0, 0.0];
+    let cb = [0.125, 1.0, 0.5];
+    let mut s = scene(vec![back, front], vec![hot, emissive("b", cb)], [0.0; 3]);
+    s.directional = vec![DirLight {
+        direction: [0.0, 0.0, -1.0],
+        color: [1.0; 3],
+        intensity: 3.0e38,
+    }];
+    let out = render(&gpu, &s, "analytic");
+    let layers = out.analytic.as_ref().expect("analytic layers");
+    let o = &s.objects[1];
+    let outline: Poly = (0..4).map(|k| project(&s, o.vertices[k].pos)).collect();
+    let mut flagged = 0;
+    for y in 0..H as i64 {
+        for x in 0..W as i64 {
+            let i = (y * W as i64 + x) as usize;
+            let (a, _) = reference::coverage(&outline, x, y);
+            // The back quad's emission everywhere, the front quad dropped.
+            assert_blend(&out, i, 1.0, cb, cb, "behind the dropped quad");
+            if a > 0.0 {
+                assert!(layers.nonfinite[i] != 0, "({x}, {y}) not flagged");
+                flagged += 1;
+            } else {
+                assert!(layers.nonfinite[i] == 0, "({x}, {y}) flagged");
+            }
+        }
+    }
+    assert!(flagged > 100, "{flagged} pixels flagged");
+    assert_clean(&gpu);
+}

@@ -9,9 +9,8 @@
 //! (2) `analytic.raster`: the fragments among their pixel's K are shaded once, at the centroid of
 //! the covered part: each leaves its albedo, normal and shading point in its slot (the fragments
 //! beyond the K are shaded there, into the pixel's tails); fragments holding the pixel centre
-//! also write native's depth, velocity and IDs; (3) `analytic.shade`, a compute pass: the kept
-//! fragments' light, per pixel and slot (shaders/analytic/shade.comp); (4) `analytic.resolve`:
-//! front to back per pixel (resolve.comp states the model). `:seed` replaces the exact area by the seed's column shortcut and flags
+//! also write native's depth, velocity and IDs; (3) `analytic.resolve`: front to back per pixel
+//! (resolve.comp states the model), lighting only the kept fragments it composites. `:seed` replaces the exact area by the seed's column shortcut and flags
 //! where it is off; `:frags=K` keeps K fragments per pixel (default 16, lowered to what the
 //! device's largest storage buffer holds).
 
@@ -212,7 +211,7 @@ pub const RASTER_BINDINGS: [BindingDesc; 11] = {
     ]
 };
 
-pub const RESOLVE_BINDINGS: [BindingDesc; 12] = {
+pub const RESOLVE_BINDINGS: [BindingDesc; 13] = {
     use DescriptorKind::{StorageBuffer as B, StorageImage as I};
     [
         BindingDesc::one("keys", 0, B),
@@ -227,6 +226,7 @@ pub const RESOLVE_BINDINGS: [BindingDesc; 12] = {
         BindingDesc::one("planes_y", 9, B),
         BindingDesc::one("tail_back", 10, B),
         BindingDesc::one("tail_masks", 11, B),
+        BindingDesc::one("surfaces", 12, B),
     ]
 };
 
@@ -259,7 +259,6 @@ pub struct Analytic {
     occluder_group: u32,
     select: Raster,
     raster: Raster,
-    shade: Pipeline,
     _layouts: Vec<SetLayout>,
     scene_set: DescriptorSet,
     material_sets: Vec<DescriptorSet>,
@@ -408,33 +407,18 @@ impl Analytic {
         let raster = graphics("analytic.raster", false)?;
         let select = graphics("analytic.select", true)?;
 
-        let mut rdefines: Vec<(String, String)> =
-            RESOLVE_BINDINGS.iter().map(BindingDesc::define).collect();
+        // The resolve also lights the visible kept fragments: the scene's set is its set 1.
+        let mut rdefines = scene_pass::shader_defines(scene_pass::LAYOUT_NATIVE);
+        rdefines.extend(RESOLVE_BINDINGS.iter().map(BindingDesc::define));
         rdefines.extend(common.iter().cloned());
-        // The shading pass: the scene's set 0 and the raster passes' set 2 (as set 1).
-        let sdefines: Vec<(String, String)> = defines
-            .iter()
-            .filter(|(k, _)| k != "SEED")
-            .cloned()
-            .collect();
-        let shade_cs = ctx.shaders.compile("analytic/shade.comp", &sdefines)?;
-        let shade = Pipeline::compute(
-            gpu,
-            &ComputeDesc {
-                name: "analytic.shade",
-                shader: &shade_cs,
-                set_layouts: &[&scene_layout, &raster_layout],
-                push_constant_bytes: 64,
-            },
-        )?;
         let cs = ctx.shaders.compile("analytic/resolve.comp", &rdefines)?;
         let resolve = Pipeline::compute(
             gpu,
             &ComputeDesc {
                 name: "analytic.resolve",
                 shader: &cs,
-                set_layouts: &[&resolve_layout],
-                push_constant_bytes: 32,
+                set_layouts: &[&resolve_layout, &scene_layout],
+                push_constant_bytes: 96,
             },
         )?;
 
@@ -514,6 +498,7 @@ impl Analytic {
                 Write::Buffer(9, &planes_y),
                 Write::Buffer(10, &tail_back),
                 Write::Buffer(11, &tail_masks),
+                Write::Buffer(12, &surfaces),
             ],
         )?;
         let rb = |name: &str, image: &Image| Readback::for_image(gpu, name, image);
@@ -531,7 +516,6 @@ impl Analytic {
             occluder_group,
             select,
             raster,
-            shade,
             _layouts: vec![scene_layout, material_layout, raster_layout, resolve_layout],
             scene_set,
             material_sets,
@@ -658,22 +642,6 @@ impl Technique for Analytic {
             this.record_raster(cmd, profiler, scene, &this.select, false);
             this.record_raster(cmd, profiler, scene, &this.raster, true);
 
-            // The kept fragments' light (shade.comp).
-            for buf in [&this.keys, &this.planes, &this.planes_y, &this.surfaces] {
-                cmd.use_buffer(buf, Access::ComputeSampled);
-            }
-            for buf in [&this.slots, &this.colors] {
-                cmd.use_buffer(buf, Access::ComputeStorageReadWrite);
-            }
-            let scope = profiler.begin(cmd, "analytic.shade", PassKind::Compute);
-            cmd.bind_pipeline(&this.shade);
-            cmd.bind_set(&this.shade, 0, &this.scene_set);
-            cmd.bind_set(&this.shade, 1, &this.raster_set);
-            cmd.push_constants(&this.shade, bytemuck::cast_slice(&world_from_clip));
-            let (w, h) = (this.color.width, this.color.height);
-            cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
-            profiler.end(cmd, scope);
-
             for buf in [
                 &this.keys,
                 &this.slots,
@@ -684,6 +652,7 @@ impl Technique for Analytic {
                 &this.tail,
                 &this.tail_back,
                 &this.tail_masks,
+                &this.surfaces,
             ] {
                 cmd.use_buffer(buf, Access::ComputeSampled);
             }
@@ -693,12 +662,14 @@ impl Technique for Analytic {
             let scope = profiler.begin(cmd, "analytic.resolve", PassKind::Compute);
             cmd.bind_pipeline(&this.resolve);
             cmd.bind_set(&this.resolve, 0, &this.resolve_set);
+            cmd.bind_set(&this.resolve, 1, &this.scene_set);
             let (w, h) = (this.color.width, this.color.height);
             let bg = this.background;
-            let mut push = [0u32; 8];
+            let mut push = [0u32; 24];
             push[..3].copy_from_slice(&bg.map(f32::to_bits));
             push[4] = w;
             push[5] = h;
+            push[8..].copy_from_slice(&world_from_clip.map(f32::to_bits));
             cmd.push_constants(&this.resolve, bytemuck::cast_slice(&push));
             cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
             profiler.end(cmd, scope);
