@@ -8,10 +8,11 @@
 // centre, then object and primitive). SELECT_PASS: inserts the key into the pixel's K nearest
 // (a 64-bit atomicMin chain: each slot keeps the smaller key and passes the larger on, so the
 // slots end sorted and hold the K nearest whatever the order of arrival) and counts the
-// fragment. Otherwise: a fragment whose key is among its pixel's K is shaded once, at the
-// centroid of its covered part, and writes (coverage, sample mask, colour) into that slot; in a
-// pixel with more than K fragments the others are shaded too and summed into the pixel's tails
-// (facing the camera; facing away).
+// fragment. Otherwise: a fragment whose key is among its pixel's K takes its albedo and normal at
+// the centroid of its covered part and writes (coverage, sample mask, albedo) and its surface
+// (surface.glsl) into that slot, for the resolve to light it if it shows; in a pixel with more
+// than K fragments the others are lit here and summed into the pixel's tails (facing the camera;
+// facing away).
 // Fragments whose triangle holds the pixel centre also write native's depth, velocity and IDs
 // through the depth test.
 #include "../inc/scene_types.glsl"
