@@ -292,6 +292,16 @@ fn emissive(name: &str, ke: [f32; 3]) -> Material {
     m
 }
 
+/// The square [-r, r]^2 at height z facing the camera, as two triangles.
+fn quad_mesh(name: &str, r: f32, z: f32, material: u32) -> Object {
+    mesh(
+        name,
+        &[[-r, -r, z], [r, -r, z], [r, r, z], [-r, r, z]],
+        vec![0, 1, 2, 0, 2, 3],
+        material,
+    )
+}
+
 fn mesh(name: &str, verts: &[[f32; 3]], indices: Vec<u32>, material: u32) -> Object {
     Object {
         name: name.into(),
@@ -519,17 +529,7 @@ fn abutting_triangles_add_up_to_the_pixel_without_a_seam() {
 #[test]
 fn an_opaque_mesh_in_front_of_another_hides_it_exactly() {
     let gpu = gpu();
-    let back = mesh(
-        "back",
-        &[
-            [-9.0, -9.0, -1.0],
-            [9.0, -9.0, -1.0],
-            [9.0, 9.0, -1.0],
-            [-9.0, 9.0, -1.0],
-        ],
-        vec![0, 1, 2, 0, 2, 3],
-        1,
-    );
+    let back = quad_mesh("back", 9.0, -1.0, 1);
     // A tilted quad in front: fully covers some pixels, partly covers others.
     let front = mesh(
         "front",
@@ -1367,28 +1367,8 @@ fn kept_fragments_are_lit_at_their_own_point_as_native_shades_the_pixel() {
 #[test]
 fn a_fragment_whose_light_is_not_finite_is_dropped_and_what_is_behind_shows() {
     let gpu = gpu();
-    let back = mesh(
-        "back",
-        &[
-            [-9.0, -9.0, -1.0],
-            [9.0, -9.0, -1.0],
-            [9.0, 9.0, -1.0],
-            [-9.0, 9.0, -1.0],
-        ],
-        vec![0, 1, 2, 0, 2, 3],
-        1,
-    );
-    let front = mesh(
-        "front",
-        &[
-            [-1.0, -1.0, 0.5],
-            [1.0, -1.0, 0.5],
-            [1.0, 1.0, 0.5],
-            [-1.0, 1.0, 0.5],
-        ],
-        vec![0, 1, 2, 0, 2, 3],
-        0,
-    );
+    let back = quad_mesh("back", 9.0, -1.0, 1);
+    let front = quad_mesh("front", 1.0, 0.5, 0);
     let mut hot = Material::named("hot");
     hot.kd = [1.0; 3];
     hot.ke = [3.0e38, 0.0, 0.0];
