@@ -53,7 +53,7 @@ layout(std430, set = 2, binding = BINDING_TAIL_MASKS) buffer TailMasks { uint ta
 // only by fragments opaque at the whole group.
 #define OCCLUDER_WORDS (MASK_SAMPLES / OCCLUDER_GROUP)
 layout(std430, set = 2, binding = BINDING_OCCLUDERS) buffer Occluders { uint occluders[]; };
-// A kept fragment's shading normal and point, for the shading pass (surface.glsl).
+// A kept fragment's shading normal and point, for the resolve's lighting (surface.glsl).
 layout(std430, set = 2, binding = BINDING_SURFACES) buffer Surfaces { uvec2 surfaces[]; };
 layout(push_constant) uniform Push { uint object_index; } pc;
 
@@ -332,11 +332,10 @@ void main() {
         nrm = bump_from(nrm, world_at(bx) - world, world_at(by) - world, hx - h, hy - h);
     }
 #endif
-    // A kept fragment leaves its albedo, normal and shading point in its slot, and the shading
-    // pass (shade.comp) adds the light: a compute pass shades only the kept fragments, where
-    // here every SIMD group holding one would run the light loop for all its lanes, most of them
-    // outside the triangle (the grown polygon's pixels it does not touch). The tails are shaded
-    // here, as they are summed.
+    // A kept fragment leaves its albedo, normal and shading point in its slot, and the resolve
+    // lights it if it shows: a compute pass lights only those, where here every SIMD group
+    // holding one would run the light loop for all its lanes, most of them outside the triangle
+    // (the grown polygon's pixels it does not touch). The tails are lit here, as they are summed.
     vec3 color = albedo;
     if (slot < 0) color = shade(world, nrm, albedo, mat, frame);
     bool finite = !any(isnan(color)) && !any(isinf(color));

@@ -102,8 +102,7 @@ vec3 shade_slot(uint slot, uint object, ivec2 px) {
     vec3 nrm;
     vec2 point;
     unpack_surface(surfaces[slot], nrm, point);
-    vec2 plane = planes[slot];
-    float z = plane.x + plane.y * (point.x - 0.5) + planes_y[slot] * (point.y - 0.5);
+    float z = plane_depth(slot, point);
     vec2 jitter = frame.screen_jitter.xy * 2.0 * frame.output_size.zw;
     vec2 ndc = (vec2(px) + point) * frame.output_size.zw * 2.0 - 1.0 - jitter;
     vec4 h = pc.world_from_clip * vec4(ndc, z, 1.0);

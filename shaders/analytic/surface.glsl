@@ -1,6 +1,6 @@
-// `analytic`: what a kept fragment's shading needs, left in its slot by the raster pass
-// (raster.frag) for the shading pass (shade.comp): the albedo in the colour's place (3 x f16,
-// which the shading pass overwrites with the colour) and, in `surfaces`, the shading normal
+// `analytic`: what a kept fragment's light needs, left in its slot by the raster pass
+// (raster.frag) for the resolve (resolve.comp, which lights the fragments it composites): the
+// albedo in the colour's place (3 x f16) and, in `surfaces`, the shading normal
 // (octahedral, 2 x snorm16: within about 3e-5 radians) and the shading point in the pixel
 // (2 x unorm16: within 1e-5 pixel). The point's position is then that of the slot's depth plane
 // there, unprojected.

@@ -1,18 +1,18 @@
 //! `analytic[:seed][:frags=K]`: anti-aliasing from the exact area of each pixel each triangle
 //! covers, instead of from samples (docs/analytic.md).
 //!
-//! Passes per frame, both through the conservative raster (shaders/analytic/raster.geom grows
-//! each near-clipped triangle by the pixel square, so every touched pixel is reached without
-//! conservative rasterisation): (1) `analytic.select`: each fragment's exact coverage
+//! Passes per frame; the first two through the conservative raster (shaders/analytic/raster.geom
+//! grows each near-clipped triangle by the pixel square, so every touched pixel is reached
+//! without conservative rasterisation): (1) `analytic.select`: each fragment's exact coverage
 //! (shaders/analytic/coverage.glsl) and sort key; the pixel keeps its K nearest keys (a 64-bit
 //! atomicMin chain, sorted and independent of the order of arrival) and counts every fragment;
-//! (2) `analytic.raster`: the fragments among their pixel's K are shaded once, at the centroid of
-//! the covered part: each leaves its albedo, normal and shading point in its slot (the fragments
-//! beyond the K are shaded there, into the pixel's tails); fragments holding the pixel centre
-//! also write native's depth, velocity and IDs; (3) `analytic.resolve`: front to back per pixel
-//! (resolve.comp states the model), lighting only the kept fragments it composites. `:seed` replaces the exact area by the seed's column shortcut and flags
-//! where it is off; `:frags=K` keeps K fragments per pixel (default 16, lowered to what the
-//! device's largest storage buffer holds).
+//! (2) `analytic.raster`: each fragment among its pixel's K leaves its albedo, normal and shading
+//! point (the covered part's centroid) in its slot; the fragments beyond the K are lit there, into
+//! the pixel's tails; fragments holding the pixel centre also write native's depth, velocity and
+//! IDs; (3) `analytic.resolve`: front to back per pixel (resolve.comp states the model), lighting
+//! only the kept fragments it composites. `:seed` replaces the exact area by the seed's column
+//! shortcut and flags where it is off; `:frags=K` keeps K fragments per pixel (default 16,
+//! lowered to what the device's largest storage buffer holds).
 
 pub mod reference;
 
@@ -60,7 +60,7 @@ pub const REGISTRATION: Registration = Registration {
 };
 
 /// Bytes of one kept fragment: its 64-bit key (depth, object, primitive), its slot (coverage,
-/// mask, colour as 3 x f16, flags), its depth plane ([`PLANE_BYTES`]) and its surface
+/// mask, albedo as 3 x f16, flags), its depth plane ([`PLANE_BYTES`]) and its surface
 /// ([`SURFACE_BYTES`]).
 pub const KEY_BYTES: u64 = 8;
 /// A slot is two 8-byte halves in two buffers (coverage + mask; colour + flags), so that each
@@ -73,7 +73,7 @@ const PLANE_XY_BYTES: u64 = 8;
 const PLANE_Y_BYTES: u64 = 4;
 pub const PLANE_BYTES: u64 = PLANE_XY_BYTES + PLANE_Y_BYTES;
 /// A kept fragment's shading normal (octahedral, 2 x snorm16) and shading point in the pixel
-/// (2 x unorm16), from the raster pass to the shading pass (shaders/analytic/surface.glsl).
+/// (2 x unorm16), from the raster pass to the resolve's lighting (shaders/analytic/surface.glsl).
 pub const SURFACE_BYTES: u64 = 8;
 /// All of one kept fragment's bytes.
 pub const FRAGMENT_BYTES: u64 = KEY_BYTES + SLOT_BYTES + PLANE_BYTES + SURFACE_BYTES;
@@ -739,9 +739,9 @@ impl Technique for Analytic {
 
     fn target_bytes(&self) -> u64 {
         let px = u64::from(self.color.width) * u64::from(self.color.height);
-        // K x (key + slot + plane + surface) + the fragment count (4), tails (2 x 32) and their masks (8),
-        // the occluder words (4 x 32 / group) + colour (8), coverage (4), counts (16), depth (4),
-        // velocity (8), IDs (8).
+        // K x (key + slot + plane + surface) + the fragment count (4), tails (2 x 32) and their
+        // masks (8), the occluder words (4 x 32 / group) + colour (8), coverage (4), counts (16),
+        // depth (4), velocity (8), IDs (8).
         px * (u64::from(self.frags) * FRAGMENT_BYTES
             + 4
             + 2 * TAIL_BYTES
