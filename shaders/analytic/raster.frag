@@ -11,7 +11,8 @@
 // fragment. Otherwise: a fragment whose key is among its pixel's K takes its albedo and normal at
 // the centroid of its covered part and writes (coverage, sample mask, albedo) and its surface
 // (surface.glsl) into that slot, for the resolve to light it if it shows; in a pixel with more
-// than K fragments the others are lit here and summed into the pixel's tails (facing the camera;
+// than K fragments the others that are not hidden are recorded (tail_record.glsl) for the tail
+// pass (tail.comp), which lights them and sums them into the pixel's tails (facing the camera;
 // facing away).
 // Fragments whose triangle holds the pixel centre also write native's depth, velocity and IDs
 // through the depth test.
@@ -40,12 +41,6 @@ layout(std430, set = 2, binding = BINDING_COLORS) buffer Colors { uvec2 colors[]
 layout(std430, set = 2, binding = BINDING_PLANES) buffer Planes { uvec2 planes[]; };
 layout(std430, set = 2, binding = BINDING_PLANES_Y) buffer PlanesY { uint planes_y[]; };
 layout(std430, set = 2, binding = BINDING_COUNTS) buffer Counts { uint counts[]; };
-// Per pixel, two tails (fragments facing the camera, facing away), each the fixed-point sums
-// (2^-24 units) of coverage x colour and of coverage of the fragments beyond the K nearest,
-// and the union of their sample masks: integers, so the sums do not depend on the order of arrival.
-layout(std430, set = 2, binding = BINDING_TAIL) buffer Tail { uint64_t tail[]; };
-layout(std430, set = 2, binding = BINDING_TAIL_BACK) buffer TailBack { uint64_t tail_back[]; };
-layout(std430, set = 2, binding = BINDING_TAIL_MASKS) buffer TailMasks { uint tail_masks[]; };
 // Per pixel and mask sample, the farthest depth over the pixel (f32 bits, reverse-Z: larger is
 // nearer; 0 where none) of the nearest fragment opaque at that sample: the select pass's
 // atomicMax. Behind the least of them, a fragment is hidden at every sample. A word per
@@ -55,11 +50,18 @@ layout(std430, set = 2, binding = BINDING_TAIL_MASKS) buffer TailMasks { uint ta
 layout(std430, set = 2, binding = BINDING_OCCLUDERS) buffer Occluders { uint occluders[]; };
 // A kept fragment's shading normal and point, for the resolve's lighting (surface.glsl).
 layout(std430, set = 2, binding = BINDING_SURFACES) buffer Surfaces { uvec2 surfaces[]; };
+#ifndef SELECT_PASS
+// The fragments beyond the K nearest that are not hidden, for the tail pass (tail.comp) to light
+// and sum into the tails (tail_record.glsl); the buffer's length is the capacity, and the count
+// runs on past it when the frame needs more (the technique grows the buffer and renders again).
+layout(std430, set = 2, binding = BINDING_TAIL_RECORDS) writeonly buffer TailRecords { uint tail_records[]; };
+layout(std430, set = 2, binding = BINDING_TAIL_COUNT) buffer TailCount { uint tail_count; };
+#endif
 layout(push_constant) uniform Push { uint object_index; } pc;
 
-#include "../inc/shading.glsl"
 #include "coverage.glsl"
 #include "surface.glsl"
+#include "tail_record.glsl"
 #define RASTER_IO in
 #include "raster_io.glsl"
 
@@ -241,8 +243,8 @@ void main() {
     int slot = first < K_SLOTS && keys[base + uint(first)] == key ? first : -1;
     // A fragment beyond the K nearest whose nearest depth in the pixel lies behind every
     // sample's occluder is hidden at every sample (and behind an opaque fragment at the centre,
-    // so native's layers do not need it either): it is not shaded into the tails. The kept ones
-    // are shaded whatever their depth.
+    // so native's layers do not need it either): it is not recorded for the tails. The kept
+    // ones are written whatever their depth.
     if (slot < 0) {
         float near = max(max(zc4.x, zc4.y), max(zc4.z, zc4.w));
         near = isnan(near) ? zhi : min(near, zhi);
@@ -309,9 +311,9 @@ void main() {
     }
     discard;
 #else
-    // Fragments beyond their pixel's K nearest are shaded too, into the pixel's tail sums.
+    // Fragments beyond their pixel's K nearest are recorded for the tails.
     if (slot >= 0 || counts[pixel] > uint(K_SLOTS)) {
-    // (the payload block is not indented: it is the whole shading path)
+    // (the payload block is not indented: it is the whole surface path)
     vec3 albedo = mat.kd.rgb;
 #if (MAT_FEATURES & MAT_ALBEDO) != 0
     if (mat.tex.x >= 0) albedo *= texture_aniso(albedo_tex, uv, gx, gy).rgb;
@@ -319,7 +321,7 @@ void main() {
     vec3 world = world_at(b);
     vec3 nrm = normalize(b.x * g_normal[0] + b.y * g_normal[1] + b.z * g_normal[2]);
     // Facing away: the back of a surface (of a closed mesh, behind its front); shaded from the
-    // side the camera sees, and summed into the back tail.
+    // side the camera sees, and summed into the back tail (tail.comp).
     bool facing_away = dot(nrm, -world) < 0.0;
     if (facing_away) nrm = -nrm;
     // The height's change over one pixel step (isotropic: anisotropic taps here cost on lavapipe
@@ -332,12 +334,12 @@ void main() {
         nrm = bump_from(nrm, world_at(bx) - world, world_at(by) - world, hx - h, hy - h);
     }
 #endif
-    // A kept fragment leaves its albedo, normal and shading point in its slot, and the resolve
-    // lights it if it shows: a compute pass lights only those, where here every SIMD group
-    // holding one would run the light loop for all its lanes, most of them outside the triangle
-    // (the grown polygon's pixels it does not touch). The tails are lit here, as they are summed.
+    // No light is computed here. A kept fragment leaves its albedo, normal and shading point in
+    // its slot, and the resolve lights it if it shows; one beyond the K is recorded, and the
+    // tail pass lights it. Here every SIMD group holding one such fragment would run the light
+    // loop for all its lanes, most of them outside the triangle (the grown polygon's pixels it
+    // does not touch); the compute passes light dense lists.
     vec3 color = albedo;
-    if (slot < 0) color = shade(world, nrm, albedo, mat, frame);
     bool finite = !any(isnan(color)) && !any(isinf(color));
 
     // The mask: for the resolve's per-sample visibility (a slot) or the tail's (beyond the K), and
@@ -379,23 +381,22 @@ void main() {
                                           (packHalf2x16(vec2(color.b, 0.0)) & 0xFFFFu) | (flags << 16u)
                                           | (uint(round(alpha_pass * 255.0)) << 24u));
     } else if (coverage > 0.0) {
-        const float unit = 16777216.0;  // 2^24
-        vec3 ac = clamp(color, 0.0, 65504.0) * coverage * unit;
-        // Two tails, each 4 sums a pixel in its own buffer: fragments facing the camera, and
-        // those facing away (composited after); and their masks' unions.
-        uint t = pixel * 4u;
-#define ADD_TAIL(buf)                                       \
-        atomicAdd(buf[t], uint64_t(ac.r));                  \
-        atomicAdd(buf[t + 1u], uint64_t(ac.g));             \
-        atomicAdd(buf[t + 2u], uint64_t(ac.b));             \
-        atomicAdd(buf[t + 3u], uint64_t(coverage * unit))
-        if (facing_away) {
-            ADD_TAIL(tail_back);
-        } else {
-            ADD_TAIL(tail);
+        // Beyond the K: recorded for the tail pass (tail_record.glsl), which lights it and adds
+        // it to the pixel's tail, facing the camera or away.
+        uint i = atomicAdd(tail_count, 1u);
+        if (i < uint(tail_records.length()) / TAIL_RECORD_WORDS) {
+            uint r = i * TAIL_RECORD_WORDS;
+            tail_records[r] = pixel;
+            tail_records[r + 1u] = floatBitsToUint(coverage);
+            tail_records[r + 2u] = mask;
+            tail_records[r + 3u] = o.ids.y | (facing_away ? TAIL_FACING_AWAY : 0u);
+            tail_records[r + 4u] = floatBitsToUint(world.x);
+            tail_records[r + 5u] = floatBitsToUint(world.y);
+            tail_records[r + 6u] = floatBitsToUint(world.z);
+            tail_records[r + 7u] = packSnorm2x16(oct_encode(nrm));
+            tail_records[r + 8u] = packHalf2x16(albedo.rg);
+            tail_records[r + 9u] = packHalf2x16(vec2(albedo.b, 0.0));
         }
-#undef ADD_TAIL
-        atomicOr(tail_masks[pixel * 2u + (facing_away ? 1u : 0u)], mask);
     }
     }
 

@@ -159,6 +159,9 @@ pub struct AnalyticLayers {
     pub nonfinite: Vec<u8>,
     /// Fragments kept per pixel (K) this frame was built with.
     pub kept_per_pixel: u32,
+    /// Fragments beyond their pixel's K that no occluder hid: lit by the tail pass and merged
+    /// into the tails.
+    pub tail_fragments: u64,
 }
 
 impl FrameOutput {

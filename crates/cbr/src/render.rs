@@ -660,6 +660,7 @@ fn analytic_summary(out: &FrameOutput) -> serde_json::Value {
         .count();
     json!({
         "kept_per_pixel": a.kept_per_pixel,
+        "tail_fragments": a.tail_fragments,
         "fragments": a.fragments.iter().map(|&f| u64::from(f)).sum::<u64>(),
         "edge_pixels": edge,
         "overflow_pixels": a.overflow.iter().filter(|&&o| o > 0).count(),

@@ -7,10 +7,14 @@
 //! (shaders/analytic/coverage.glsl) and sort key; the pixel keeps its K nearest keys (a 64-bit
 //! atomicMin chain, sorted and independent of the order of arrival) and counts every fragment;
 //! (2) `analytic.raster`: each fragment among its pixel's K leaves its albedo, normal and shading
-//! point (the covered part's centroid) in its slot; the fragments beyond the K are lit there, into
-//! the pixel's tails; fragments holding the pixel centre also write native's depth, velocity and
-//! IDs; (3) `analytic.resolve`: front to back per pixel (resolve.comp states the model), lighting
-//! only the kept fragments it composites. `:seed` replaces the exact area by the seed's column
+//! point (the covered part's centroid) in its slot; the fragments beyond the K that no occluder
+//! hides are recorded (shaders/analytic/tail_record.glsl); fragments holding the pixel centre also
+//! write native's depth, velocity and IDs; (3) `analytic.tail`: lights the records, one
+//! invocation each, into the pixel's tails (fixed-point sums, independent of the order); (4)
+//! `analytic.resolve`: front to back per pixel (resolve.comp states the model), lighting only the
+//! kept fragments it composites. When a frame records more fragments than the record buffer
+//! holds, the buffer grows to what the frame counted and the frame is rendered again (the
+//! timings are those of the second rendering). `:seed` replaces the exact area by the seed's column
 //! shortcut and flags where it is off; `:frags=K` keeps K fragments per pixel (default 16,
 //! lowered to what the device's largest storage buffer holds).
 
@@ -82,6 +86,11 @@ pub const FRAGMENT_BYTES: u64 = KEY_BYTES + SLOT_BYTES + PLANE_BYTES + SURFACE_B
 pub const TAIL_BYTES: u64 = 32;
 /// Per pixel, the two tails' sample-mask unions (2 x u32).
 pub const TAIL_MASK_BYTES: u64 = 8;
+/// One recorded fragment beyond the K nearest (shaders/analytic/tail_record.glsl: 10 words).
+pub const TAIL_RECORD_BYTES: u64 = 40;
+/// Records the buffer starts with, per pixel (it grows to what a frame needs, up to the device's
+/// largest storage buffer).
+pub const TAIL_RECORDS_PER_PIXEL_START: u64 = 1;
 /// Per pixel and mask sample, the farthest depth over the pixel of the nearest fragment opaque
 /// at that sample (f32 bits; 0 where none): fragments beyond the K nearest lying behind every
 /// sample's are not shaded. One 4-byte word per sample, or per group of 2, 4, ... consecutive
@@ -106,6 +115,26 @@ fn occluder_pixel_bytes(group: u32) -> u64 {
 
 fn occluder_bytes(px: u64, max_range: u32) -> u64 {
     px * occluder_pixel_bytes(occluder_group(px, max_range))
+}
+
+/// Writes binding i of a set of storage buffers with `buffers[i]` (RASTER_BINDINGS and
+/// TAIL_BINDINGS list their buffers in binding order).
+fn buffer_writes<'a>(buffers: &[&'a Buffer]) -> Vec<Write<'a>> {
+    buffers
+        .iter()
+        .zip(0u32..)
+        .map(|(b, i)| Write::Buffer(i, b))
+        .collect()
+}
+
+/// The most tail records one storage buffer holds on this device.
+fn max_tail_capacity(max_range: u32) -> u64 {
+    u64::from(max_range) / TAIL_RECORD_BYTES
+}
+
+/// Tail records the buffer starts with at `px` pixels.
+fn start_tail_capacity(px: u64, max_range: u32) -> u64 {
+    (px * TAIL_RECORDS_PER_PIXEL_START).clamp(1, max_tail_capacity(max_range))
 }
 
 /// Fragments kept per pixel unless `frags=K` says otherwise (lowered to what fits).
@@ -194,20 +223,31 @@ pub fn plan_lists(
 }
 
 /// Set 2 of the raster passes (set 0: the scene's, set 1: the material's).
-pub const RASTER_BINDINGS: [BindingDesc; 11] = {
+pub const RASTER_BINDINGS: [BindingDesc; 10] = {
     use DescriptorKind::StorageBuffer as B;
     [
         BindingDesc::one("keys", 0, B),
         BindingDesc::one("slots", 1, B),
         BindingDesc::one("counts", 2, B),
-        BindingDesc::one("tail", 3, B),
-        BindingDesc::one("colors", 4, B),
-        BindingDesc::one("planes", 5, B),
-        BindingDesc::one("planes_y", 6, B),
-        BindingDesc::one("tail_back", 7, B),
-        BindingDesc::one("tail_masks", 8, B),
-        BindingDesc::one("occluders", 9, B),
-        BindingDesc::one("surfaces", 10, B),
+        BindingDesc::one("colors", 3, B),
+        BindingDesc::one("planes", 4, B),
+        BindingDesc::one("planes_y", 5, B),
+        BindingDesc::one("occluders", 6, B),
+        BindingDesc::one("surfaces", 7, B),
+        BindingDesc::one("tail_records", 8, B),
+        BindingDesc::one("tail_count", 9, B),
+    ]
+};
+
+/// Set 0 of the tail pass (set 1: the scene's).
+pub const TAIL_BINDINGS: [BindingDesc; 5] = {
+    use DescriptorKind::StorageBuffer as B;
+    [
+        BindingDesc::one("tail_records", 0, B),
+        BindingDesc::one("tail_count", 1, B),
+        BindingDesc::one("tail", 2, B),
+        BindingDesc::one("tail_back", 3, B),
+        BindingDesc::one("tail_masks", 4, B),
     ]
 };
 
@@ -259,10 +299,14 @@ pub struct Analytic {
     occluder_group: u32,
     select: Raster,
     raster: Raster,
+    raster_layout: SetLayout,
+    tail_layout: SetLayout,
     _layouts: Vec<SetLayout>,
     scene_set: DescriptorSet,
     material_sets: Vec<DescriptorSet>,
     raster_set: DescriptorSet,
+    tail_pass: Pipeline,
+    tail_set: DescriptorSet,
     resolve: Pipeline,
     resolve_set: DescriptorSet,
     keys: Buffer,
@@ -276,6 +320,13 @@ pub struct Analytic {
     planes: Buffer,
     planes_y: Buffer,
     surfaces: Buffer,
+    /// Records of the fragments beyond the K (grows: [`Analytic::grow_tail_records`]), their
+    /// count, and the count read back.
+    tail_records: Buffer,
+    tail_capacity: u64,
+    max_tail_capacity: u64,
+    tail_count: Buffer,
+    tail_count_rb: Readback,
     targets: Targets,
     color: Image,
     coverage: Image,
@@ -304,6 +355,13 @@ impl Analytic {
         e.storage_buffer("analytic.tail_back", px * TAIL_BYTES, false);
         e.storage_buffer("analytic.tail_masks", px * TAIL_MASK_BYTES, false);
         e.storage_buffer("analytic.occluders", occluder_bytes(px, max_range), false);
+        e.storage_buffer(
+            "analytic.tail_records",
+            start_tail_capacity(px, max_range) * TAIL_RECORD_BYTES,
+            false,
+        );
+        e.storage_buffer("analytic.tail_count", 4, false);
+        e.buffer("readback.analytic.tail_count", 4, true);
         e.image("analytic.velocity", VELOCITY_FORMAT, w, h);
         e.image("analytic.ids", ID_FORMAT, w, h);
         e.image("analytic.depth", DEPTH_FORMAT, w, h);
@@ -355,6 +413,7 @@ impl Analytic {
         let material_layout = SetLayout::new(gpu, "analytic.material_layout", &MATERIAL_BINDINGS)?;
         let raster_layout = SetLayout::new(gpu, "analytic.raster_layout", &RASTER_BINDINGS)?;
         let resolve_layout = SetLayout::new(gpu, "analytic.resolve_layout", &RESOLVE_BINDINGS)?;
+        let tail_layout = SetLayout::new(gpu, "analytic.tail_layout", &TAIL_BINDINGS)?;
 
         let mut defines = scene_pass::shader_defines(scene_pass::LAYOUT_NATIVE);
         defines.extend(RASTER_BINDINGS.iter().map(BindingDesc::define));
@@ -411,6 +470,18 @@ impl Analytic {
         let mut rdefines = scene_pass::shader_defines(scene_pass::LAYOUT_NATIVE);
         rdefines.extend(RESOLVE_BINDINGS.iter().map(BindingDesc::define));
         rdefines.extend(common.iter().cloned());
+        let mut tdefines = scene_pass::shader_defines(scene_pass::LAYOUT_NATIVE);
+        tdefines.extend(TAIL_BINDINGS.iter().map(BindingDesc::define));
+        let tail_cs = ctx.shaders.compile("analytic/tail.comp", &tdefines)?;
+        let tail_pass = Pipeline::compute(
+            gpu,
+            &ComputeDesc {
+                name: "analytic.tail",
+                shader: &tail_cs,
+                set_layouts: &[&tail_layout, &scene_layout],
+                push_constant_bytes: 0,
+            },
+        )?;
         let cs = ctx.shaders.compile("analytic/resolve.comp", &rdefines)?;
         let resolve = Pipeline::compute(
             gpu,
@@ -437,6 +508,18 @@ impl Analytic {
         let tail_back = buffer("analytic.tail_back", px * TAIL_BYTES, storage)?;
         let tail_masks = buffer("analytic.tail_masks", px * TAIL_MASK_BYTES, storage)?;
         let occluders = buffer("analytic.occluders", occluder_bytes(px, max_range), storage)?;
+        let tail_capacity = start_tail_capacity(px, max_range);
+        let tail_records = buffer(
+            "analytic.tail_records",
+            tail_capacity * TAIL_RECORD_BYTES,
+            storage,
+        )?;
+        let tail_count = buffer(
+            "analytic.tail_count",
+            4,
+            storage | vk::BufferUsageFlags::TRANSFER_SRC,
+        )?;
+        let tail_count_rb = Readback::for_buffer(gpu, "readback.analytic.tail_count", 4, 1, 1)?;
         // Native's colour target is not drawn (the resolve writes the colour).
         let FrameTargets {
             velocity,
@@ -467,19 +550,24 @@ impl Analytic {
             gpu,
             "analytic.raster_set",
             &raster_layout,
-            &[
-                Write::Buffer(0, &keys),
-                Write::Buffer(1, &slots),
-                Write::Buffer(2, &counts_buf),
-                Write::Buffer(3, &tail),
-                Write::Buffer(4, &colors),
-                Write::Buffer(5, &planes),
-                Write::Buffer(6, &planes_y),
-                Write::Buffer(7, &tail_back),
-                Write::Buffer(8, &tail_masks),
-                Write::Buffer(9, &occluders),
-                Write::Buffer(10, &surfaces),
-            ],
+            &buffer_writes(&[
+                &keys,
+                &slots,
+                &counts_buf,
+                &colors,
+                &planes,
+                &planes_y,
+                &occluders,
+                &surfaces,
+                &tail_records,
+                &tail_count,
+            ]),
+        )?;
+        let tail_set = DescriptorSet::new(
+            gpu,
+            "analytic.tail_set",
+            &tail_layout,
+            &buffer_writes(&[&tail_records, &tail_count, &tail, &tail_back, &tail_masks]),
         )?;
         let resolve_set = DescriptorSet::new(
             gpu,
@@ -516,10 +604,14 @@ impl Analytic {
             occluder_group,
             select,
             raster,
-            _layouts: vec![scene_layout, material_layout, raster_layout, resolve_layout],
+            raster_layout,
+            tail_layout,
+            _layouts: vec![scene_layout, material_layout, resolve_layout],
             scene_set,
             material_sets,
             raster_set,
+            tail_pass,
+            tail_set,
             resolve,
             resolve_set,
             keys,
@@ -533,6 +625,11 @@ impl Analytic {
             planes,
             planes_y,
             surfaces,
+            tail_records,
+            tail_capacity,
+            max_tail_capacity: max_tail_capacity(max_range),
+            tail_count,
+            tail_count_rb,
             targets,
             color,
             coverage,
@@ -545,6 +642,163 @@ impl Analytic {
     /// Fragments kept per pixel this technique was built with.
     pub fn kept_per_pixel(&self) -> u32 {
         self.frags
+    }
+
+    /// Records and submits the frame's passes once (render() checks the tail records' count).
+    fn submit_frame(&self, ctx: &mut FrameCtx, world_from_clip: [f32; 16]) -> Result<()> {
+        let this = self;
+        let counter = ctx.counter;
+        ctx.submit("frame", |cmd, profiler, scene| {
+            let scope = profiler.begin(cmd, "analytic.clear", PassKind::Transfer);
+            cmd.fill_buffer(&this.keys, u32::MAX);
+            cmd.fill_buffer(&this.counts_buf, 0);
+            cmd.fill_buffer(&this.tail, 0);
+            cmd.fill_buffer(&this.tail_back, 0);
+            cmd.fill_buffer(&this.tail_masks, 0);
+            cmd.fill_buffer(&this.occluders, 0);
+            cmd.fill_buffer(&this.tail_count, 0);
+            profiler.end(cmd, scope);
+            cmd.use_buffer(counter, Access::FragmentStorageWrite);
+            // The select pass writes no attachment (its fragments all discard); the second pass
+            // clears and writes them.
+            this.record_raster(cmd, profiler, scene, &this.select, false);
+            this.record_raster(cmd, profiler, scene, &this.raster, true);
+
+            // The tail pass: one invocation per record, up to the buffer's capacity (the count
+            // may run past it: render() then grows the buffer and renders again).
+            cmd.use_buffer(&this.tail_records, Access::ComputeSampled);
+            cmd.use_buffer(&this.tail_count, Access::ComputeSampled);
+            for buf in [&this.tail, &this.tail_back, &this.tail_masks] {
+                cmd.use_buffer(buf, Access::ComputeStorageReadWrite);
+            }
+            let scope = profiler.begin(cmd, "analytic.tail", PassKind::Compute);
+            cmd.bind_pipeline(&this.tail_pass);
+            cmd.bind_set(&this.tail_pass, 0, &this.tail_set);
+            cmd.bind_set(&this.tail_pass, 1, &this.scene_set);
+            let groups = this.tail_capacity.div_ceil(64);
+            let row = groups.min(u64::from(u16::MAX));
+            cmd.dispatch(row as u32, groups.div_ceil(row) as u32, 1);
+            profiler.end(cmd, scope);
+
+            for buf in [
+                &this.keys,
+                &this.slots,
+                &this.colors,
+                &this.planes,
+                &this.planes_y,
+                &this.counts_buf,
+                &this.tail,
+                &this.tail_back,
+                &this.tail_masks,
+                &this.surfaces,
+            ] {
+                cmd.use_buffer(buf, Access::ComputeSampled);
+            }
+            for img in [&this.color, &this.coverage, &this.counts] {
+                cmd.use_image(img, Access::ComputeStorageWrite);
+            }
+            let scope = profiler.begin(cmd, "analytic.resolve", PassKind::Compute);
+            cmd.bind_pipeline(&this.resolve);
+            cmd.bind_set(&this.resolve, 0, &this.resolve_set);
+            cmd.bind_set(&this.resolve, 1, &this.scene_set);
+            let (w, h) = (this.color.width, this.color.height);
+            let bg = this.background;
+            let mut push = [0u32; 24];
+            push[..3].copy_from_slice(&bg.map(f32::to_bits));
+            push[4] = w;
+            push[5] = h;
+            push[8..].copy_from_slice(&world_from_clip.map(f32::to_bits));
+            cmd.push_constants(&this.resolve, bytemuck::cast_slice(&push));
+            cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
+            profiler.end(cmd, scope);
+
+            let scope = profiler.begin(cmd, "readback", PassKind::Transfer);
+            let [c, cov, cnt, d, v, ids] = &this.readbacks;
+            cmd.read_image(&this.color, c);
+            cmd.read_image(&this.coverage, cov);
+            cmd.read_image(&this.counts, cnt);
+            cmd.read_image(&this.targets.depth, d);
+            cmd.read_image(&this.targets.velocity, v);
+            cmd.read_image(&this.targets.ids, ids);
+            cmd.use_buffer(&this.tail_count, Access::TransferSrc);
+            cmd.read_buffer(&this.tail_count, &this.tail_count_rb);
+            profiler.end(cmd, scope);
+            cmd.use_buffer(counter, Access::HostRead);
+            Ok(())
+        })
+    }
+
+    /// Fragments the last submitted frame recorded for the tails (some beyond the capacity
+    /// when it exceeds it).
+    fn recorded_tails(&self) -> Result<u64> {
+        Ok(u64::from(
+            bytemuck::cast_slice::<u8, u32>(self.tail_count_rb.bytes()?)[0],
+        ))
+    }
+
+    /// Tail records the buffer holds now.
+    pub fn tail_capacity(&self) -> u64 {
+        self.tail_capacity
+    }
+
+    /// Replaces the tail-record buffer by one holding `needed` records and a quarter more (at most
+    /// the device's largest storage buffer), and the two sets that bind it; or the refusal where
+    /// one buffer cannot hold `needed`.
+    fn grow_tail_records(&mut self, gpu: &cbr_gpu::Gpu, needed: u64) -> Result<()> {
+        if needed > self.max_tail_capacity {
+            return Err(GpuError::Other(format!(
+                "analytic: this frame has {needed} fragments beyond the {} nearest of their pixels \
+                 that no occluder hides; their records ({needed} x {TAIL_RECORD_BYTES} bytes) \
+                 exceed the largest storage buffer this device binds ({} bytes, \
+                 maxStorageBufferRange): lower the resolution",
+                self.frags,
+                self.max_tail_capacity * TAIL_RECORD_BYTES
+            )));
+        }
+        let capacity = (needed + needed / 4).min(self.max_tail_capacity);
+        tracing::info!(
+            "analytic: {needed} tail records this frame, {} held: the buffer grows to {capacity}",
+            self.tail_capacity
+        );
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        self.tail_records = Buffer::new(
+            gpu,
+            "analytic.tail_records",
+            capacity * TAIL_RECORD_BYTES,
+            usage,
+            Location::GpuOnly,
+        )?;
+        self.tail_capacity = capacity;
+        self.raster_set = DescriptorSet::new(
+            gpu,
+            "analytic.raster_set",
+            &self.raster_layout,
+            &buffer_writes(&[
+                &self.keys,
+                &self.slots,
+                &self.counts_buf,
+                &self.colors,
+                &self.planes,
+                &self.planes_y,
+                &self.occluders,
+                &self.surfaces,
+                &self.tail_records,
+                &self.tail_count,
+            ]),
+        )?;
+        self.tail_set = DescriptorSet::new(
+            gpu,
+            "analytic.tail_set",
+            &self.tail_layout,
+            &buffer_writes(&[
+                &self.tail_records,
+                &self.tail_count,
+                &self.tail,
+                &self.tail_back,
+                &self.tail_masks,
+            ]),
+        )?;
+        Ok(())
     }
 
     fn record_raster(
@@ -564,11 +818,10 @@ impl Analytic {
             &self.planes,
             &self.planes_y,
             &self.counts_buf,
-            &self.tail,
-            &self.tail_back,
-            &self.tail_masks,
             &self.occluders,
             &self.surfaces,
+            &self.tail_records,
+            &self.tail_count,
         ] {
             cmd.use_buffer(buf, Access::FragmentStorageWrite);
         }
@@ -625,67 +878,18 @@ impl Technique for Analytic {
             .inverse()
             .to_cols_array()
             .map(|v| v as f32);
-        let this = &*self;
-        let counter = ctx.counter;
-        ctx.submit("frame", |cmd, profiler, scene| {
-            let scope = profiler.begin(cmd, "analytic.clear", PassKind::Transfer);
-            cmd.fill_buffer(&this.keys, u32::MAX);
-            cmd.fill_buffer(&this.counts_buf, 0);
-            cmd.fill_buffer(&this.tail, 0);
-            cmd.fill_buffer(&this.tail_back, 0);
-            cmd.fill_buffer(&this.tail_masks, 0);
-            cmd.fill_buffer(&this.occluders, 0);
-            profiler.end(cmd, scope);
-            cmd.use_buffer(counter, Access::FragmentStorageWrite);
-            // The select pass writes no attachment (its fragments all discard); the second pass
-            // clears and writes them.
-            this.record_raster(cmd, profiler, scene, &this.select, false);
-            this.record_raster(cmd, profiler, scene, &this.raster, true);
-
-            for buf in [
-                &this.keys,
-                &this.slots,
-                &this.colors,
-                &this.planes,
-                &this.planes_y,
-                &this.counts_buf,
-                &this.tail,
-                &this.tail_back,
-                &this.tail_masks,
-                &this.surfaces,
-            ] {
-                cmd.use_buffer(buf, Access::ComputeSampled);
+        let timings_before = ctx.timings.clone();
+        loop {
+            self.submit_frame(ctx, world_from_clip)?;
+            let recorded = self.recorded_tails()?;
+            if recorded <= self.tail_capacity {
+                return Ok(());
             }
-            for img in [&this.color, &this.coverage, &this.counts] {
-                cmd.use_image(img, Access::ComputeStorageWrite);
-            }
-            let scope = profiler.begin(cmd, "analytic.resolve", PassKind::Compute);
-            cmd.bind_pipeline(&this.resolve);
-            cmd.bind_set(&this.resolve, 0, &this.resolve_set);
-            cmd.bind_set(&this.resolve, 1, &this.scene_set);
-            let (w, h) = (this.color.width, this.color.height);
-            let bg = this.background;
-            let mut push = [0u32; 24];
-            push[..3].copy_from_slice(&bg.map(f32::to_bits));
-            push[4] = w;
-            push[5] = h;
-            push[8..].copy_from_slice(&world_from_clip.map(f32::to_bits));
-            cmd.push_constants(&this.resolve, bytemuck::cast_slice(&push));
-            cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
-            profiler.end(cmd, scope);
-
-            let scope = profiler.begin(cmd, "readback", PassKind::Transfer);
-            let [c, cov, cnt, d, v, ids] = &this.readbacks;
-            cmd.read_image(&this.color, c);
-            cmd.read_image(&this.coverage, cov);
-            cmd.read_image(&this.counts, cnt);
-            cmd.read_image(&this.targets.depth, d);
-            cmd.read_image(&this.targets.velocity, v);
-            cmd.read_image(&this.targets.ids, ids);
-            profiler.end(cmd, scope);
-            cmd.use_buffer(counter, Access::HostRead);
-            Ok(())
-        })
+            // More fragments beyond the K than the buffer holds: grow it and render the frame
+            // again (its timings replace the first rendering's).
+            self.grow_tail_records(ctx.gpu, recorded)?;
+            ctx.timings = timings_before.clone();
+        }
     }
 
     fn color(&self, _frame: u32) -> Option<&Image> {
@@ -733,6 +937,7 @@ impl Technique for Analytic {
                 .map(|c| u8::from(c[2] & FLAG_NONFINITE != 0))
                 .collect(),
             kept_per_pixel: self.frags,
+            tail_fragments: self.recorded_tails()?,
         });
         Ok(out)
     }

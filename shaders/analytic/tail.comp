@@ -1,0 +1,63 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#extension GL_ARB_gpu_shader_int64 : require
+#extension GL_EXT_shader_atomic_int64 : require
+// `analytic`, the tail pass: lights the fragments beyond their pixel's K nearest that the raster
+// pass recorded (tail_record.glsl: the ones no occluder hides) and adds each to its pixel's tail,
+// facing the camera or away, as the fixed-point sums (2^-24 units) of coverage x colour and of
+// coverage, and the union of the sample masks. Integer sums: the result does not depend on the
+// order the raster pass recorded them in. A fragment whose light is not finite is left out, as
+// the resolve drops such a kept fragment.
+// One invocation per record: a dense list, where the raster pass's SIMD groups were mostly
+// pixels the fragment's triangle does not touch (docs/analytic.md, Shading).
+#include "../inc/scene_types.glsl"
+#include "surface.glsl"
+#include "tail_record.glsl"
+
+layout(local_size_x = 64) in;
+
+layout(std430, set = 0, binding = BINDING_TAIL_RECORDS) readonly buffer TailRecords { uint tail_records[]; };
+layout(std430, set = 0, binding = BINDING_TAIL_COUNT) readonly buffer TailCount { uint tail_count; };
+// Per pixel, two tails (facing the camera, facing away), 4 sums each; and their masks' unions.
+layout(std430, set = 0, binding = BINDING_TAIL) buffer Tail { uint64_t tail[]; };
+layout(std430, set = 0, binding = BINDING_TAIL_BACK) buffer TailBack { uint64_t tail_back[]; };
+layout(std430, set = 0, binding = BINDING_TAIL_MASKS) buffer TailMasks { uint tail_masks[]; };
+// The scene's set, for the lighting.
+layout(set = 1, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
+layout(std430, set = 1, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
+layout(std430, set = 1, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
+
+#include "../inc/shading.glsl"
+
+void main() {
+    // Rows of at most 65535 groups of 64 (the dispatch is 2D past that).
+    uint i = gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u + gl_GlobalInvocationID.x;
+    if (i >= min(tail_count, uint(tail_records.length()) / TAIL_RECORD_WORDS)) return;
+    uint r = i * TAIL_RECORD_WORDS;
+    uint pixel = tail_records[r];
+    float coverage = uintBitsToFloat(tail_records[r + 1u]);
+    uint mask = tail_records[r + 2u];
+    uint material = tail_records[r + 3u] & ~TAIL_FACING_AWAY;
+    bool facing_away = (tail_records[r + 3u] & TAIL_FACING_AWAY) != 0u;
+    vec3 world = uintBitsToFloat(uvec3(tail_records[r + 4u], tail_records[r + 5u], tail_records[r + 6u]));
+    vec3 nrm = oct_decode(unpackSnorm2x16(tail_records[r + 7u]));
+    vec3 albedo = vec3(unpackHalf2x16(tail_records[r + 8u]), unpackHalf2x16(tail_records[r + 9u]).x);
+    vec3 color = shade(world, nrm, albedo, materials[material], frame);
+    if (any(isnan(color)) || any(isinf(color))) return;
+
+    const float unit = 16777216.0;  // 2^24
+    vec3 ac = clamp(color, 0.0, 65504.0) * coverage * unit;
+    uint t = pixel * 4u;
+#define ADD_TAIL(buf)                                       \
+    atomicAdd(buf[t], uint64_t(ac.r));                      \
+    atomicAdd(buf[t + 1u], uint64_t(ac.g));                 \
+    atomicAdd(buf[t + 2u], uint64_t(ac.b));                 \
+    atomicAdd(buf[t + 3u], uint64_t(coverage * unit))
+    if (facing_away) {
+        ADD_TAIL(tail_back);
+    } else {
+        ADD_TAIL(tail);
+    }
+#undef ADD_TAIL
+    atomicOr(tail_masks[pixel * 2u + (facing_away ? 1u : 0u)], mask);
+}
