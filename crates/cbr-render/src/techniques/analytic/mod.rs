@@ -946,17 +946,18 @@ impl Technique for Analytic {
         let px = u64::from(self.color.width) * u64::from(self.color.height);
         // K x (key + slot + plane + surface) + the fragment count (4), tails (2 x 32) and their
         // masks (8), the occluder words (4 x 32 / group) + colour (8), coverage (4), counts (16),
-        // depth (4), velocity (8), IDs (8).
-        px * (u64::from(self.frags) * FRAGMENT_BYTES
-            + 4
-            + 2 * TAIL_BYTES
-            + TAIL_MASK_BYTES
-            + occluder_pixel_bytes(self.occluder_group)
-            + 8
-            + 4
-            + 16
-            + 4
-            + 8
-            + 8)
+        // depth (4), velocity (8), IDs (8); and the tail records the buffer holds now.
+        self.tail_capacity * TAIL_RECORD_BYTES
+            + px * (u64::from(self.frags) * FRAGMENT_BYTES
+                + 4
+                + 2 * TAIL_BYTES
+                + TAIL_MASK_BYTES
+                + occluder_pixel_bytes(self.occluder_group)
+                + 8
+                + 4
+                + 16
+                + 4
+                + 8
+                + 8)
     }
 }
