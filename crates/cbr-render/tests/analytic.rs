@@ -10,8 +10,8 @@ use cbr_gpu::{
     Access, BindingDesc, Buffer, ComputeDesc, DescriptorKind, DescriptorSet, Gpu, Location,
     Pipeline, SetLayout, Write, vk,
 };
-use cbr_render::techniques::analytic::occluder_group;
 use cbr_render::techniques::analytic::reference::{self, Poly, Surface};
+use cbr_render::techniques::analytic::{grown_tail_capacity, occluder_group};
 use cbr_render::{FrameOutput, RenderSettings, Renderer, Spec};
 use cbr_scene::{
     AlphaSource, CameraKey, CameraPath, DirLight, LoadStats, Material, Object, PointLight, Scene,
@@ -1448,6 +1448,18 @@ fn fragments_beyond_k_are_lit_by_the_tail_pass_and_the_record_buffer_grows_to_ho
         "{tails} tail fragments: the buffer (one record a pixel) did not have to grow"
     );
     assert_eq!(all.analytic.as_ref().unwrap().tail_fragments, 0);
+    // The growth: the count and a quarter more, at most one storage buffer (lavapipe's 128 MiB
+    // holds 3,355,443 records of 40 bytes); beyond that the frame is refused with its count.
+    let range = 134_217_728;
+    assert_eq!(grown_tail_capacity(7671, 1, range), Ok(9588));
+    assert_eq!(grown_tail_capacity(3_000_000, 16, range), Ok(3_355_443));
+    let err = grown_tail_capacity(3_355_444, 16, range).unwrap_err();
+    assert!(
+        err.contains("3355444 fragments beyond the 16 nearest")
+            && err.contains("134217720 bytes")
+            && err.contains("maxStorageBufferRange"),
+        "{err}"
+    );
     let (mut worst, mut sum, mut n) = (0.0f64, 0.0f64, 0usize);
     for i in 0..(W * H) as usize {
         let (a, b) = (rgb(&one, i), rgb(&all, i));

@@ -132,6 +132,27 @@ fn max_tail_capacity(max_range: u32) -> u64 {
     u64::from(max_range) / TAIL_RECORD_BYTES
 }
 
+/// The tail-record capacity a frame that recorded `needed` fragments beyond its pixels' `frags`
+/// nearest grows the buffer to: `needed` and a quarter more, at most what one storage buffer
+/// holds; or the refusal where that cannot hold `needed`.
+pub fn grown_tail_capacity(
+    needed: u64,
+    frags: u32,
+    max_range: u32,
+) -> std::result::Result<u64, String> {
+    let max = max_tail_capacity(max_range);
+    if needed > max {
+        return Err(format!(
+            "analytic: this frame has {needed} fragments beyond the {frags} nearest of their \
+             pixels that no occluder hides; their records ({needed} x {TAIL_RECORD_BYTES} bytes) \
+             exceed the largest storage buffer this device binds ({} bytes, \
+             maxStorageBufferRange): lower the resolution",
+            max * TAIL_RECORD_BYTES
+        ));
+    }
+    Ok((needed + needed / 4).min(max))
+}
+
 /// Tail records the buffer starts with at `px` pixels.
 fn start_tail_capacity(px: u64, max_range: u32) -> u64 {
     (px * TAIL_RECORDS_PER_PIXEL_START).clamp(1, max_tail_capacity(max_range))
@@ -324,7 +345,7 @@ pub struct Analytic {
     /// count, and the count read back.
     tail_records: Buffer,
     tail_capacity: u64,
-    max_tail_capacity: u64,
+    max_range: u32,
     tail_count: Buffer,
     tail_count_rb: Readback,
     targets: Targets,
@@ -627,7 +648,7 @@ impl Analytic {
             surfaces,
             tail_records,
             tail_capacity,
-            max_tail_capacity: max_tail_capacity(max_range),
+            max_range,
             tail_count,
             tail_count_rb,
             targets,
@@ -745,17 +766,8 @@ impl Analytic {
     /// the device's largest storage buffer), and the two sets that bind it; or the refusal where
     /// one buffer cannot hold `needed`.
     fn grow_tail_records(&mut self, gpu: &cbr_gpu::Gpu, needed: u64) -> Result<()> {
-        if needed > self.max_tail_capacity {
-            return Err(GpuError::Other(format!(
-                "analytic: this frame has {needed} fragments beyond the {} nearest of their pixels \
-                 that no occluder hides; their records ({needed} x {TAIL_RECORD_BYTES} bytes) \
-                 exceed the largest storage buffer this device binds ({} bytes, \
-                 maxStorageBufferRange): lower the resolution",
-                self.frags,
-                self.max_tail_capacity * TAIL_RECORD_BYTES
-            )));
-        }
-        let capacity = (needed + needed / 4).min(self.max_tail_capacity);
+        let capacity =
+            grown_tail_capacity(needed, self.frags, self.max_range).map_err(GpuError::Other)?;
         tracing::info!(
             "analytic: {needed} tail records this frame, {} held: the buffer grows to {capacity}",
             self.tail_capacity
