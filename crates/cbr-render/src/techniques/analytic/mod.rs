@@ -667,82 +667,81 @@ impl Analytic {
 
     /// Records and submits the frame's passes once (render() checks the tail records' count).
     fn submit_frame(&self, ctx: &mut FrameCtx, world_from_clip: [f32; 16]) -> Result<()> {
-        let this = self;
         let counter = ctx.counter;
         ctx.submit("frame", |cmd, profiler, scene| {
             let scope = profiler.begin(cmd, "analytic.clear", PassKind::Transfer);
-            cmd.fill_buffer(&this.keys, u32::MAX);
-            cmd.fill_buffer(&this.counts_buf, 0);
-            cmd.fill_buffer(&this.tail, 0);
-            cmd.fill_buffer(&this.tail_back, 0);
-            cmd.fill_buffer(&this.tail_masks, 0);
-            cmd.fill_buffer(&this.occluders, 0);
-            cmd.fill_buffer(&this.tail_count, 0);
+            cmd.fill_buffer(&self.keys, u32::MAX);
+            cmd.fill_buffer(&self.counts_buf, 0);
+            cmd.fill_buffer(&self.tail, 0);
+            cmd.fill_buffer(&self.tail_back, 0);
+            cmd.fill_buffer(&self.tail_masks, 0);
+            cmd.fill_buffer(&self.occluders, 0);
+            cmd.fill_buffer(&self.tail_count, 0);
             profiler.end(cmd, scope);
             cmd.use_buffer(counter, Access::FragmentStorageWrite);
             // The select pass writes no attachment (its fragments all discard); the second pass
             // clears and writes them.
-            this.record_raster(cmd, profiler, scene, &this.select, false);
-            this.record_raster(cmd, profiler, scene, &this.raster, true);
+            self.record_raster(cmd, profiler, scene, &self.select, false);
+            self.record_raster(cmd, profiler, scene, &self.raster, true);
 
             // The tail pass: one invocation per record, up to the buffer's capacity (the count
             // may run past it: render() then grows the buffer and renders again).
-            cmd.use_buffer(&this.tail_records, Access::ComputeSampled);
-            cmd.use_buffer(&this.tail_count, Access::ComputeSampled);
-            for buf in [&this.tail, &this.tail_back, &this.tail_masks] {
+            cmd.use_buffer(&self.tail_records, Access::ComputeSampled);
+            cmd.use_buffer(&self.tail_count, Access::ComputeSampled);
+            for buf in [&self.tail, &self.tail_back, &self.tail_masks] {
                 cmd.use_buffer(buf, Access::ComputeStorageReadWrite);
             }
             let scope = profiler.begin(cmd, "analytic.tail", PassKind::Compute);
-            cmd.bind_pipeline(&this.tail_pass);
-            cmd.bind_set(&this.tail_pass, 0, &this.tail_set);
-            cmd.bind_set(&this.tail_pass, 1, &this.scene_set);
-            let groups = this.tail_capacity.div_ceil(64);
+            cmd.bind_pipeline(&self.tail_pass);
+            cmd.bind_set(&self.tail_pass, 0, &self.tail_set);
+            cmd.bind_set(&self.tail_pass, 1, &self.scene_set);
+            let groups = self.tail_capacity.div_ceil(64);
             let row = groups.min(u64::from(u16::MAX));
             cmd.dispatch(row as u32, groups.div_ceil(row) as u32, 1);
             profiler.end(cmd, scope);
 
             for buf in [
-                &this.keys,
-                &this.slots,
-                &this.colors,
-                &this.planes,
-                &this.planes_y,
-                &this.counts_buf,
-                &this.tail,
-                &this.tail_back,
-                &this.tail_masks,
-                &this.surfaces,
+                &self.keys,
+                &self.slots,
+                &self.colors,
+                &self.planes,
+                &self.planes_y,
+                &self.counts_buf,
+                &self.tail,
+                &self.tail_back,
+                &self.tail_masks,
+                &self.surfaces,
             ] {
                 cmd.use_buffer(buf, Access::ComputeSampled);
             }
-            for img in [&this.color, &this.coverage, &this.counts] {
+            for img in [&self.color, &self.coverage, &self.counts] {
                 cmd.use_image(img, Access::ComputeStorageWrite);
             }
             let scope = profiler.begin(cmd, "analytic.resolve", PassKind::Compute);
-            cmd.bind_pipeline(&this.resolve);
-            cmd.bind_set(&this.resolve, 0, &this.resolve_set);
-            cmd.bind_set(&this.resolve, 1, &this.scene_set);
-            let (w, h) = (this.color.width, this.color.height);
-            let bg = this.background;
+            cmd.bind_pipeline(&self.resolve);
+            cmd.bind_set(&self.resolve, 0, &self.resolve_set);
+            cmd.bind_set(&self.resolve, 1, &self.scene_set);
+            let (w, h) = (self.color.width, self.color.height);
+            let bg = self.background;
             let mut push = [0u32; 24];
             push[..3].copy_from_slice(&bg.map(f32::to_bits));
             push[4] = w;
             push[5] = h;
             push[8..].copy_from_slice(&world_from_clip.map(f32::to_bits));
-            cmd.push_constants(&this.resolve, bytemuck::cast_slice(&push));
+            cmd.push_constants(&self.resolve, bytemuck::cast_slice(&push));
             cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
             profiler.end(cmd, scope);
 
             let scope = profiler.begin(cmd, "readback", PassKind::Transfer);
-            let [c, cov, cnt, d, v, ids] = &this.readbacks;
-            cmd.read_image(&this.color, c);
-            cmd.read_image(&this.coverage, cov);
-            cmd.read_image(&this.counts, cnt);
-            cmd.read_image(&this.targets.depth, d);
-            cmd.read_image(&this.targets.velocity, v);
-            cmd.read_image(&this.targets.ids, ids);
-            cmd.use_buffer(&this.tail_count, Access::TransferSrc);
-            cmd.read_buffer(&this.tail_count, &this.tail_count_rb);
+            let [c, cov, cnt, d, v, ids] = &self.readbacks;
+            cmd.read_image(&self.color, c);
+            cmd.read_image(&self.coverage, cov);
+            cmd.read_image(&self.counts, cnt);
+            cmd.read_image(&self.targets.depth, d);
+            cmd.read_image(&self.targets.velocity, v);
+            cmd.read_image(&self.targets.ids, ids);
+            cmd.use_buffer(&self.tail_count, Access::TransferSrc);
+            cmd.read_buffer(&self.tail_count, &self.tail_count_rb);
             profiler.end(cmd, scope);
             cmd.use_buffer(counter, Access::HostRead);
             Ok(())
