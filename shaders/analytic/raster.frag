@@ -21,7 +21,6 @@
 layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
 layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
 layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
-layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
 layout(set = 1, binding = BINDING_ALBEDO) uniform sampler2D albedo_tex;
 layout(set = 1, binding = BINDING_MASK) uniform sampler2D mask_tex;
 layout(set = 1, binding = BINDING_BUMP) uniform sampler2D bump_tex;

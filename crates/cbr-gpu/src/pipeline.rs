@@ -156,11 +156,13 @@ impl DescriptorSet {
             pool,
             raw,
         };
-        set.write(gpu, layout, writes)?;
+        set.update(gpu, layout, writes)?;
         Ok(set)
     }
 
-    fn write(&self, gpu: &Gpu, layout: &SetLayout, writes: &[Write]) -> Result<()> {
+    /// Points the given bindings at new resources (the others keep theirs). The set must not be
+    /// in use by a command buffer that has not completed.
+    pub fn update(&self, gpu: &Gpu, layout: &SetLayout, writes: &[Write]) -> Result<()> {
         let kind_of = |binding: u32| {
             layout
                 .bindings

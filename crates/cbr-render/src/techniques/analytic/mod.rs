@@ -756,14 +756,9 @@ impl Analytic {
         ))
     }
 
-    /// Tail records the buffer holds now.
-    pub fn tail_capacity(&self) -> u64 {
-        self.tail_capacity
-    }
-
     /// Replaces the tail-record buffer by one holding `needed` records and a quarter more (at most
-    /// the device's largest storage buffer), and the two sets that bind it; or the refusal where
-    /// one buffer cannot hold `needed`.
+    /// the device's largest storage buffer) and points the two sets that bind it at the new one;
+    /// or the refusal where one buffer cannot hold `needed`.
     fn grow_tail_records(&mut self, gpu: &cbr_gpu::Gpu, needed: u64) -> Result<()> {
         let capacity =
             grown_tail_capacity(needed, self.frags, self.max_range).map_err(GpuError::Other)?;
@@ -780,35 +775,19 @@ impl Analytic {
             Location::GpuOnly,
         )?;
         self.tail_capacity = capacity;
-        self.raster_set = DescriptorSet::new(
-            gpu,
-            "analytic.raster_set",
-            &self.raster_layout,
-            &buffer_writes(&[
-                &self.keys,
-                &self.slots,
-                &self.counts_buf,
-                &self.colors,
-                &self.planes,
-                &self.planes_y,
-                &self.occluders,
-                &self.surfaces,
-                &self.tail_records,
-                &self.tail_count,
-            ]),
-        )?;
-        self.tail_set = DescriptorSet::new(
-            gpu,
-            "analytic.tail_set",
-            &self.tail_layout,
-            &buffer_writes(&[
-                &self.tail_records,
-                &self.tail_count,
-                &self.tail,
-                &self.tail_back,
-                &self.tail_masks,
-            ]),
-        )?;
+        // The frame that counted them has completed (FrameCtx::submit waits), so the two sets
+        // that bind the buffer are not in use.
+        for (set, layout, bindings) in [
+            (&self.raster_set, &self.raster_layout, &RASTER_BINDINGS[..]),
+            (&self.tail_set, &self.tail_layout, &TAIL_BINDINGS[..]),
+        ] {
+            let binding = bindings
+                .iter()
+                .find(|b| b.name == "tail_records")
+                .map(|b| b.binding)
+                .expect("both sets bind the tail records");
+            set.update(gpu, layout, &[Write::Buffer(binding, &self.tail_records)])?;
+        }
         Ok(())
     }
 
