@@ -11,7 +11,7 @@ use cbr_gpu::{
     Pipeline, SetLayout, Write, vk,
 };
 use cbr_render::techniques::analytic::reference::{self, Poly, Surface};
-use cbr_render::techniques::analytic::{grown_tail_capacity, occluder_group};
+use cbr_render::techniques::analytic::{grown_tail_capacity, occluder_group, parse, plan_lists};
 use cbr_render::{FrameOutput, RenderSettings, Renderer, Spec};
 use cbr_scene::{
     AlphaSource, CameraKey, CameraPath, DirLight, LoadStats, Material, Object, PointLight, Scene,
@@ -955,6 +955,17 @@ fn fragments_beyond_k_are_counted_as_overflow_and_lists_that_cannot_fit_are_refu
         worst < 4.0 / 32.0 && mean < 5e-3,
         "K = 1 and K = 16 differ by {worst} (mean {mean})"
     );
+    // Each pixel's overflow is what it counted beyond the K kept: with K = 16 and with the
+    // default, 32 (some pixels here hold more than 32).
+    let deep = render(&gpu, &s, "analytic");
+    for (out, k) in [(&wide, 16u32), (&deep, 32)] {
+        let a = out.analytic.as_ref().unwrap();
+        let beyond = a.fragments.iter().filter(|&&f| f > k).count();
+        assert!(beyond > 0, "no pixel holds more than {k}");
+        for (i, (&f, &o)) in a.fragments.iter().zip(&a.overflow).enumerate() {
+            assert_eq!(o, f.saturating_sub(k), "K = {k}, pixel {i}: {f} fragments");
+        }
+    }
     assert_clean(&gpu);
 
     // 8192 x 8192 x 8 fragments x 44 bytes: refused with the estimate, before the lists exist.
@@ -1476,4 +1487,23 @@ fn fragments_beyond_k_are_lit_by_the_tail_pass_and_the_record_buffer_grows_to_ho
         "K = 1 off K = 16 by {worst} (mean {mean}, relative)"
     );
     assert_clean(&gpu);
+}
+
+#[test]
+fn fragments_kept_per_pixel_default_to_32_lowered_to_what_one_storage_buffer_holds() {
+    // K = 32 by default; each of the keys, the slot halves and the surfaces is a storage buffer
+    // of K x 8 bytes a pixel, so lavapipe's 128 MiB holds 18 at 1280x720 and 8 at 1920x1080.
+    let range = 134_217_728;
+    assert_eq!(plan_lists(160, 90, None, range), Ok(32));
+    assert_eq!(plan_lists(1280, 720, None, range), Ok(18));
+    assert_eq!(plan_lists(1920, 1080, None, range), Ok(8));
+    assert_eq!(plan_lists(160, 90, Some(32), range), Ok(32));
+    let err = plan_lists(1280, 720, Some(32), range).unwrap_err();
+    assert!(err.contains("at most 18 fits"), "{err}");
+    // The bound is one word's bits in the resolve (its set of composited fragments).
+    assert_eq!(parse(&["frags=32"]).map(|c| c.frags), Ok(Some(32)));
+    for bad in ["frags=0", "frags=33"] {
+        let err = parse(&[bad]).unwrap_err();
+        assert!(err.contains("(1 to 32)"), "{bad}: {err}");
+    }
 }

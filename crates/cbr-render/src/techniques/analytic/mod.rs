@@ -15,8 +15,8 @@
 //! kept fragments it composites. When a frame records more fragments than the record buffer
 //! holds, the buffer grows to what the frame counted and the frame is rendered again (the
 //! timings are those of the second rendering). `:seed` replaces the exact area by the seed's column
-//! shortcut and flags where it is off; `:frags=K` keeps K fragments per pixel (default 16,
-//! lowered to what the device's largest storage buffer holds).
+//! shortcut and flags where it is off; `:frags=K` keeps K fragments per pixel (1 to 32;
+//! default 32, lowered to what the device's largest storage buffer holds).
 
 pub mod reference;
 
@@ -158,8 +158,10 @@ fn start_tail_capacity(px: u64, max_range: u32) -> u64 {
     (px * TAIL_RECORDS_PER_PIXEL_START).clamp(1, max_tail_capacity(max_range))
 }
 
-/// Fragments kept per pixel unless `frags=K` says otherwise (lowered to what fits).
-pub const DEFAULT_FRAGS: u32 = 16;
+/// Fragments kept per pixel unless `frags=K` says otherwise (lowered to what fits), and the most
+/// `frags=K` may ask for (resolve.comp keeps a pixel's kept fragments as the bits of one word).
+pub const DEFAULT_FRAGS: u32 = 32;
+pub const MAX_FRAGS: u32 = 32;
 /// The key's identity field: object IDs below 2^12, primitive IDs below 2^20.
 pub const MAX_OBJECTS: usize = (1 << 12) - 1;
 pub const MAX_PRIMITIVES: usize = 1 << 20;
@@ -184,8 +186,8 @@ pub fn parse(params: &[&str]) -> std::result::Result<AnalyticConfig, String> {
                     let n: u32 = n
                         .parse()
                         .ok()
-                        .filter(|&n| (1..=16).contains(&n))
-                        .ok_or_else(|| format!("analytic frags=`{n}` (1 to 16)"))?;
+                        .filter(|&n| (1..=MAX_FRAGS).contains(&n))
+                        .ok_or_else(|| format!("analytic frags=`{n}` (1 to {MAX_FRAGS})"))?;
                     c.frags = Some(n);
                 }
                 None => return Err(unknown_param("analytic", p, "seed, frags=K")),
@@ -223,7 +225,7 @@ pub fn plan_lists(
         .max(HALF_SLOT_BYTES)
         .max(PLANE_XY_BYTES)
         .max(SURFACE_BYTES);
-    let fit = (u64::from(max_range) / (px * widest).max(1)).min(16) as u32;
+    let fit = (u64::from(max_range) / (px * widest).max(1)).min(u64::from(MAX_FRAGS)) as u32;
     let refuse = |k: u32| {
         format!(
             "analytic at {width}x{height} with {k} fragments per pixel needs {} bytes of fragment \
