@@ -1078,7 +1078,7 @@ fn analytic_seed_counts_its_errors_in_run_json_and_draws_them() {
     let off = a["seed_differs_pixels"].as_u64().expect("seed pixels");
     let share = a["seed_differs_edge_fraction"].as_f64().expect("share");
     assert!(edge > 100 && off > 0 && share > 0.0 && share <= 1.0, "{a}");
-    assert_eq!(a["kept_per_pixel"], 16, "{a}");
+    assert_eq!(a["kept_per_pixel"], 32, "{a}");
     assert!(a["tail_fragments"].as_u64().is_some(), "{a}");
     assert_eq!(a["nonfinite_pixels"], 0, "{a}");
     assert!(out.join("debug/frame_0000_seed_differs.png").is_file());
