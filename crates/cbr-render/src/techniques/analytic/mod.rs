@@ -158,9 +158,10 @@ fn start_tail_capacity(px: u64, max_range: u32) -> u64 {
     (px * TAIL_RECORDS_PER_PIXEL_START).clamp(1, max_tail_capacity(max_range))
 }
 
-/// Fragments kept per pixel unless `frags=K` says otherwise (lowered to what fits), and the most
-/// `frags=K` may ask for (resolve.comp keeps a pixel's kept fragments as the bits of one word).
+/// Fragments kept per pixel unless `frags=K` says otherwise (lowered to what fits).
 pub const DEFAULT_FRAGS: u32 = 32;
+/// The most `frags=K` may ask for: resolve.comp holds the set of a pixel's kept fragments it
+/// composites as the bits of one 32-bit word.
 pub const MAX_FRAGS: u32 = 32;
 /// The key's identity field: object IDs below 2^12, primitive IDs below 2^20.
 pub const MAX_OBJECTS: usize = (1 << 12) - 1;
