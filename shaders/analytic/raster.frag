@@ -17,6 +17,8 @@
 // Fragments whose triangle holds the pixel centre also write native's depth, velocity and IDs
 // through the depth test.
 #include "../inc/scene_types.glsl"
+#include "surface.glsl"
+#include "tail_record.glsl"
 
 layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
 layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
@@ -53,14 +55,12 @@ layout(std430, set = 2, binding = BINDING_SURFACES) buffer Surfaces { uvec2 surf
 // The fragments beyond the K nearest that are not hidden, for the tail pass (tail.comp) to light
 // and sum into the tails (tail_record.glsl); the buffer's length is the capacity, and the count
 // runs on past it when the frame needs more (the technique grows the buffer and renders again).
-layout(std430, set = 2, binding = BINDING_TAIL_RECORDS) writeonly buffer TailRecords { uint tail_records[]; };
+layout(std430, set = 2, binding = BINDING_TAIL_RECORDS) writeonly buffer TailRecords { TailRecord tail_records[]; };
 layout(std430, set = 2, binding = BINDING_TAIL_COUNT) buffer TailCount { uint tail_count; };
 #endif
 layout(push_constant) uniform Push { uint object_index; } pc;
 
 #include "coverage.glsl"
-#include "surface.glsl"
-#include "tail_record.glsl"
 #define RASTER_IO in
 #include "raster_io.glsl"
 
@@ -383,18 +383,9 @@ void main() {
         // Beyond the K: recorded for the tail pass (tail_record.glsl), which lights it and adds
         // it to the pixel's tail, facing the camera or away.
         uint i = atomicAdd(tail_count, 1u);
-        if (i < uint(tail_records.length()) / TAIL_RECORD_WORDS) {
-            uint r = i * TAIL_RECORD_WORDS;
-            tail_records[r] = pixel;
-            tail_records[r + 1u] = floatBitsToUint(coverage);
-            tail_records[r + 2u] = mask;
-            tail_records[r + 3u] = o.ids.y | (facing_away ? TAIL_FACING_AWAY : 0u);
-            tail_records[r + 4u] = floatBitsToUint(world.x);
-            tail_records[r + 5u] = floatBitsToUint(world.y);
-            tail_records[r + 6u] = floatBitsToUint(world.z);
-            tail_records[r + 7u] = packSnorm2x16(oct_encode(nrm));
-            tail_records[r + 8u] = packHalf2x16(albedo.rg);
-            tail_records[r + 9u] = packHalf2x16(vec2(albedo.b, 0.0));
+        if (i < uint(tail_records.length())) {
+            tail_records[i] = make_tail_record(pixel, coverage, mask, o.ids.y, facing_away, world,
+                                               nrm, albedo);
         }
     }
     }

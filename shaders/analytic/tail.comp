@@ -16,7 +16,7 @@
 
 layout(local_size_x = 64) in;
 
-layout(std430, set = 0, binding = BINDING_TAIL_RECORDS) readonly buffer TailRecords { uint tail_records[]; };
+layout(std430, set = 0, binding = BINDING_TAIL_RECORDS) readonly buffer TailRecords { TailRecord tail_records[]; };
 layout(std430, set = 0, binding = BINDING_TAIL_COUNT) readonly buffer TailCount { uint tail_count; };
 // Per pixel, two tails (facing the camera, facing away), 4 sums each; and their masks' unions.
 layout(std430, set = 0, binding = BINDING_TAIL) buffer Tail { uint64_t tail[]; };
@@ -32,16 +32,15 @@ layout(std430, set = 1, binding = BINDING_LIGHTS) readonly buffer Lights { Light
 void main() {
     // Rows of at most 65535 groups of 64 (the dispatch is 2D past that).
     uint i = gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u + gl_GlobalInvocationID.x;
-    if (i >= min(tail_count, uint(tail_records.length()) / TAIL_RECORD_WORDS)) return;
-    uint r = i * TAIL_RECORD_WORDS;
-    uint pixel = tail_records[r];
-    float coverage = uintBitsToFloat(tail_records[r + 1u]);
-    uint mask = tail_records[r + 2u];
-    uint material = tail_records[r + 3u] & ~TAIL_FACING_AWAY;
-    bool facing_away = (tail_records[r + 3u] & TAIL_FACING_AWAY) != 0u;
-    vec3 world = uintBitsToFloat(uvec3(tail_records[r + 4u], tail_records[r + 5u], tail_records[r + 6u]));
-    vec3 nrm = oct_decode(unpackSnorm2x16(tail_records[r + 7u]));
-    vec3 albedo = vec3(unpackHalf2x16(tail_records[r + 8u]), unpackHalf2x16(tail_records[r + 9u]).x);
+    if (i >= min(tail_count, uint(tail_records.length()))) return;
+    TailRecord rec = tail_records[i];
+    uint pixel = rec.pixel;
+    uint mask = rec.mask;
+    float coverage;
+    uint material;
+    bool facing_away;
+    vec3 world, nrm, albedo;
+    read_tail_record(rec, coverage, material, facing_away, world, nrm, albedo);
     vec3 color = shade(world, nrm, albedo, materials[material], frame);
     if (any(isnan(color)) || any(isinf(color))) return;
 
