@@ -56,7 +56,7 @@ layout(std430, set = 2, binding = BINDING_SURFACES) buffer Surfaces { uvec2 surf
 // and sum into the tails (tail_record.glsl); the buffer's length is the capacity, and the count
 // runs on past it when the frame needs more (the technique grows the buffer and renders again).
 layout(std430, set = 2, binding = BINDING_TAIL_RECORDS) writeonly buffer TailRecords { TailRecord tail_records[]; };
-layout(std430, set = 2, binding = BINDING_TAIL_COUNT) buffer TailCount { uint tail_count; };
+layout(std430, set = 2, binding = BINDING_TAIL_COUNT) buffer TailCounts { TailCount tail_count; };
 #endif
 layout(push_constant) uniform Push { uint object_index; } pc;
 
@@ -382,10 +382,12 @@ void main() {
     } else if (coverage > 0.0) {
         // Beyond the K: recorded for the tail pass (tail_record.glsl), which lights it and adds
         // it to the pixel's tail, facing the camera or away.
-        uint i = atomicAdd(tail_count, 1u);
+        uint i = atomicAdd(tail_count.count, 1u);
         if (i < uint(tail_records.length())) {
             tail_records[i] = make_tail_record(pixel, coverage, mask, o.ids.y, facing_away, world,
                                                nrm, albedo);
+            // The first record of a row of the tail pass's dispatch adds the row.
+            if (i % (64u * uint(TAIL_ROW_GROUPS)) == 0u) atomicAdd(tail_count.groups_y, 1u);
         }
     }
     }

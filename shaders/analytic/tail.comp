@@ -17,7 +17,7 @@
 layout(local_size_x = 64) in;
 
 layout(std430, set = 0, binding = BINDING_TAIL_RECORDS) readonly buffer TailRecords { TailRecord tail_records[]; };
-layout(std430, set = 0, binding = BINDING_TAIL_COUNT) readonly buffer TailCount { uint tail_count; };
+layout(std430, set = 0, binding = BINDING_TAIL_COUNT) readonly buffer TailCounts { TailCount tail_count; };
 // Per pixel, two tails (facing the camera, facing away), 4 sums each; and their masks' unions.
 layout(std430, set = 0, binding = BINDING_TAIL) buffer Tail { uint64_t tail[]; };
 layout(std430, set = 0, binding = BINDING_TAIL_BACK) buffer TailBack { uint64_t tail_back[]; };
@@ -30,9 +30,10 @@ layout(std430, set = 1, binding = BINDING_LIGHTS) readonly buffer Lights { Light
 #include "../inc/shading.glsl"
 
 void main() {
-    // Rows of at most 65535 groups of 64 (the dispatch is 2D past that).
+    // Rows of TAIL_ROW_GROUPS groups of 64 (tail_record.glsl's TailCount), as many as the records
+    // held begin; the last row's invocations past the count return.
     uint i = gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u + gl_GlobalInvocationID.x;
-    if (i >= min(tail_count, uint(tail_records.length()))) return;
+    if (i >= min(tail_count.count, uint(tail_records.length()))) return;
     TailRecord rec = tail_records[i];
     uint pixel = rec.pixel;
     uint mask = rec.mask;

@@ -7,6 +7,18 @@
 #define TAIL_RECORD_GLSL
 #define TAIL_FACING_AWAY 0x80000000u
 
+// The records' count and the tail pass's dispatch (a VkDispatchIndirectCommand from word 1): rows
+// of TAIL_ROW_GROUPS groups of 64 invocations (x, set by the host each frame with y = 0, z = 1),
+// y counting the rows begun by the records the buffer holds. The raster pass adds a row when it
+// writes a record at the start of one, so the pass runs ceil(held / (64 TAIL_ROW_GROUPS)) rows,
+// not the buffer's capacity. TAIL_ROW_GROUPS: a define (crates/cbr-render's analytic module).
+struct TailCount {
+    uint count;     // records counted, some past the buffer's capacity when it overflows
+    uint groups_x;  // TAIL_ROW_GROUPS
+    uint groups_y;  // rows
+    uint groups_z;  // 1
+};
+
 struct TailRecord {
     uint pixel;
     uint coverage;   // f32 bits

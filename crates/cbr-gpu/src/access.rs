@@ -24,6 +24,8 @@ pub enum Access {
     GraphicsRead,
     /// Storage writes (atomics) from fragment shaders (buffers).
     FragmentStorageWrite,
+    /// Read by a compute shader and as the parameters of an indirect dispatch (buffers).
+    ComputeIndirect,
 }
 
 impl Access {
@@ -43,6 +45,7 @@ impl Access {
                 S::VERTEX_INPUT | S::VERTEX_SHADER | S::FRAGMENT_SHADER | S::GEOMETRY_SHADER
             }
             Access::FragmentStorageWrite => S::FRAGMENT_SHADER,
+            Access::ComputeIndirect => S::DRAW_INDIRECT | S::COMPUTE_SHADER,
         }
     }
 
@@ -70,6 +73,7 @@ impl Access {
                     | A::SHADER_SAMPLED_READ
             }
             Access::FragmentStorageWrite => A::SHADER_STORAGE_WRITE | A::SHADER_STORAGE_READ,
+            Access::ComputeIndirect => A::INDIRECT_COMMAND_READ | A::SHADER_STORAGE_READ,
         }
     }
 
@@ -85,7 +89,10 @@ impl Access {
             Access::ComputeStorageWrite | Access::ComputeStorageReadWrite => L::GENERAL,
             Access::TransferSrc => L::TRANSFER_SRC_OPTIMAL,
             Access::TransferDst => L::TRANSFER_DST_OPTIMAL,
-            Access::HostRead | Access::GraphicsRead | Access::FragmentStorageWrite => L::GENERAL,
+            Access::HostRead
+            | Access::GraphicsRead
+            | Access::FragmentStorageWrite
+            | Access::ComputeIndirect => L::GENERAL,
         }
     }
 

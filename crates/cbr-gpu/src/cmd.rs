@@ -128,6 +128,18 @@ impl Cmd {
         };
     }
 
+    /// Writes `data` at the start of `buffer` (vkCmdUpdateBuffer: at most 65536 bytes, recorded
+    /// into the command buffer): small per-frame parameters such as an indirect dispatch's.
+    pub fn update_buffer(&mut self, buffer: &Buffer, data: &[u32]) {
+        self.use_buffer(buffer, Access::TransferDst);
+        // SAFETY: recording state; the data is at most 64 KiB, a multiple of 4 bytes, and the
+        // buffer at least that large (callers size it for what they write).
+        unsafe {
+            self.dev()
+                .cmd_update_buffer(self.cb, buffer.raw(), 0, bytemuck::cast_slice(data))
+        };
+    }
+
     pub fn copy_buffer(&mut self, src: &Buffer, dst: &Buffer, size: u64) {
         self.use_buffer(src, Access::TransferSrc);
         self.use_buffer(dst, Access::TransferDst);
@@ -348,6 +360,18 @@ impl Cmd {
     pub fn dispatch(&mut self, x: u32, y: u32, z: u32) {
         // SAFETY: recording state with a compute pipeline bound.
         unsafe { self.dev().cmd_dispatch(self.cb, x, y, z) };
+    }
+
+    /// A dispatch whose group counts (VkDispatchIndirectCommand: x, y, z) the GPU wrote into
+    /// `buffer` at byte `offset` (a multiple of 4); the buffer needs INDIRECT_BUFFER usage and
+    /// [`Access::ComputeIndirect`] declared before.
+    pub fn dispatch_indirect(&mut self, buffer: &Buffer, offset: u64) {
+        // SAFETY: recording state with a compute pipeline bound; the caller's buffer holds the
+        // command at `offset`.
+        unsafe {
+            self.dev()
+                .cmd_dispatch_indirect(self.cb, buffer.raw(), offset)
+        };
     }
 }
 

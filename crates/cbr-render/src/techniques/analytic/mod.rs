@@ -91,6 +91,13 @@ pub const TAIL_RECORD_BYTES: u64 = 40;
 /// Records the buffer starts with, per pixel (it grows to what a frame needs, up to the device's
 /// largest storage buffer).
 pub const TAIL_RECORDS_PER_PIXEL_START: u64 = 1;
+/// The tail pass's rows: groups of 64 invocations per row of its indirect dispatch, whose row
+/// count the raster pass raises as it writes records (shaders/analytic/tail_record.glsl,
+/// TailCount). Small, so that the last row's idle invocations are few; 65,535 rows of 1,024
+/// records hold more than one storage buffer's records (3.4 million on lavapipe).
+pub const TAIL_ROW_GROUPS: u32 = 16;
+/// The records' count and the tail pass's VkDispatchIndirectCommand (4 x u32).
+pub const TAIL_COUNT_BYTES: u64 = 16;
 /// Per pixel and mask sample, the farthest depth over the pixel of the nearest fragment opaque
 /// at that sample (f32 bits; 0 where none): fragments beyond the K nearest lying behind every
 /// sample's are not shaded. One 4-byte word per sample, or per group of 2, 4, ... consecutive
@@ -384,7 +391,7 @@ impl Analytic {
             start_tail_capacity(px, max_range) * TAIL_RECORD_BYTES,
             false,
         );
-        e.storage_buffer("analytic.tail_count", 4, false);
+        e.storage_buffer("analytic.tail_count", TAIL_COUNT_BYTES, false);
         e.buffer("readback.analytic.tail_count", 4, true);
         e.image("analytic.velocity", VELOCITY_FORMAT, w, h);
         e.image("analytic.ids", ID_FORMAT, w, h);
@@ -444,6 +451,7 @@ impl Analytic {
         let common = [
             ("K_SLOTS".to_string(), frags.to_string()),
             ("OCCLUDER_GROUP".to_string(), occluder_group.to_string()),
+            ("TAIL_ROW_GROUPS".to_string(), TAIL_ROW_GROUPS.to_string()),
         ];
         defines.extend(common.iter().cloned());
         if c.seed {
@@ -496,6 +504,7 @@ impl Analytic {
         rdefines.extend(common.iter().cloned());
         let mut tdefines = scene_pass::shader_defines(scene_pass::LAYOUT_NATIVE);
         tdefines.extend(TAIL_BINDINGS.iter().map(BindingDesc::define));
+        tdefines.extend(common.iter().cloned());
         let tail_cs = ctx.shaders.compile("analytic/tail.comp", &tdefines)?;
         let tail_pass = Pipeline::compute(
             gpu,
@@ -540,8 +549,8 @@ impl Analytic {
         )?;
         let tail_count = buffer(
             "analytic.tail_count",
-            4,
-            storage | vk::BufferUsageFlags::TRANSFER_SRC,
+            TAIL_COUNT_BYTES,
+            storage | vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::INDIRECT_BUFFER,
         )?;
         let tail_count_rb = Readback::for_buffer(gpu, "readback.analytic.tail_count", 4, 1, 1)?;
         // Native's colour target is not drawn (the resolve writes the colour).
@@ -679,7 +688,8 @@ impl Analytic {
             cmd.fill_buffer(&self.tail_back, 0);
             cmd.fill_buffer(&self.tail_masks, 0);
             cmd.fill_buffer(&self.occluders, 0);
-            cmd.fill_buffer(&self.tail_count, 0);
+            // No records yet; the tail pass's dispatch: rows of TAIL_ROW_GROUPS groups, none.
+            cmd.update_buffer(&self.tail_count, &[0, TAIL_ROW_GROUPS, 0, 1]);
             profiler.end(cmd, scope);
             cmd.use_buffer(counter, Access::FragmentStorageWrite);
             // The select pass writes no attachment (its fragments all discard); the second pass
@@ -687,10 +697,11 @@ impl Analytic {
             self.record_raster(cmd, profiler, scene, &self.select, false);
             self.record_raster(cmd, profiler, scene, &self.raster, true);
 
-            // The tail pass: one invocation per record, up to the buffer's capacity (the count
-            // may run past it: render() then grows the buffer and renders again).
+            // The tail pass: one invocation per record the buffer holds, in the rows the raster
+            // pass counted (the count may run past the capacity: render() then grows the buffer
+            // and renders again).
             cmd.use_buffer(&self.tail_records, Access::ComputeSampled);
-            cmd.use_buffer(&self.tail_count, Access::ComputeSampled);
+            cmd.use_buffer(&self.tail_count, Access::ComputeIndirect);
             for buf in [&self.tail, &self.tail_back, &self.tail_masks] {
                 cmd.use_buffer(buf, Access::ComputeStorageReadWrite);
             }
@@ -698,9 +709,7 @@ impl Analytic {
             cmd.bind_pipeline(&self.tail_pass);
             cmd.bind_set(&self.tail_pass, 0, &self.tail_set);
             cmd.bind_set(&self.tail_pass, 1, &self.scene_set);
-            let groups = self.tail_capacity.div_ceil(64);
-            let row = groups.min(u64::from(u16::MAX));
-            cmd.dispatch(row as u32, groups.div_ceil(row) as u32, 1);
+            cmd.dispatch_indirect(&self.tail_count, 4);
             profiler.end(cmd, scope);
 
             for buf in [
