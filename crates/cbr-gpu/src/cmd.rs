@@ -131,9 +131,15 @@ impl Cmd {
     /// Writes `data` at the start of `buffer` (vkCmdUpdateBuffer: at most 65536 bytes, recorded
     /// into the command buffer): small per-frame parameters such as an indirect dispatch's.
     pub fn update_buffer(&mut self, buffer: &Buffer, data: &[u32]) {
+        assert!(
+            !data.is_empty() && data.len() * 4 <= 65536 && data.len() as u64 * 4 <= buffer.size(),
+            "vkCmdUpdateBuffer takes 4 to 65536 bytes within the buffer ({} bytes), not {}",
+            buffer.size(),
+            data.len() * 4
+        );
         self.use_buffer(buffer, Access::TransferDst);
-        // SAFETY: recording state; the data is at most 64 KiB, a multiple of 4 bytes, and the
-        // buffer at least that large (callers size it for what they write).
+        // SAFETY: recording state; the data is 4 to 65536 bytes, a multiple of 4, and within the
+        // buffer (asserted above).
         unsafe {
             self.dev()
                 .cmd_update_buffer(self.cb, buffer.raw(), 0, bytemuck::cast_slice(data))
