@@ -354,7 +354,6 @@ pub struct Analytic {
     /// Records of the fragments beyond the K (grows: [`Analytic::grow_tail_records`]), their
     /// count, and the count read back.
     tail_records: Buffer,
-    tail_capacity: u64,
     max_range: u32,
     tail_count: Buffer,
     tail_count_rb: Readback,
@@ -541,10 +540,9 @@ impl Analytic {
         let tail_back = buffer("analytic.tail_back", px * TAIL_BYTES, storage)?;
         let tail_masks = buffer("analytic.tail_masks", px * TAIL_MASK_BYTES, storage)?;
         let occluders = buffer("analytic.occluders", occluder_bytes(px, max_range), storage)?;
-        let tail_capacity = start_tail_capacity(px, max_range);
         let tail_records = buffer(
             "analytic.tail_records",
-            tail_capacity * TAIL_RECORD_BYTES,
+            start_tail_capacity(px, max_range) * TAIL_RECORD_BYTES,
             storage,
         )?;
         let tail_count = buffer(
@@ -659,7 +657,6 @@ impl Analytic {
             planes_y,
             surfaces,
             tail_records,
-            tail_capacity,
             max_range,
             tail_count,
             tail_count_rb,
@@ -760,6 +757,11 @@ impl Analytic {
         })
     }
 
+    /// Tail records the buffer holds.
+    fn tail_capacity(&self) -> u64 {
+        self.tail_records.size() / TAIL_RECORD_BYTES
+    }
+
     /// Fragments the last submitted frame recorded for the tails (some beyond the capacity
     /// when it exceeds it).
     fn recorded_tails(&self) -> Result<u64> {
@@ -776,7 +778,7 @@ impl Analytic {
             grown_tail_capacity(needed, self.frags, self.max_range).map_err(GpuError::Other)?;
         tracing::info!(
             "analytic: {needed} tail records this frame, {} held: the buffer grows to {capacity}",
-            self.tail_capacity
+            self.tail_capacity()
         );
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         self.tail_records = Buffer::new(
@@ -786,7 +788,6 @@ impl Analytic {
             usage,
             Location::GpuOnly,
         )?;
-        self.tail_capacity = capacity;
         // The frame that counted them has completed (FrameCtx::submit waits), so the two sets
         // that bind the buffer are not in use.
         for (set, layout, bindings) in [
@@ -884,7 +885,7 @@ impl Technique for Analytic {
         loop {
             self.submit_frame(ctx, world_from_clip)?;
             let recorded = self.recorded_tails()?;
-            if recorded <= self.tail_capacity {
+            if recorded <= self.tail_capacity() {
                 return Ok(());
             }
             // More fragments beyond the K than the buffer holds: grow it and render the frame
@@ -949,7 +950,7 @@ impl Technique for Analytic {
         // K x (key + slot + plane + surface) + the fragment count (4), tails (2 x 32) and their
         // masks (8), the occluder words (4 x 32 / group) + colour (8), coverage (4), counts (16),
         // depth (4), velocity (8), IDs (8); and the tail records the buffer holds now.
-        self.tail_capacity * TAIL_RECORD_BYTES
+        self.tail_records.size()
             + px * (u64::from(self.frags) * FRAGMENT_BYTES
                 + 4
                 + 2 * TAIL_BYTES
