@@ -138,38 +138,56 @@ vec4 texture_aniso(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
     return sum / float(n);
 }
 
-// Alpha-tested materials, per sample: the alpha test at each of the covered part's mask samples
-// (the UV carried there by its screen derivatives dx, dy; filtered over a quarter pixel, about the
-// samples' spacing). Returns the passing samples; `pass` is their share of the covered part's, by
-// which its coverage scales. Such a fragment then hides and is hidden per sample like an opaque
-// one. One too small to hold a sample has none to test: the share of it that passes is estimated
-// from the alpha at the shading point and its change over one pixel (alpha taken as linear across
-// the pixel), and it has holes: its stand-in neither hides nor is hidden, and the resolve
+// Alpha-tested materials, per sample. The mask slot holds the material's coverage texture
+// (cbr_scene::Texture::alpha_coverage): the passing share in alpha, the albedo premultiplied by it
+// in rgb, both averaged by the mips, so one lookup gives the test and the colour of the part that
+// passes. The test runs at each of the covered part's mask samples (the UV carried there by its
+// screen derivatives dx, dy), filtered over a sixteenth of a pixel: about a point, as the
+// supersampled reference tests it (a quarter pixel, the samples' spacing, blurred the cards'
+// holes and thin parts before the test: docs/analytic.md). Returns the passing samples; `pass` is
+// their share of the covered part's, by which its coverage scales, and `albedo` the mean over
+// them of the passing texels' albedo (rgb / alpha): the albedo's own mips would mix in the colour
+// of texels that fail, which the reference never sees. Such a fragment then hides and is hidden
+// per sample like an opaque one. One too small to hold a sample has none to test: the share of
+// it that passes is estimated from the alpha at the shading point and its change over one pixel
+// (alpha taken as linear across the pixel), its albedo is the passing texels' over the pixel's
+// footprint, and it has holes: its stand-in neither hides nor is hidden, and the resolve
 // composites it through the transmittance of the alpha-tested fragments in front.
+#define ALPHA_SAMPLE_FILTER 0.0625
 uint alpha_test(uint geo_mask, vec2 uv, vec2 dx, vec2 dy, vec2 gx, vec2 gy, vec2 mean_point,
-                int channel, out float pass) {
+                out float pass, out vec3 albedo) {
     if (geo_mask == 0u) {
-        float a = textureGrad(mask_tex, uv, gx, gy)[channel];
-        float ax = textureGrad(mask_tex, uv + gx, gx, gy)[channel];
-        float ay = textureGrad(mask_tex, uv + gy, gx, gy)[channel];
+        float a = textureGrad(mask_tex, uv, gx, gy).a;
+        float ax = textureGrad(mask_tex, uv + gx, gx, gy).a;
+        float ay = textureGrad(mask_tex, uv + gy, gx, gy).a;
         float width = abs(ax - a) + abs(ay - a);
         pass = clamp((a - 0.5) / max(width, 1e-4) + 0.5, 0.0, 1.0);
+        albedo = vec3(1.0);
+#ifndef SELECT_PASS
+        vec4 c = texture_aniso(mask_tex, uv, gx, gy);
+        if (c.a > 0.0) albedo = c.rgb / c.a;
+#endif
         return 0u;
     }
     uint passing = 0u;
     uint rest = geo_mask;
+    vec4 sum = vec4(0.0);
     while (rest != 0u) {
         int k = findLSB(rest);
         rest &= rest - 1u;
         vec2 d = mask_sample(k) - mean_point;
-        if (textureGrad(mask_tex, uv + dx * d.x + dy * d.y, 0.25 * gx, 0.25 * gy)[channel] >= 0.5) {
+        vec4 c = textureGrad(mask_tex, uv + dx * d.x + dy * d.y, ALPHA_SAMPLE_FILTER * gx,
+                             ALPHA_SAMPLE_FILTER * gy);
+        if (c.a >= 0.5) {
             passing |= 1u << uint(k);
+            sum += c;
 #ifdef SELECT_PASS
             break;  // the select pass needs only whether any sample passes
 #endif
         }
     }
     pass = float(bitCount(passing)) / float(bitCount(geo_mask));
+    albedo = sum.a > 0.0 ? sum.rgb / sum.a : vec3(1.0);
     return passing;
 }
 
@@ -226,6 +244,7 @@ void main() {
     // Alpha-tested materials: the passing samples of the covered part (below); a fragment that
     // passes nowhere is dropped before it takes a slot.
     float alpha_pass = 1.0;
+    vec3 alpha_albedo = vec3(1.0);
     uint alpha_mask = 0u;
     uint geo_mask = 0u;
     // The plane's depth at the pixel's corners: over the covered part (inside the pixel) the
@@ -260,7 +279,8 @@ void main() {
 #if (MAT_FEATURES & MAT_MASK) != 0
     if (mat.tex.y >= 0) {
         geo_mask = sample_mask(p, n, orient);
-        alpha_mask = alpha_test(geo_mask, uv, dx, dy, gx, gy, cov.mean_point, mat.tex.z, alpha_pass);
+        alpha_mask = alpha_test(geo_mask, uv, dx, dy, gx, gy, cov.mean_point, alpha_pass,
+                                alpha_albedo);
         if (alpha_pass <= 0.0) discard;
     }
 #endif
@@ -314,9 +334,18 @@ void main() {
     if (slot >= 0 || counts[pixel] > uint(K_SLOTS)) {
     // (the payload block is not indented: it is the whole surface path)
     vec3 albedo = mat.kd.rgb;
-#if (MAT_FEATURES & MAT_ALBEDO) != 0
-    if (mat.tex.x >= 0) albedo *= texture_aniso(albedo_tex, uv, gx, gy).rgb;
+    // An alpha-tested fragment's albedo is that of its passing part (alpha_test); the others'
+    // is filtered over the pixel's footprint.
+#if (MAT_FEATURES & MAT_MASK) != 0
+    if (mat.tex.y >= 0) {
+        albedo *= alpha_albedo;
+    } else
 #endif
+    {
+#if (MAT_FEATURES & MAT_ALBEDO) != 0
+        if (mat.tex.x >= 0) albedo *= texture_aniso(albedo_tex, uv, gx, gy).rgb;
+#endif
+    }
     vec3 world = world_at(b);
     vec3 nrm = normalize(b.x * g_normal[0] + b.y * g_normal[1] + b.z * g_normal[2]);
     // Facing away: the back of a surface (of a closed mesh, behind its front); shaded from the

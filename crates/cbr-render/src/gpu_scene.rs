@@ -30,6 +30,9 @@ pub struct GpuScene {
     pub white: Image,
     /// Per material: the textures of its albedo, mask and bump slots.
     pub material_textures: Vec<[Option<u32>; 3]>,
+    /// Per material: an alpha-tested one's coverage texture ([`cbr_scene::Texture::alpha_coverage`],
+    /// after the scene's own in `textures`), which `analytic` binds in the mask slot.
+    pub material_coverage: Vec<Option<u32>>,
     /// Per material: its texture paths (MAT_ALBEDO | MAT_MASK | MAT_BUMP; bump only with a
     /// height map and the scene's `bump` setting), from the material data the shaders read.
     pub material_features: Vec<u32>,
@@ -110,15 +113,53 @@ fn material_data(m: &cbr_scene::Material, bump: bool) -> MaterialData {
     }
 }
 
-/// Uploads the scene's textures and, last, a 1x1 white one.
-fn upload_textures(gpu: &Gpu, scene: &Scene) -> Result<Vec<Image>> {
-    let mut images = Vec::with_capacity(scene.textures.len() + 1);
+/// What an alpha-tested material's coverage texture is made of: its albedo texture, its mask
+/// texture and the mask's channel.
+type CoverageSource = (Option<u32>, u32, u32);
+
+/// The alpha-tested materials' coverage textures ([`cbr_scene::Texture::alpha_coverage`]), one
+/// per distinct source, and per material the index of its own in that list.
+fn alpha_coverage_sources(scene: &Scene) -> (Vec<CoverageSource>, Vec<Option<u32>>) {
+    let mut sources: Vec<CoverageSource> = Vec::new();
+    let per_material = scene
+        .materials
+        .iter()
+        .map(|m| match m.alpha {
+            AlphaSource::Opaque => None,
+            AlphaSource::Texture { tex, channel } => {
+                let key = (m.kd_tex, tex, channel);
+                let i = sources.iter().position(|&s| s == key).unwrap_or_else(|| {
+                    sources.push(key);
+                    sources.len() - 1
+                });
+                Some(i as u32)
+            }
+        })
+        .collect();
+    (sources, per_material)
+}
+
+fn alpha_coverage_texture(
+    scene: &Scene,
+    (albedo, mask, channel): (Option<u32>, u32, u32),
+) -> cbr_scene::Texture {
+    cbr_scene::Texture::alpha_coverage(
+        albedo.map(|a| &scene.textures[a as usize]),
+        &scene.textures[mask as usize],
+        channel as usize,
+    )
+}
+
+/// Uploads the scene's textures, then `extra`, and, last, a 1x1 white one.
+fn upload_textures(gpu: &Gpu, scene: &Scene, extra: &[cbr_scene::Texture]) -> Result<Vec<Image>> {
+    let mut images = Vec::with_capacity(scene.textures.len() + extra.len() + 1);
     let mut staging_bytes = Vec::new();
     let mut copies: Vec<Vec<LevelCopy>> = Vec::new();
     let white = cbr_scene::Texture::from_rgba8("white", 1, 1, vec![255; 4], false);
     for (i, t) in scene
         .textures
         .iter()
+        .chain(extra)
         .chain(std::iter::once(&white))
         .enumerate()
     {
@@ -212,7 +253,22 @@ impl GpuScene {
             );
             texels += bytes;
         }
-        e.image_bytes(format!("texture[{}] white", scene.textures.len()), 4, 1, 1);
+        // The coverage textures have their source's size: the albedo's, else the mask's.
+        let (sources, _) = alpha_coverage_sources(scene);
+        for (k, &(albedo, mask, _)) in sources.iter().enumerate() {
+            let (albedo, mask) = (
+                albedo.map(|a| &scene.textures[a as usize]),
+                &scene.textures[mask as usize],
+            );
+            let t = albedo.unwrap_or(mask);
+            let bytes: u64 = t.levels.iter().map(|l| l.rgba.len() as u64).sum();
+            let name = cbr_scene::Texture::alpha_coverage_name(albedo, mask);
+            let i = scene.textures.len() + k;
+            e.image_bytes(format!("texture[{i}] {name}"), bytes, t.width(), t.height());
+            texels += bytes;
+        }
+        let white = scene.textures.len() + sources.len();
+        e.image_bytes(format!("texture[{white}] white"), 4, 1, 1);
         staging.push(("textures.staging".into(), texels + 4));
         if let Some((name, bytes)) = staging.into_iter().max_by_key(|s| s.1) {
             e.buffer(name, bytes, true);
@@ -261,7 +317,16 @@ impl GpuScene {
             usage_storage,
             bytemuck::cast_slice(&mats),
         )?;
-        let mut textures = upload_textures(gpu, scene)?;
+        let (coverage_sources, coverage_of) = alpha_coverage_sources(scene);
+        let coverage: Vec<cbr_scene::Texture> = coverage_sources
+            .iter()
+            .map(|&src| alpha_coverage_texture(scene, src))
+            .collect();
+        let mut textures = upload_textures(gpu, scene, &coverage)?;
+        let material_coverage = coverage_of
+            .iter()
+            .map(|c| c.map(|k| scene.textures.len() as u32 + k))
+            .collect();
         let white = textures
             .pop()
             .ok_or_else(|| cbr_gpu::GpuError::Other("no white texture".into()))?;
@@ -326,6 +391,7 @@ impl GpuScene {
             textures,
             white,
             material_textures,
+            material_coverage,
             material_features,
             sampler,
             draws,

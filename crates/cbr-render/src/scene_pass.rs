@@ -331,7 +331,7 @@ impl ScenePass {
             })
         })?;
         let set = scene_set(gpu, name, &layout, scene, counter)?;
-        let material_sets = material_sets(gpu, name, &material_layout, scene)?;
+        let material_sets = material_sets(gpu, name, &material_layout, scene, MaskSlot::Mask)?;
         Ok(ScenePass {
             variants,
             _layouts: [layout, material_layout],
@@ -480,6 +480,16 @@ pub fn scene_set(
     )
 }
 
+/// What an alpha-tested material's mask slot holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MaskSlot {
+    /// The mask texture itself (sampled at the material's channel).
+    Mask,
+    /// Its coverage texture ([`GpuScene::material_coverage`]: the passing share in alpha and the
+    /// albedo premultiplied by it).
+    Coverage,
+}
+
 /// One set 1 ([`MATERIAL_BINDINGS`]) per material; slots a material does not use hold the 1x1
 /// white texture.
 pub fn material_sets(
@@ -487,12 +497,18 @@ pub fn material_sets(
     name: &str,
     layout: &SetLayout,
     scene: &GpuScene,
+    mask_slot: MaskSlot,
 ) -> Result<Vec<DescriptorSet>> {
     scene
         .material_textures
         .iter()
+        .zip(&scene.material_coverage)
         .enumerate()
-        .map(|(i, slots)| {
+        .map(|(i, (slots, &coverage))| {
+            let mask = match mask_slot {
+                MaskSlot::Mask => slots[1],
+                MaskSlot::Coverage => coverage,
+            };
             let tex = |slot: Option<u32>| {
                 (
                     slot.map(|t| &scene.textures[t as usize])
@@ -506,7 +522,7 @@ pub fn material_sets(
                 layout,
                 &[
                     Write::Sampled(binding("albedo"), vec![tex(slots[0])]),
-                    Write::Sampled(binding("mask"), vec![tex(slots[1])]),
+                    Write::Sampled(binding("mask"), vec![tex(mask)]),
                     Write::Sampled(binding("bump"), vec![tex(slots[2])]),
                 ],
             )

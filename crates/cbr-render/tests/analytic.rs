@@ -1174,6 +1174,78 @@ fn alpha_tested_layers_hide_each_other_per_sample() {
 }
 
 #[test]
+fn an_alpha_tested_fragment_takes_the_colour_of_its_passing_texels_alone() {
+    // An alpha-tested quad facing the camera, lit by an ambient light of 1, its texture columns
+    // of one texel alternately red and passing, blue and failing, about 4.7 texels to a pixel.
+    // Filtered over a pixel's footprint (mip level 2), the albedo would be half red, half blue;
+    // the reference sees only the red texels, where the test passes. So each pixel must be red
+    // times the column's exact passing share over the black background, with no blue at all.
+    let gpu = gpu();
+    let texels = 256u32;
+    let rgba = (0..texels * 2)
+        .flat_map(|i| {
+            if (i % texels).is_multiple_of(2) {
+                [255, 0, 0, 255]
+            } else {
+                [0, 0, 255, 0]
+            }
+        })
+        .collect();
+    let (x0, x1, y0, y1, z) = (-2.2f32, 2.2f32, -1.5f32, 1.5f32, 0.5f32);
+    let v = [[x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z]];
+    let uvs = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+    let mut m = Material::named("leaf");
+    m.kd = [1.0; 3];
+    m.kd_tex = Some(0);
+    m.alpha = AlphaSource::Texture { tex: 0, channel: 3 };
+    let mut s = scene(vec![textured_quad("leaf", v, uvs, 0)], vec![m], [0.0; 3]);
+    s.textures = vec![Texture::from_rgba8("red-blue", texels, 2, rgba, false)];
+    s.settings.ambient = [1.0; 3];
+    let out = render(&gpu, &s, "analytic");
+    assert_clean(&gpu);
+    let [sx0, sy0] = project(&s, [x0, y0, z]);
+    let [sx1, sy1] = project(&s, [x1, y1, z]);
+    let (ylo, yhi) = (sy0.min(sy1), sy0.max(sy1));
+    // The share of pixel column [x, x + 1) over red texels, exactly.
+    let passing = |x: f64| -> f64 {
+        let steps = 4096;
+        (0..steps)
+            .filter(|&i| {
+                let sx = x + (f64::from(i) + 0.5) / f64::from(steps);
+                let u = (sx - sx0) / (sx1 - sx0);
+                (u * f64::from(texels)).floor() as i64 % 2 == 0
+            })
+            .count() as f64
+            / f64::from(steps)
+    };
+    let (mut worst_red, mut sum_red, mut worst_blue, mut n) = (0.0f64, 0.0f64, 0.0f64, 0usize);
+    for y in 0..H as i64 {
+        for x in 0..W as i64 {
+            let (fx, fy) = (x as f64, y as f64);
+            if fx < sx0 + 1.0 || fx + 1.0 > sx1 - 1.0 || fy < ylo + 1.0 || fy + 1.0 > yhi - 1.0 {
+                continue;
+            }
+            let got = rgb(&out, (y * W as i64 + x) as usize);
+            let e = (got[0] - passing(fx)).abs();
+            worst_red = worst_red.max(e);
+            sum_red += e;
+            worst_blue = worst_blue.max(got[2]);
+            n += 1;
+        }
+    }
+    let mean_red = sum_red / n as f64;
+    eprintln!(
+        "{n} pixels: red off by mean {mean_red:.4}, worst {worst_red:.4}; worst blue {worst_blue:.4}"
+    );
+    assert!(n > 800, "the quad covers {n} pixels");
+    // Red: the passing share sampled by 32 mask samples; blue: f16 rounding at most.
+    assert!(
+        worst_blue <= 1e-3 && mean_red <= 0.03 && worst_red <= 0.1,
+        "red off by mean {mean_red}, worst {worst_red}; worst blue {worst_blue}"
+    );
+}
+
+#[test]
 fn textures_are_filtered_over_the_anisotropic_footprint() {
     // A floor seen at a grazing angle with stripes running away from the camera: a pixel's
     // footprint in the texture is long along the stripes and short across them. Filtering at the

@@ -157,6 +157,56 @@ impl Texture {
         Ok(Texture::from_rgba8(&name, w, h, rgba.into_raw(), srgb))
     }
 
+    /// The coverage texture of an alpha-tested material, for averages over the part of a
+    /// footprint where the alpha test passes (`analytic`). Level 0, at the albedo's size (the
+    /// mask's without an albedo texture), holds the albedo (white without one) where the mask's
+    /// channel `channel`, taken at the nearest texel, is at least one half, 0 elsewhere, and the
+    /// pass (0 or 1) in alpha. Its mips average both in linear space, so a filtered texel holds
+    /// (mean of albedo x pass, mean of pass) over the filter: their quotient is the albedo's mean
+    /// over the passing texels alone, and the alpha the passing share. The albedo's own mips
+    /// average in the colour of texels that fail the test, which no one sees.
+    pub fn alpha_coverage(albedo: Option<&Texture>, mask: &Texture, channel: usize) -> Texture {
+        let channel = channel.min(3);
+        let base = albedo.unwrap_or(mask);
+        let (w, h) = (base.width(), base.height());
+        let (mw, mh) = (mask.width(), mask.height());
+        let m0 = &mask.levels[0].rgba;
+        let mut rgba = vec![0u8; (w * h * 4) as usize];
+        rgba.par_chunks_mut((w * 4) as usize)
+            .enumerate()
+            .for_each(|(y, row)| {
+                let my = ((y as u64 * u64::from(mh)) / u64::from(h)) as usize;
+                for x in 0..w as usize {
+                    let mx = ((x as u64 * u64::from(mw)) / u64::from(w)) as usize;
+                    let pass = m0[(my * mw as usize + mx) * 4 + channel] >= 128;
+                    if !pass {
+                        continue;
+                    }
+                    let texel = &mut row[x * 4..x * 4 + 4];
+                    match albedo {
+                        Some(a) => {
+                            let i = (y * w as usize + x) * 4;
+                            texel[..3].copy_from_slice(&a.levels[0].rgba[i..i + 3]);
+                        }
+                        None => texel[..3].fill(255),
+                    }
+                    texel[3] = 255;
+                }
+            });
+        let name = Texture::alpha_coverage_name(albedo, mask);
+        let srgb = albedo.is_some_and(|a| a.srgb);
+        Texture::from_rgba8(&name, w, h, rgba, srgb)
+    }
+
+    /// The name [`Texture::alpha_coverage`] gives its texture.
+    pub fn alpha_coverage_name(albedo: Option<&Texture>, mask: &Texture) -> String {
+        format!(
+            "{} (alpha coverage of {})",
+            albedo.unwrap_or(mask).name,
+            mask.name
+        )
+    }
+
     /// A loud magenta/black checker used in place of a missing texture when the user asks for it.
     pub fn fallback(name: &str) -> Texture {
         let n = 16u32;
@@ -203,5 +253,33 @@ mod tests {
         assert_eq!(t.levels[1].rgba[0], 188);
         let lin = Texture::from_rgba8("t", 2, 2, rgba, false);
         assert_eq!(lin.levels[1].rgba[0], 128);
+    }
+
+    #[test]
+    fn alpha_coverage_mips_hold_the_passing_texels_colour_premultiplied() {
+        // 4x2 albedo: red texels that pass, blue ones (alpha 0) that fail, in columns; the mask is
+        // the albedo's own alpha at half the resolution (2x1), so each mask texel covers two
+        // albedo columns: pass, fail.
+        let red_blue = [[255, 0, 0, 255], [0, 0, 255, 0]];
+        let albedo: Vec<u8> = (0..8).flat_map(|i| red_blue[(i % 4) / 2]).collect();
+        let albedo = Texture::from_rgba8("albedo", 4, 2, albedo, true);
+        let mask = Texture::from_rgba8("mask", 2, 1, vec![0, 0, 0, 200, 0, 0, 0, 100], false);
+        let c = Texture::alpha_coverage(Some(&albedo), &mask, 3);
+        assert!(c.srgb);
+        assert_eq!((c.width(), c.height()), (4, 2));
+        // Level 0: the albedo where the mask passes (200 >= 128), 0 where it fails (100).
+        assert_eq!(&c.levels[0].rgba[..8], &[255, 0, 0, 255, 255, 0, 0, 255]);
+        assert_eq!(&c.levels[0].rgba[8..16], &[0, 0, 0, 0, 0, 0, 0, 0]);
+        // Level 1 (2x1): left texel all passing red; right all failing: no blue anywhere.
+        assert_eq!(&c.levels[1].rgba[..8], &[255, 0, 0, 255, 0, 0, 0, 0]);
+        // Level 2 (1x1): half passing; red premultiplied by 1/2 in linear space (sRGB 188),
+        // so red / alpha is the passing texels' red, 1.
+        assert_eq!(c.levels[2].rgba, vec![188, 0, 0, 128]);
+        // The albedo's own level 2 mixes in the failing blue.
+        assert!(albedo.levels[2].rgba[2] > 100);
+        // Without an albedo texture: white where the mask passes, at the mask's size.
+        let w = Texture::alpha_coverage(None, &mask, 3);
+        assert_eq!(w.levels[0].rgba, vec![255, 255, 255, 255, 0, 0, 0, 0]);
+        assert!(!w.srgb);
     }
 }

@@ -575,8 +575,15 @@ impl Analytic {
 
         let scene_set =
             scene_pass::scene_set(gpu, "analytic", &scene_layout, ctx.scene, ctx.counter)?;
-        let material_sets =
-            scene_pass::material_sets(gpu, "analytic", &material_layout, ctx.scene)?;
+        // The mask slot holds the coverage textures: the alpha test and the albedo of the
+        // passing part in one lookup (raster.frag).
+        let material_sets = scene_pass::material_sets(
+            gpu,
+            "analytic",
+            &material_layout,
+            ctx.scene,
+            scene_pass::MaskSlot::Coverage,
+        )?;
         let raster_set = DescriptorSet::new(
             gpu,
             "analytic.raster_set",

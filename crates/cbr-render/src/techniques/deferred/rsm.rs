@@ -78,7 +78,13 @@ impl RsmPass {
             },
         )?;
         let set = scene_pass::scene_set(gpu, name, &layout, scene, counter)?;
-        let material_sets = scene_pass::material_sets(gpu, name, &material_layout, scene)?;
+        let material_sets = scene_pass::material_sets(
+            gpu,
+            name,
+            &material_layout,
+            scene,
+            scene_pass::MaskSlot::Mask,
+        )?;
         let img = |n: &str, format, usage| {
             Image::new(
                 gpu,
