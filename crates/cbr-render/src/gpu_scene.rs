@@ -141,7 +141,7 @@ fn alpha_coverage_sources(scene: &Scene) -> (Vec<CoverageSource>, Vec<Option<u32
 
 fn alpha_coverage_texture(
     scene: &Scene,
-    (albedo, mask, channel): (Option<u32>, u32, u32),
+    (albedo, mask, channel): CoverageSource,
 ) -> cbr_scene::Texture {
     cbr_scene::Texture::alpha_coverage(
         albedo.map(|a| &scene.textures[a as usize]),
