@@ -1078,6 +1078,36 @@ fn stripe_mask(name: &str, texels: u32, inverted: bool) -> Texture {
     Texture::from_rgba8(name, texels, 2, rgba, false)
 }
 
+/// The pixels of a camera-facing quad's screen rectangle (x from `sx0` to `sx1`, y from `ylo` to
+/// `yhi`) that lie a pixel from its sides (where the quad's own edges and its texture's
+/// wrap-around come in), each with the share of its column [x, x + 1) where the quad's texture of
+/// `texels` one-texel columns, the even ones passing, passes: exactly, to 1/4096 (u is affine in
+/// screen x on a quad facing the camera).
+fn columns_inside(sx0: f64, sx1: f64, ylo: f64, yhi: f64, texels: u32) -> Vec<(usize, f64)> {
+    let passing = |x: f64| -> f64 {
+        let steps = 4096;
+        (0..steps)
+            .filter(|&i| {
+                let sx = x + (f64::from(i) + 0.5) / f64::from(steps);
+                let u = (sx - sx0) / (sx1 - sx0);
+                (u * f64::from(texels)).floor() as i64 % 2 == 0
+            })
+            .count() as f64
+            / f64::from(steps)
+    };
+    let mut out = Vec::new();
+    for y in 0..H as i64 {
+        for x in 0..W as i64 {
+            let (fx, fy) = (x as f64, y as f64);
+            if fx < sx0 + 1.0 || fx + 1.0 > sx1 - 1.0 || fy < ylo + 1.0 || fy + 1.0 > yhi - 1.0 {
+                continue;
+            }
+            out.push(((y * W as i64 + x) as usize, passing(fx)));
+        }
+    }
+    out
+}
+
 #[test]
 fn alpha_tested_layers_hide_each_other_per_sample() {
     // Two alpha-tested quads facing the camera, one behind the other and scaled so that both
@@ -1116,47 +1146,24 @@ fn alpha_tested_layers_hide_each_other_per_sample() {
         ];
         let out = render(&gpu, &s, "analytic");
         assert_clean(&gpu);
-        // The front quad's screen rectangle; u is affine in screen x (the quad faces the camera).
+        // The front quad's screen rectangle, and the front mask's passing share per pixel.
         let [sx0, sy0] = project(&s, [x0, y0, zf]);
         let [sx1, sy1] = project(&s, [x1, y1, zf]);
         let (ylo, yhi) = (sy0.min(sy1), sy0.max(sy1));
-        // The share of pixel column [x, x + 1) where the front mask passes, exactly.
-        let passing = |x: f64| -> f64 {
-            let steps = 4096;
-            (0..steps)
-                .filter(|&i| {
-                    let sx = x + (f64::from(i) + 0.5) / f64::from(steps);
-                    let u = (sx - sx0) / (sx1 - sx0);
-                    (u * f64::from(texels)).floor() as i64 % 2 == 0
-                })
-                .count() as f64
-                / f64::from(steps)
-        };
         let (mut worst, mut sum, mut n) = (0.0f64, 0.0f64, 0usize);
-        for y in 0..H as i64 {
-            for x in 0..W as i64 {
-                // Pixels inside the rectangle, a pixel from its sides (where the quads' own
-                // edges and the masks' wrap-around come in).
-                let (fx, fy) = (x as f64, y as f64);
-                if fx < sx0 + 1.0 || fx + 1.0 > sx1 - 1.0 || fy < ylo + 1.0 || fy + 1.0 > yhi - 1.0
-                {
+        let other = if complementary { cb } else { bg };
+        for (i, f) in columns_inside(sx0, sx1, ylo, yhi, texels) {
+            let got = rgb(&out, i);
+            for c in 0..3 {
+                let want = f * f64::from(cf[c]) + (1.0 - f) * f64::from(other[c]);
+                let contrast = f64::from((cf[c] - other[c]).abs());
+                if contrast < 0.5 {
                     continue;
                 }
-                let f = passing(fx);
-                let other = if complementary { cb } else { bg };
-                let i = (y * W as i64 + x) as usize;
-                let got = rgb(&out, i);
-                for c in 0..3 {
-                    let want = f * f64::from(cf[c]) + (1.0 - f) * f64::from(other[c]);
-                    let contrast = f64::from((cf[c] - other[c]).abs());
-                    if contrast < 0.5 {
-                        continue;
-                    }
-                    let e = (got[c] - want).abs() / contrast;
-                    worst = worst.max(e);
-                    sum += e;
-                    n += 1;
-                }
+                let e = (got[c] - want).abs() / contrast;
+                worst = worst.max(e);
+                sum += e;
+                n += 1;
             }
         }
         let mean = sum / n as f64;
@@ -1203,35 +1210,18 @@ fn an_alpha_tested_fragment_takes_the_colour_of_its_passing_texels_alone() {
     s.settings.ambient = [1.0; 3];
     let out = render(&gpu, &s, "analytic");
     assert_clean(&gpu);
+    // The quad's screen rectangle, and the share of each pixel's column over red texels.
     let [sx0, sy0] = project(&s, [x0, y0, z]);
     let [sx1, sy1] = project(&s, [x1, y1, z]);
     let (ylo, yhi) = (sy0.min(sy1), sy0.max(sy1));
-    // The share of pixel column [x, x + 1) over red texels, exactly.
-    let passing = |x: f64| -> f64 {
-        let steps = 4096;
-        (0..steps)
-            .filter(|&i| {
-                let sx = x + (f64::from(i) + 0.5) / f64::from(steps);
-                let u = (sx - sx0) / (sx1 - sx0);
-                (u * f64::from(texels)).floor() as i64 % 2 == 0
-            })
-            .count() as f64
-            / f64::from(steps)
-    };
     let (mut worst_red, mut sum_red, mut worst_blue, mut n) = (0.0f64, 0.0f64, 0.0f64, 0usize);
-    for y in 0..H as i64 {
-        for x in 0..W as i64 {
-            let (fx, fy) = (x as f64, y as f64);
-            if fx < sx0 + 1.0 || fx + 1.0 > sx1 - 1.0 || fy < ylo + 1.0 || fy + 1.0 > yhi - 1.0 {
-                continue;
-            }
-            let got = rgb(&out, (y * W as i64 + x) as usize);
-            let e = (got[0] - passing(fx)).abs();
-            worst_red = worst_red.max(e);
-            sum_red += e;
-            worst_blue = worst_blue.max(got[2]);
-            n += 1;
-        }
+    for (i, f) in columns_inside(sx0, sx1, ylo, yhi, texels) {
+        let got = rgb(&out, i);
+        let e = (got[0] - f).abs();
+        worst_red = worst_red.max(e);
+        sum_red += e;
+        worst_blue = worst_blue.max(got[2]);
+        n += 1;
     }
     let mean_red = sum_red / n as f64;
     eprintln!(
