@@ -244,7 +244,7 @@ impl GpuScene {
         }
         let mut texels = 0;
         for (i, t) in scene.textures.iter().enumerate() {
-            let bytes: u64 = t.levels.iter().map(|l| l.rgba.len() as u64).sum();
+            let bytes = t.bytes();
             e.image_bytes(
                 format!("texture[{i}] {}", t.name),
                 bytes,
@@ -261,7 +261,7 @@ impl GpuScene {
                 &scene.textures[mask as usize],
             );
             let t = albedo.unwrap_or(mask);
-            let bytes: u64 = t.levels.iter().map(|l| l.rgba.len() as u64).sum();
+            let bytes = t.bytes();
             let name = cbr_scene::Texture::alpha_coverage_name(albedo, mask);
             let i = scene.textures.len() + k;
             e.image_bytes(format!("texture[{i}] {name}"), bytes, t.width(), t.height());

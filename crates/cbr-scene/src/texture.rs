@@ -223,6 +223,11 @@ impl Texture {
         Texture::from_rgba8(name, n, n, rgba, true)
     }
 
+    /// Bytes of the whole mip chain (RGBA8).
+    pub fn bytes(&self) -> u64 {
+        self.levels.iter().map(|l| l.rgba.len() as u64).sum()
+    }
+
     pub fn width(&self) -> u32 {
         self.levels[0].width
     }
