@@ -170,6 +170,11 @@ vec2 mask_sample(int k) {
     return (vec2(float(k), float((k * 13) & 31)) + 0.5) / 32.0;
 }
 
+// The quadrant of the pixel that mask sample k lies in: x half + 2 x y half (8 samples each).
+int sample_quadrant(int k) {
+    return (k >> 4) | ((((k * 13) & 31) >> 4) << 1);
+}
+
 // Which of the mask samples lie in the polygon. A sample exactly on an edge goes to the polygon
 // on the positive side of the edge in its canonical direction (lower y, then lower x, first), so
 // of two polygons sharing an edge exactly one takes it, whatever their windings. `orient` is the

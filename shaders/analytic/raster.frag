@@ -51,6 +51,9 @@ layout(std430, set = 2, binding = BINDING_COUNTS) buffer Counts { uint counts[];
 layout(std430, set = 2, binding = BINDING_OCCLUDERS) buffer Occluders { uint occluders[]; };
 // A kept fragment's shading normal and point, for the resolve's lighting (surface.glsl).
 layout(std430, set = 2, binding = BINDING_SURFACES) buffer Surfaces { uvec2 surfaces[]; };
+// Its albedo's luminance in the pixel's four quadrants (4 x f16), for the resolve's albedo of
+// the part that shows (resolve.comp, shown_albedo).
+layout(std430, set = 2, binding = BINDING_QUADRANTS) buffer Quadrants { uvec2 quadrants[]; };
 #ifndef SELECT_PASS
 // The fragments beyond the K nearest that are not hidden, for the tail pass (tail.comp) to light
 // and sum into the tails (tail_record.glsl); the buffer's length is the capacity, and the count
@@ -155,7 +158,8 @@ vec4 texture_aniso(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
 // composites it through the transmittance of the alpha-tested fragments in front.
 #define ALPHA_SAMPLE_FILTER 0.0625
 uint alpha_test(uint geo_mask, vec2 uv, vec2 dx, vec2 dy, vec2 gx, vec2 gy, vec2 mean_point,
-                out float pass, out vec3 albedo) {
+                out float pass, out vec3 albedo, out vec4 quad_luma) {
+    quad_luma = vec4(1.0);
     if (geo_mask == 0u) {
         float a = textureGrad(mask_tex, uv, gx, gy).a;
         float ax = textureGrad(mask_tex, uv + gx, gx, gy).a;
@@ -172,6 +176,7 @@ uint alpha_test(uint geo_mask, vec2 uv, vec2 dx, vec2 dy, vec2 gx, vec2 gy, vec2
     uint passing = 0u;
     uint rest = geo_mask;
     vec4 sum = vec4(0.0);
+    vec4 qsum[4] = vec4[4](vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0));
     while (rest != 0u) {
         int k = findLSB(rest);
         rest &= rest - 1u;
@@ -181,6 +186,7 @@ uint alpha_test(uint geo_mask, vec2 uv, vec2 dx, vec2 dy, vec2 gx, vec2 gy, vec2
         if (c.a >= 0.5) {
             passing |= 1u << uint(k);
             sum += c;
+            qsum[sample_quadrant(k)] += c;
 #ifdef SELECT_PASS
             break;  // the select pass needs only whether any sample passes
 #endif
@@ -188,6 +194,11 @@ uint alpha_test(uint geo_mask, vec2 uv, vec2 dx, vec2 dy, vec2 gx, vec2 gy, vec2
     }
     pass = float(bitCount(passing)) / float(bitCount(geo_mask));
     albedo = sum.a > 0.0 ? sum.rgb / sum.a : vec3(1.0);
+    // Each quadrant's passing samples' albedo (the mean where the quadrant has none: it holds no
+    // sample of the mask, so the resolve never weighs it).
+    for (int q = 0; q < 4; ++q) {
+        quad_luma[q] = albedo_luma(qsum[q].a > 0.0 ? qsum[q].rgb / qsum[q].a : albedo);
+    }
     return passing;
 }
 
@@ -245,6 +256,8 @@ void main() {
     // passes nowhere is dropped before it takes a slot.
     float alpha_pass = 1.0;
     vec3 alpha_albedo = vec3(1.0);
+    // The albedo's luminance in the pixel's four quadrants (equal: untextured).
+    vec4 quad_luma = vec4(1.0);
     uint alpha_mask = 0u;
     uint geo_mask = 0u;
     // The plane's depth at the pixel's corners: over the covered part (inside the pixel) the
@@ -263,24 +276,30 @@ void main() {
     // sample's occluder is hidden at every sample (and behind an opaque fragment at the centre,
     // so native's layers do not need it either): it is not recorded for the tails. The kept
     // ones are written whatever their depth.
-    if (slot < 0) {
-        float near = max(max(zc4.x, zc4.y), max(zc4.z, zc4.w));
-        near = isnan(near) ? zhi : min(near, zhi);
-        float occ = 1e30;
-        for (uint k = 0u; k < uint(OCCLUDER_WORDS); ++k)
-            occ = min(occ, uintBitsToFloat(occluders[pixel * uint(OCCLUDER_WORDS) + k]));
-        // Strictly behind, by more than rounding: coplanar neighbours (abutting triangles of one
-        // surface) evaluate their corners' depths with different rounding, and neither hides
-        // the other.
-        if (near < occ * (1.0 - 1e-5)) discard;
-    }
+    //
+    // A kept fragment needs its quadrants' albedo (below) only where nearer fragments may hide
+    // part of it: not the pixel's nearest (slot 0: nearer ones, if any, are rare crossings) and
+    // not one hidden at every sample. The loop's bound is per lane, so a SIMD group of nearest
+    // fragments skips the occluder reads.
+    float near = max(max(zc4.x, zc4.y), max(zc4.z, zc4.w));
+    near = isnan(near) ? zhi : min(near, zhi);
+    float occ = 1e30;
+    int words = slot != 0 ? OCCLUDER_WORDS : 0;
+    for (int k = 0; k < words; ++k)
+        occ = min(occ, uintBitsToFloat(occluders[pixel * uint(OCCLUDER_WORDS) + uint(k)]));
+    // Strictly behind, by more than rounding: coplanar neighbours (abutting triangles of one
+    // surface) evaluate their corners' depths with different rounding, and neither hides the
+    // other.
+    bool hidden = slot != 0 && near < occ * (1.0 - 1e-5);
+    if (slot < 0 && hidden) discard;
+    bool need_quadrants = slot > 0 && !hidden;
 #endif
     // MAT_FEATURES (scene_types.glsl): only the texture paths of this pipeline's materials.
 #if (MAT_FEATURES & MAT_MASK) != 0
     if (mat.tex.y >= 0) {
         geo_mask = sample_mask(p, n, orient);
         alpha_mask = alpha_test(geo_mask, uv, dx, dy, gx, gy, cov.mean_point, alpha_pass,
-                                alpha_albedo);
+                                alpha_albedo, quad_luma);
         if (alpha_pass <= 0.0) discard;
     }
 #endif
@@ -343,7 +362,18 @@ void main() {
 #endif
     {
 #if (MAT_FEATURES & MAT_ALBEDO) != 0
-        if (mat.tex.x >= 0) albedo *= texture_aniso(albedo_tex, uv, gx, gy).rgb;
+        if (mat.tex.x >= 0) {
+            albedo *= texture_aniso(albedo_tex, uv, gx, gy).rgb;
+#ifndef SELECT_PASS
+            // Each quadrant's own footprint (half the pixel's, centred in it), for the part of
+            // the fragment that shows when nearer ones hide the rest (resolve.comp).
+            for (int q = 0; q < (need_quadrants ? 4 : 0); ++q) {
+                vec2 d = vec2(float(q & 1), float(q >> 1)) * 0.5 + 0.25 - cov.mean_point;
+                quad_luma[q] = albedo_luma(
+                    texture_aniso(albedo_tex, uv + dx * d.x + dy * d.y, 0.5 * gx, 0.5 * gy).rgb);
+            }
+#endif
+        }
 #endif
     }
     vec3 world = world_at(b);
@@ -405,6 +435,7 @@ void main() {
         planes_y[base + uint(slot)] = floatBitsToUint(plane.z);
         slots[base + uint(slot)] = uvec2(floatBitsToUint(coverage), mask);
         surfaces[base + uint(slot)] = pack_surface(nrm, cov.mean_point);
+        quadrants[base + uint(slot)] = uvec2(packHalf2x16(quad_luma.xy), packHalf2x16(quad_luma.zw));
         colors[base + uint(slot)] = uvec2(packHalf2x16(color.rg),
                                           (packHalf2x16(vec2(color.b, 0.0)) & 0xFFFFu) | (flags << 16u)
                                           | (uint(round(alpha_pass * 255.0)) << 24u));

@@ -28,6 +28,8 @@
 //    through the mean transmittance of its samples that no opaque winner in front of it holds,
 //    an opaque one through that of the samples it keeps. Then v is clamped to what nearer ones
 //    left, v = min(v, 1 - sum): colour += v c.
+//    A fragment some of whose samples are hidden shows only the rest of its mask: its albedo is
+//    scaled to their quadrants' (shown_albedo; the raster pass filtered it over the pixel).
 //    Only the fragments composited with v > 0 are lit, here, after the visibility (shaders
 //    /inc/shading.glsl's `shade` at the fragment's shading point: the albedo, normal and point
 //    the raster pass left in its slot, surface.glsl; the point's camera-relative position is its
@@ -61,6 +63,7 @@ layout(std430, set = 0, binding = BINDING_TAIL_MASKS) readonly buffer TailMasks 
 layout(std430, set = 0, binding = BINDING_PLANES) readonly buffer Planes { vec2 planes[]; };
 layout(std430, set = 0, binding = BINDING_PLANES_Y) readonly buffer PlanesY { float planes_y[]; };
 layout(std430, set = 0, binding = BINDING_SURFACES) readonly buffer Surfaces { uvec2 surfaces[]; };
+layout(std430, set = 0, binding = BINDING_QUADRANTS) readonly buffer Quadrants { uvec2 quadrants[]; };
 // The scene's set, for the lighting.
 layout(set = 1, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
 layout(std430, set = 1, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
@@ -95,10 +98,36 @@ float plane_depth(uint slot, vec2 q) {
     return p.x + p.y * (q.x - 0.5) + planes_y[slot] * (q.y - 0.5);
 }
 
-// The light of the fragment in `slot` (of object `object`) at pixel px.
-vec3 shade_slot(uint slot, uint object, ivec2 px) {
+// The albedo of the part of a fragment that shows, relative to its albedo over its mask: where
+// nearer fragments hide some of its samples (`kept` is the rest of `mask`), the mean of its
+// quadrants' albedo luminance over the kept samples against that over the mask. The raster pass
+// filtered the albedo over the pixel's footprint; a surface seen through a gap between nearer
+// ones (the floor between a fence's slats, behind leaves) shows only the part of it in the gap.
+float shown_albedo(uint slot, uint mask, uint kept) {
+    if (kept == mask || kept == 0u) return 1.0;
+    uvec2 packed = quadrants[slot];
+    vec4 luma = vec4(unpackHalf2x16(packed.x), unpackHalf2x16(packed.y));
+    if (all(equal(luma, luma.xxxx))) return 1.0;  // one albedo over the pixel (untextured)
+    vec4 in_mask = vec4(0.0);
+    vec4 in_kept = vec4(0.0);
+    uint rest = mask;
+    while (rest != 0u) {
+        int s = findLSB(rest);
+        rest &= rest - 1u;
+        int q = sample_quadrant(s);
+        in_mask[q] += 1.0;
+        if (((kept >> uint(s)) & 1u) != 0u) in_kept[q] += 1.0;
+    }
+    float all_luma = dot(in_mask, luma) / dot(in_mask, vec4(1.0));
+    float shown_luma = dot(in_kept, luma) / dot(in_kept, vec4(1.0));
+    return all_luma > 0.0 ? shown_luma / all_luma : 1.0;
+}
+
+// The light of the fragment in `slot` (of object `object`) at pixel px, its albedo scaled by
+// `albedo_scale` (shown_albedo).
+vec3 shade_slot(uint slot, uint object, ivec2 px, float albedo_scale) {
     uvec2 cl = colors[slot];
-    vec3 albedo = vec3(unpackHalf2x16(cl.x), unpackHalf2x16(cl.y).x);
+    vec3 albedo = vec3(unpackHalf2x16(cl.x), unpackHalf2x16(cl.y).x) * albedo_scale;
     vec3 nrm;
     vec2 point;
     unpack_surface(surfaces[slot], nrm, point);
@@ -233,6 +262,7 @@ void main() {
     flags = 0u;
     visible = 0u;
     float shown[K_SLOTS];  // the composited v of the fragments in `show`
+    float scale[K_SLOTS];  // and their shown_albedo
     uint show = 0u;
     for (int k = 0; k < count; ++k) {
         uint fflags = fl[k];
@@ -263,6 +293,7 @@ void main() {
         v = min(v, 1.0 - sum);
         if (v <= 0.0) continue;
         shown[k] = v;
+        scale[k] = shown_albedo(base + uint(k), masks[k], holes ? masks[k] : masks[k] & ~lost[k]);
         show |= 1u << uint(k);
         sum += v;
         ++visible;
@@ -274,7 +305,7 @@ void main() {
     while (show != 0u) {
         int k = findLSB(show);
         show &= show - 1u;
-        vec3 c = shade_slot(base + uint(k), objs[k], px);
+        vec3 c = shade_slot(base + uint(k), objs[k], px, scale[k]);
         if (any(isnan(c)) || any(isinf(c))) {
             fl[k] |= FRAG_HOLES | FRAG_NONFINITE;
             area[k] = 0.0;

@@ -7,6 +7,11 @@
 #ifndef SURFACE_GLSL
 #define SURFACE_GLSL
 
+// Luminance of an albedo (Rec. 709 weights), for the quadrants' relative albedo.
+float albedo_luma(vec3 c) {
+    return dot(c, vec3(0.2126, 0.7152, 0.0722));
+}
+
 // Octahedral encoding of a unit vector (Meyer et al. 2010) into [-1, 1]^2, and back.
 vec2 oct_encode(vec3 n) {
     n /= abs(n.x) + abs(n.y) + abs(n.z);

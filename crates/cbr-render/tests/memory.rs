@@ -264,6 +264,6 @@ fn what_cannot_fit_is_refused_before_anything_is_allocated() {
     // analytic keeps its own refusal (its lists, fitted to maxStorageBufferRange).
     let settings = RenderSettings::parse(8192, 8192, "analytic:frags=8").expect("spec");
     let err = Renderer::estimate(gpu.caps(), &scene, &settings).expect_err("refused");
-    assert!(err.contains("23622320128 bytes"), "{err}");
+    assert!(err.contains("27917287424 bytes"), "{err}");
     assert_clean(&gpu);
 }

@@ -79,8 +79,13 @@ pub const PLANE_BYTES: u64 = PLANE_XY_BYTES + PLANE_Y_BYTES;
 /// A kept fragment's shading normal (octahedral, 2 x snorm16) and shading point in the pixel
 /// (2 x unorm16), from the raster pass to the resolve's lighting (shaders/analytic/surface.glsl).
 pub const SURFACE_BYTES: u64 = 8;
+/// A kept fragment's albedo luminance in each quadrant of the pixel (4 x f16), by which the
+/// resolve takes the albedo of the part that shows when other fragments hide the rest
+/// (shaders/analytic/resolve.comp, `shown_albedo`).
+pub const QUADRANT_BYTES: u64 = 8;
 /// All of one kept fragment's bytes.
-pub const FRAGMENT_BYTES: u64 = KEY_BYTES + SLOT_BYTES + PLANE_BYTES + SURFACE_BYTES;
+pub const FRAGMENT_BYTES: u64 =
+    KEY_BYTES + SLOT_BYTES + PLANE_BYTES + SURFACE_BYTES + QUADRANT_BYTES;
 /// Per pixel and tail, the fixed-point sums of the fragments beyond the K nearest (4 x u64); two
 /// tails (facing the camera, facing away), each in its own buffer.
 pub const TAIL_BYTES: u64 = 32;
@@ -232,7 +237,8 @@ pub fn plan_lists(
     let widest = KEY_BYTES
         .max(HALF_SLOT_BYTES)
         .max(PLANE_XY_BYTES)
-        .max(SURFACE_BYTES);
+        .max(SURFACE_BYTES)
+        .max(QUADRANT_BYTES);
     let fit = (u64::from(max_range) / (px * widest).max(1)).min(u64::from(MAX_FRAGS)) as u32;
     let refuse = |k: u32| {
         format!(
@@ -254,7 +260,7 @@ pub fn plan_lists(
 }
 
 /// Set 2 of the raster passes (set 0: the scene's, set 1: the material's).
-pub const RASTER_BINDINGS: [BindingDesc; 10] = {
+pub const RASTER_BINDINGS: [BindingDesc; 11] = {
     use DescriptorKind::StorageBuffer as B;
     [
         BindingDesc::one("keys", 0, B),
@@ -267,6 +273,7 @@ pub const RASTER_BINDINGS: [BindingDesc; 10] = {
         BindingDesc::one("surfaces", 7, B),
         BindingDesc::one("tail_records", 8, B),
         BindingDesc::one("tail_count", 9, B),
+        BindingDesc::one("quadrants", 10, B),
     ]
 };
 
@@ -282,7 +289,7 @@ pub const TAIL_BINDINGS: [BindingDesc; 5] = {
     ]
 };
 
-pub const RESOLVE_BINDINGS: [BindingDesc; 13] = {
+pub const RESOLVE_BINDINGS: [BindingDesc; 14] = {
     use DescriptorKind::{StorageBuffer as B, StorageImage as I};
     [
         BindingDesc::one("keys", 0, B),
@@ -298,6 +305,7 @@ pub const RESOLVE_BINDINGS: [BindingDesc; 13] = {
         BindingDesc::one("tail_back", 10, B),
         BindingDesc::one("tail_masks", 11, B),
         BindingDesc::one("surfaces", 12, B),
+        BindingDesc::one("quadrants", 13, B),
     ]
 };
 
@@ -351,6 +359,7 @@ pub struct Analytic {
     planes: Buffer,
     planes_y: Buffer,
     surfaces: Buffer,
+    quadrants: Buffer,
     /// Records of the fragments beyond the K (grows: [`Analytic::grow_tail_records`]), their
     /// count, and the count read back.
     tail_records: Buffer,
@@ -380,6 +389,7 @@ impl Analytic {
         e.storage_buffer("analytic.planes", kept * PLANE_XY_BYTES, false);
         e.storage_buffer("analytic.planes_y", kept * PLANE_Y_BYTES, false);
         e.storage_buffer("analytic.surfaces", kept * SURFACE_BYTES, false);
+        e.storage_buffer("analytic.quadrants", kept * QUADRANT_BYTES, false);
         e.storage_buffer("analytic.counts_buffer", px * 4, false);
         e.storage_buffer("analytic.tail", px * TAIL_BYTES, false);
         e.storage_buffer("analytic.tail_back", px * TAIL_BYTES, false);
@@ -535,6 +545,7 @@ impl Analytic {
         let planes = buffer("analytic.planes", kept * PLANE_XY_BYTES, storage)?;
         let planes_y = buffer("analytic.planes_y", kept * PLANE_Y_BYTES, storage)?;
         let surfaces = buffer("analytic.surfaces", kept * SURFACE_BYTES, storage)?;
+        let quadrants = buffer("analytic.quadrants", kept * QUADRANT_BYTES, storage)?;
         let counts_buf = buffer("analytic.counts_buffer", px * 4, storage)?;
         let tail = buffer("analytic.tail", px * TAIL_BYTES, storage)?;
         let tail_back = buffer("analytic.tail_back", px * TAIL_BYTES, storage)?;
@@ -599,6 +610,7 @@ impl Analytic {
                 &surfaces,
                 &tail_records,
                 &tail_count,
+                &quadrants,
             ]),
         )?;
         let tail_set = DescriptorSet::new(
@@ -625,6 +637,7 @@ impl Analytic {
                 Write::Buffer(10, &tail_back),
                 Write::Buffer(11, &tail_masks),
                 Write::Buffer(12, &surfaces),
+                Write::Buffer(13, &quadrants),
             ],
         )?;
         let rb = |name: &str, image: &Image| Readback::for_image(gpu, name, image);
@@ -663,6 +676,7 @@ impl Analytic {
             planes,
             planes_y,
             surfaces,
+            quadrants,
             tail_records,
             max_range,
             tail_count,
@@ -727,6 +741,7 @@ impl Analytic {
                 &self.tail_back,
                 &self.tail_masks,
                 &self.surfaces,
+                &self.quadrants,
             ] {
                 cmd.use_buffer(buf, Access::ComputeSampled);
             }
@@ -832,6 +847,7 @@ impl Analytic {
             &self.surfaces,
             &self.tail_records,
             &self.tail_count,
+            &self.quadrants,
         ] {
             cmd.use_buffer(buf, Access::FragmentStorageWrite);
         }
@@ -954,7 +970,7 @@ impl Technique for Analytic {
 
     fn target_bytes(&self) -> u64 {
         let px = u64::from(self.color.width) * u64::from(self.color.height);
-        // K x (key + slot + plane + surface) + the fragment count (4), tails (2 x 32) and their
+        // K x (key + slot + plane + surface + quadrants) + the fragment count (4), tails (2 x 32) and their
         // masks (8), the occluder words (4 x 32 / group) + colour (8), coverage (4), counts (16),
         // depth (4), velocity (8), IDs (8); and the tail records the buffer holds now.
         self.tail_records.size()
