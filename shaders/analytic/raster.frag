@@ -276,23 +276,17 @@ void main() {
     // sample's occluder is hidden at every sample (and behind an opaque fragment at the centre,
     // so native's layers do not need it either): it is not recorded for the tails. The kept
     // ones are written whatever their depth.
-    //
-    // A kept fragment needs its quadrants' albedo (below) only where nearer fragments may hide
-    // part of it: not the pixel's nearest (slot 0: nearer ones, if any, are rare crossings) and
-    // not one hidden at every sample. The loop's bound is per lane, so a SIMD group of nearest
-    // fragments skips the occluder reads.
     float near = max(max(zc4.x, zc4.y), max(zc4.z, zc4.w));
     near = isnan(near) ? zhi : min(near, zhi);
-    float occ = 1e30;
-    int words = slot != 0 ? OCCLUDER_WORDS : 0;
-    for (int k = 0; k < words; ++k)
-        occ = min(occ, uintBitsToFloat(occluders[pixel * uint(OCCLUDER_WORDS) + uint(k)]));
-    // Strictly behind, by more than rounding: coplanar neighbours (abutting triangles of one
-    // surface) evaluate their corners' depths with different rounding, and neither hides the
-    // other.
-    bool hidden = slot != 0 && near < occ * (1.0 - 1e-5);
-    if (slot < 0 && hidden) discard;
-    bool need_quadrants = slot > 0 && !hidden;
+    if (slot < 0) {
+        float occ = 1e30;
+        for (uint k = 0u; k < uint(OCCLUDER_WORDS); ++k)
+            occ = min(occ, uintBitsToFloat(occluders[pixel * uint(OCCLUDER_WORDS) + k]));
+        // Strictly behind, by more than rounding: coplanar neighbours (abutting triangles of one
+        // surface) evaluate their corners' depths with different rounding, and neither hides
+        // the other.
+        if (near < occ * (1.0 - 1e-5)) discard;
+    }
 #endif
     // MAT_FEATURES (scene_types.glsl): only the texture paths of this pipeline's materials.
 #if (MAT_FEATURES & MAT_MASK) != 0
@@ -352,6 +346,8 @@ void main() {
     // Fragments beyond their pixel's K nearest are recorded for the tails.
     if (slot >= 0 || counts[pixel] > uint(K_SLOTS)) {
     // (the payload block is not indented: it is the whole surface path)
+    // The covered part's mask samples (an alpha-tested fragment's: above).
+    if (mat.tex.y < 0) geo_mask = sample_mask(p, n, orient);
     vec3 albedo = mat.kd.rgb;
     // An alpha-tested fragment's albedo is that of its passing part (alpha_test); the others'
     // is filtered over the pixel's footprint.
@@ -366,7 +362,21 @@ void main() {
             albedo *= texture_aniso(albedo_tex, uv, gx, gy).rgb;
 #ifndef SELECT_PASS
             // Each quadrant's own footprint (half the pixel's, centred in it), for the part of
-            // the fragment that shows when nearer ones hide the rest (resolve.comp).
+            // the fragment that shows when nearer ones hide the rest (resolve.comp). Needed only
+            // where a surface strictly in front (an occluder word: its farthest depth in the
+            // pixel nearer than this fragment's nearest) holds some of the fragment's samples
+            // but not all: not for the pixel's nearest fragment (slot 0), nor for abutting
+            // triangles of one surface, nor for a fragment hidden everywhere. Each lane's loops
+            // end with its own work, so a SIMD group with none skips them.
+            uint in_front = 0u;
+            uint rest = slot > 0 ? geo_mask : 0u;
+            while (rest != 0u) {
+                int k = findLSB(rest);
+                rest &= rest - 1u;
+                uint word = pixel * uint(OCCLUDER_WORDS) + uint(k / OCCLUDER_GROUP);
+                if (near < uintBitsToFloat(occluders[word]) * (1.0 - 1e-5)) in_front |= 1u << uint(k);
+            }
+            bool need_quadrants = in_front != 0u && in_front != geo_mask;
             for (int q = 0; q < (need_quadrants ? 4 : 0); ++q) {
                 vec2 d = vec2(float(q & 1), float(q >> 1)) * 0.5 + 0.25 - cov.mean_point;
                 quad_luma[q] = albedo_luma(
@@ -402,7 +412,6 @@ void main() {
 
     // The mask: for the resolve's per-sample visibility (a slot) or the tail's (beyond the K), and
     // the seed's vertex columns.
-    if (mat.tex.y < 0) geo_mask = sample_mask(p, n, orient);
     uint mask = mat.tex.y >= 0 ? alpha_mask : geo_mask;
     float coverage = cov.area;
     uint flags = 0u;
