@@ -1066,6 +1066,26 @@ fn textured_quad(name: &str, v: [[f32; 3]; 4], uv: [[f32; 2]; 4], material: u32)
     o
 }
 
+/// The rectangle (x0, x1, y0, y1) of `stacked_quads`' front quad and its height.
+const STACK_RECT: (f32, f32, f32, f32) = (-2.2, 2.2, -1.5, 1.5);
+const STACK_FRONT_Z: f32 = 0.5;
+
+/// Two textured quads facing the camera (UVs over [0, 1]^2): the front one (material 0) at
+/// `STACK_FRONT_Z`, and one behind it at height 0 (material 1), scaled to project onto the same
+/// screen rectangle.
+fn stacked_quads() -> Vec<Object> {
+    let ((x0, x1, y0, y1), zf, zb) = (STACK_RECT, STACK_FRONT_Z, 0.0f32);
+    let k = (5.0 - zb) / (5.0 - zf);
+    let corners = |z: f32, scale: f32| {
+        [[x0, y0], [x1, y0], [x1, y1], [x0, y1]].map(|[x, y]| [x * scale, y * scale, z])
+    };
+    let uvs = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+    vec![
+        textured_quad("front", corners(zf, 1.0), uvs, 0),
+        textured_quad("back", corners(zb, k), uvs, 1),
+    ]
+}
+
 /// Columns of texels `texels` wide, alternately passing (alpha 255) and failing (alpha 0), the
 /// first passing unless `inverted`; 2 rows.
 fn stripe_mask(name: &str, texels: u32, inverted: bool) -> Texture {
@@ -1119,27 +1139,14 @@ fn alpha_tested_layers_hide_each_other_per_sample() {
     // a pixel's colour.
     let gpu = gpu();
     let texels = 32u32;
-    let (x0, x1, y0, y1) = (-2.2f32, 2.2f32, -1.5f32, 1.5f32);
-    let (zf, zb) = (0.5f32, 0.0f32);
-    let k = (5.0 - zb) / (5.0 - zf);
-    let corners = |z: f32, scale: f32| {
-        [[x0, y0], [x1, y0], [x1, y1], [x0, y1]].map(|[x, y]| [x * scale, y * scale, z])
-    };
-    let uvs = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+    let ((x0, x1, y0, y1), zf) = (STACK_RECT, STACK_FRONT_Z);
     let (cf, cb, bg) = ([1.0, 0.9, 0.1], [0.1, 0.05, 1.0], [0.02, 0.02, 0.02]);
     for complementary in [false, true] {
         let mut front = emissive("front", cf);
         front.alpha = AlphaSource::Texture { tex: 0, channel: 3 };
         let mut back = emissive("back", cb);
         back.alpha = AlphaSource::Texture { tex: 1, channel: 3 };
-        let mut s = scene(
-            vec![
-                textured_quad("front", corners(zf, 1.0), uvs, 0),
-                textured_quad("back", corners(zb, k), uvs, 1),
-            ],
-            vec![front, back],
-            bg,
-        );
+        let mut s = scene(stacked_quads(), vec![front, back], bg);
         s.textures = vec![
             stripe_mask("front", texels, false),
             stripe_mask("back", texels, complementary),
@@ -1261,26 +1268,13 @@ fn a_surface_seen_through_gaps_takes_the_albedo_of_the_part_that_shows() {
             .collect();
         Texture::from_rgba8("stripes", back_texels, 2, rgba, false)
     };
-    let (x0, x1, y0, y1) = (-2.2f32, 2.2f32, -1.5f32, 1.5f32);
-    let (zf, zb) = (0.5f32, 0.0f32);
-    let k = (5.0 - zb) / (5.0 - zf);
-    let corners = |z: f32, scale: f32| {
-        [[x0, y0], [x1, y0], [x1, y1], [x0, y1]].map(|[x, y]| [x * scale, y * scale, z])
-    };
-    let uvs = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+    let ((x0, x1, y0, y1), zf) = (STACK_RECT, STACK_FRONT_Z);
     let mut front = emissive("front", [1.0, 0.0, 0.0]);
     front.alpha = AlphaSource::Texture { tex: 0, channel: 3 };
     let mut back = Material::named("back");
     back.kd = [1.0; 3];
     back.kd_tex = Some(1);
-    let mut s = scene(
-        vec![
-            textured_quad("front", corners(zf, 1.0), uvs, 0),
-            textured_quad("back", corners(zb, k), uvs, 1),
-        ],
-        vec![front, back],
-        [0.0; 3],
-    );
+    let mut s = scene(stacked_quads(), vec![front, back], [0.0; 3]);
     s.textures = vec![stripe_mask("front", front_texels, false), back_texture];
     s.settings.ambient = [1.0; 3];
     let out = render(&gpu, &s, "analytic");
