@@ -172,7 +172,8 @@ vec2 mask_sample(int k) {
 
 // The quadrant of the pixel that mask sample k lies in: x half + 2 x y half (8 samples each).
 int sample_quadrant(int k) {
-    return (k >> 4) | ((((k * 13) & 31) >> 4) << 1);
+    ivec2 half_ = ivec2(mask_sample(k) * 2.0);
+    return half_.x + 2 * half_.y;
 }
 
 // Which of the mask samples lie in the polygon. A sample exactly on an edge goes to the polygon

@@ -104,7 +104,7 @@ float plane_depth(uint slot, vec2 q) {
 // filtered the albedo over the pixel's footprint; a surface seen through a gap between nearer
 // ones (the floor between a fence's slats, behind leaves) shows only the part of it in the gap.
 float shown_albedo(uint slot, uint mask, uint kept) {
-    if (kept == mask || kept == 0u) return 1.0;
+    if (kept == mask) return 1.0;
     uvec2 packed = quadrants[slot];
     vec4 luma = vec4(unpackHalf2x16(packed.x), unpackHalf2x16(packed.y));
     if (all(equal(luma, luma.xxxx))) return 1.0;  // one albedo over the pixel (untextured)
@@ -271,9 +271,11 @@ void main() {
         if ((fflags & FRAG_NONFINITE) != 0u) flags |= FLAG_NONFINITE;
         bool holes = (fflags & (FRAG_HOLES | FRAG_NONFINITE)) == FRAG_HOLES;
         float v = vis[k];
+        // The samples it shows through: an alpha-tested one's whole mask, an opaque one's kept
+        // samples (its mask where it lost them all: a fragment settled by the occlusion sum).
+        uint keep = holes ? masks[k] : masks[k] & ~lost[k];
+        if (keep == 0u) keep = masks[k];
         if (holes || any_holes) {
-            uint keep = holes ? masks[k] : masks[k] & ~lost[k];
-            if (keep == 0u) keep = masks[k];
             float t = 0.0;
             uint n = 0u;
             uint rest = keep;
@@ -293,7 +295,7 @@ void main() {
         v = min(v, 1.0 - sum);
         if (v <= 0.0) continue;
         shown[k] = v;
-        scale[k] = shown_albedo(base + uint(k), masks[k], holes ? masks[k] : masks[k] & ~lost[k]);
+        scale[k] = shown_albedo(base + uint(k), masks[k], keep);
         show |= 1u << uint(k);
         sum += v;
         ++visible;
