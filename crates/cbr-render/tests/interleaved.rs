@@ -772,6 +772,42 @@ fn implicit_equals_the_split() {
     assert_clean(&gpu);
 }
 
+/// `ours`' same-surface thresholds reach the filter: `normal=C` and `plane=T` at their defaults
+/// give the default's frame bit for bit; tighter ones make more pixels shade subsets themselves
+/// (the demo has curved and creased surfaces within one object), looser ones fewer.
+#[test]
+fn the_same_surface_thresholds_move_the_fallback() {
+    let gpu = gpu();
+    let shaders = cbr_render::shader_library();
+    let mut s = cbr_scene::builtin("demo").expect("demo");
+    (s.settings.width, s.settings.height) = (96, 54);
+    let base = "interleaved:4x4:vpls=256:debug";
+    let fallback = |out: &FrameOutput| -> u64 {
+        let i = out.interleaved.as_ref().expect("debug layers");
+        i.fallback.iter().map(|&f| u64::from(f)).sum()
+    };
+    let default = render(&gpu, &shaders, &s, base);
+    let same = render(&gpu, &shaders, &s, &format!("{base}:normal=0.9:plane=0.02"));
+    let diff = compare(base, &default, &same);
+    assert_eq!(diff.max_ulps, 0, "the defaults spelled out: {diff:?}");
+    assert_eq!(fallback(&default), fallback(&same));
+    let n0 = fallback(&default);
+    for (params, more) in [
+        ("normal=0.99", true),
+        ("plane=0.002", true),
+        ("normal=-1:plane=1000", false),
+    ] {
+        let got = render(&gpu, &shaders, &s, &format!("{base}:{params}"));
+        let n = fallback(&got);
+        println!("{params}: {n} subsets shaded by their pixels, default {n0}");
+        assert!(
+            if more { n > n0 } else { n < n0 },
+            "{params}: {n} against {n0}"
+        );
+    }
+    assert_clean(&gpu);
+}
+
 /// Mean absolute difference of the colour channels, over all pixels and over `mask`.
 fn error(a: &FrameOutput, b: &FrameOutput, mask: &[bool]) -> (f64, f64) {
     let (mut all, mut masked, mut count) = (0.0, 0.0, 0usize);
@@ -862,6 +898,14 @@ fn bad_tiles_and_counts_are_refused() {
         ("interleaved:4x4:enough=17", "K from 1 to 16"),
         ("interleaved:2x2:enough=0", "K from 1 to 4"),
         ("interleaved:4x4:implicit:floor", "`implicit` does not have"),
+        ("interleaved:4x4:normal=1.5", "a cosine from -1 to 1"),
+        ("interleaved:4x4:normal=x", "a cosine from -1 to 1"),
+        ("interleaved:4x4:plane=0", "a positive share"),
+        ("interleaved:4x4:plane=inf", "a positive share"),
+        (
+            "interleaved:4x4:box:normal=0.95",
+            "same-surface test of the `ours` filter",
+        ),
         (
             "interleaved:4x4:box:exact-edges",
             "a variant of the `ours` filter",
@@ -876,6 +920,7 @@ fn bad_tiles_and_counts_are_refused() {
     assert!(Spec::parse("interleaved:4x4:raw:none").is_ok());
     assert!(Spec::parse("interleaved:8x8:enough=32:search=1:implicit").is_ok());
     assert!(Spec::parse("interleaved:4x4:exact-edges:search=1").is_ok());
+    assert!(Spec::parse("interleaved:4x4:normal=0.98:plane=0.01:direct").is_ok());
     let err = Spec::parse("interleaved:4x4:exact-edges=4").expect_err("R = 4");
     assert!(err.contains("R from 0 to 3"), "{err}");
 }

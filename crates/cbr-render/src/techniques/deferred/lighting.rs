@@ -85,6 +85,9 @@ pub struct Interleaving<'a> {
     pub exact_edges: u32,
     /// The ENOUGH define (`ours` only): found subsets that spare the fallback.
     pub enough: u32,
+    /// The SAME_NORMAL_COS and PLANE_TOLERANCE defines (`ours` only): its same-surface test.
+    pub same_normal_cos: f32,
+    pub plane_tolerance: f32,
     /// The FILTER define: 0 none (each pixel its own subset), 1 box over the M x N window,
     /// 2 ours (geometry-aware), 3 seed (the image is already the seed's blur).
     pub filter: u32,
@@ -142,6 +145,9 @@ impl LightingPass {
             ] {
                 defines.push((k.into(), v.to_string()));
             }
+            // `{:?}` keeps the decimal point (0.9, 1.0, 1e-5): a GLSL float literal.
+            defines.push(("SAME_NORMAL_COS".into(), format!("{:?}", i.same_normal_cos)));
+            defines.push(("PLANE_TOLERANCE".into(), format!("{:?}", i.plane_tolerance)));
             if i.debug.is_some() {
                 defines.push(("DEBUG".into(), "1".into()));
             }

@@ -61,6 +61,11 @@ pub fn subset_range(k: u32, count: u32, subsets: u32) -> std::ops::Range<usize> 
 
 /// The widest band `exact-edges=R` shades exactly.
 pub const MAX_EXACT_EDGES: u32 = 3;
+/// `ours`' same-surface test (filter.glsl): the least dot of two normals on one surface
+/// (`normal=C`), and the plane distance as a share of p's distance (`plane=T`). The defaults are
+/// the seed's edge thresholds; docs/interleaved.md sweeps both.
+pub const DEFAULT_SAME_NORMAL_COS: f32 = 0.9;
+pub const DEFAULT_PLANE_TOLERANCE: f32 = 0.02;
 /// `ours`' search beyond the window unless `search=K` says otherwise.
 pub const DEFAULT_SEARCH: u32 = 0;
 /// VPLs unless `vpls=N` says otherwise.
@@ -114,6 +119,12 @@ pub struct InterleavedConfig {
     /// side 2R + 1, shades every subset itself: the reference's value in a band of R pixels
     /// along the boundaries, at the cost of M N subsets there.
     pub exact_edges: u32,
+    /// `normal=C` (`ours`): a window pixel is on p's surface only where the two normals' dot is
+    /// at least C (default [`DEFAULT_SAME_NORMAL_COS`]).
+    pub same_normal_cos: f32,
+    /// `plane=T` (`ours`): ... and it lies within T times p's distance from the camera of p's
+    /// tangent plane (default [`DEFAULT_PLANE_TOLERANCE`]).
+    pub plane_tolerance: f32,
     /// `floor`: also run a copy kernel moving the split and gather passes' bytes (their
     /// bandwidth floor), timed as `interleaved.copy_floor`.
     pub floor: bool,
@@ -153,6 +164,9 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
     let mut exact_edges = 0;
     let mut search = DEFAULT_SEARCH;
     let mut enough = None;
+    let mut same_normal_cos = DEFAULT_SAME_NORMAL_COS;
+    let mut plane_tolerance = DEFAULT_PLANE_TOLERANCE;
+    let mut surface_test = None;
     let mut light_params = Vec::new();
     for p in rest {
         let key = p.split_once('=').map_or(*p, |(k, _)| k);
@@ -209,6 +223,22 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
                 })?);
                 None
             }
+            "normal" | "plane" => {
+                let v = p.split_once('=').and_then(|(_, v)| v.parse::<f32>().ok());
+                if key == "normal" {
+                    same_normal_cos = v.filter(|c| (-1.0..=1.0).contains(c)).ok_or_else(|| {
+                        format!("interleaved `{p}`: normal=C with C a cosine from -1 to 1")
+                    })?;
+                } else {
+                    plane_tolerance = v.filter(|t| *t > 0.0 && t.is_finite()).ok_or_else(|| {
+                        format!(
+                            "interleaved `{p}`: plane=T with T a positive share of the distance"
+                        )
+                    })?;
+                }
+                surface_test = Some(*p);
+                None
+            }
             "vpls" | "points" | "rsm" | "reach" | "clamp" => {
                 light_params.push(*p);
                 None
@@ -218,8 +248,8 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
                     "interleaved",
                     p,
                     "vpls=N, points=N, rsm=R, reach=D, clamp=D, one filter of none (raw), box, \
-                     ours, seed, and search=0|1, enough=K, exact-edges[=R], direct, implicit, debug, \
-                     floor",
+                     ours, seed, and search=0|1, enough=K, exact-edges[=R], normal=C, plane=T, \
+                     direct, implicit, debug, floor",
                 ));
             }
         };
@@ -249,6 +279,12 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
         ));
     }
     let filter = filter.unwrap_or(Filter::Ours);
+    if let Some(p) = surface_test.filter(|_| filter != Filter::Ours) {
+        return Err(format!(
+            "interleaved: `{p}` sets the same-surface test of the `ours` filter, not of `{}`",
+            filter.name()
+        ));
+    }
     if exact_edges > 0 && filter != Filter::Ours {
         return Err(format!(
             "interleaved: `exact-edges` is a variant of the `ours` filter, not of `{}`",
@@ -271,6 +307,8 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
         search,
         enough: enough.unwrap_or(m * n),
         exact_edges,
+        same_normal_cos,
+        plane_tolerance,
         floor,
         direct,
         lights,
@@ -384,6 +422,8 @@ fn interleaving<'a>(
         search: config.search,
         enough: config.enough,
         exact_edges: config.exact_edges,
+        same_normal_cos: config.same_normal_cos,
+        plane_tolerance: config.plane_tolerance,
         filter: config.filter as u32,
         box_rows: config.box_rows(),
         irradiance: split.output(),
