@@ -9,7 +9,7 @@
 //   FILTER 2 (`ours`): for each subset, the window's pixel holding it if it lies on p's surface
 //     (same object, normals' dot at least SAME_NORMAL_COS, `normal=C`, default 0.9: ~25
 //     degrees; on p's tangent plane within PLANE_TOLERANCE, `plane=T`, default 2%, of p's
-//     distance),
+//     distance; both defines set by the host, crates/cbr-render's interleaved module),
 //     with SEARCH 1 else the nearest pixel holding it one period (M or N pixels) further that does;
 //     when at least ENOUGH subsets were found (`enough=K`), their mean; otherwise every subset
 //     with no such pixel is shaded at p itself (ENOUGH = M N, the default: always). Every subset
@@ -28,12 +28,6 @@ layout(set = 0, binding = BINDING_SPECULAR) uniform sampler2D g_specular;
 layout(set = 0, binding = BINDING_DEBUG_BITS, r32ui) uniform writeonly uimage2D debug_bits;
 #endif
 
-#ifndef SAME_NORMAL_COS
-#define SAME_NORMAL_COS 0.9
-#endif
-#ifndef PLANE_TOLERANCE
-#define PLANE_TOLERANCE 0.02
-#endif
 const uint DBG_EDGE = 1u << 6;
 const uint DBG_FALLBACK_SHIFT = 8u;
 const uint DBG_ROUNDTRIP = 1u << 16;
