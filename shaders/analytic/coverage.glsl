@@ -56,7 +56,8 @@ float diff_products(float a, float b, float c, float d) {
 // within the edge's y range: x(y) clamped to [0, 1], integrated over y. Endpoints come as
 // double-f32 pairs (hi, lo: the exact pixel-local coordinate is hi + lo), since a far vertex's
 // local coordinate may not fit one f32 exactly.
-vec3 edge_integrals(vec2 a, vec2 al, vec2 b, vec2 bl) {
+vec3 edge_integrals(vec2 a, vec2 al, vec2 b, vec2 bl, out vec3 second) {
+    second = vec3(0.0);
     precise float y0 = max(a.y, 0.0);
     precise float y1 = min(b.y, 1.0);
     if (!(y0 < y1)) return vec3(0.0);
@@ -98,6 +99,13 @@ vec3 edge_integrals(vec2 a, vec2 al, vec2 b, vec2 bl) {
         r.x += l * (u + v) * 0.5;
         r.y += l * (u * u + u * v + v * v) * (1.0 / 6.0);
         r.z += l * (ya * (2.0 * u + v) + yb * (u + 2.0 * v)) * (1.0 / 6.0);
+        // Second moments (covered_footprint; not precise, and dropped by the compiler where
+        // unused): integrals of c^3 / 3, y^2 c and y c^2 / 2.
+        second.x += l * (u + v) * (u * u + v * v) * (1.0 / 12.0);
+        second.y += l * (ya * ya * (3.0 * u + v) + 2.0 * ya * yb * (u + v) + yb * yb * (u + 3.0 * v))
+            * (1.0 / 12.0);
+        second.z += l * (ya * (3.0 * u * u + 2.0 * u * v + v * v) + yb * (u * u + 2.0 * u * v + 3.0 * v * v))
+            * (1.0 / 24.0);
     }
     return r;
 }
@@ -105,6 +113,7 @@ vec3 edge_integrals(vec2 a, vec2 al, vec2 b, vec2 bl) {
 struct PixelCoverage {
     float area;     // exact area of the polygon inside the pixel, [0, 1]
     vec2 mean_point;  // centroid of that part (pixel-local); the pixel centre when area is 0
+    vec3 second;      // its second moments per area: mean x^2, y^2, xy (0 when area is 0)
 };
 
 // Exact coverage of the convex polygon p[0..n) (either winding), pixel-local: p is the screen
@@ -112,23 +121,53 @@ struct PixelCoverage {
 // lies in a larger binade relative to the pixel than on the screen).
 PixelCoverage exact_coverage(vec2 p[MAX_POLY], vec2 lo[MAX_POLY], int n) {
     precise vec3 sum = vec3(0.0);
+    vec3 sum2 = vec3(0.0);
     for (int i = 0; i < n; ++i) {
         int j = (i + 1) % n;
         vec2 a = p[i];
         vec2 b = p[j];
         if (a.y == b.y && lo[i].y == lo[j].y) continue;  // horizontal edges bound no y range
-        precise vec3 e = (a.y < b.y || (a.y == b.y && lo[i].y < lo[j].y))
-            ? edge_integrals(a, lo[i], b, lo[j])
-            : -edge_integrals(b, lo[j], a, lo[i]);
+        vec3 e2;
+        bool up = a.y < b.y || (a.y == b.y && lo[i].y < lo[j].y);
+        precise vec3 e = up ? edge_integrals(a, lo[i], b, lo[j], e2)
+                            : -edge_integrals(b, lo[j], a, lo[i], e2);
         sum += e;
+        sum2 += up ? e2 : -e2;
     }
     PixelCoverage c;
     c.area = min(abs(sum.x), 1.0);
     c.mean_point = vec2(0.5);
+    c.second = vec3(0.0);
     if (abs(sum.x) > 0.0) {
         c.mean_point = clamp(sum.yz / sum.x, vec2(0.0), vec2(1.0));
+        c.second = sum2 / sum.x;
     }
     return c;
+}
+
+// The covered part's footprint for texture filtering ("gradients of the covered part"): the
+// principal axes of its second moments (pixel-local), each as long as the box of the same
+// variance is wide (sqrt(12 lambda)), the longer first, as the columns. The whole pixel gives
+// unit axes (callers keep the pixel's own footprint there: no rounding); a sliver gives a thin
+// footprint along it. Bounds: the longer at least 1/16 pixel (the alpha test's point) and the
+// shorter at least a quarter of the longer, which bounds texture_aniso's taps.
+mat2 covered_footprint(PixelCoverage cov) {
+    vec3 m = cov.second;
+    vec2 mean = cov.mean_point;
+    float cxx = max(m.x - mean.x * mean.x, 0.0);
+    float cyy = max(m.y - mean.y * mean.y, 0.0);
+    float cxy = m.z - mean.x * mean.y;
+    float h = 0.5 * (cxx + cyy);
+    float d = sqrt(0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy);
+    float l1 = h + d;
+    float l2 = max(h - d, 0.0);
+    // The eigenvector of l1: (l1 - cyy, cxy), or (cxy, l1 - cxx) where that one vanishes.
+    vec2 e1 = vec2(l1 - cyy, cxy);
+    if (dot(e1, e1) < 1e-12) e1 = vec2(cxy, l1 - cxx);
+    e1 = dot(e1, e1) < 1e-12 ? vec2(1.0, 0.0) : normalize(e1);
+    float w1 = max(sqrt(12.0 * l1), 1.0 / 16.0);
+    float w2 = max(sqrt(12.0 * l2), 0.25 * w1);
+    return mat2(e1 * w1, vec2(-e1.y, e1.x) * w2);
 }
 
 // Screen polygon -> pixel-local hi + lo pairs (Knuth's TwoSum: hi + lo == v - corner exactly).

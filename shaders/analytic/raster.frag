@@ -359,7 +359,17 @@ void main() {
     {
 #if (MAT_FEATURES & MAT_ALBEDO) != 0
         if (mat.tex.x >= 0) {
-            albedo *= texture_aniso(albedo_tex, uv, gx, gy).rgb;
+            // The footprint of the covered part (coverage.glsl's covered_footprint: its
+            // principal axes and widths, carried into the texture by the UV map's
+            // derivatives); the pixel's own where the triangle covers the whole pixel.
+            vec2 fx = gx;
+            vec2 fy = gy;
+            if (cov.area < 1.0) {
+                mat2 f = covered_footprint(cov);
+                fx = gx * f[0].x + gy * f[0].y;
+                fy = gx * f[1].x + gy * f[1].y;
+            }
+            albedo *= texture_aniso(albedo_tex, uv, fx, fy).rgb;
 #ifndef SELECT_PASS
             // Each quadrant's own footprint (half the pixel's, centred in it), for the part of
             // the fragment that shows when nearer ones hide the rest (resolve.comp). Needed only
