@@ -361,10 +361,12 @@ void main() {
         if (mat.tex.x >= 0) {
             // The footprint of the covered part (coverage.glsl's covered_footprint: its
             // principal axes and widths, carried into the texture by the UV map's
-            // derivatives); the pixel's own where the triangle covers the whole pixel.
+            // derivatives); the pixel's own where the triangle covers the whole pixel, to
+            // rounding: there the covariance is isotropic and its axes would be rounding's
+            // choice, where the pixel's are the continuous one.
             vec2 fx = gx;
             vec2 fy = gy;
-            if (cov.area < 1.0) {
+            if (cov.area < 0.9999) {
                 mat2 f = covered_footprint(cov);
                 fx = gx * f[0].x + gy * f[0].y;
                 fy = gx * f[1].x + gy * f[1].y;

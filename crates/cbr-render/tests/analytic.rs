@@ -1490,16 +1490,15 @@ fn a_partly_covered_pixel_takes_the_texture_of_its_covered_part() {
     let sp = v.map(|p| project(&s, p));
     let e = [sp[1][0] - sp[0][0], sp[1][1] - sp[0][1]];
     let e2 = e[0] * e[0] + e[1] * e[1];
+    // Inside the projected quad: on the inner side of every edge, whichever its winding.
+    let orient = 1.0f64.copysign(
+        (sp[1][0] - sp[0][0]) * (sp[2][1] - sp[0][1])
+            - (sp[1][1] - sp[0][1]) * (sp[2][0] - sp[0][0]),
+    );
     let inside = |x: f64, y: f64| {
         (0..4).all(|k| {
             let (p, q) = (sp[k], sp[(k + 1) % 4]);
-            let cross = (q[0] - p[0]) * (y - p[1]) - (q[1] - p[1]) * (x - p[0]);
-            cross
-                * 1.0f64.copysign(
-                    (sp[1][0] - sp[0][0]) * (sp[2][1] - sp[0][1])
-                        - (sp[1][1] - sp[0][1]) * (sp[2][0] - sp[0][0]),
-                )
-                >= 0.0
+            ((q[0] - p[0]) * (y - p[1]) - (q[1] - p[1]) * (x - p[0])) * orient >= 0.0
         })
     };
     let value = |x: f64, y: f64| {
