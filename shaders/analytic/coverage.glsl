@@ -148,7 +148,8 @@ PixelCoverage exact_coverage(vec2 p[MAX_POLY], vec2 lo[MAX_POLY], int n) {
 // The covered part's footprint for texture filtering ("gradients of the covered part"): the
 // principal axes of its second moments (pixel-local), each as long as the box of the same
 // variance is wide (sqrt(12 lambda)), the longer first, as the columns. The whole pixel gives
-// unit axes (callers keep the pixel's own footprint there: no rounding); a sliver gives a thin
+// unit axes in no particular direction (raster.frag keeps the pixel's own footprint wherever the
+// coverage is within 1e-4 of the pixel); a sliver gives a thin
 // footprint along it. Bounds: the longer at least 1/16 pixel (the alpha test's point) and the
 // shorter at least a quarter of the longer, which bounds texture_aniso's taps.
 mat2 covered_footprint(PixelCoverage cov) {

@@ -350,7 +350,7 @@ void main() {
     if (mat.tex.y < 0) geo_mask = sample_mask(p, n, orient);
     vec3 albedo = mat.kd.rgb;
     // An alpha-tested fragment's albedo is that of its passing part (alpha_test); the others'
-    // is filtered over the pixel's footprint.
+    // is filtered over the footprint of the part of the pixel they cover.
 #if (MAT_FEATURES & MAT_MASK) != 0
     if (mat.tex.y >= 0) {
         albedo *= alpha_albedo;
