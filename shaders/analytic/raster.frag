@@ -443,6 +443,7 @@ void main() {
         mask = nearest_sample_bit(cov.mean_point);
         flags |= 8u;  // a stand-in bit (the resolve treats it as one sample of this fragment)
     }
+    if (facing_away) flags |= 16u;  // the resolve's stand-in rule compares surfaces by facing
     if (slot >= 0) {
         // The depth plane: z / w is affine in the screen, z(ndc) = gz . (ndc, 1) / gw . (ndc, 1)
         // with gw = (0, 0, 1) up to rounding (the clip matrix's third row is the w's).
