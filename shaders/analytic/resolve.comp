@@ -14,8 +14,9 @@
 //    where the winner is in front of its plane there, by more than 1e-3 of the depth if the
 //    winner is its own object (else the same surface: a sliver beside its neighbour); and it is
 //    hidden where the rest of its surface in the pixel is hidden at every sample (its object, its
-//    facing, a normal within SAME_SURFACE_COS). A fragment that loses no sample is unoccluded: it adds its
-//    exact coverage a; one that loses every sample to its own object is hidden (the back of a
+//    facing, a normal within SAME_SURFACE_COS, a plane through its depth within
+//    SAME_SURFACE_DEPTH). A fragment that loses no sample is unoccluded: it adds its exact
+//    coverage a; one that loses every sample to its own object is hidden (the back of a
 //    closed mesh behind its front). Otherwise each winner w occludes it by w's visible coverage
 //    spread evenly over the samples w won:
 //        v = a - sum over k's lost samples s of v(w(s)) / won(w(s)).
@@ -95,8 +96,10 @@ layout(push_constant) uniform Push {
 #define FRAG_STAND_IN 8u   // its mask is the one sample nearest its centroid
 #define FRAG_FACING_AWAY 16u  // its normal faces away from the camera (shaded from the other side)
 // Two fragments of one object facing the same way whose shading normals are within this cosine
-// (about 32 degrees) count as one surface for the stand-in rule (step 2).
+// (about 32 degrees) and whose depth planes agree within this share of the depth at the stand-in's
+// centroid count as one surface for the stand-in rule (step 2).
 #define SAME_SURFACE_COS 0.85
+#define SAME_SURFACE_DEPTH 1e-2
 
 // Fragment k's depth at mask sample q (pixel-local).
 float plane_depth(uint slot, vec2 q) {
@@ -244,17 +247,22 @@ void main() {
     // what hides it lies over its real place (a sliver under a nearer surface's edge, or the back
     // of a mesh along its contour: its own sample out in the open, where only a far wall is).
     // Where the rest of its surface in the pixel (real fragments of its object facing the same
-    // way, normals within SAME_SURFACE_COS) is hidden at every sample, it is hidden too.
+    // way, normals within SAME_SURFACE_COS, their planes through its centroid's depth within
+    // SAME_SURFACE_DEPTH) is hidden at every sample, it is hidden too.
     for (int k = 0; k < count; ++k) {
         if ((fl[k] & (FRAG_STAND_IN | FRAG_HOLES)) != FRAG_STAND_IN || lost[k] != 0u) continue;
-        vec3 nk = oct_decode(unpackSnorm2x16(surfaces[base + uint(k)].x));
+        vec3 nk;
+        vec2 ck;
+        unpack_surface(surfaces[base + uint(k)], nk, ck);
+        float zk = plane_depth(base + uint(k), ck);
         bool sibling = false;
         bool all_hidden = true;
         for (int j = 0; j < count; ++j) {
             if (j == k || (fl[j] & (FRAG_STAND_IN | FRAG_HOLES)) != 0u || objs[j] != objs[k]
                 || ((fl[j] ^ fl[k]) & FRAG_FACING_AWAY) != 0u) continue;
             vec3 nj = oct_decode(unpackSnorm2x16(surfaces[base + uint(j)].x));
-            if (dot(nj, nk) < SAME_SURFACE_COS) continue;
+            if (dot(nj, nk) < SAME_SURFACE_COS
+                || abs(plane_depth(base + uint(j), ck) - zk) > SAME_SURFACE_DEPTH * abs(zk)) continue;
             sibling = true;
             all_hidden = all_hidden && lost[j] == masks[j];
         }
