@@ -226,14 +226,18 @@ real3 history_resampled(vec2 q, uint valid, bool exact) {
     if (all_ok) {
         // All four taps valid: Catmull-Rom over the 4 x 4 texels around q (outer taps clamped to
         // the screen, not validated; the neighbourhood clamp bounds any overshoot), which keeps
-        // the history sharp where bilinear would soften it at every reprojection.
+        // the history sharp where bilinear would soften it at every reprojection. The four corner
+        // texels (weights products of two negative lobes, at most 0.0055) are left out and the
+        // other 12 renormalised: on llvmpipe every texelFetch calls a fetch function, and the
+        // four cost 17% of the resolve for no loss (docs/resolve.md, 2026-11-27).
         vec2 f = (q - 0.5) - vec2(base);
         vec4 wx = catmull_rom(f.x);
         vec4 wy = catmull_rom(f.y);
         real3 c = real3(0.0);
+        float wsum = 0.0;
         for (int j = 0; j < 4; j++) {
-            real3 row = real3(0.0);
             for (int i = 0; i < 4; i++) {
+                if ((i == 0 || i == 3) && (j == 0 || j == 3)) continue;
                 real3 t;
                 if ((i == 1 || i == 2) && (j == 1 || j == 2)) {
                     t = inner[(i - 1) + 2 * (j - 1)];
@@ -242,11 +246,12 @@ real3 history_resampled(vec2 q, uint valid, bool exact) {
                                          clamp(base + ivec2(i - 1, j - 1), ivec2(0), size() - 1), 0)
                                   .rgb);
                 }
-                row += real(wx[i]) * t;
+                float wij = wx[i] * wy[j];
+                c += real(wij) * t;
+                wsum += wij;
             }
-            c += real(wy[j]) * row;
         }
-        h = max(c, real3(0.0));
+        h = max(c / real(wsum), real3(0.0));
     }
     return exact ? inner[0] : h;
 }

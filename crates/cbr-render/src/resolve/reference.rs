@@ -200,8 +200,9 @@ impl Ctx<'_> {
         (ws, valid)
     }
 
-    /// History at q over the taps in `valid` (bilinear, renormalised), Catmull-Rom when all four
-    /// with weight are.
+    /// History at q over the taps in `valid` (bilinear, renormalised), Catmull-Rom over the 12
+    /// texels of the 4 x 4 window without its corners (renormalised) when all four with weight
+    /// are.
     fn history_resampled(&self, q: [f32; 2], valid: u32) -> V3 {
         let hist = self.hist();
         let (base, w) = Self::taps(q);
@@ -225,17 +226,22 @@ impl Ctx<'_> {
             let g = [q[0] - 0.5, q[1] - 0.5];
             let f = [g[0] - base[0] as f32, g[1] - base[1] as f32];
             let (wx, wy) = (catmull_rom(f[0]), catmull_rom(f[1]));
+            // The 4 x 4 window without its four corners, renormalised (resolve.comp).
             let mut c = [0.0; 3];
+            let mut wsum = 0.0f32;
             for (j, &wj) in wy.iter().enumerate() {
-                let mut row = [0.0; 3];
                 for (i, &wi) in wx.iter().enumerate() {
+                    if (i == 0 || i == 3) && (j == 0 || j == 3) {
+                        continue;
+                    }
                     let tx = (base[0] + i as i32 - 1).clamp(0, self.w - 1);
                     let ty = (base[1] + j as i32 - 1).clamp(0, self.h - 1);
-                    row = add(row, scale(hist.color[self.idx(tx, ty)], wi));
+                    let wij = wi * wj;
+                    c = add(c, scale(hist.color[self.idx(tx, ty)], wij));
+                    wsum += wij;
                 }
-                c = add(c, scale(row, wj));
             }
-            h = c.map(|v| v.max(0.0));
+            h = div(c, wsum).map(|v| v.max(0.0));
         }
         h
     }
