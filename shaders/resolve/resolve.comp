@@ -229,7 +229,7 @@ real3 history_resampled(vec2 q, uint valid, bool exact) {
         // the history sharp where bilinear would soften it at every reprojection. The four corner
         // texels (weights products of two negative lobes, at most 0.0055) are left out and the
         // other 12 renormalised: on llvmpipe every texelFetch calls a fetch function, and the
-        // four cost 17% of the resolve for no loss (docs/resolve.md, 2026-11-27).
+        // four cost 17% of the resolve for no loss (docs/resolve.md, "Texel fetches on lavapipe").
         vec2 f = (q - 0.5) - vec2(base);
         vec4 wx = catmull_rom(f.x);
         vec4 wy = catmull_rom(f.y);
