@@ -581,16 +581,20 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
     bool covered = false;
     bool still_won = false;
     uint win_valid = 0u;
+    // Candidates showing an object an earlier candidate already showed are skipped, when k
+    // advances, so that no iteration is spent on them.
+    bool dup1 = c[1].ids.x == c[0].ids.x;
+    bool dup2 = c[2].ids.x == c[0].ids.x || c[2].ids.x == c[1].ids.x;
+    bool dup3 = c[3].ids.x == c[0].ids.x || c[3].ids.x == c[1].ids.x || c[3].ids.x == c[2].ids.x;
     int k = still ? -1 : 0;  // this lane's hypothesis: -1 the still one, then candidate k
-    for (int it = 0; it < 5; it++, k++) {
-        if (reset || covered || k > 3 || (k > 0 && !multi)) break;
+    // The exit test is the body's last statement: llvmpipe checks whether any lane goes on only
+    // at the end of an iteration, so a test at the top would run one more iteration, every fetch
+    // in it, with no lane active.
+    for (int it = 0; it < 5 && !reset; it++) {
         Sample ck = c[0];
         if (k == 1) ck = c[1];
         if (k == 2) ck = c[2];
         if (k == 3) ck = c[3];
-        bool dup = false;
-        for (int j = 0; j < 3; j++) dup = dup || (j < k && c[j].ids.x == ck.ids.x);
-        if (dup) continue;
         bool is_still = k < 0;
         vec2 v = use_v && !is_still ? ck.v : vec2(0.0);
         uint id = own ? own_id : ck.ids.x;
@@ -631,6 +635,11 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
                 win_valid = valid;
             }
         }
+        k++;
+        if (k == 1 && dup1) k++;
+        if (k == 2 && dup2) k++;
+        if (k == 3 && dup3) k++;
+        if (covered || k > 3 || (k > 0 && !multi)) break;
     }
     if (covered) {
         found = true;
