@@ -7,7 +7,9 @@
 Each round renders SCENE once per entry (`cbr render ... --technique TECHNIQUE`), in the order
 given, so slow drifts of a shared machine fall on every entry alike; per entry it prints the
 median `resolve` pass time over all rounds' frames from --skip on (the first frames reset the
-history and touch textures for the first time), and its ratio to the first entry. Build each
+history and touch textures for the first time), and its ratio to the first entry; the median over rounds of each round's ratio to the first entry
+(paired, so that a drift of the machine's speed cancels: prefer many short rounds), and each
+round's median. Build each
 version of cbr into its own file (e.g. `cp target/release/cbr /tmp/cbr-before`) and never
 compile while this runs. Times are lavapipe's GPU timestamps: compare entries of one run only."""
 import argparse
@@ -37,6 +39,7 @@ def main():
             sys.exit(f"{e}: expected BIN@TECHNIQUE")
         entries.append(tuple(e.split("@", 1)))
     times = {e: [] for e in entries}
+    rounds = {e: [] for e in entries}
     with tempfile.TemporaryDirectory(prefix="resolve-ab-") as tmp:
         for _ in range(a.rounds):
             for k, (cbr, technique) in enumerate(entries):
@@ -54,13 +57,20 @@ def main():
                 if not ms:
                     sys.exit(f"{technique}: no `resolve` pass in {out}/run.json")
                 times[(cbr, technique)] += ms
+                rounds[(cbr, technique)].append(statistics.median(ms))
     first = statistics.median(times[entries[0]])
     print(f"{a.scene}, {a.width}x{a.height}, frames {a.skip}-{a.frames - 1}, {a.rounds} rounds")
-    for cbr, technique in entries:
-        m = statistics.median(times[(cbr, technique)])
-        print(f"{cbr} {technique}: resolve median {m:.2f} ms over "
-              f"{len(times[(cbr, technique)])} frames ({m / first:.2f}x the first)")
-
+    for e in entries:
+        cbr, technique = e
+        m = statistics.median(times[e])
+        # Each round's median over the first entry's in the same round: a slow drift of the
+        # machine's speed (2 cores shared with other tenants; rounds of one binary have differed
+        # by 1.5x within one run) falls on both and cancels.
+        paired = sorted(r / f for r, f in zip(rounds[e], rounds[entries[0]]))
+        print(f"{cbr} {technique}: resolve median {m:.2f} ms over {len(times[e])} frames "
+              f"({m / first:.2f}x the first); paired ratio to the first {statistics.median(paired):.3f} "
+              f"(rounds {paired[0]:.3f}-{paired[-1]:.3f}); rounds' medians "
+              + " ".join(f"{r:.1f}" for r in rounds[e]))
 
 if __name__ == "__main__":
     main()

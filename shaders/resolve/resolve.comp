@@ -200,60 +200,67 @@ float history_weight(vec2 q, uint id, float lo, float hi, bool use_ids, bool use
 // renormalised; with `exact`, the texel q lies in, as it is (the still rule). Kept apart from the
 // test so that `ours` tests its candidates first and resamples once, for the winner: on a SIMD
 // machine a resample inside the candidate loop runs for every candidate on which any lane stops.
+//
+// hist_color's sampler is bilinear, clamp to edge, in texel units (resolve/mod.rs), and every case
+// is five taps of it, each at a per-lane position with a per-lane weight, so that a SIMD machine
+// that predicates (llvmpipe runs both sides of every `if`, and every texel read is a call there)
+// makes five calls for whatever mix of cases its lanes hold:
+// - all four bilinear taps valid: Catmull-Rom over the 4 x 4 texels around q without the four
+//   corners (products of two negative lobes, at most 0.0055 each), the other 12 renormalised, as
+//   5 bilinear taps: the inner 2 x 2 in one tap at the ratio of its weights, and each pair of
+//   outer texels on one side in one tap (the Catmull-Rom's inner weights are positive, so every
+//   pair's ratio lies in [0, 1]). Outer texels are clamped to the screen and not validated; the
+//   neighbourhood clamp bounds any overshoot. It keeps the history sharp where bilinear would
+//   soften it at every reprojection.
+// - some taps invalid: the valid ones, each a tap at its texel's centre (a bilinear tap there is
+//   that texel exactly: its fractions are 0).
+// - `exact`: one tap at the centre of the texel q lies in.
 real3 history_resampled(vec2 q, uint valid, bool exact) {
     ivec2 base;
     float w[4];
     bilinear_taps(q, base, w);
-    // The four inner texels, clamped to the screen: the bilinear taps (a valid tap is inside, so
-    // the clamp leaves it) and the inner 2 x 2 of the Catmull-Rom window, fetched once for both.
-    real3 inner[4];
-    for (int k = 0; k < 4; k++) {
-        inner[k] = real3(texelFetch(hist_color, clamp(base + TAP[k], ivec2(0), size() - 1), 0).rgb);
-    }
-    real3 acc = real3(0.0);
-    float ws = 0.0;
+    vec2 b = vec2(base) + 0.5;  // tap 0's texel centre
     bool all_ok = true;
-    for (int k = 0; k < 4; k++) {
-        if (w[k] <= 0.0) continue;
-        if ((valid & (1u << k)) != 0u) {
-            acc += real(w[k]) * inner[k];
-            ws += w[k];
-        } else {
-            all_ok = false;
+    for (int k = 0; k < 4; k++) all_ok = all_ok && (w[k] <= 0.0 || (valid & (1u << k)) != 0u);
+    vec2 pos[5];
+    float wt[5];
+    if (exact || !all_ok) {
+        for (int k = 0; k < 4; k++) {
+            pos[k] = b + vec2(TAP[k]);
+            wt[k] = exact ? (k == 0 ? 1.0 : 0.0)
+                          : (w[k] > 0.0 && (valid & (1u << k)) != 0u ? w[k] : 0.0);
         }
-    }
-    real3 h = acc / real(ws);
-    if (all_ok) {
-        // All four taps valid: Catmull-Rom over the 4 x 4 texels around q (outer taps clamped to
-        // the screen, not validated; the neighbourhood clamp bounds any overshoot), which keeps
-        // the history sharp where bilinear would soften it at every reprojection. The four corner
-        // texels (weights products of two negative lobes, at most 0.0055) are left out and the
-        // other 12 renormalised: on llvmpipe every texelFetch calls a fetch function, and the
-        // four cost 17% of the resolve for no loss (docs/resolve.md, "Texel fetches on lavapipe").
+        pos[4] = b;
+        wt[4] = 0.0;
+    } else {
         vec2 f = (q - 0.5) - vec2(base);
         vec4 wx = catmull_rom(f.x);
         vec4 wy = catmull_rom(f.y);
-        real3 c = real3(0.0);
-        float wsum = 0.0;
-        for (int j = 0; j < 4; j++) {
-            for (int i = 0; i < 4; i++) {
-                if ((i == 0 || i == 3) && (j == 0 || j == 3)) continue;
-                real3 t;
-                if ((i == 1 || i == 2) && (j == 1 || j == 2)) {
-                    t = inner[(i - 1) + 2 * (j - 1)];
-                } else {
-                    t = real3(texelFetch(hist_color,
-                                         clamp(base + ivec2(i - 1, j - 1), ivec2(0), size() - 1), 0)
-                                  .rgb);
-                }
-                float wij = wx[i] * wy[j];
-                c += real(wij) * t;
-                wsum += wij;
-            }
-        }
-        h = max(c / real(wsum), real3(0.0));
+        float sx = wx.y + wx.z;
+        float sy = wy.y + wy.z;
+        vec2 c = b + vec2(wx.z / sx, wy.z / sy);
+        pos[0] = c;
+        wt[0] = sx * sy;
+        pos[1] = vec2(b.x - 1.0, c.y);
+        wt[1] = wx.x * sy;
+        pos[2] = vec2(b.x + 2.0, c.y);
+        wt[2] = wx.w * sy;
+        pos[3] = vec2(c.x, b.y - 1.0);
+        wt[3] = wy.x * sx;
+        pos[4] = vec2(c.x, b.y + 2.0);
+        wt[4] = wy.w * sx;
     }
-    return exact ? inner[0] : h;
+    real3 acc = real3(0.0);
+    float ws = 0.0;
+    for (int k = 0; k < 5; k++) {
+        real3 t = real3(textureLod(hist_color, pos[k], 0.0).rgb);
+        if (wt[k] != 0.0) {
+            acc += real(wt[k]) * t;
+            ws += wt[k];
+        }
+    }
+    real3 h = acc / real(ws);
+    return exact || !all_ok ? h : max(h, real3(0.0));
 }
 
 // History at q validated against object `id` and reverse-Z depths [lo, hi] (`fused`): the texel

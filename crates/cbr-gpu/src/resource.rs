@@ -376,6 +376,11 @@ pub struct SamplerDesc {
     pub linear: bool,
     pub mipmaps: bool,
     pub repeat: bool,
+    /// Texel-unit coordinates (texel i's centre at i + 0.5; Vulkan's unnormalizedCoordinates):
+    /// positions computed in pixels reach the sampler without a division and its rounding, so a
+    /// position on a texel centre filters to that texel exactly. Needs clamp to edge, no mips,
+    /// and `textureLod(.., 0)` in the shader.
+    pub unnormalized: bool,
 }
 
 impl SamplerDesc {
@@ -384,6 +389,7 @@ impl SamplerDesc {
         linear: false,
         mipmaps: false,
         repeat: false,
+        unnormalized: false,
     };
 }
 
@@ -404,10 +410,11 @@ impl Sampler {
         } else {
             vk::SamplerAddressMode::CLAMP_TO_EDGE
         };
+        debug_assert!(!d.unnormalized || (!d.repeat && !d.mipmaps));
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(filter)
             .min_filter(filter)
-            .mipmap_mode(if d.linear {
+            .mipmap_mode(if d.linear && !d.unnormalized {
                 vk::SamplerMipmapMode::LINEAR
             } else {
                 vk::SamplerMipmapMode::NEAREST
@@ -415,6 +422,7 @@ impl Sampler {
             .address_mode_u(mode)
             .address_mode_v(mode)
             .address_mode_w(mode)
+            .unnormalized_coordinates(d.unnormalized)
             .min_lod(0.0)
             .max_lod(if d.mipmaps { vk::LOD_CLAMP_NONE } else { 0.0 });
         // SAFETY: valid create info.

@@ -359,6 +359,7 @@ impl GpuScene {
                 linear: true,
                 mipmaps: true,
                 repeat: true,
+                unnormalized: false,
             },
         )?;
         let objects = Buffer::new(

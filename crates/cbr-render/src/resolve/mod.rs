@@ -302,6 +302,7 @@ pub struct ResolvePass {
     _layout: SetLayout,
     sets: [DescriptorSet; 2],
     _sampler: Sampler,
+    _hist_sampler: Sampler,
     pub history: [History; 2],
     pub debug_bits: Image,
     pub debug_velocity: Image,
@@ -432,6 +433,17 @@ impl ResolvePass {
             },
         )?;
         let sampler = Sampler::new(gpu, "resolve.sampler", SamplerDesc::NEAREST)?;
+        // The history colour's: `ours`' Catmull-Rom takes 5 bilinear taps (resolve.comp,
+        // history_resampled); texelFetch ignores the sampler.
+        let hist_sampler = Sampler::new(
+            gpu,
+            "resolve.hist_sampler",
+            SamplerDesc {
+                linear: true,
+                unnormalized: true,
+                ..SamplerDesc::NEAREST
+            },
+        )?;
         let usage = vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::SAMPLED
             | vk::ImageUsageFlags::TRANSFER_SRC
@@ -465,7 +477,7 @@ impl ResolvePass {
                     Write::Sampled(1, vec![(&targets.velocity, &sampler)]),
                     Write::Sampled(2, vec![(&targets.ids, &sampler)]),
                     Write::Sampled(3, vec![(&targets.depth, &sampler)]),
-                    Write::Sampled(4, vec![(&prev.color, &sampler)]),
+                    Write::Sampled(4, vec![(&prev.color, &hist_sampler)]),
                     Write::Sampled(5, vec![(&prev.geom, &sampler)]),
                     Write::Sampled(6, vec![(pre_depth, &sampler)]),
                     Write::Sampled(7, vec![(pre_ids, &sampler)]),
@@ -487,6 +499,7 @@ impl ResolvePass {
             _layout: layout,
             sets,
             _sampler: sampler,
+            _hist_sampler: hist_sampler,
             history,
             debug_bits,
             debug_velocity,

@@ -204,46 +204,64 @@ impl Ctx<'_> {
     /// texels of the 4 x 4 window without its corners (renormalised) when all four with weight
     /// are.
     fn history_resampled(&self, q: [f32; 2], valid: u32) -> V3 {
-        let hist = self.hist();
         let (base, w) = Self::taps(q);
+        let b = [base[0] as f32 + 0.5, base[1] as f32 + 0.5];
+        let all_ok = (0..4).all(|k| w[k] <= 0.0 || valid & (1 << k) != 0);
+        // Five bilinear taps (position in texels, weight), as resolve.comp's hist_color sampler
+        // takes them.
+        let taps: [([f32; 2], f32); 5] = if all_ok {
+            // Catmull-Rom over the 4 x 4 window without its corners, renormalised: the inner
+            // 2 x 2 in one tap, each side's pair of outer texels in one.
+            let f = [q[0] - 0.5 - base[0] as f32, q[1] - 0.5 - base[1] as f32];
+            let (wx, wy) = (catmull_rom(f[0]), catmull_rom(f[1]));
+            let (sx, sy) = (wx[1] + wx[2], wy[1] + wy[2]);
+            let c = [b[0] + wx[2] / sx, b[1] + wy[2] / sy];
+            [
+                (c, sx * sy),
+                ([b[0] - 1.0, c[1]], wx[0] * sy),
+                ([b[0] + 2.0, c[1]], wx[3] * sy),
+                ([c[0], b[1] - 1.0], wy[0] * sx),
+                ([c[0], b[1] + 2.0], wy[3] * sx),
+            ]
+        } else {
+            // The valid bilinear taps, each at its texel's centre.
+            let t = |k: usize| {
+                let wk = if w[k] > 0.0 && valid & (1 << k) != 0 { w[k] } else { 0.0 };
+                ([b[0] + TAP[k][0] as f32, b[1] + TAP[k][1] as f32], wk)
+            };
+            [t(0), t(1), t(2), t(3), (b, 0.0)]
+        };
         let mut acc = [0.0; 3];
         let mut ws = 0.0f32;
-        let mut all_ok = true;
-        for k in 0..4 {
-            let (tx, ty) = (base[0] + TAP[k][0], base[1] + TAP[k][1]);
-            if w[k] <= 0.0 {
-                continue;
-            }
-            if valid & (1 << k) != 0 {
-                acc = add(acc, scale(hist.color[self.idx(tx, ty)], w[k]));
-                ws += w[k];
-            } else {
-                all_ok = false;
+        for (pos, wt) in taps {
+            if wt != 0.0 {
+                acc = add(acc, scale(self.bilinear(pos), wt));
+                ws += wt;
             }
         }
-        let mut h = div(acc, ws);
-        if all_ok {
-            let g = [q[0] - 0.5, q[1] - 0.5];
-            let f = [g[0] - base[0] as f32, g[1] - base[1] as f32];
-            let (wx, wy) = (catmull_rom(f[0]), catmull_rom(f[1]));
-            // The 4 x 4 window without its four corners, renormalised (resolve.comp).
-            let mut c = [0.0; 3];
-            let mut wsum = 0.0f32;
-            for (j, &wj) in wy.iter().enumerate() {
-                for (i, &wi) in wx.iter().enumerate() {
-                    if (i == 0 || i == 3) && (j == 0 || j == 3) {
-                        continue;
-                    }
-                    let tx = (base[0] + i as i32 - 1).clamp(0, self.w - 1);
-                    let ty = (base[1] + j as i32 - 1).clamp(0, self.h - 1);
-                    let wij = wi * wj;
-                    c = add(c, scale(hist.color[self.idx(tx, ty)], wij));
-                    wsum += wij;
-                }
-            }
-            h = div(c, wsum).map(|v| v.max(0.0));
-        }
-        h
+        let h = div(acc, ws);
+        if all_ok { h.map(|v| v.max(0.0)) } else { h }
+    }
+
+    /// The history colour filtered bilinearly at `pos` (texels, texel i's centre at i + 0.5),
+    /// each texel coordinate clamped to the screen: a linear sampler with unnormalized
+    /// coordinates and clamp to edge.
+    fn bilinear(&self, pos: [f32; 2]) -> V3 {
+        let hist = self.hist();
+        let (u, v) = (pos[0] - 0.5, pos[1] - 0.5);
+        let (x0, y0) = (u.floor(), v.floor());
+        let (fx, fy) = (u - x0, v - y0);
+        let texel = |dx: i32, dy: i32| {
+            let x = (x0 as i32 + dx).clamp(0, self.w - 1);
+            let y = (y0 as i32 + dy).clamp(0, self.h - 1);
+            hist.color[self.idx(x, y)]
+        };
+        let lerp = |a: V3, b: V3, t: f32| add(a, scale(add(b, scale(a, -1.0)), t));
+        lerp(
+            lerp(texel(0, 0), texel(1, 0), fx),
+            lerp(texel(0, 1), texel(1, 1), fx),
+            fy,
+        )
     }
 
     /// A rendered pixel: its sample, or with `fused` the sample blended into its history
