@@ -171,21 +171,28 @@ uint tap_reasons(ivec2 t, uint id, float lo, float hi, bool use_ids, bool use_de
 // half of it is valid: the footprint locates an edge of the object to a fraction of a texel,
 // where the texel containing q alone (`fused`'s test) is off by up to half a texel. `valid`
 // gets bit k for each valid tap k (TAP order), for history_resampled; `g0` the geometry of tap 0
-// (the texel containing q when q is a texel centre; zero if that tap was not read).
+// (the texel containing q when q is a texel centre; zero if that tap has no weight or lies off
+// the screen).
 float history_weight(vec2 q, uint id, float lo, float hi, bool use_ids, bool use_depth,
                      out uint valid, inout uint why, out uvec2 g0) {
     ivec2 base;
     float w[4];
     bilinear_taps(q, base, w);
+    // The footprint's 2 x 2 texels in two gathers (IDs, depth bits), at the point between their
+    // centres: a coordinate half a texel from any centre, which the normalisation's rounding
+    // cannot move to another footprint. Gather order: (0,1), (1,1), (1,0), (0,0).
+    vec2 uv = vec2(base + 1) / vec2(size());
+    uvec4 gi = textureGather(hist_geom, uv, 0);
+    uvec4 gd = textureGather(hist_geom, uv, 1);
+    uvec2 gt[4] = uvec2[4](uvec2(gi.w, gd.w), uvec2(gi.z, gd.z), uvec2(gi.x, gd.x),
+                           uvec2(gi.y, gd.y));
     float ws = 0.0;
     valid = 0u;
-    g0 = uvec2(0u);
+    g0 = w[0] > 0.0 && inside(base) ? gt[0] : uvec2(0u);
     for (int k = 0; k < 4; k++) {
         ivec2 t = base + TAP[k];
         if (w[k] <= 0.0 || !inside(t)) continue;
-        uvec2 g = texelFetch(hist_geom, t, 0).xy;
-        if (k == 0) g0 = g;
-        uint rn = geom_reasons(g, id, lo, hi, use_ids, use_depth);
+        uint rn = geom_reasons(gt[k], id, lo, hi, use_ids, use_depth);
         if (rn == 0u) {
             ws += w[k];
             valid |= 1u << k;
