@@ -226,7 +226,11 @@ impl Ctx<'_> {
         } else {
             // The valid bilinear taps, each at its texel's centre.
             let t = |k: usize| {
-                let wk = if w[k] > 0.0 && valid & (1 << k) != 0 { w[k] } else { 0.0 };
+                let wk = if w[k] > 0.0 && valid & (1 << k) != 0 {
+                    w[k]
+                } else {
+                    0.0
+                };
                 ([b[0] + TAP[k][0] as f32, b[1] + TAP[k][1] as f32], wk)
             };
             [t(0), t(1), t(2), t(3), (b, 0.0)]
