@@ -796,6 +796,26 @@ void main() {
     write_result(p, resolve_missing(p, n));
 }
 #else
+// Missing pixel p of a quad, whose rendered samples h_in (its horizontal neighbour) and v_in
+// (its vertical one) are loaded: only the two neighbours outside the quad are loaded. Written
+// without a per-lane choice between loaded and loading: a SIMD machine that predicates would
+// otherwise run all four loads.
+void resolve_in_quad(ivec2 p, Sample h_in, Sample v_in) {
+    if (!inside(p)) return;
+    // In the quad's right column the outer horizontal neighbour is to the right, else to the
+    // left; likewise the bottom row and the vertical one.
+    bool right = (p.x & 1) == 1;
+    bool below = (p.y & 1) == 1;
+    Sample h_out = load_sample(p + ivec2(right ? 1 : -1, 0));
+    Sample v_out = load_sample(p + ivec2(0, below ? 1 : -1));
+    Sample n[4];
+    n[0] = right ? h_in : h_out;
+    n[1] = right ? h_out : h_in;
+    n[2] = below ? v_in : v_out;
+    n[3] = below ? v_out : v_in;
+    write_result(p, resolve_missing(p, n));
+}
+
 // One 2x2 quad: its two rendered samples are loaded once and serve as two of the four
 // neighbours of each of its two missing pixels: 6 sample loads instead of 10.
 void main() {
@@ -814,26 +834,10 @@ void main() {
     if (inside(ra)) write_result(ra, rendered_result(ra, sa));
     if (inside(rb)) write_result(rb, rendered_result(rb, sb));
     // A missing pixel's horizontal neighbour inside the quad is sa for ma and sb for mb, its
-    // vertical one the other (both parities); only the two outside the quad are loaded. Written
-    // without a per-lane choice between loaded and loading: a SIMD machine that predicates would
-    // otherwise run all four loads.
-    for (int m = 0; m < 2; m++) {
-        ivec2 p = m == 0 ? ma : mb;
-        if (!inside(p)) continue;
-        // In the quad's right column the outer horizontal neighbour is to the right, else to
-        // the left; likewise the bottom row and the vertical one.
-        bool right = (p.x & 1) == 1;
-        bool below = (p.y & 1) == 1;
-        Sample h_in = m == 0 ? sa : sb;
-        Sample v_in = m == 0 ? sb : sa;
-        Sample h_out = load_sample(p + ivec2(right ? 1 : -1, 0));
-        Sample v_out = load_sample(p + ivec2(0, below ? 1 : -1));
-        Sample n[4];
-        n[0] = right ? h_in : h_out;
-        n[1] = right ? h_out : h_in;
-        n[2] = below ? v_in : v_out;
-        n[3] = below ? v_out : v_in;
-        write_result(p, resolve_missing(p, n));
-    }
+    // vertical one the other (both parities). Two calls, not a loop over the two pixels: llvmpipe
+    // tests a loop's exit only at the end of an iteration, so a `for` over them ran a third
+    // iteration, the whole missing-pixel path with no lane active (docs/resolve.md).
+    resolve_in_quad(ma, sa, sb);
+    resolve_in_quad(mb, sb, sa);
 }
 #endif
