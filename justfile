@@ -90,6 +90,12 @@ bench-interleaved: setup
 resolve-cost:
     scripts/resolve-cost.sh
 
+# The resolve shader's own instructions in lavapipe's JIT code under callgrind (demo, 256x144,
+# 3 frames; about 1.5 min a technique): `ours` and `pq4k` in both thread mappings
+# (docs/resolve.md, "A deterministic cost figure").
+resolve-jit-cost: setup
+    python3 scripts/resolve-jit-cost.py checkerboard:rotated:ours checkerboard:rotated:pq4k checkerboard:rotated:ours:pixel checkerboard:rotated:pq4k:pixel
+
 # The hard-case gallery (docs/hard-cases.md): every technique on every built-in hard case
 # (`cbr info` lists them) at 320x180 against ssaa:16 (cached in out/cache; ~25 min cold on 2
 # cores), strips by `cbr montage` into docs/images/hard-cases/.
