@@ -3,6 +3,7 @@
 
     scripts/resolve-ab.py SCENE BIN@TECHNIQUE [BIN@TECHNIQUE ...]
                           [--width 1280 --height 720] [--frames 8] [--rounds 3] [--skip 2]
+                          [--pass resolve]
 
 Each round renders SCENE once per entry (`cbr render ... --technique TECHNIQUE`), in the order
 given, so slow drifts of a shared machine fall on every entry alike; per entry it prints the
@@ -32,6 +33,8 @@ def main():
     ap.add_argument("--frames", type=int, default=8)
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--skip", type=int, default=2)
+    ap.add_argument("--pass", dest="pass_name", default="resolve",
+                    help="the pass to time (e.g. interlaced.resolve)")
     a = ap.parse_args()
     if a.frames <= a.skip:
         sys.exit("--frames must exceed --skip")
@@ -56,9 +59,9 @@ def main():
                     sys.exit(f"{' '.join(cmd)}: {p.stderr.strip()}")
                 run = json.load(open(os.path.join(out, "run.json")))
                 ms = [t["gpu_ms"] for f in run["frames"][a.skip:] for t in f["passes"]
-                      if t["name"] == "resolve"]
+                      if t["name"] == a.pass_name]
                 if not ms:
-                    sys.exit(f"{technique}: no `resolve` pass in {out}/run.json")
+                    sys.exit(f"{technique}: no `{a.pass_name}` pass in {out}/run.json")
                 times[(cbr, technique)] += ms
                 rounds[(cbr, technique)].append(statistics.median(ms))
                 per_frame[(cbr, technique)].append(ms)

@@ -9,7 +9,8 @@ Runs `cbr render SCENE --technique TECHNIQUE` under callgrind with llvmpipe on t
 compiled shader function is an unnamed `???:0x...` entry, and every texel fetch of a shader is a
 call into a fetch function generated per texture. The resolve is the JIT function that calls
 five or more JIT functions (its sample, history and geometry fetches) and is called once per
-8-lane vector of its dispatch in every frame. Prints, per technique, its inclusive count
+8-lane vector of its dispatch in every frame. Works for the checkerboard resolve in both
+mappings and for `interlaced`'s resolve. Prints, per technique, its inclusive count
 (fetch functions included), the fetch functions' share, and the count per resolved pixel.
 
 Same binary, driver and inputs give the same count (valgrind runs one thread; the JIT is
@@ -83,10 +84,12 @@ def main():
             if p.returncode != 0:
                 sys.exit(f"{' '.join(cmd)} failed:\n{p.stderr[-2000:]}")
             funcs = jit_functions(prof)
-        # Quad mapping (the default): one invocation per 2x2 quad; `:pixel`: one per pixel.
+        # The checkerboard's quad mapping (its default): one invocation per 2x2 quad; `:pixel`
+        # and `interlaced`'s resolve: one per pixel.
         # 8 lanes a vector. Another per-pixel compute pass of the frame has 4 fetch functions
         # and the pixel mapping's call count: the resolve is the largest such function.
-        per = 8 if "pixel" in t.split("+")[0].split(":") else 32
+        parts = t.split("+")[0].split(":")
+        per = 32 if parts[0] == "checkerboard" and "pixel" not in parts else 8
         expected = pixels // per
         cands = sorted(((v[0], k) for k, v in funcs.items()
                         if v[1] == expected and len(v[2]) >= a.min_fetches), reverse=True)

@@ -276,9 +276,16 @@ Result resolve_missing(ivec2 p) {
             r.ids = texelFetch(hist_ids, p, 0).xy;
             r.dbg |= DBG_STILL;
         }
+        // The candidates in one loop whose exit test is the body's last statement: llvmpipe
+        // checks whether any lane goes on only at the end of an iteration, and runs the body of
+        // an `if` whatever its lanes take, so a test at the top ran one more iteration, every
+        // fetch in it, with no lane active (docs/resolve.md). A pixel the still rule took
+        // skips the body; one whose second candidate shows the first one's object stops after
+        // the first; none goes past the second.
+        bool one = has(F_NO_IDS) || n[second].ids.x == n[first].ids.x;
         for (int k = 0; k < 2; k++) {
             int c = k == 0 ? first : second;
-            if (found || (k == 1 && (has(F_NO_IDS) || n[second].ids.x == n[first].ids.x))) break;
+            bool skip = found;
             uint id = n[c].ids.x;
             // The depth span of the vertical neighbours showing this object.
             float lo = n[c].d;
@@ -287,12 +294,17 @@ Result resolve_missing(ivec2 p) {
                 lo = min(n[ABOVE].d, n[BELOW].d);
                 hi = max(n[ABOVE].d, n[BELOW].d);
             }
-            if (history_validated(vec2(p) + 0.5 - n[c].v, id, lo, hi, h, why)) {
+            vec3 hk;
+            uint why_k = 0u;
+            if (!skip && history_validated(vec2(p) + 0.5 - n[c].v, id, lo, hi, hk, why_k)) {
                 found = true;
+                h = hk;
                 r.v = n[c].v;
                 r.d = n[c].d;
                 r.ids = n[c].ids;
             }
+            why |= why_k;
+            if (found || one || k == 1) break;
         }
     }
     if (found) {
