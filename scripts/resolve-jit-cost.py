@@ -84,12 +84,15 @@ def main():
             if p.returncode != 0:
                 sys.exit(f"{' '.join(cmd)} failed:\n{p.stderr[-2000:]}")
             funcs = jit_functions(prof)
-        # The checkerboard's quad mapping (its default): one invocation per 2x2 quad; `:pixel`
-        # and `interlaced`'s resolve: one per pixel.
+        # The checkerboard's quad mapping (its default): one invocation per 2x2 quad; `:pixel`:
+        # one per pixel; `interlaced`'s resolve: one per vertical pair.
         # 8 lanes a vector. Another per-pixel compute pass of the frame has 4 fetch functions
         # and the pixel mapping's call count: the resolve is the largest such function.
         parts = t.split("+")[0].split(":")
-        per = 32 if parts[0] == "checkerboard" and "pixel" not in parts else 8
+        if parts[0] == "interlaced":
+            per = 16
+        else:
+            per = 32 if "pixel" not in parts else 8
         expected = pixels // per
         cands = sorted(((v[0], k) for k, v in funcs.items()
                         if v[1] == expected and len(v[2]) >= a.min_fetches), reverse=True)

@@ -2,7 +2,8 @@
 // The `interlaced` resolve (docs/interlaced.md): rows of the frame's parity were rendered, the
 // others are reconstructed from the previous resolved frame (velocity-reprojected, validated by
 // object ID and depth like the checkerboard resolve) or, where history fails, from the rows
-// above and below (edge-directed line averaging). One output pixel per invocation. The CPU
+// above and below (edge-directed line averaging). Two output pixels per invocation, one rendered
+// and one missing (main, below). The CPU
 // reference is crates/cbr-render/src/techniques/interlaced/reference.rs: keep the two in step,
 // operation for operation.
 //
@@ -318,20 +319,7 @@ Result resolve_missing(ivec2 p) {
     return r;
 }
 
-void main() {
-    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-    if (p.x >= size().x || p.y >= size().y) return;
-    Result r;
-    if ((p.y & 1) == pc.size_parity.z) {
-        Sample s = load_sample(p);
-        r.c = s.c;
-        r.v = s.v;
-        r.d = s.d;
-        r.ids = s.ids;
-        r.dbg = DBG_RENDERED;
-    } else {
-        r = resolve_missing(p);
-    }
+void write_result(ivec2 p, Result r) {
     imageStore(out_color, p, vec4(r.c, 1.0));
     imageStore(out_velocity, p, vec4(r.v, 0.0, 0.0));
     imageStore(out_ids, p, uvec4(r.ids, 0u, 0u));
@@ -339,4 +327,26 @@ void main() {
 #if DEBUG
     imageStore(out_debug, p, uvec4(r.dbg));
 #endif
+}
+
+// Invocation (x, j): the pixels of column x in rows 2j and 2j + 1, one rendered and one missing.
+// Every lane then has a missing pixel to resolve: with one pixel per invocation an 8-wide lane
+// group is one row, all rendered or all missing, and on a SIMD machine that runs the body of an
+// `if` whatever its lanes take (llvmpipe) the rendered rows' groups paid for the missing path too.
+void main() {
+    ivec2 p0 = ivec2(gl_GlobalInvocationID.x, 2 * int(gl_GlobalInvocationID.y));
+    if (p0.x >= size().x || p0.y >= size().y) return;
+    ivec2 pr = p0 + ivec2(0, pc.size_parity.z);      // the pair's rendered row
+    ivec2 pm = p0 + ivec2(0, 1 - pc.size_parity.z);  // and its missing one
+    if (pr.y < size().y) {
+        Sample s = load_sample(pr);
+        Result r;
+        r.c = s.c;
+        r.v = s.v;
+        r.d = s.d;
+        r.ids = s.ids;
+        r.dbg = DBG_RENDERED;
+        write_result(pr, r);
+    }
+    if (pm.y < size().y) write_result(pm, resolve_missing(pm));
 }
