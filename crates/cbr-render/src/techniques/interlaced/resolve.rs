@@ -308,7 +308,11 @@ impl InterlacedResolve {
         cmd.bind_set(&self.pipeline, 0, &self.sets[frame.slot]);
         cmd.push_constants(&self.pipeline, bytemuck::bytes_of(&push));
         // One invocation per vertical pair of pixels (rows 2j, 2j + 1): the shader's main.
-        cmd.dispatch(self.width.div_ceil(8), self.height.div_ceil(2).div_ceil(8), 1);
+        cmd.dispatch(
+            self.width.div_ceil(8),
+            self.height.div_ceil(2).div_ceil(8),
+            1,
+        );
         profiler.end(cmd, scope);
     }
 
