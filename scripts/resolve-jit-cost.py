@@ -56,6 +56,21 @@ def jit_functions(profile):
     return funcs
 
 
+def vectors(technique, width, height):
+    """8-lane vectors of the resolve's dispatch per frame: llvmpipe calls the shader function
+    once per vector of every workgroup, padding included. The checkerboard's quad mapping (its
+    default) has one invocation per 2x2 quad, `:pixel` one per pixel, groups of 8 x 8 or (`:16`)
+    16 x 16; `interlaced` one per vertical pair of pixels, groups of 8 x 8."""
+    parts = technique.split("+")[0].split(":")
+    if parts[0] == "interlaced":
+        ux, uy, g = width, (height + 1) // 2, 8
+    else:
+        pixel = "pixel" in parts
+        ux, uy = (width, height) if pixel else ((width + 1) // 2, (height + 1) // 2)
+        g = 16 if "16" in parts else 8
+    return -(-ux // g) * -(-uy // g) * g * g // 8
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("techniques", nargs="+")
@@ -84,21 +99,14 @@ def main():
             if p.returncode != 0:
                 sys.exit(f"{' '.join(cmd)} failed:\n{p.stderr[-2000:]}")
             funcs = jit_functions(prof)
-        # The checkerboard's quad mapping (its default): one invocation per 2x2 quad; `:pixel`:
-        # one per pixel; `interlaced`'s resolve: one per vertical pair.
-        # 8 lanes a vector. Another per-pixel compute pass of the frame has 4 fetch functions
-        # and the pixel mapping's call count: the resolve is the largest such function.
-        parts = t.split("+")[0].split(":")
-        if parts[0] == "interlaced":
-            per = 16
-        else:
-            per = 32 if "pixel" not in parts else 8
-        expected = pixels // per
-        cands = sorted(((v[0], k) for k, v in funcs.items()
-                        if v[1] == expected and len(v[2]) >= a.min_fetches), reverse=True)
+        expected = a.frames * vectors(t, a.width, a.height)
+        cands = [(v[0], k) for k, v in funcs.items()
+                 if v[1] == expected and len(v[2]) >= a.min_fetches]
         if not cands:
             sys.exit(f"{t}: no JIT function with {a.min_fetches}+ fetch callees "
                      f"called {expected} times; is it a resolve technique?")
+        # Another per-pixel compute pass of the frame has 4 fetch functions and the pixel
+        # mapping's call count: the resolve is the largest candidate.
         total, addr = max(cands)
         fetch = sum(c[1] for c in funcs[addr][2])
         print(f"{t}: {total / 1e6:.2f} M instructions (fetch functions {fetch / 1e6:.2f} M, "

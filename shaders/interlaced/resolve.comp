@@ -286,7 +286,6 @@ Result resolve_missing(ivec2 p) {
         bool one = has(F_NO_IDS) || n[second].ids.x == n[first].ids.x;
         for (int k = 0; k < 2; k++) {
             int c = k == 0 ? first : second;
-            bool skip = found;
             uint id = n[c].ids.x;
             // The depth span of the vertical neighbours showing this object.
             float lo = n[c].d;
@@ -295,16 +294,12 @@ Result resolve_missing(ivec2 p) {
                 lo = min(n[ABOVE].d, n[BELOW].d);
                 hi = max(n[ABOVE].d, n[BELOW].d);
             }
-            vec3 hk;
-            uint why_k = 0u;
-            if (!skip && history_validated(vec2(p) + 0.5 - n[c].v, id, lo, hi, hk, why_k)) {
+            if (!found && history_validated(vec2(p) + 0.5 - n[c].v, id, lo, hi, h, why)) {
                 found = true;
-                h = hk;
                 r.v = n[c].v;
                 r.d = n[c].d;
                 r.ids = n[c].ids;
             }
-            why |= why_k;
             if (found || one || k == 1) break;
         }
     }
