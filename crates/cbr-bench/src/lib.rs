@@ -75,6 +75,10 @@ pub struct BenchOptions {
     pub no_cache: bool,
     /// Render and time cacheable techniques among the rows instead of reading the frame cache.
     pub time_cached_rows: bool,
+    /// Time the passes only: no error is measured, no frame kept, no image written (GPU
+    /// studies at 4K, where the per-frame metrics would take most of the run). The reference
+    /// must be `native`, which is then timed as a row like the others.
+    pub timing_only: bool,
     /// k of the disocclusion FLIP: a pixel counts when its reference object ID differs from its
     /// ID in any of the k frames before (default 4).
     pub disocclusion_frames: Option<u32>,
@@ -211,6 +215,11 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
         _ => a.reference.clone(),
     };
     Spec::parse(&reference).map_err(|e| anyhow::anyhow!("--reference: {e}"))?;
+    if a.timing_only && reference != "native" {
+        bail!(
+            "--timing-only measures no error, so it takes no reference: drop --reference {reference} (native is timed as a row)"
+        );
+    }
     let mut plan = Vec::new();
     for &(w, h) in &resolutions {
         let mut configs: Vec<Config> = expand(&techniques, w, h, &mappings, &groups, &lod_biases)?
@@ -269,8 +278,12 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
             );
         }
         bar.set_message(format!("reference {reference} {w}x{h}"));
-        let role = Role::Reference {
-            disocclusion_frames: k,
+        let role = if a.timing_only {
+            Role::Timing
+        } else {
+            Role::Reference {
+                disocclusion_frames: k,
+            }
         };
         let (rm, ref_frames) = measure(&gpu, &scene, &ref_config, (warmup, frames), role, &bar)?;
         if let Some(s) = &rm.id_stand_in
@@ -301,9 +314,13 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
             } else {
                 cache.clone()
             };
-            let role = Role::Against {
-                name: &reference,
-                frames: &ref_frames,
+            let role = if a.timing_only {
+                Role::Timing
+            } else {
+                Role::Against {
+                    name: &reference,
+                    frames: &ref_frames,
+                }
             };
             let (m, _) = measure(&gpu, &scene, &c, (warmup, frames), role, &bar)?;
             all.push((c, m));
@@ -371,7 +388,7 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
                 "crops": crops,
                 "copy_floor_ms": summary_json(summarize(m.passes.get("resolve.copy_floor").map(Vec::as_slice).unwrap_or(&[]))),
                 "reference": reference,
-                "error": if is_reference { json!(null) } else { json!({
+                "error": if is_reference || a.timing_only { json!(null) } else { json!({
                     "psnr_mean": opt(mean(&m.psnr)),
                     "ssim_mean": opt(mean(&m.ssim)),
                     "flip_mean": opt(mean(&m.flip)),
@@ -444,7 +461,8 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
             "measured_frames": frames,
             "timing": "GPU timestamps per pass; compute passes bracketed by barriers (lavapipe); median, p5, p95 over the measured frames",
             "frame_ms": format!("sum of the technique's passes per frame (not {})", NOT_TECHNIQUE.join(", ")),
-            "reference": format!("{reference} at the same resolution and frame"),
+            "reference": if a.timing_only { "none: --timing-only (no error measured)".to_string() } else { format!("{reference} at the same resolution and frame") },
+            "timing_only": a.timing_only,
             "edge_pixels": "FLIP mean over the reference's edge pixels: more than one object ID among a supersampled reference's samples (its coverage layer), or for a one-sample reference an object ID that differs from a 4-neighbour's",
             "disocclusion_frames": k,
             "disocclusion_pixels": format!("FLIP mean over the pixels whose reference object ID differs from their ID in any of the k = {k} frames before (frames before frame 0 do not exist); frames whose mask is empty are left out of the mean"),

@@ -135,6 +135,8 @@ pub enum Role<'a> {
         name: &'a str,
         frames: &'a [RefFrame],
     },
+    /// Timed only (`--timing-only`): no comparison, no frames or snapshot kept.
+    Timing,
 }
 
 pub fn measure(
@@ -176,7 +178,7 @@ pub fn measure(
             m.id_stand_in = stand_in;
             Some((h, check))
         }
-        Role::Against { .. } => None,
+        Role::Against { .. } | Role::Timing => None,
     };
     let mut stability = Stability::default();
     bar.inc(u64::from(first));
@@ -222,7 +224,7 @@ pub fn measure(
                 disocc,
             });
         }
-        if last {
+        if last && !matches!(role, Role::Timing) {
             m.snapshot = Some(Snapshot { out, flip_map });
         }
     }

@@ -61,6 +61,10 @@ pub struct BenchArgs {
     /// frames from the cache; the reference still comes from the cache.
     #[arg(long)]
     time_cached_rows: bool,
+    /// Time the passes only: no error, no frames kept, no images (GPU studies at 4K, where the
+    /// per-frame metrics would take most of the run). Takes no --reference; native is a row.
+    #[arg(long)]
+    timing_only: bool,
     /// k of the disocclusion FLIP: the error over pixels whose reference object ID differs from
     /// their ID in any of the k frames before [default: 4].
     #[arg(long, value_name = "K")]
@@ -94,6 +98,7 @@ impl BenchArgs {
             reference: self.reference.clone(),
             no_cache: self.no_cache,
             time_cached_rows: self.time_cached_rows,
+            timing_only: self.timing_only,
             disocclusion_frames: self.disocclusion_frames,
             device: self.device.clone(),
             validation: self.validation,

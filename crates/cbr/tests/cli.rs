@@ -619,6 +619,112 @@ fn bench_writes_json_and_csv_with_the_protocol_and_sweeps() {
 }
 
 #[test]
+fn bench_timing_only_times_every_row_and_measures_no_error() {
+    let d = tempfile::tempdir().expect("tempdir");
+    let out = d.path().join("bench");
+    let o = cbr(
+        &[
+            "bench",
+            "builtin:demo",
+            "--width",
+            "64",
+            "--height",
+            "36",
+            "--warmup",
+            "1",
+            "--frames",
+            "2",
+            "--techniques",
+            "checkerboard:rotated:ours,checkerboard:split:pq4k:fp16",
+            "--groups",
+            "8,16",
+            "--timing-only",
+            "--validation",
+            "-o",
+            out.to_str().expect("utf8"),
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let b: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("bench.json")).expect("bench.json"))
+            .expect("json");
+    assert_eq!(b["validation"]["messages"], 0);
+    assert_eq!(b["protocol"]["timing_only"], true);
+    let rows = b["rows"].as_array().expect("rows");
+    let configs: Vec<&str> = rows
+        .iter()
+        .map(|r| r["config"].as_str().unwrap_or(""))
+        .collect();
+    assert_eq!(
+        configs,
+        [
+            "native",
+            "checkerboard:rotated:ours:8",
+            "checkerboard:rotated:ours:16",
+            "checkerboard:split:pq4k:fp16:8",
+            "checkerboard:split:pq4k:fp16:16"
+        ]
+    );
+    for r in rows {
+        let c = r["config"].as_str().unwrap_or("");
+        assert!(r["error"].is_null(), "{c}: {}", r["error"]);
+        assert!(r["images"].is_null(), "{c}: no image is written");
+        assert_eq!(r["frame_ms"]["n"], 2, "{c}");
+        assert!(
+            r["frame_ms"]["median"].as_f64().is_some_and(|t| t > 0.0),
+            "{c}"
+        );
+        if c.starts_with("checkerboard") {
+            assert_eq!(r["passes"]["resolve"]["n"], 2, "{c}");
+            assert_eq!(r["copy_floor_ms"]["n"], 2, "{c}");
+        }
+    }
+    let written: Vec<String> = std::fs::read_dir(&out)
+        .expect("out")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        written
+            .iter()
+            .all(|f| f == "bench.json" || f == "bench.csv"),
+        "{written:?}"
+    );
+    let report = d.path().join("report.html");
+    let o = cbr(
+        &[
+            "report",
+            out.to_str().expect("utf8"),
+            "-o",
+            report.to_str().expect("utf8"),
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    // No error is measured, so no reference is taken.
+    let refused = d.path().join("refused");
+    let o = cbr(
+        &[
+            "bench",
+            "builtin:demo",
+            "--width",
+            "64",
+            "--height",
+            "36",
+            "--timing-only",
+            "--reference",
+            "ssaa:4",
+            "-o",
+            refused.to_str().expect("utf8"),
+        ],
+        &[],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--timing-only"), "{}", stderr(&o));
+    assert!(!refused.exists());
+}
+
+#[test]
 fn bench_against_a_supersampled_reference_names_it_everywhere_and_caches_it() {
     let d = tempfile::tempdir().expect("tempdir");
     let cache = d.path().join("cache");
