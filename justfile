@@ -112,6 +112,26 @@ test: lint
     @echo "[test] cargo test --workspace (GPU tests on ${VK_DRIVER_FILES:-the default Vulkan device}, validation layers on)"
     cargo test --workspace --no-fail-fast
 
+# Issue 17's GPU study, prepared here for a session that is lent the GPU machine (docs/resolve.md,
+# "The GPU study"): packs the release and test binaries, ../shared and Debian's Vulkan loader and
+# validation layers into .gpu/ (git-ignored, about 25 MiB) for the device tool to carry; there,
+# `bash scripts/gpu-study.sh` runs the test suite and the timing-only benches in one command.
+gpu-pack:
+    scripts/gpu-pack.sh
+
+# The GPU study's script end to end on this machine's device at tiny sizes, in a copy of the tree
+# the way the device tool sends it (after `just gpu-pack`; about 2 minutes on lavapipe).
+gpu-study-dry-run:
+    #!/usr/bin/env bash
+    set -euo pipefail
+    [ -f .gpu/bins.tar.xz ] || { echo "run just gpu-pack first" >&2; exit 1; }
+    d=$(mktemp -d); mkdir -p "$d/repo"
+    git ls-files -z --cached --others --exclude-standard | xargs -0 -I{} cp --parents {} "$d/repo/"
+    cp -r .gpu "$d/repo/"
+    (cd "$d/repo" && CBR_GPU_STUDY_QUICK=1 CBR_GPU_STUDY_TESTS='layouts|msaa|timestamps' OUT="$d/OUT" bash scripts/gpu-study.sh)
+    cat "$d/OUT/gpu-study.md"
+    echo "[gpu-study-dry-run] $d/OUT"
+
 # Criterion benchmarks of the metrics on 1080p pairs, then peak memory on a 4K HDR pair
 # (figures in docs/metrics.md).
 bench-metrics: setup
