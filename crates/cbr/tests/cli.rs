@@ -40,6 +40,12 @@ fn expect_failure(scene: &Path, extra: &[&str], env: &[(&str, &str)], expect: &[
     assert!(!out.exists(), "no output folder may be written on failure");
 }
 
+/// The bench.json a `cbr bench` run wrote into `out`.
+fn read_bench_json(out: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(out.join("bench.json")).expect("bench.json"))
+        .expect("json")
+}
+
 fn write(dir: &Path, name: &str, text: &[u8]) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, text).expect("write");
@@ -559,9 +565,7 @@ fn bench_writes_json_and_csv_with_the_protocol_and_sweeps() {
         &[],
     );
     assert!(o.status.success(), "{}", stderr(&o));
-    let b: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("bench.json")).expect("bench.json"))
-            .expect("json");
+    let b = read_bench_json(&out);
     check_bench_schema(&b);
     assert_eq!(b["validation"]["messages"], 0);
     let configs: Vec<&str> = b["rows"]
@@ -646,9 +650,7 @@ fn bench_timing_only_times_every_row_and_measures_no_error() {
         &[],
     );
     assert!(o.status.success(), "{}", stderr(&o));
-    let b: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("bench.json")).expect("bench.json"))
-            .expect("json");
+    let b = read_bench_json(&out);
     assert_eq!(b["validation"]["messages"], 0);
     assert_eq!(b["protocol"]["timing_only"], true);
     let rows = b["rows"].as_array().expect("rows");
@@ -753,9 +755,7 @@ fn bench_against_a_supersampled_reference_names_it_everywhere_and_caches_it() {
             &cache_env,
         );
         assert!(o.status.success(), "{}", stderr(&o));
-        let b: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(out.join("bench.json")).expect("bench.json"))
-                .expect("json");
+        let b = read_bench_json(&out);
         check_bench_schema(&b);
         assert_eq!(b["validation"]["messages"], 0);
         b
@@ -867,9 +867,7 @@ fn bench_writes_the_temporal_metrics_with_finite_values() {
         }
         let o = cbr(&args, &cache_env);
         assert!(o.status.success(), "{}", stderr(&o));
-        let b: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(out.join("bench.json")).expect("bench.json"))
-                .expect("json");
+        let b = read_bench_json(&out);
         check_bench_schema(&b);
         b
     };
