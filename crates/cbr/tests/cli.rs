@@ -755,7 +755,7 @@ fn bench_against_a_supersampled_reference_names_it_everywhere_and_caches_it() {
             &cache_env,
         );
         assert!(o.status.success(), "{}", stderr(&o));
-        let b = read_bench_json(&out);
+        let b = read_bench_json(out);
         check_bench_schema(&b);
         assert_eq!(b["validation"]["messages"], 0);
         b
@@ -867,7 +867,7 @@ fn bench_writes_the_temporal_metrics_with_finite_values() {
         }
         let o = cbr(&args, &cache_env);
         assert!(o.status.success(), "{}", stderr(&o));
-        let b = read_bench_json(&out);
+        let b = read_bench_json(out);
         check_bench_schema(&b);
         b
     };
