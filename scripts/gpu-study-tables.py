@@ -58,6 +58,45 @@ def resolve_rows(runs, prefix):
     return out
 
 
+def goals(runs):
+    """Issues 14 and 15's frame-time goals, timed on this device (no error: --timing-only)."""
+    for scene in ("demo", "sibenik"):
+        b = runs.get(f"goal-interleaved-{scene}")
+        if not b:
+            continue
+        rows = b["rows"]
+        ref = next((med(r["frame_ms"]) for r in rows if r["config"] == "deferred:vpls=1024"), None)
+        r0 = rows[0]
+        print(f"## Interleaved shading against every VPL at every pixel, {scene}, {r0['width']}x{r0['height']} "
+              f"({b['protocol']['warmup_frames']} warm-up + {b['protocol']['measured_frames']} measured frames)\n")
+        print("Issue 15's goal: 4x4 with 1024 VPLs at least 10x faster than `deferred:vpls=1024` at FLIP at "
+              "most 0.05. FLIP is not measured here (`--timing-only`); docs/interleaved.md has lavapipe's.\n")
+        print("| configuration | frame | x faster than `deferred:vpls=1024` | passes |")
+        print("|---|---|---|---|")
+        for r in rows:
+            f = med(r["frame_ms"])
+            passes = ", ".join(f"{k} {ms(med(v))}" for k, v in r["passes"].items() if k != "readback")
+            print(f"| `{r['config']}` | {ms(f)} | {ratio(ref, f)} | {passes} |")
+        print()
+    for scene in ("demo", "sibenik"):
+        b = runs.get(f"goal-analytic-{scene}")
+        if not b:
+            continue
+        print(f"## `analytic` against `ssaa:16`, {scene} ({b['protocol']['warmup_frames']} warm-up + "
+              f"{b['protocol']['measured_frames']} measured frames)\n")
+        print("Issue 14's goal: the frame at most 1/20 of `ssaa:16`'s at the same resolution.\n")
+        print("| resolution | `native` | `ssaa:16` | `analytic` | `analytic` / `ssaa:16` |")
+        print("|---|---|---|---|---|")
+        by_res = {}
+        for r in b["rows"]:
+            by_res.setdefault(f"{r['width']}x{r['height']}", {})[r["config"]] = med(r["frame_ms"])
+        for res, t in by_res.items():
+            a, s = t.get("analytic"), t.get("ssaa:16")
+            frac = f"1/{s / a:.1f}" if a and s else "-"
+            print(f"| {res} | {ms(t.get('native'))} | {ms(s)} | {ms(a)} | {frac} |")
+        print()
+
+
 def main():
     work = sys.argv[1]
     runs = load(work)
@@ -136,6 +175,8 @@ def main():
                 print(f"| `{r['config']}` | {ms(f)} | {ratio(f, native)} | {ms(raster)} | {ratio(raster, native)} | "
                       f"{ms(res_ms)}{share} |")
             print()
+
+    goals(runs)
 
     hd = resolve_rows(runs, "core-").get("1920x1080", [])
     if hd:

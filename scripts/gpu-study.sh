@@ -4,22 +4,27 @@
 #
 #   run(command="bash scripts/gpu-study.sh", carry=[".gpu"], timeout_s=600)
 #
-# Stages, each under its own time budget so that what finished comes back when a later one runs
-# out (the tool allows 10 minutes a command and 15 minutes of device time a session):
+# Stages, each with a deadline counted from the script's start (a stage that ends early leaves
+# its time to the next), so that what finished comes back when a later one runs out (the tool
+# allows 10 minutes a command and 15 minutes of device time a session):
 #   1. unpack .gpu (binaries, ../shared, Debian's Vulkan loader and validation layers) and link the
 #      paths the binaries were built under; `cbr info` of the device;
-#   2. tests (CBR_GPU_TESTS_S, default 200 s): every test binary of the workspace on the GPU,
-#      validation layers on as always; the msaa2x and sample-location tests first;
-#   3. bench (CBR_GPU_BENCH_S, default 300 s): `cbr bench --timing-only` of builtin:demo at
+#   2. tests (until CBR_GPU_TESTS_END, default 190 s): every test binary of the workspace on the
+#      GPU, validation layers on as always; the msaa2x and sample-location tests first;
+#   3. bench (until CBR_GPU_BENCH_END, default 450 s): `cbr bench --timing-only` of builtin:demo at
 #      3840x2160 and 1920x1080: rotated, split and (where the device has 2x MSAA) msaa2x, with and
 #      without sample locations; `ours` and `pq4k` in every mapping (pixel, quad), group (8, 16)
 #      and precision (fp32, fp16), the other modes at the defaults, each with its copy floor;
 #      then Sibenik's frame against native at 1280x720 and 1920x1080;
-#   4. scripts/gpu-study-tables.py: the tables for docs/resolve.md and references/README.md.
+#   4. goals (until CBR_GPU_GOALS_END, default 550 s): the frame-time goals of issues 14 and 15
+#      that lavapipe's cost structure decides (docs/analytic.md, docs/interleaved.md), timed on
+#      the GPU: interleaved:4x4 against every VPL at every pixel (deferred:vpls=1024) at 1280x720
+#      on the demo and Sibenik; analytic against ssaa:16 at 320x180 and Sibenik at 160x90 too;
+#   5. scripts/gpu-study-tables.py: the tables for the docs and references/README.md.
 # What comes back in $OUT: gpu-study.md (the tables), tests.tsv (per test binary: passed, failed,
 # skipped lines, VUID lines), study.log, results.tar.gz (every bench.json and test log).
 #
-# Arguments: `all` (default), `tests` or `bench` (stage 1 always runs). CBR_GPU_STUDY_QUICK=1: a
+# Arguments: `all` (default), `tests`, `bench` or `goals` (stage 1 always runs). CBR_GPU_STUDY_QUICK=1: a
 # dry run on any device at tiny sizes (this is how the script is checked on lavapipe: `just
 # gpu-study-dry-run`).
 set -uo pipefail
@@ -77,8 +82,7 @@ nproc=$(nproc)
 
 # --- 2. tests --------------------------------------------------------------------------------------
 run_tests() {
-    local budget=${CBR_GPU_TESTS_S:-200} end
-    end=$((SECONDS + budget))
+    local end=${CBR_GPU_TESTS_END:-190}
     printf 'test\tstatus\tpassed\tfailed\tskipped_lines\tvuid_lines\tseconds\n' >"$work/tests.tsv"
     # The GPU-only checks first (msaa2x, sample locations, 2x MSAA), then the rest in pack order.
     local list
@@ -112,10 +116,8 @@ run_tests() {
 # --- 3. bench --------------------------------------------------------------------------------------
 can() { grep -qP "^  $1 +yes" "$out/info.txt"; }
 run_bench() {
-    local budget=${CBR_GPU_BENCH_S:-300} end
-    end=$((SECONDS + budget))
-    local big=3840x2160 hd=1920x1080 sib="1280x720,1920x1080" warmup=2 frames=8
-    if [ "$quick" = 1 ]; then big=128x72 hd=64x36 sib=64x36 warmup=1 frames=2; fi
+    local big=3840x2160 hd=1920x1080 sib="1280x720,1920x1080"
+    [ "$quick" = 1 ] && big=128x72 hd=64x36 sib=64x36
     local layouts="rotated split" core=() modes=()
     can msaa2x && layouts="msaa2x $layouts"
     for l in $layouts; do
@@ -136,10 +138,19 @@ run_bench() {
         "modes-$hd|builtin:demo|$hd|$modes_csv|"
         "sibenik|scenes/sibenik.toml|$sib|checkerboard:rotated:ours,checkerboard:split:ours,checkerboard:rotated:pq4k$(can msaa2x && echo ,checkerboard:msaa2x:ours)|"
     )
-    for r in "${runs[@]}"; do
+    bench_runs "${CBR_GPU_BENCH_END:-450}" "${runs[@]}"
+}
+
+# Runs `cbr bench --timing-only` for each "name|scene|resolutions|techniques|extra flags" until
+# the deadline (seconds since the script's start).
+bench_runs() {
+    local end=$1 warmup=2 frames=8
+    shift
+    [ "$quick" = 1 ] && warmup=1 frames=2
+    for r in "$@"; do
         IFS='|' read -r name scene res techs extra <<<"$r"
         local left=$((end - SECONDS))
-        if [ "$left" -le 10 ]; then log "bench $name: not run (bench budget spent)"; continue; fi
+        if [ "$left" -le 10 ]; then log "bench $name: not run (its stage's time is spent)"; continue; fi
         local t0=$SECONDS
         # shellcheck disable=SC2086
         timeout "$left" "$cbr" bench "$scene" --resolutions "$res" --warmup $warmup --frames $frames \
@@ -149,11 +160,24 @@ run_bench() {
     done
 }
 
+# --- 4. goals --------------------------------------------------------------------------------------
+run_goals() {
+    local hd=1280x720 small=320x180 tiny=160x90
+    [ "$quick" = 1 ] && hd=64x36 small=32x18 tiny=32x18
+    local il="deferred:vpls=1024,deferred,interleaved:4x4:direct:box,interleaved:4x4:direct:seed,interleaved:4x4,interleaved:4x4:direct"
+    bench_runs "${CBR_GPU_GOALS_END:-550}" \
+        "goal-interleaved-demo|builtin:demo|$hd|$il|" \
+        "goal-interleaved-sibenik|scenes/sibenik.toml|$hd|$il|" \
+        "goal-analytic-demo|builtin:demo|$small|ssaa:16,analytic|--time-cached-rows --no-cache" \
+        "goal-analytic-sibenik|scenes/sibenik.toml|$tiny,$small|ssaa:16,analytic|--time-cached-rows --no-cache"
+}
+
 case $part in
-    all) run_tests; run_bench ;;
+    all) run_tests; run_bench; run_goals ;;
     tests) run_tests ;;
     bench) run_bench ;;
-    *) log "error: unknown part $part (all, tests, bench)"; exit 2 ;;
+    goals) run_goals ;;
+    *) log "error: unknown part $part (all, tests, bench, goals)"; exit 2 ;;
 esac
 
 python3 scripts/gpu-study-tables.py "$work" >"$out/gpu-study.md" 2>>"$out/study.log" \
