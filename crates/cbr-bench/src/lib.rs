@@ -89,6 +89,9 @@ pub struct BenchOptions {
     pub out: PathBuf,
 }
 
+/// The protocol's error entries in a `--timing-only` run.
+const NOT_MEASURED: &str = "not measured (--timing-only)";
+
 /// What a finished run wrote.
 pub struct BenchResult {
     pub configurations: usize,
@@ -267,7 +270,9 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
         scene.settings.height = *h;
         let mut ref_config =
             expand(std::slice::from_ref(&reference), *w, *h, &[], &[], &[])?.remove(0);
-        let cache = (!a.no_cache).then(cbr_render::cache::default_dir);
+        // Timing only: nothing is read from or written to the frame cache (a cached frame is not
+        // timed, and no frame is kept).
+        let cache = (!a.no_cache && !a.timing_only).then(cbr_render::cache::default_dir);
         ref_config.settings.cache = cache.clone();
         if let Some(dir) = &ref_config.settings.cache
             && reference != "native"
@@ -294,22 +299,24 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
                 s.mismatched_pixels, s.pixels, s.native_frames[1]
             );
         }
-        id_sources.push(json!({
-            "width": w,
-            "height": h,
-            "source": match &rm.id_stand_in {
-                Some(_) => "reference, with a native raster at the reference's LOD bias for the warm-up frames the reference skipped",
-                None => "reference",
-            },
-            "native": rm.id_stand_in,
-        }));
+        if !a.timing_only {
+            id_sources.push(json!({
+                "width": w,
+                "height": h,
+                "source": match &rm.id_stand_in {
+                    Some(_) => "reference, with a native raster at the reference's LOD bias for the warm-up frames the reference skipped",
+                    None => "reference",
+                },
+                "native": rm.id_stand_in,
+            }));
+        }
         let mut all = vec![(ref_config, rm)];
         for c in configs {
             bar.set_message(format!("{} {w}x{h}", c.name));
             // Cacheable techniques (ssaa) among the rows share the reference's cache, unless
             // their time is wanted (--time-cached-rows).
             let mut c = c.clone();
-            c.settings.cache = if a.time_cached_rows {
+            c.settings.cache = if a.time_cached_rows || a.timing_only {
                 None
             } else {
                 cache.clone()
@@ -463,13 +470,13 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
             "frame_ms": format!("sum of the technique's passes per frame (not {})", NOT_TECHNIQUE.join(", ")),
             "reference": if a.timing_only { "none: --timing-only (no error measured)".to_string() } else { format!("{reference} at the same resolution and frame") },
             "timing_only": a.timing_only,
-            "edge_pixels": "FLIP mean over the reference's edge pixels: more than one object ID among a supersampled reference's samples (its coverage layer), or for a one-sample reference an object ID that differs from a 4-neighbour's",
+            "edge_pixels": if a.timing_only { NOT_MEASURED } else { "FLIP mean over the reference's edge pixels: more than one object ID among a supersampled reference's samples (its coverage layer), or for a one-sample reference an object ID that differs from a 4-neighbour's" },
             "disocclusion_frames": k,
-            "disocclusion_pixels": format!("FLIP mean over the pixels whose reference object ID differs from their ID in any of the k = {k} frames before (frames before frame 0 do not exist); frames whose mask is empty are left out of the mean"),
+            "disocclusion_pixels": if a.timing_only { NOT_MEASURED.to_string() } else { format!("FLIP mean over the pixels whose reference object ID differs from their ID in any of the k = {k} frames before (frames before frame 0 do not exist); frames whose mask is empty are left out of the mean") },
             "disocclusion_ids": id_sources,
-            "temporal": "over consecutive measured frames, display values: flicker = mean |e_t - e_(t-1)| with e = test - reference (cbr compare's flicker), change = mean |x_t - x_(t-1)| of the test, ref_change = the same of the reference",
+            "temporal": if a.timing_only { NOT_MEASURED } else { "over consecutive measured frames, display values: flicker = mean |e_t - e_(t-1)| with e = test - reference (cbr compare's flicker), change = mean |x_t - x_(t-1)| of the test, ref_change = the same of the reference" },
             "display": DisplayTransform { exposure_stops: scene.settings.exposure }.describe(),
-            "metrics": "PSNR and SSIM on display values, LDR-FLIP (67.02 ppd), relMSE on linear HDR (eps 0.01)",
+            "metrics": if a.timing_only { NOT_MEASURED } else { "PSNR and SSIM on display values, LDR-FLIP (67.02 ppd), relMSE on linear HDR (eps 0.01)" },
         },
         "reference": reference,
         "reference_images": reference_images,

@@ -626,6 +626,8 @@ fn bench_writes_json_and_csv_with_the_protocol_and_sweeps() {
 fn bench_timing_only_times_every_row_and_measures_no_error() {
     let d = tempfile::tempdir().expect("tempdir");
     let out = d.path().join("bench");
+    // ssaa is cacheable: timing only neither reads nor writes the frame cache.
+    let cache = d.path().join("cache");
     let o = cbr(
         &[
             "bench",
@@ -639,7 +641,7 @@ fn bench_timing_only_times_every_row_and_measures_no_error() {
             "--frames",
             "2",
             "--techniques",
-            "checkerboard:rotated:ours,checkerboard:split:pq4k:fp16",
+            "checkerboard:rotated:ours,checkerboard:split:pq4k:fp16,ssaa:2",
             "--groups",
             "8,16",
             "--timing-only",
@@ -647,12 +649,17 @@ fn bench_timing_only_times_every_row_and_measures_no_error() {
             "-o",
             out.to_str().expect("utf8"),
         ],
-        &[],
+        &[("CBR_CACHE_DIR", cache.to_str().expect("utf8"))],
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let b = read_bench_json(&out);
     assert_eq!(b["validation"]["messages"], 0);
     assert_eq!(b["protocol"]["timing_only"], true);
+    assert_eq!(b["protocol"]["metrics"], "not measured (--timing-only)");
+    assert!(
+        !cache.exists() || std::fs::read_dir(&cache).expect("cache").next().is_none(),
+        "no frame may be cached"
+    );
     let rows = b["rows"].as_array().expect("rows");
     let configs: Vec<&str> = rows
         .iter()
@@ -665,7 +672,8 @@ fn bench_timing_only_times_every_row_and_measures_no_error() {
             "checkerboard:rotated:ours:8",
             "checkerboard:rotated:ours:16",
             "checkerboard:split:pq4k:fp16:8",
-            "checkerboard:split:pq4k:fp16:16"
+            "checkerboard:split:pq4k:fp16:16",
+            "ssaa:2"
         ]
     );
     for r in rows {
