@@ -120,7 +120,10 @@ gpu-pack:
     scripts/gpu-pack.sh
 
 # The GPU study's script end to end on this machine's device at tiny sizes, in a copy of the tree
-# the way the device tool sends it (after `just gpu-pack`; about 2 minutes on lavapipe).
+# the way the device tool sends it, with /work hidden (a private mount namespace, tmpfs over it:
+# as root), so that the packed binaries, the link of the path they were built under and the
+# unpacked ../shared are what runs, not this checkout (after `just gpu-pack`; about 2 minutes on
+# lavapipe).
 gpu-study-dry-run:
     #!/usr/bin/env bash
     set -euo pipefail
@@ -128,7 +131,8 @@ gpu-study-dry-run:
     d=$(mktemp -d); mkdir -p "$d/repo"
     git ls-files -z --cached --others --exclude-standard | xargs -0 -I{} cp --parents {} "$d/repo/"
     cp -r .gpu "$d/repo/"
-    (cd "$d/repo" && CBR_GPU_STUDY_QUICK=1 CBR_GPU_STUDY_TESTS='layouts|msaa|timestamps' OUT="$d/OUT" bash scripts/gpu-study.sh)
+    hide=$(dirname "$(cat .gpu/root.txt)")
+    unshare -m bash -c "mount -t tmpfs none '$hide' && cd '$d/repo' && CBR_GPU_STUDY_QUICK=1 CBR_GPU_STUDY_TESTS='layouts|msaa|timestamps|real_scenes|cli' OUT='$d/OUT' bash scripts/gpu-study.sh"
     cat "$d/OUT/gpu-study.md"
     echo "[gpu-study-dry-run] $d/OUT"
 

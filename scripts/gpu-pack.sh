@@ -5,6 +5,7 @@
 #   .gpu/bins.tar.xz    the release `cbr`, the debug `cbr` and every test binary of `cargo test
 #                       --workspace` (the ones ./dev test runs), stripped, at their target/ paths
 #   .gpu/tests.txt      the test binaries: path, crate folder (cargo runs a test there) and name
+#   .gpu/src-hash.txt  a hash of crates/, shaders/ and Cargo.*: the study warns when the tree differs
 #   .gpu/root.txt       the checkout's path here: the binaries hold paths under it (env!), so the
 #                       study links it to the device's copy of the tree
 #   .gpu/shared.tar.xz  ../shared/scenes and ../shared/testdata (the real-scene tests, Sibenik)
@@ -60,6 +61,11 @@ tar -C .. -cf - shared/scenes shared/testdata | xz -T0 -6 >.gpu/shared.tar.xz
 say "downloading Debian's Vulkan loader and validation layers"
 (cd .gpu/deb && apt-get download libvulkan1 vulkan-validationlayers >&2)
 git rev-parse HEAD >.gpu/commit.txt
+# The same list and hash as gpu-study.sh's src_hash: the files under crates/ and shaders/ and the
+# Cargo files that the device tool sends (tracked, and untracked but not ignored).
+git ls-files -z --cached --others --exclude-standard -- crates shaders Cargo.toml Cargo.lock \
+    | xargs -0 -I{} sh -c '[ -f "$1" ] && printf "%s\n" "$1"' _ {} | LC_ALL=C sort \
+    | xargs -d '\n' sha256sum | sha256sum | cut -c1-16 >.gpu/src-hash.txt
 echo "$PWD" >.gpu/root.txt
 git status --porcelain >.gpu/dirty.txt
 

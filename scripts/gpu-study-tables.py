@@ -122,8 +122,19 @@ def main():
         tot = lambda i: sum(int(l[i]) for l in lines if len(l) > i and l[i].isdigit())
         print(f"\nTotal: {tot(2)} passed, {tot(3)} failed, {tot(5)} VUID lines.\n")
 
+    rtsv = os.path.join(work, "runs.tsv")
+    if os.path.exists(rtsv):
+        lines = [l.rstrip("\n").split("\t") for l in open(rtsv)][1:]
+        print("## Bench runs (`cbr bench --timing-only`)\n")
+        print("| run | scene | resolutions | status | s |")
+        print("|---|---|---|---|---|")
+        for l in lines:
+            print("| " + " | ".join((l + [""] * 5)[:5]) + " |")
+        print()
+
     for res, rows in resolve_rows(runs, "core-").items():
-        b = next(b for n, b in runs.items() if n == f"core-{res}")
+        b = next(b for n, b in runs.items()
+                 if n.startswith("core-") and any(f"{r['width']}x{r['height']}" == res for r in b["rows"]))
         p = b["protocol"]
         print(f"## Resolve cost, builtin:demo, {res} ({p['warmup_frames']} warm-up + "
               f"{p['measured_frames']} measured frames)\n")
@@ -156,15 +167,19 @@ def main():
                   f"{ms(med(r['frame_ms']))} |")
         print()
 
-    if "sibenik" in runs:
-        b = runs["sibenik"]
+    sib = [(n, b) for n, b in runs.items() if n.startswith("sibenik")]
+    if sib:
         by_res = {}
-        for r in b["rows"]:
-            by_res.setdefault(f"{r['width']}x{r['height']}", []).append(r)
+        for n, b in sib:
+            for r in b["rows"]:
+                rows = by_res.setdefault(f"{r['width']}x{r['height']}", [])
+                if not any(x["config"] == r["config"] for x in rows):
+                    rows.append(r)
+        p = sib[0][1]["protocol"]
         for res, rows in by_res.items():
             native = next((med(r["frame_ms"]) for r in rows if r["config"] == "native"), None)
-            print(f"## Šibenik's frame, {res} ({b['protocol']['warmup_frames']} warm-up + "
-                  f"{b['protocol']['measured_frames']} measured frames)\n")
+            print(f"## Šibenik's frame, {res} ({p['warmup_frames']} warm-up + "
+                  f"{p['measured_frames']} measured frames; native from the first run)\n")
             print("| configuration | frame | / native | raster | / native's | resolve (share of frame) |")
             print("|---|---|---|---|---|---|")
             for r in rows:

@@ -1,61 +1,92 @@
 #!/usr/bin/env bash
 # Issue 17's GPU study, in one command on the lent GPU machine (docs/resolve.md, "The GPU study").
-# Prepare here with scripts/gpu-pack.sh (just gpu-pack), then through the device tool:
+# Prepare here with scripts/gpu-pack.sh (just gpu-pack) in the same session, then through the
+# device tool:
 #
 #   run(command="bash scripts/gpu-study.sh", carry=[".gpu"], timeout_s=600)
 #
 # Stages, each with a deadline counted from the script's start (a stage that ends early leaves
-# its time to the next), so that what finished comes back when a later one runs out (the tool
-# allows 10 minutes a command and 15 minutes of device time a session):
+# its time to the next; no single bench run takes more than CBR_GPU_RUN_CAP_S, default 120 s),
+# so that what finished comes back when a later one runs out (the tool allows 10 minutes a
+# command and 15 minutes of device time a session):
 #   1. unpack .gpu (binaries, ../shared, Debian's Vulkan loader and validation layers) and link the
-#      paths the binaries were built under; `cbr info` of the device;
+#      paths the binaries were built under; check that the tree is the one packed; `cbr info` of
+#      the device; a 64x36 frame with the validation layers on;
 #   2. tests (until CBR_GPU_TESTS_END, default 190 s): every test binary of the workspace on the
 #      GPU, validation layers on as always; the msaa2x and sample-location tests first;
 #   3. bench (until CBR_GPU_BENCH_END, default 450 s): `cbr bench --timing-only` of builtin:demo at
-#      3840x2160 and 1920x1080: rotated, split and (where the device has 2x MSAA) msaa2x, with and
-#      without sample locations; `ours` and `pq4k` in every mapping (pixel, quad), group (8, 16)
-#      and precision (fp32, fp16), the other modes at the defaults, each with its copy floor;
-#      then Sibenik's frame against native at 1280x720 and 1920x1080;
+#      1920x1080 and then 3840x2160: rotated and split, then (where the device has 2x MSAA)
+#      msaa2x with and without sample locations, in separate runs; `ours` and `pq4k` in every
+#      mapping (pixel, quad), group (8, 16) and precision (fp32, fp16), the other modes at the
+#      defaults, each with its copy floor; then Sibenik's frame against native at 1280x720 and
+#      1920x1080;
 #   4. goals (until CBR_GPU_GOALS_END, default 550 s): the frame-time goals of issues 14 and 15
 #      that lavapipe's cost structure decides (docs/analytic.md, docs/interleaved.md), timed on
 #      the GPU: interleaved:4x4 against every VPL at every pixel (deferred:vpls=1024) at 1280x720
 #      on the demo and Sibenik; analytic against ssaa:16 at 320x180 and Sibenik at 160x90 too;
 #   5. scripts/gpu-study-tables.py: the tables for the docs and references/README.md.
 # What comes back in $OUT: gpu-study.md (the tables), tests.tsv (per test binary: passed, failed,
-# skipped lines, VUID lines), study.log, results.tar.gz (every bench.json and test log).
+# SKIPPED lines, VUID lines), runs.tsv (per bench run: exit status, seconds), info.txt, study.log,
+# results.tar.gz (every bench.json and log; rebuilt after each run, so it survives a kill).
 #
 # Arguments: `all` (default), `tests`, `bench` or `goals` (stage 1 always runs). CBR_GPU_STUDY_QUICK=1: a
 # dry run on any device at tiny sizes (this is how the script is checked on lavapipe: `just
 # gpu-study-dry-run`).
 set -uo pipefail
-cd "$(dirname "$0")/.."
-repo=$PWD
+# Physical paths: the binaries resolve `..` in the paths they hold physically.
+cd -P "$(dirname "$0")/.." || exit 1
+repo=$(pwd -P)
 part=${1:-all}
 quick=${CBR_GPU_STUDY_QUICK:-0}
+cap=${CBR_GPU_RUN_CAP_S:-120}
 out=${OUT:-$repo/out/gpu-study}
 work=$repo/out/gpu-study-work
 rm -rf "$work"
 mkdir -p "$out" "$work/tests" "$work/bench"
 log() { printf '[gpu-study %s] %s\n' "$(date +%T)" "$*" | tee -a "$out/study.log" >&2; }
+pack_results() {
+    cp "$out/study.log" "$work/" 2>/dev/null
+    tar --exclude vvl -C "$(dirname "$work")" -czf "$out/results.tar.gz" "$(basename "$work")" 2>/dev/null
+}
+# The source files whose build the pack holds: scripts/gpu-pack.sh hashes the same list.
+src_hash() {
+    find crates shaders Cargo.toml Cargo.lock -type f 2>/dev/null | LC_ALL=C sort | xargs -d '\n' sha256sum | sha256sum | cut -c1-16
+}
 
 # --- 1. unpack -------------------------------------------------------------------------------------
 [ -f .gpu/bins.tar.xz ] || { log "error: .gpu/bins.tar.xz is missing: run scripts/gpu-pack.sh here first and carry .gpu"; exit 1; }
 root=$(cat .gpu/root.txt)
-log "pack of commit $(cat .gpu/commit.txt) built under $root; this tree: $repo ($(git rev-parse --verify -q HEAD || echo 'no commit'))"
-if [ "${CBR_GPU_STUDY_KEEP_TARGET:-0}" != 1 ]; then
-    tar -C "$repo" -xJf .gpu/bins.tar.xz || { log "error: cannot unpack the binaries"; exit 1; }
+log "pack of commit $(cat .gpu/commit.txt) built under $root; this tree: $repo"
+if [ "$(src_hash)" != "$(cat .gpu/src-hash.txt 2>/dev/null)" ]; then
+    log "WARNING: crates/, shaders/ or Cargo.* differ from what the pack was built from (run just gpu-pack again): the binaries are the pack's"
 fi
+tar -C "$repo" -xJf .gpu/bins.tar.xz || { log "error: cannot unpack the binaries"; exit 1; }
 # The binaries name files by the paths they were built under (env!("CARGO_MANIFEST_DIR"),
-# CARGO_BIN_EXE_cbr); the scenes and tests read ../shared beside the checkout.
-if [ "$root" != "$repo" ] && [ ! -e "$root" ]; then
-    mkdir -p "$(dirname "$root")" && ln -s "$repo" "$root" && log "linked $root -> $repo"
+# CARGO_BIN_EXE_cbr): make $root this tree.
+if [ ! "$root/target/debug/cbr" -ef "$repo/target/debug/cbr" ]; then
+    if [ ! -e "$root" ] && [ ! -L "$root" ]; then
+        mkdir -p "$(dirname "$root")" && ln -s "$repo" "$root"
+    else
+        mkdir -p "$root" && mount --bind "$repo" "$root"
+    fi
+    if [ "$root/target/debug/cbr" -ef "$repo/target/debug/cbr" ]; then
+        log "$root is now this tree"
+    else
+        log "error: cannot make $root this tree (the test binaries look there); the tests will fail"
+    fi
 fi
-for s in "$(dirname "$repo")/shared" "$(dirname "$root")/shared"; do
+# The scenes and tests read ../shared beside the checkout, resolved physically: beside this tree
+# (scenes/*.toml) and beside $root's target (the tests' ../../../shared from a crate).
+for s in "$(dirname "$repo")/shared" "$(cd -P "$root/.." 2>/dev/null && pwd -P)/shared"; do
     if [ ! -d "$s/scenes" ]; then
         mkdir -p "$(dirname "$s")" && tar -C "$(dirname "$s")" -xJf .gpu/shared.tar.xz && log "unpacked $s"
     fi
 done
-if ! ldconfig -p 2>/dev/null | grep -q 'libvulkan.so.1 '; then
+for s in "$repo/scenes/../../shared/scenes" "$root/crates/cbr-render/../../../shared/scenes"; do
+    [ -d "$s" ] || log "error: $s is missing: the real-scene tests will skip and the Sibenik runs fail"
+done
+# `grep >/dev/null`, not `grep -q`: with pipefail, ldconfig could die of SIGPIPE when grep quits.
+if ! ldconfig -p 2>/dev/null | grep 'libvulkan.so.1 ' >/dev/null; then
     for f in .gpu/deb/libvulkan1_*.deb; do dpkg -x "$f" /; done
     ldconfig
     log "installed the Vulkan loader from .gpu/deb"
@@ -72,104 +103,131 @@ if [ -z "${VK_DRIVER_FILES:-}" ]; then
         if [ -e "$f" ]; then export VK_DRIVER_FILES=$f; break; fi
     done
 fi
+# Loaders before 1.3.207 read only the older name.
+[ -n "${VK_DRIVER_FILES:-}" ] && export VK_ICD_FILENAMES=$VK_DRIVER_FILES
 log "VK_DRIVER_FILES=${VK_DRIVER_FILES:-<unset>}"
 cbr=$repo/target/release/cbr
-"$cbr" info >"$out/info.txt" 2>&1 || { log "error: cbr info failed:"; cat "$out/info.txt" >&2; exit 1; }
+"$cbr" info >"$out/info.txt" 2>&1 || { log "error: cbr info failed:"; cat "$out/info.txt" >&2; pack_results; exit 1; }
 cp "$out/info.txt" "$work/info.txt"
 cp .gpu/commit.txt "$work/commit.txt"
 log "device: $(sed -n 's/^chosen: //p' "$out/info.txt"); $(grep -m1 'driver:' "$out/info.txt" | sed 's/^ *//')"
+timeout -k 5 60 "$cbr" bench builtin:demo --width 64 --height 36 --warmup 0 --frames 1 --timing-only \
+    --validation -o "$work/bench/validation-check" >"$work/bench/validation-check.log" 2>&1
+log "validation check (64x36, native, layers on): rc $?, $(grep -o '"messages": [0-9]*' "$work/bench/validation-check/bench.json" 2>/dev/null || echo 'no bench.json') $(tail -1 "$work/bench/validation-check.log")"
 nproc=$(nproc)
 
 # --- 2. tests --------------------------------------------------------------------------------------
 run_tests() {
-    local end=${CBR_GPU_TESTS_END:-190}
-    printf 'test\tstatus\tpassed\tfailed\tskipped_lines\tvuid_lines\tseconds\n' >"$work/tests.tsv"
+    local end=${CBR_GPU_TESTS_END:-190} first='^(layouts|msaa|resolve|timestamps)$' list
+    printf 'test\tstatus\tpassed\tfailed\tSKIPPED lines\tVUID lines\tseconds\n' >"$out/tests.tsv"
     # The GPU-only checks first (msaa2x, sample locations, 2x MSAA), then the rest in pack order.
-    local list
-    list=$( (grep -P '\t(layouts|msaa|resolve|timestamps)$' .gpu/tests.txt; grep -vP '\t(layouts|msaa|resolve|timestamps)$' .gpu/tests.txt) )
-    [ -n "${CBR_GPU_STUDY_TESTS:-}" ] && list=$(grep -P "\t(${CBR_GPU_STUDY_TESTS})\$" <<<"$list")
+    list=$(awk -F'\t' -v re="$first" '$3 ~ re' .gpu/tests.txt; awk -F'\t' -v re="$first" '$3 !~ re' .gpu/tests.txt)
+    if [ -n "${CBR_GPU_STUDY_TESTS:-}" ]; then
+        list=$(awk -F'\t' -v re="^(${CBR_GPU_STUDY_TESTS})\$" '$3 ~ re' <<<"$list")
+    fi
     while IFS=$'\t' read -r bin crate name; do
         [ -n "$bin" ] || continue
-        local left=$((end - SECONDS)) safe="$(basename "$crate")-${name// /_}"
-        safe=${safe//[()]/}
+        local left=$((end - SECONDS)) safe
         name="$(basename "$crate") $name"
+        safe=${name// /_}
+        safe=${safe//[()]/}
         if [ "$left" -le 5 ]; then
-            printf '%s\tnot run (test budget spent)\t\t\t\t\t\n' "$name" >>"$work/tests.tsv"
+            printf '%s\tnot run (test time spent)\t\t\t\t\t\n' "$name" >>"$out/tests.tsv"
             continue
         fi
-        local t0=$SECONDS rc
-        (cd "$root/$crate" && CARGO_MANIFEST_DIR=$root/$crate timeout "$left" "$root/$bin" --test-threads="$nproc" --nocapture) \
-            >"$work/tests/$safe.log" 2>&1
+        local t0=$SECONDS rc counts passed failed skipped vuid status
+        (cd "$root/$crate" && CARGO_MANIFEST_DIR=$root/$crate timeout -k 10 "$left" "$root/$bin" \
+            --test-threads="$nproc" --nocapture) >"$work/tests/$safe.log" 2>&1
         rc=$?
-        local passed failed status
-        passed=$(grep -oP 'test result: \w+\. \K[0-9]+(?= passed)' "$work/tests/$safe.log" | awk '{s+=$1} END {print s+0}')
-        failed=$(grep -oP '[0-9]+(?= failed;)' "$work/tests/$safe.log" | awk '{s+=$1} END {print s+0}')
-        case $rc in 0) status=ok ;; 124) status="timed out" ;; *) status="rc $rc" ;; esac
-        printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "$status" "${passed:-0}" "${failed:-0}" \
-            "$(grep -c 'SKIPPED' "$work/tests/$safe.log")" "$(grep -c 'VUID' "$work/tests/$safe.log")" \
-            "$((SECONDS - t0))" >>"$work/tests.tsv"
-        log "test $name: $status (${passed:-0} passed, ${failed:-0} failed) in $((SECONDS - t0)) s"
+        counts=$(awk '/^test result:/ { for (i = 2; i <= NF; i++) { if ($i ~ /^passed;?$/) p += $(i-1); if ($i ~ /^failed;?$/) f += $(i-1) } } END { print p + 0, f + 0 }' "$work/tests/$safe.log")
+        read -r passed failed <<<"$counts"
+        skipped=$(grep -c 'SKIPPED' "$work/tests/$safe.log")
+        vuid=$(grep -c 'VUID' "$work/tests/$safe.log")
+        case $rc in 0) status=ok ;; 124|137) status="timed out" ;; *) status="rc $rc" ;; esac
+        [ "$skipped" -gt 0 ] && status="$status ($skipped SKIPPED lines)"
+        printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "$status" "$passed" "$failed" "$skipped" "$vuid" \
+            "$((SECONDS - t0))" >>"$out/tests.tsv"
+        log "test $name: $status ($passed passed, $failed failed) in $((SECONDS - t0)) s"
     done <<<"$list"
-    cp "$work/tests.tsv" "$out/tests.tsv"
+    cp "$out/tests.tsv" "$work/tests.tsv"
+    pack_results
 }
 
 # --- 3. bench --------------------------------------------------------------------------------------
-can() { grep -qP "^  $1 +yes" "$out/info.txt"; }
+can() { grep -E "^  $1 +yes" "$out/info.txt" >/dev/null; }
 run_bench() {
-    local big=3840x2160 hd=1920x1080 sib="1280x720,1920x1080"
-    [ "$quick" = 1 ] && big=128x72 hd=64x36 sib=64x36
-    local layouts="rotated split" core=() modes=()
-    can msaa2x && layouts="msaa2x $layouts"
-    for l in $layouts; do
-        for m in ours pq4k; do core+=("checkerboard:$l:$m" "checkerboard:$l:$m:fp16"); done
-        for m in intel spatial temporal; do modes+=("checkerboard:$l:$m"); done
+    local sizes="1920x1080 3840x2160" sib="1280x720,1920x1080"
+    [ "$quick" = 1 ] && sizes="64x36 128x72" sib=64x36
+    local portable=() msaa=() pmodes=() mmodes=()
+    for m in ours pq4k; do
+        for l in rotated split; do portable+=("checkerboard:$l:$m" "checkerboard:$l:$m:fp16"); done
+        msaa+=("checkerboard:msaa2x:$m" "checkerboard:msaa2x:$m:fp16")
+    done
+    for m in intel spatial temporal; do
+        pmodes+=("checkerboard:rotated:$m" "checkerboard:split:$m")
+        mmodes+=("checkerboard:msaa2x:$m")
     done
     if can 'msaa2x --msaa2x-sample-locations'; then
-        for m in ours pq4k; do core+=("checkerboard:msaa2x:$m:locations"); done
+        for m in ours pq4k; do msaa+=("checkerboard:msaa2x:$m:locations"); done
     fi
-    local core_csv modes_csv
-    core_csv=$(IFS=,; echo "${core[*]}")
-    modes_csv=$(IFS=,; echo "${modes[*]}")
-    # name | scene | resolutions | techniques | extra
-    local runs=(
-        "core-$big|builtin:demo|$big|$core_csv|--mappings pixel,quad --groups 8,16"
-        "core-$hd|builtin:demo|$hd|$core_csv|--mappings pixel,quad --groups 8,16"
-        "modes-$big|builtin:demo|$big|$modes_csv|"
-        "modes-$hd|builtin:demo|$hd|$modes_csv|"
-        "sibenik|scenes/sibenik.toml|$sib|checkerboard:rotated:ours,checkerboard:split:ours,checkerboard:rotated:pq4k$(can msaa2x && echo ,checkerboard:msaa2x:ours)|"
-    )
+    local csv_p csv_m csv_pm csv_mm runs=() sweep="--mappings pixel,quad --groups 8,16"
+    csv_p=$(IFS=,; echo "${portable[*]}")
+    csv_m=$(IFS=,; echo "${msaa[*]}")
+    csv_pm=$(IFS=,; echo "${pmodes[*]}")
+    csv_mm=$(IFS=,; echo "${mmodes[*]}")
+    # name | scene | resolutions | techniques | extra flags; 1080p first (the Stadia comparison),
+    # msaa2x apart (one configuration a device refuses refuses its whole run).
+    for res in $sizes; do
+        runs+=("core-$res-portable|builtin:demo|$res|$csv_p|$sweep")
+        can msaa2x && runs+=("core-$res-msaa2x|builtin:demo|$res|$csv_m|$sweep")
+        runs+=("modes-$res-portable|builtin:demo|$res|$csv_pm|")
+        can msaa2x && runs+=("modes-$res-msaa2x|builtin:demo|$res|$csv_mm|")
+    done
+    runs+=("sibenik-portable|scenes/sibenik.toml|$sib|checkerboard:rotated:ours,checkerboard:split:ours,checkerboard:rotated:pq4k|")
+    can msaa2x && runs+=("sibenik-msaa2x|scenes/sibenik.toml|$sib|checkerboard:msaa2x:ours|")
     bench_runs "${CBR_GPU_BENCH_END:-450}" "${runs[@]}"
 }
 
 # Runs `cbr bench --timing-only` for each "name|scene|resolutions|techniques|extra flags" until
-# the deadline (seconds since the script's start).
+# the deadline (seconds since the script's start), each run at most $cap seconds.
 bench_runs() {
     local end=$1 warmup=2 frames=8
     shift
     [ "$quick" = 1 ] && warmup=1 frames=2
+    [ -f "$out/runs.tsv" ] || printf 'run\tscene\tresolutions\tstatus\tseconds\n' >"$out/runs.tsv"
     for r in "$@"; do
+        local name scene res techs extra left t0 rc status
         IFS='|' read -r name scene res techs extra <<<"$r"
-        local left=$((end - SECONDS))
-        if [ "$left" -le 10 ]; then log "bench $name: not run (its stage's time is spent)"; continue; fi
-        local t0=$SECONDS
+        left=$((end - SECONDS))
+        if [ "$left" -le 10 ]; then
+            log "bench $name: not run (its stage's time is spent)"
+            printf '%s\t%s\t%s\tnot run (time spent)\t\n' "$name" "$scene" "$res" >>"$out/runs.tsv"
+            continue
+        fi
+        [ "$left" -gt "$cap" ] && left=$cap
+        t0=$SECONDS
         # shellcheck disable=SC2086
-        timeout "$left" "$cbr" bench "$scene" --resolutions "$res" --warmup $warmup --frames $frames \
+        timeout -k 10 "$left" "$cbr" bench "$scene" --resolutions "$res" --warmup $warmup --frames $frames \
             --timing-only --techniques "$techs" $extra -o "$work/bench/$name" >"$work/bench/$name.log" 2>&1
-        local rc=$?
-        log "bench $name ($scene, $res): rc $rc in $((SECONDS - t0)) s$( [ $rc = 0 ] || echo ": $(tail -2 "$work/bench/$name.log" | tr '\n' ' ')")"
+        rc=$?
+        case $rc in 0) status=ok ;; 124|137) status="timed out after $left s" ;; *) status="rc $rc: $(tail -1 "$work/bench/$name.log" | tr '\t' ' ')" ;; esac
+        printf '%s\t%s\t%s\t%s\t%s\n' "$name" "$scene" "$res" "$status" "$((SECONDS - t0))" >>"$out/runs.tsv"
+        log "bench $name ($scene, $res): $status in $((SECONDS - t0)) s"
+        cp "$out/runs.tsv" "$work/runs.tsv"
+        pack_results
     done
 }
 
 # --- 4. goals --------------------------------------------------------------------------------------
 run_goals() {
     local hd=1280x720 small=320x180 tiny=160x90
-    [ "$quick" = 1 ] && hd=64x36 small=32x18 tiny=32x18
+    [ "$quick" = 1 ] && hd=64x36 small=32x18 tiny=24x14
     local il="deferred:vpls=1024,deferred,interleaved:4x4:direct:box,interleaved:4x4:direct:seed,interleaved:4x4,interleaved:4x4:direct"
     bench_runs "${CBR_GPU_GOALS_END:-550}" \
         "goal-interleaved-demo|builtin:demo|$hd|$il|" \
         "goal-interleaved-sibenik|scenes/sibenik.toml|$hd|$il|" \
-        "goal-analytic-demo|builtin:demo|$small|ssaa:16,analytic|--time-cached-rows --no-cache" \
-        "goal-analytic-sibenik|scenes/sibenik.toml|$tiny,$small|ssaa:16,analytic|--time-cached-rows --no-cache"
+        "goal-analytic-demo|builtin:demo|$small|ssaa:16,analytic|" \
+        "goal-analytic-sibenik|scenes/sibenik.toml|$tiny,$small|ssaa:16,analytic|"
 }
 
 case $part in
@@ -180,8 +238,9 @@ case $part in
     *) log "error: unknown part $part (all, tests, bench, goals)"; exit 2 ;;
 esac
 
+cp "$out/tests.tsv" "$work/tests.tsv" 2>/dev/null
+cp "$out/runs.tsv" "$work/runs.tsv" 2>/dev/null
 python3 scripts/gpu-study-tables.py "$work" >"$out/gpu-study.md" 2>>"$out/study.log" \
     || log "gpu-study-tables.py failed (the raw results are in results.tar.gz)"
-cp "$out/study.log" "$work/" 2>/dev/null
-tar --exclude vvl -C "$(dirname "$work")" -czf "$out/results.tar.gz" "$(basename "$work")"
-log "done: $out (gpu-study.md, tests.tsv, info.txt, study.log, results.tar.gz)"
+log "done: $out (gpu-study.md, tests.tsv, runs.tsv, info.txt, study.log, results.tar.gz)"
+pack_results
