@@ -58,6 +58,20 @@ def resolve_rows(runs, prefix):
     return out
 
 
+def tsv_table(path, title, columns):
+    """Prints a tab-separated file with a header line as a markdown table; returns its rows."""
+    if not os.path.exists(path):
+        return None
+    lines = [l.rstrip("\n").split("\t") for l in open(path)][1:]
+    print(f"## {title}\n")
+    print("| " + " | ".join(columns) + " |")
+    print("|" + "---|" * len(columns))
+    for l in lines:
+        print("| " + " | ".join((l + [""] * len(columns))[:len(columns)]) + " |")
+    print()
+    return lines
+
+
 def goals(runs):
     """Issues 14 and 15's frame-time goals, timed on this device (no error: --timing-only)."""
     for scene in ("demo", "sibenik"):
@@ -111,26 +125,13 @@ def main():
           "table's heading); the copy floor is a compute kernel moving the resolve's minimum bytes, "
           "timed in the same frames.\n")
 
-    tsv = os.path.join(work, "tests.tsv")
-    if os.path.exists(tsv):
-        lines = [l.rstrip("\n").split("\t") for l in open(tsv)][1:]
-        print("## Tests (validation layers on)\n")
-        print("| test binary | status | passed | failed | SKIPPED lines | VUID lines | s |")
-        print("|---|---|---|---|---|---|---|")
-        for l in lines:
-            print("| " + " | ".join(l + [""] * (7 - len(l))) + " |")
+    lines = tsv_table(os.path.join(work, "tests.tsv"), "Tests (validation layers on)",
+                      ["test binary", "status", "passed", "failed", "SKIPPED lines", "VUID lines", "s"])
+    if lines is not None:
         tot = lambda i: sum(int(l[i]) for l in lines if len(l) > i and l[i].isdigit())
-        print(f"\nTotal: {tot(2)} passed, {tot(3)} failed, {tot(5)} VUID lines.\n")
-
-    rtsv = os.path.join(work, "runs.tsv")
-    if os.path.exists(rtsv):
-        lines = [l.rstrip("\n").split("\t") for l in open(rtsv)][1:]
-        print("## Bench runs (`cbr bench --timing-only`)\n")
-        print("| run | scene | resolutions | status | s |")
-        print("|---|---|---|---|---|")
-        for l in lines:
-            print("| " + " | ".join((l + [""] * 5)[:5]) + " |")
-        print()
+        print(f"Total: {tot(2)} passed, {tot(3)} failed, {tot(5)} VUID lines.\n")
+    tsv_table(os.path.join(work, "runs.tsv"), "Bench runs (`cbr bench --timing-only`)",
+              ["run", "scene", "resolutions", "status", "s"])
 
     for res, rows in resolve_rows(runs, "core-").items():
         b = next(b for n, b in runs.items()
