@@ -9,7 +9,8 @@
 #   .gpu/root.txt       the checkout's path here: the binaries hold paths under it (env!), so the
 #                       study links it to the device's copy of the tree
 #   .gpu/shared.tar.xz  ../shared/scenes and ../shared/testdata (the real-scene tests, Sibenik)
-#   .gpu/deb/           Debian 12's Vulkan loader and validation layers, unpacked there
+#   .gpu/deb/           Debian 12's Vulkan loader and validation layers, unpacked there (and in
+#                       deb/fallback/ its libstdc++ and libgcc, unpacked only where they are missing)
 #
 # .gpu/ is git-ignored; the device tool carries it (`carry: [".gpu"]`). The tree plus .gpu must
 # stay under the tool's 64 MiB: this script checks it. Run it here (after ./dev has installed the
@@ -60,6 +61,9 @@ tar -C "$stage" -cf - target | xz -T0 --lzma2=preset=6,dict=256MiB >.gpu/bins.ta
 tar -C .. -cf - shared/scenes shared/testdata | xz -T0 -6 >.gpu/shared.tar.xz
 say "downloading Debian's Vulkan loader and validation layers"
 (cd .gpu/deb && apt-get download libvulkan1 vulkan-validationlayers >&2)
+# libstdc++ and libgcc for a device whose userland lacks them (used only then).
+mkdir -p .gpu/deb/fallback
+(cd .gpu/deb/fallback && apt-get download libstdc++6 libgcc-s1 >&2)
 git rev-parse HEAD >.gpu/commit.txt
 # The same list and hash as gpu-study.sh's src_hash: the files under crates/ and shaders/ and the
 # Cargo files that the device tool sends (tracked, and untracked but not ignored).

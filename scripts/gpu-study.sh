@@ -46,7 +46,7 @@ mkdir -p "$out" "$work/tests" "$work/bench"
 log() { printf '[gpu-study %s] %s\n' "$(date +%T)" "$*" | tee -a "$out/study.log" >&2; }
 pack_results() {
     cp "$out/study.log" "$work/" 2>/dev/null
-    tar --exclude vvl -C "$(dirname "$work")" -czf "$out/results.tar.gz" "$(basename "$work")" 2>/dev/null
+    tar --exclude vvl --exclude fallback -C "$(dirname "$work")" -czf "$out/results.tar.gz" "$(basename "$work")" 2>/dev/null
 }
 # The source files whose build the pack holds: scripts/gpu-pack.sh hashes the same list.
 src_hash() {
@@ -61,6 +61,12 @@ if [ "$(src_hash)" != "$(cat .gpu/src-hash.txt 2>/dev/null)" ]; then
     log "WARNING: crates/, shaders/ or Cargo.* differ from what the pack was built from (run just gpu-pack again): the binaries are the pack's"
 fi
 tar -C "$repo" -xJf .gpu/bins.tar.xz || { log "error: cannot unpack the binaries"; exit 1; }
+if ! "$repo/target/release/cbr" --version >/dev/null 2>"$work/version.err"; then
+    log "cbr does not start here ($(head -1 "$work/version.err")): Debian's libstdc++ and libgcc from .gpu/deb/fallback"
+    for f in .gpu/deb/fallback/*.deb; do dpkg -x "$f" "$work/fallback"; done
+    export LD_LIBRARY_PATH=$work/fallback/usr/lib/x86_64-linux-gnu${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+    "$repo/target/release/cbr" --version >/dev/null 2>&1 || log "error: cbr still does not start"
+fi
 # The binaries name files by the paths they were built under (env!("CARGO_MANIFEST_DIR"),
 # CARGO_BIN_EXE_cbr): make $root this tree.
 if [ ! "$root/target/debug/cbr" -ef "$repo/target/debug/cbr" ]; then
