@@ -210,7 +210,8 @@ vec2 mask_sample(int k) {
     return (vec2(float(k), float((k * 13) & 31)) + 0.5) / 32.0;
 }
 
-// The quadrant of the pixel that mask sample k lies in: x half + 2 x y half (8 samples each).
+// The quadrant of the pixel that mask sample k lies in: x half + 2 x y half (the lattice puts 10,
+// 6, 6 and 10 samples in quadrants 0-3).
 int sample_quadrant(int k) {
     ivec2 half_ = ivec2(mask_sample(k) * 2.0);
     return half_.x + 2 * half_.y;
