@@ -6,8 +6,11 @@
 //! bench.json (schema cbr.bench/1) and bench.csv with device, driver, resolution and settings on
 //! every row. DESIGN.md "Benchmark protocol"; docs/bench-and-report.md.
 #![forbid(unsafe_code)]
+// bench.json's rows are one json! literal each, deeper than serde_json's default macro depth.
+#![recursion_limit = "256"]
 #![cfg_attr(not(test), deny(clippy::unwrap_used))]
 
+pub mod analytic_attribution;
 pub mod attribution;
 pub mod config;
 pub mod measure;
@@ -409,6 +412,7 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
                     "change_mean": opt(mean(&m.change)),
                     "ref_change_mean": opt(mean(&m.ref_change)),
                     "attribution": m.attribution.as_ref().map(|a| a.to_json()),
+                    "analytic_attribution": m.analytic_attribution.as_ref().map(|a| a.to_json()),
                     "per_frame": m.errors,
                 })},
             }));

@@ -117,6 +117,8 @@ pub struct Measured {
     pub id_stand_in: Option<IdStandIn>,
     /// Error by pixel class, for resolves that write their debug bits (`:debug`).
     pub attribution: Option<crate::attribution::Attribution>,
+    /// `analytic` frames: error by what the resolve composited per pixel.
+    pub analytic_attribution: Option<crate::analytic_attribution::AnalyticAttribution>,
 }
 
 pub fn mean(v: &[f64]) -> Option<f64> {
@@ -312,12 +314,10 @@ fn compare_frame(
     let (flip_edge, flip_disocc) = (masked(&rf.edge), masked(&rf.disocc));
     let interior: Vec<bool> = rf.edge.iter().map(|&e| !e).collect();
     let flip_interior = masked(&interior);
-    let bits = out.resolve.as_ref().and_then(|r| r.debug_bits.as_ref());
-    if let (Some(bits), Some(map)) = (bits, map.as_ref()) {
-        // Per-pixel error for the attribution: mean |display(test) - display(ref)| over RGB.
+    // Per-pixel error for the attributions: mean |display(test) - display(ref)| over RGB.
+    let pixel_error = || -> Vec<f32> {
         let d = &options.display;
-        let err: Vec<f32> = out
-            .color
+        out.color
             .chunks(4)
             .zip(rf.color.chunks(4))
             .map(|(t, r)| {
@@ -326,10 +326,24 @@ fn compare_frame(
                     .sum::<f32>()
                     / 3.0
             })
-            .collect();
+            .collect()
+    };
+    let bits = out.resolve.as_ref().and_then(|r| r.debug_bits.as_ref());
+    if let (Some(bits), Some(map)) = (bits, map.as_ref()) {
         m.attribution
             .get_or_insert_default()
-            .add(bits, &err, &map.data, &rf.disocc);
+            .add(bits, &pixel_error(), &map.data, &rf.disocc);
+    }
+    if let (Some(layers), Some(cov), Some(map)) =
+        (out.analytic.as_ref(), out.coverage.as_ref(), map.as_ref())
+    {
+        m.analytic_attribution.get_or_insert_default().add(
+            layers,
+            &cov.edge,
+            &pixel_error(),
+            &map.data,
+            &rf.edge,
+        );
     }
     let change = stability.next(&ri, &ti, options)?;
     let v = |k| p.value(k).unwrap_or(f64::NAN);

@@ -755,7 +755,7 @@ fn bench_against_a_supersampled_reference_names_it_everywhere_and_caches_it() {
                 "--reference",
                 "ssaa:2",
                 "--techniques",
-                "msaa:4,checkerboard:rotated:ours+sharpen",
+                "msaa:4,checkerboard:rotated:ours+sharpen,analytic",
                 "--validation",
                 "-o",
                 out.to_str().expect("utf8"),
@@ -782,9 +782,30 @@ fn bench_against_a_supersampled_reference_names_it_everywhere_and_caches_it() {
             "ssaa:2",
             "native",
             "msaa:4",
-            "checkerboard:rotated:ours+sharpen"
+            "checkerboard:rotated:ours+sharpen",
+            "analytic"
         ]
     );
+    // analytic's error by what its resolve composited: shares of all and of edge pixels.
+    let a = &b["rows"][4]["error"]["analytic_attribution"];
+    for set in ["all", "edge"] {
+        let sum = |k: &str| -> f64 {
+            [
+                "empty",
+                "overflow",
+                "one_full",
+                "one_partial",
+                "two",
+                "three_plus",
+            ]
+            .iter()
+            .map(|c| a[set][c][k].as_f64().expect("share"))
+            .sum()
+        };
+        assert!((sum("pixels") - 1.0).abs() < 1e-9, "{set}: {a}");
+        assert!((sum("error") - 1.0).abs() < 1e-9, "{set}: {a}");
+    }
+    assert!(b["rows"][2]["error"]["analytic_attribution"].is_null());
     let native = &b["rows"][1];
     assert!(
         native["error"]["flip_edge_mean"]
