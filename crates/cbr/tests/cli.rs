@@ -790,17 +790,10 @@ fn bench_against_a_supersampled_reference_names_it_everywhere_and_caches_it() {
     let a = &b["rows"][4]["error"]["analytic_attribution"];
     for set in ["all", "edge"] {
         let sum = |k: &str| -> f64 {
-            [
-                "empty",
-                "overflow",
-                "one_full",
-                "one_partial",
-                "two",
-                "three_plus",
-            ]
-            .iter()
-            .map(|c| a[set][c][k].as_f64().expect("share"))
-            .sum()
+            cbr_bench::analytic_attribution::CLASSES
+                .iter()
+                .map(|c| a[set][c][k].as_f64().expect("share"))
+                .sum()
         };
         assert!((sum("pixels") - 1.0).abs() < 1e-9, "{set}: {a}");
         assert!((sum("error") - 1.0).abs() < 1e-9, "{set}: {a}");
