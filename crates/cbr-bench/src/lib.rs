@@ -459,6 +459,8 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
         r["pareto"] = json!(f);
     }
     let messages = gpu.validation().messages();
+    // The protocol's error entries, or what a timing-only run says instead.
+    let measured = |text: &str| if a.timing_only { NOT_MEASURED } else { text }.to_string();
     let bench = json!({
         "schema": "cbr.bench/1",
         "cbr_version": env!("CARGO_PKG_VERSION"),
@@ -474,13 +476,13 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
             "frame_ms": format!("sum of the technique's passes per frame (not {})", NOT_TECHNIQUE.join(", ")),
             "reference": if a.timing_only { "none: --timing-only (no error measured)".to_string() } else { format!("{reference} at the same resolution and frame") },
             "timing_only": a.timing_only,
-            "edge_pixels": if a.timing_only { NOT_MEASURED } else { "FLIP mean over the reference's edge pixels: more than one object ID among a supersampled reference's samples (its coverage layer), or for a one-sample reference an object ID that differs from a 4-neighbour's" },
+            "edge_pixels": measured("FLIP mean over the reference's edge pixels: more than one object ID among a supersampled reference's samples (its coverage layer), or for a one-sample reference an object ID that differs from a 4-neighbour's"),
             "disocclusion_frames": k,
-            "disocclusion_pixels": if a.timing_only { NOT_MEASURED.to_string() } else { format!("FLIP mean over the pixels whose reference object ID differs from their ID in any of the k = {k} frames before (frames before frame 0 do not exist); frames whose mask is empty are left out of the mean") },
+            "disocclusion_pixels": measured(&format!("FLIP mean over the pixels whose reference object ID differs from their ID in any of the k = {k} frames before (frames before frame 0 do not exist); frames whose mask is empty are left out of the mean")),
             "disocclusion_ids": id_sources,
-            "temporal": if a.timing_only { NOT_MEASURED } else { "over consecutive measured frames, display values: flicker = mean |e_t - e_(t-1)| with e = test - reference (cbr compare's flicker), change = mean |x_t - x_(t-1)| of the test, ref_change = the same of the reference" },
+            "temporal": measured("over consecutive measured frames, display values: flicker = mean |e_t - e_(t-1)| with e = test - reference (cbr compare's flicker), change = mean |x_t - x_(t-1)| of the test, ref_change = the same of the reference"),
             "display": DisplayTransform { exposure_stops: scene.settings.exposure }.describe(),
-            "metrics": if a.timing_only { NOT_MEASURED } else { "PSNR and SSIM on display values, LDR-FLIP (67.02 ppd), relMSE on linear HDR (eps 0.01)" },
+            "metrics": measured("PSNR and SSIM on display values, LDR-FLIP (67.02 ppd), relMSE on linear HDR (eps 0.01)"),
         },
         "reference": reference,
         "reference_images": reference_images,
