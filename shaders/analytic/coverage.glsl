@@ -1,5 +1,6 @@
 // Exact pixel coverage of a convex polygon (a triangle, or the quadrilateral the near plane cuts
-// from one), its centroid, the seed's column shortcut and a 32-sample visibility mask. Shared by
+// from one), its centroid, the seed's column shortcut and a visibility mask of MASK_SAMPLES
+// (32, 64 or 128: `analytic:samples=N`) samples. Shared by
 // the analytic raster (raster.frag) and the coverage test kernel (coverage_test.comp); the CPU
 // f64 reference is crates/cbr-render/src/techniques/analytic/reference.rs.
 //
@@ -25,7 +26,7 @@
 #define ANALYTIC_COVERAGE_GLSL
 
 #define MAX_POLY 4
-#define MASK_SAMPLES 32
+#include "mask.glsl"
 
 // Dekker's exact product: a * b == p + e (Veltkamp's split; no reliance on a fused multiply-add,
 // which a driver may lower to a separate multiply and add).
@@ -187,7 +188,7 @@ void to_local(vec2 screen[MAX_POLY], vec2 corner, out vec2 p[MAX_POLY], out vec2
 // centre line, clipped to the pixel (exact when every edge crossing the column crosses one pixel
 // of it); columns holding a vertex take the supersampled mask instead, as the seed prescribes
 // for "the triangle's vertex pixels".
-float seed_coverage(vec2 p[MAX_POLY], int n, uint mask) {
+float seed_coverage(vec2 p[MAX_POLY], int n, Mask mask) {
     float ylo = 1e30;
     float yhi = -1e30;
     bool vertex_column = false;
@@ -200,18 +201,19 @@ float seed_coverage(vec2 p[MAX_POLY], int n, uint mask) {
         ylo = min(ylo, y);
         yhi = max(yhi, y);
     }
-    if (vertex_column) return float(bitCount(mask)) / float(MASK_SAMPLES);
+    if (vertex_column) return float(mask_count(mask)) / float(MASK_SAMPLES);
     return max(min(yhi, 1.0) - max(ylo, 0.0), 0.0);
 }
 
-// The visibility mask's sample k: a rank-1 lattice (every row and column of a 32 x 32 grid holds
-// one sample), so near-horizontal and near-vertical edges still sweep through samples one by one.
+// The visibility mask's sample k: a rank-1 lattice (every row and column of an N x N grid holds
+// one sample, N = MASK_SAMPLES), so near-horizontal and near-vertical edges still sweep through
+// samples one by one. Generator MASK_GEN (mask.glsl).
 vec2 mask_sample(int k) {
-    return (vec2(float(k), float((k * 13) & 31)) + 0.5) / 32.0;
+    return (vec2(float(k), float((k * MASK_GEN) & (MASK_SAMPLES - 1))) + 0.5) / float(MASK_SAMPLES);
 }
 
-// The quadrant of the pixel that mask sample k lies in: x half + 2 x y half (the lattice puts 10,
-// 6, 6 and 10 samples in quadrants 0-3).
+// The quadrant of the pixel that mask sample k lies in: x half + 2 x y half (the 32-sample lattice
+// puts 10, 6, 6 and 10 samples in quadrants 0-3).
 int sample_quadrant(int k) {
     ivec2 half_ = ivec2(mask_sample(k) * 2.0);
     return half_.x + 2 * half_.y;
@@ -268,22 +270,38 @@ float orientation(vec2 p[MAX_POLY], int n) {
     return s < 0.0 ? -1.0 : 1.0;
 }
 
-uint sample_mask(vec2 p[MAX_POLY], int n, float orient) {
-    uint m = 0xFFFFFFFFu;
+// Sample k lies at x = (k + 1/2) / N: the samples in the polygon's x extent are a run of
+// consecutive k, and only those are tested (a fifth of a pixel wide, a fifth of the samples),
+// with a sample's margin on each side. A sample outside the extent is outside the polygon; only
+// a sliver so thin that rounding puts a sample beyond its tip on the inside of both its long
+// edges could tell otherwise.
+Mask sample_mask(vec2 p[MAX_POLY], int n, float orient) {
+    CanonicalEdge e[MAX_POLY];
+    float xmin = 1e30;
+    float xmax = -1e30;
     for (int i = 0; i < n; ++i) {
-        CanonicalEdge e = canonical_edge(p, n, i, orient);
-        uint em = 0u;
-        for (int k = 0; k < MASK_SAMPLES; ++k) {
-            if (on_inside(e, mask_sample(k))) em |= 1u << uint(k);
-        }
-        m &= em;
+        e[i] = canonical_edge(p, n, i, orient);
+        xmin = min(xmin, p[i].x);
+        xmax = max(xmax, p[i].x);
+    }
+    const float N = float(MASK_SAMPLES);
+    float lo = clamp(floor(xmin * N - 0.5) - 1.0, 0.0, N - 1.0);
+    float hi = clamp(ceil(xmax * N - 0.5) + 1.0, 0.0, N - 1.0);
+    int k0 = isnan(lo) ? 0 : int(lo);
+    int k1 = isnan(hi) ? MASK_SAMPLES - 1 : int(hi);
+    Mask m = Mask(0u);
+    for (int k = k0; k <= k1; ++k) {
+        vec2 q = mask_sample(k);
+        bool in_all = true;
+        for (int i = 0; i < n; ++i) in_all = in_all && on_inside(e[i], q);
+        if (in_all) m |= mask_bit(k);
     }
     return m;
 }
 
 // A covered part too small to hold a sample still needs one bit for the visibility test: the
 // sample nearest its centroid.
-uint nearest_sample_bit(vec2 q) {
+Mask nearest_sample_bit(vec2 q) {
     int best = 0;
     float bd = 1e30;
     for (int k = 0; k < MASK_SAMPLES; ++k) {
@@ -294,7 +312,7 @@ uint nearest_sample_bit(vec2 q) {
             best = k;
         }
     }
-    return 1u << uint(best);
+    return mask_bit(best);
 }
 
 #endif

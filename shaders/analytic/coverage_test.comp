@@ -14,7 +14,8 @@ struct Case {
 };
 struct Result {
     vec4 area_centroid_seed;  // exact area, centroid (pixel-local), seed area
-    uvec4 mask;               // sample mask, nearest-sample bit, centre inside, 0
+    uvec4 mask;               // the sample mask's words (MASK_WORDS of them; 0 beyond)
+    uvec4 info;               // the nearest sample to the centroid, centre inside, 0, 0
 };
 layout(std430, set = 0, binding = 0) readonly buffer Cases { Case cases[]; };
 layout(std430, set = 0, binding = 1) writeonly buffer Results { Result results[]; };
@@ -32,8 +33,12 @@ void main() {
     int n = c.info.x;
     PixelCoverage cov = exact_coverage(p, lo, n);
     float o = orientation(p, n);
-    uint mask = sample_mask(p, n, o);
+    Mask mask = sample_mask(p, n, o);
     results[i].area_centroid_seed = vec4(cov.area, cov.mean_point, seed_coverage(p, n, mask));
-    results[i].mask = uvec4(mask, nearest_sample_bit(cov.mean_point),
-                            inside(p, n, o, vec2(0.5)) ? 1u : 0u, 0u);
+    uvec4 words = uvec4(0u);
+    for (int w = 0; w < MASK_WORDS; ++w) words[w] = mask_word(mask, w);
+    results[i].mask = words;
+    Mask nearest = nearest_sample_bit(cov.mean_point);
+    int nearest_index = mask_pop(nearest);
+    results[i].info = uvec4(uint(nearest_index), inside(p, n, o, vec2(0.5)) ? 1u : 0u, 0u, 0u);
 }

@@ -18,6 +18,7 @@
 // through the depth test.
 #include "../inc/scene_types.glsl"
 #include "surface.glsl"
+#include "mask.glsl"
 #include "tail_record.glsl"
 
 layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
@@ -36,6 +37,8 @@ layout(std430, set = 2, binding = BINDING_KEYS) buffer KeyWords { uint key_words
 // sample mask; colour (3 x f16), flags (8 bits) and the passing share of an alpha-tested
 // fragment without samples (8 bits, for the resolve's transmittance).
 layout(std430, set = 2, binding = BINDING_SLOTS) buffer Slots { uvec2 slots[]; };
+// The sample mask's words after the first (MASK_WORDS - 1 per slot; unused with 32 samples).
+layout(std430, set = 2, binding = BINDING_SLOT_MASKS) buffer SlotMasks { uint slot_masks[]; };
 layout(std430, set = 2, binding = BINDING_COLORS) buffer Colors { uvec2 colors[]; };
 // A kept fragment's depth plane in the pixel: depth at the pixel centre and its change per pixel
 // in x (planes) and y (planes_y), for the resolve's per-sample visibility.
@@ -45,7 +48,7 @@ layout(std430, set = 2, binding = BINDING_COUNTS) buffer Counts { uint counts[];
 // Per pixel and mask sample, the farthest depth over the pixel (f32 bits, reverse-Z: larger is
 // nearer; 0 where none) of the nearest fragment opaque at that sample: the select pass's
 // atomicMax. Behind the least of them, a fragment is hidden at every sample. A word per
-// OCCLUDER_GROUP consecutive samples (1 unless 32 words a pixel exceed a storage buffer), written
+// OCCLUDER_GROUP consecutive samples (1 unless MASK_SAMPLES words a pixel exceed a storage buffer), written
 // only by fragments opaque at the whole group.
 #define OCCLUDER_WORDS (MASK_SAMPLES / OCCLUDER_GROUP)
 layout(std430, set = 2, binding = BINDING_OCCLUDERS) buffer Occluders { uint occluders[]; };
@@ -157,10 +160,10 @@ vec4 texture_aniso(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
 // footprint, and it has holes: its stand-in neither hides nor is hidden, and the resolve
 // composites it through the transmittance of the alpha-tested fragments in front.
 #define ALPHA_SAMPLE_FILTER 0.0625
-uint alpha_test(uint geo_mask, vec2 uv, vec2 dx, vec2 dy, vec2 gx, vec2 gy, vec2 mean_point,
+Mask alpha_test(Mask geo_mask, vec2 uv, vec2 dx, vec2 dy, vec2 gx, vec2 gy, vec2 mean_point,
                 out float pass, out vec3 albedo, out vec4 quad_luma) {
     quad_luma = vec4(1.0);
-    if (geo_mask == 0u) {
+    if (!mask_any(geo_mask)) {
         float a = textureGrad(mask_tex, uv, gx, gy).a;
         float ax = textureGrad(mask_tex, uv + gx, gx, gy).a;
         float ay = textureGrad(mask_tex, uv + gy, gx, gy).a;
@@ -171,20 +174,19 @@ uint alpha_test(uint geo_mask, vec2 uv, vec2 dx, vec2 dy, vec2 gx, vec2 gy, vec2
         vec4 c = texture_aniso(mask_tex, uv, gx, gy);
         if (c.a > 0.0) albedo = c.rgb / c.a;
 #endif
-        return 0u;
+        return Mask(0u);
     }
-    uint passing = 0u;
-    uint rest = geo_mask;
+    Mask passing = Mask(0u);
+    Mask rest = geo_mask;
     vec4 sum = vec4(0.0);
     vec4 qsum[4] = vec4[4](vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0));
-    while (rest != 0u) {
-        int k = findLSB(rest);
-        rest &= rest - 1u;
+    while (mask_any(rest)) {
+        int k = mask_pop(rest);
         vec2 d = mask_sample(k) - mean_point;
         vec4 c = textureGrad(mask_tex, uv + dx * d.x + dy * d.y, ALPHA_SAMPLE_FILTER * gx,
                              ALPHA_SAMPLE_FILTER * gy);
         if (c.a >= 0.5) {
-            passing |= 1u << uint(k);
+            passing |= mask_bit(k);
             sum += c;
             qsum[sample_quadrant(k)] += c;
 #ifdef SELECT_PASS
@@ -192,7 +194,7 @@ uint alpha_test(uint geo_mask, vec2 uv, vec2 dx, vec2 dy, vec2 gx, vec2 gy, vec2
 #endif
         }
     }
-    pass = float(bitCount(passing)) / float(bitCount(geo_mask));
+    pass = float(mask_count(passing)) / float(mask_count(geo_mask));
     albedo = sum.a > 0.0 ? sum.rgb / sum.a : vec3(1.0);
     // Each quadrant's passing samples' albedo (the mean where the quadrant has none: it holds no
     // sample of the mask, so the resolve never weighs it).
@@ -258,8 +260,8 @@ void main() {
     vec3 alpha_albedo = vec3(1.0);
     // The albedo's luminance in the pixel's four quadrants (equal: untextured).
     vec4 quad_luma = vec4(1.0);
-    uint alpha_mask = 0u;
-    uint geo_mask = 0u;
+    Mask alpha_mask = Mask(0u);
+    Mask geo_mask = Mask(0u);
     // The plane's depth at the pixel's corners: over the covered part (inside the pixel) the
     // affine z / w lies between their extremes.
     vec4 zc4 = vec4(depth_at(corner), depth_at(corner + vec2(1.0, 0.0)),
@@ -303,18 +305,22 @@ void main() {
     {
         float far = min(min(zc4.x, zc4.y), min(zc4.z, zc4.w));
         far = isnan(far) ? zlo : max(far, zlo);
-        uint opaque = mat.tex.y >= 0 ? alpha_mask : sample_mask(p, n, orient);
+        Mask opaque = mat.tex.y >= 0 ? alpha_mask : sample_mask(p, n, orient);
         if (far > 0.0 && !isinf(far)) {
             uint fb = floatBitsToUint(far);
-            uint left = opaque;
-            while (left != 0u) {
-                uint g = uint(findLSB(left)) / uint(OCCLUDER_GROUP);
-                uint gm = (0xFFFFFFFFu >> uint(32 - OCCLUDER_GROUP)) << (g * uint(OCCLUDER_GROUP));
-                // The words only grow: one already at or beyond fb needs no atomic (a plain
-                // 32-bit read, never torn; a stale one is only smaller).
-                uint word = pixel * uint(OCCLUDER_WORDS) + g;
-                if ((opaque & gm) == gm && occluders[word] < fb) atomicMax(occluders[word], fb);
-                left &= ~gm;
+            // A group of OCCLUDER_GROUP consecutive samples lies within one mask word.
+            for (int w = 0; w < MASK_WORDS; ++w) {
+                uint bits = mask_word(opaque, w);
+                uint left = bits;
+                while (left != 0u) {
+                    uint g = uint(findLSB(left)) / uint(OCCLUDER_GROUP);
+                    uint gm = (0xFFFFFFFFu >> uint(32 - OCCLUDER_GROUP)) << (g * uint(OCCLUDER_GROUP));
+                    // The words only grow: one already at or beyond fb needs no atomic (a plain
+                    // 32-bit read, never torn; a stale one is only smaller).
+                    uint word = pixel * uint(OCCLUDER_WORDS) + uint(w * (32 / OCCLUDER_GROUP)) + g;
+                    if ((bits & gm) == gm && occluders[word] < fb) atomicMax(occluders[word], fb);
+                    left &= ~gm;
+                }
             }
         }
     }
@@ -380,15 +386,14 @@ void main() {
             // but not all: not for the pixel's nearest fragment (slot 0), nor for abutting
             // triangles of one surface, nor for a fragment hidden everywhere. Each lane's loops
             // end with its own work, so a SIMD group with none skips them.
-            uint in_front = 0u;
-            uint rest = slot > 0 ? geo_mask : 0u;
-            while (rest != 0u) {
-                int k = findLSB(rest);
-                rest &= rest - 1u;
+            Mask in_front = Mask(0u);
+            Mask rest = slot > 0 ? geo_mask : Mask(0u);
+            while (mask_any(rest)) {
+                int k = mask_pop(rest);
                 uint word = pixel * uint(OCCLUDER_WORDS) + uint(k / OCCLUDER_GROUP);
-                if (near < uintBitsToFloat(occluders[word]) * (1.0 - 1e-5)) in_front |= 1u << uint(k);
+                if (near < uintBitsToFloat(occluders[word]) * (1.0 - 1e-5)) in_front |= mask_bit(k);
             }
-            bool need_quadrants = in_front != 0u && in_front != geo_mask;
+            bool need_quadrants = mask_any(in_front) && in_front != geo_mask;
             for (int q = 0; q < (need_quadrants ? 4 : 0); ++q) {
                 vec2 d = vec2(float(q & 1), float(q >> 1)) * 0.5 + 0.25 - cov.mean_point;
                 quad_luma[q] = albedo_luma(
@@ -424,7 +429,7 @@ void main() {
 
     // The mask: for the resolve's per-sample visibility (a slot) or the tail's (beyond the K), and
     // the seed's vertex columns.
-    uint mask = mat.tex.y >= 0 ? alpha_mask : geo_mask;
+    Mask mask = mat.tex.y >= 0 ? alpha_mask : geo_mask;
     float coverage = cov.area;
     uint flags = 0u;
 #ifdef SEED
@@ -432,14 +437,14 @@ void main() {
     if (abs(coverage - cov.area) > 1e-3) flags |= 1u;
 #endif
     coverage *= alpha_pass;
-    if (mat.tex.y >= 0 && geo_mask == 0u) flags |= 2u;
+    if (mat.tex.y >= 0 && !mask_any(geo_mask)) flags |= 2u;
     if (!finite) {
         // Never let a non-finite colour into the pixel: the fragment covers nothing, flagged.
         color = vec3(0.0);
         coverage = 0.0;
         flags |= 6u;
     }
-    if (mask == 0u) {
+    if (!mask_any(mask)) {
         mask = nearest_sample_bit(cov.mean_point);
         flags |= 8u;  // a stand-in bit (the resolve treats it as one sample of this fragment)
     }
@@ -455,7 +460,9 @@ void main() {
         if (any(isnan(plane)) || any(isinf(plane)) || !finite) plane = vec3(z, 0.0, 0.0);
         planes[base + uint(slot)] = floatBitsToUint(plane.xy);
         planes_y[base + uint(slot)] = floatBitsToUint(plane.z);
-        slots[base + uint(slot)] = uvec2(floatBitsToUint(coverage), mask);
+        slots[base + uint(slot)] = uvec2(floatBitsToUint(coverage), mask_word(mask, 0));
+        for (int w = 1; w < MASK_WORDS; ++w)
+            slot_masks[(base + uint(slot)) * uint(MASK_WORDS - 1) + uint(w - 1)] = mask_word(mask, w);
         surfaces[base + uint(slot)] = pack_surface(nrm, cov.mean_point);
         quadrants[base + uint(slot)] = uvec2(packHalf2x16(quad_luma.xy), packHalf2x16(quad_luma.zw));
         colors[base + uint(slot)] = uvec2(packHalf2x16(color.rg),

@@ -1,7 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // `analytic`, resolve: per pixel, its K nearest fragments, each with its exact coverage a, its
-// 32-sample mask and its depth plane. The visibility model (docs/analytic.md):
+// MASK_SAMPLES-sample mask (mask.glsl) and its depth plane. The visibility model (docs/analytic.md):
 // 1. Per mask sample, its winner: the nearest fragment there by the fragments' depth planes
 //    (ties: the earlier key, object then primitive), among the fragments whose mask holds the
 //    sample. An alpha-tested fragment's mask holds only its samples that pass the test
@@ -22,7 +22,7 @@
 //        v = a - sum over k's lost samples s of v(w(s)) / won(w(s)).
 //    Exact for an opaque surface in front of another that covers the rest of the pixel (the far
 //    one gets exactly 1 - a_near) and for abutting triangles; where two partial surfaces overlap
-//    or two surfaces intersect inside the pixel, the overlap's shape is sampled by the 32 samples
+//    or two surfaces intersect inside the pixel, the overlap's shape is sampled by the MASK_SAMPLES samples
 //    and its area by the exact coverages. v depends on the winners' v: two sweeps in key order,
 //    the first from v = a won / m.
 // 3. Front to back in key order, through each sample's transmittance past the fragments with
@@ -58,6 +58,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(std430, set = 0, binding = BINDING_KEYS) readonly buffer Keys { uint64_t keys[]; };
 layout(std430, set = 0, binding = BINDING_SLOTS) readonly buffer Slots { uvec2 slots[]; };
+layout(std430, set = 0, binding = BINDING_SLOT_MASKS) readonly buffer SlotMasks { uint slot_masks[]; };
 layout(std430, set = 0, binding = BINDING_COLORS) readonly buffer Colors { uvec2 colors[]; };
 layout(std430, set = 0, binding = BINDING_COUNTS) readonly buffer Counts { uint counts[]; };
 layout(std430, set = 0, binding = BINDING_TAIL) readonly buffer Tail { uint64_t tail[]; };
@@ -112,20 +113,19 @@ float plane_depth(uint slot, vec2 q) {
 // quadrants' albedo luminance over the kept samples against that over the mask. The raster pass
 // filtered the albedo over the pixel's footprint; a surface seen through a gap between nearer
 // ones (the floor between a fence's slats, behind leaves) shows only the part of it in the gap.
-float shown_albedo(uint slot, uint mask, uint kept) {
+float shown_albedo(uint slot, Mask mask, Mask kept) {
     if (kept == mask) return 1.0;
     uvec2 packed = quadrants[slot];
     vec4 luma = vec4(unpackHalf2x16(packed.x), unpackHalf2x16(packed.y));
     if (all(equal(luma, luma.xxxx))) return 1.0;  // one albedo over the pixel (untextured)
     vec4 in_mask = vec4(0.0);
     vec4 in_kept = vec4(0.0);
-    uint rest = mask;
-    while (rest != 0u) {
-        int s = findLSB(rest);
-        rest &= rest - 1u;
+    Mask rest = mask;
+    while (mask_any(rest)) {
+        int s = mask_pop(rest);
         int q = sample_quadrant(s);
         in_mask[q] += 1.0;
-        if (((kept >> uint(s)) & 1u) != 0u) in_kept[q] += 1.0;
+        if (mask_has(kept, s)) in_kept[q] += 1.0;
     }
     float all_luma = dot(in_mask, luma) / dot(in_mask, vec4(1.0));
     float shown_luma = dot(in_kept, luma) / dot(in_kept, vec4(1.0));
@@ -156,7 +156,7 @@ void main() {
 
     // The slots hold the K nearest keys in order (the select pass's insertion).
     uint objs[K_SLOTS];
-    uint masks[K_SLOTS];
+    Mask masks[K_SLOTS];
     uint fl[K_SLOTS];
     float area[K_SLOTS];
     float alpha[K_SLOTS];  // an alpha-tested fragment's passing share of its covered part
@@ -167,7 +167,9 @@ void main() {
         objs[k] = uint(key & 0xFFFFFFFFul) >> 20u;
         uvec2 sl = slots[base + uint(k)];
         area[k] = uintBitsToFloat(sl.x);
-        masks[k] = sl.y;
+        masks[k] = Mask(sl.y);
+        for (int w = 1; w < MASK_WORDS; ++w)
+            mask_set_word(masks[k], w, slot_masks[(base + uint(k)) * uint(MASK_WORDS - 1) + uint(w - 1)]);
         uint packed = colors[base + uint(k)].y;
         fl[k] = (packed >> 16u) & 0xFFu;
         alpha[k] = float(packed >> 24u) / 255.0;
@@ -179,6 +181,7 @@ void main() {
     vec3 color;
     uint flags;
     uint visible;
+    bool pixel_holes;  // a kept fragment has holes: the per-sample transmittances are used
     // Settled again without a fragment whose light turned out non-finite (at most once per
     // fragment).
     for (int attempt = 0; attempt <= K_SLOTS; ++attempt) {
@@ -186,43 +189,53 @@ void main() {
     // 1. Each mask sample's winner (a slot index, 0xFF for none) and its depth there.
     uint winner[MASK_SAMPLES];
     float wz[MASK_SAMPLES];
-    uint won[K_SLOTS];
-    for (int k = 0; k < count; ++k) won[k] = 0u;
-    for (int s = 0; s < MASK_SAMPLES; ++s) {
-        vec2 q = mask_sample(s);
+    Mask won[K_SLOTS];
+    for (int k = 0; k < count; ++k) won[k] = Mask(0u);
+    // Fragment by fragment in key order, over its own samples only (a pixel's fragments hold
+    // few of the samples each): at each sample the candidates come in the same order as a loop
+    // over the fragments per sample would take them, so the winners are the same.
+    // winner[s] and wz[s] are set where `claimed` holds s (no per-sample initialisation: at 128
+    // samples the private arrays' stores were a measurable part of the pass).
+    Mask claimed = Mask(0u);
+    Mask real_won = Mask(0u);  // the samples a real (not stand-in) fragment wins so far
+    for (int k = 0; k < count; ++k) {
+        if ((fl[k] & FRAG_HOLES) != 0u) continue;
         // The nearest real sample of the mask wins; where none holds it, the nearest stand-in.
-        uint best = 0xFFu;
-        float bz = 0.0;
-        bool best_real = false;
-        for (int k = 0; k < count; ++k) {
-            if ((fl[k] & FRAG_HOLES) != 0u || ((masks[k] >> uint(s)) & 1u) == 0u) continue;
-            bool real = (fl[k] & FRAG_STAND_IN) == 0u;
-            float z = plane_depth(base + uint(k), q);
+        bool real = (fl[k] & FRAG_STAND_IN) == 0u;
+        Mask rest = masks[k];
+        while (mask_any(rest)) {
+            int s = mask_pop(rest);
+            float z = plane_depth(base + uint(k), mask_sample(s));
+            bool best_real = mask_has(real_won, s);
             // Reverse-Z: nearer is larger; ties keep the earlier key.
-            if (best == 0xFFu || (real && !best_real) || (real == best_real && z > bz)) {
-                best = uint(k);
-                bz = z;
-                best_real = real;
+            if (!mask_has(claimed, s) || (real && !best_real) || (real == best_real && z > wz[s])) {
+                winner[s] = uint(k);
+                wz[s] = z;
+                if (real) real_won |= mask_bit(s);
             }
         }
-        winner[s] = best;
-        wz[s] = bz;
-        if (best != 0xFFu) won[best] |= 1u << uint(s);
+        claimed |= masks[k];
+    }
+    {
+        Mask rest = claimed;
+        while (mask_any(rest)) {
+            int s = mask_pop(rest);
+            won[winner[s]] |= mask_bit(s);
+        }
     }
 
     // 2. The samples each fragment lost to a winner in front of it, and the visible coverages:
     // settled (unoccluded, or hidden behind its own mesh) or by the occlusion sum (two sweeps).
-    uint lost[K_SLOTS];
+    Mask lost[K_SLOTS];
     float vis[K_SLOTS];
     bool settled[K_SLOTS];
     for (int k = 0; k < count; ++k) {
-        uint l = 0u;
+        Mask l = Mask(0u);
         bool own = true;  // every lost sample lost to its own object
         if ((fl[k] & FRAG_HOLES) == 0u) {
-            uint rest = masks[k] & ~won[k];
-            while (rest != 0u) {
-                int s = findLSB(rest);
-                rest &= rest - 1u;
+            Mask rest = masks[k] & ~won[k];
+            while (mask_any(rest)) {
+                int s = mask_pop(rest);
                 uint w = winner[s];
                 float zk = plane_depth(base + uint(k), mask_sample(s));
                 bool stand_in = (fl[k] & FRAG_STAND_IN) != 0u;
@@ -232,16 +245,16 @@ void main() {
                 // surface); a real sample is lost to any winner but itself.
                 bool behind = !stand_in || (wz[s] > zk && !(same_object && wz[s] - zk <= 1e-3 * abs(zk)));
                 if (behind) {
-                    l |= 1u << uint(s);
+                    l |= mask_bit(s);
                     own = own && same_object;
                 }
             }
         }
         lost[k] = l;
-        uint m = bitCount(masks[k]);
+        uint m = uint(mask_count(masks[k]));
         // Hidden (l == mask) gives 0, unoccluded (l == 0) gives a.
-        vis[k] = m > 0u ? area[k] * float(m - bitCount(l)) / float(m) : area[k];
-        settled[k] = l == 0u || (l == masks[k] && own);
+        vis[k] = m > 0u ? area[k] * float(m - uint(mask_count(l))) / float(m) : area[k];
+        settled[k] = !mask_any(l) || (l == masks[k] && own);
     }
     // A stand-in's sample lies outside it, so the winner there can be a surface behind it while
     // what hides it lies over its real place (a sliver under a nearer surface's edge, or the back
@@ -250,7 +263,7 @@ void main() {
     // way, normals within SAME_SURFACE_COS, their planes through its centroid's depth within
     // SAME_SURFACE_DEPTH) is hidden at every sample, it is hidden too.
     for (int k = 0; k < count; ++k) {
-        if ((fl[k] & (FRAG_STAND_IN | FRAG_HOLES)) != FRAG_STAND_IN || lost[k] != 0u) continue;
+        if ((fl[k] & (FRAG_STAND_IN | FRAG_HOLES)) != FRAG_STAND_IN || mask_any(lost[k])) continue;
         vec3 nk;
         vec2 ck;
         unpack_surface(surfaces[base + uint(k)], nk, ck);
@@ -276,12 +289,11 @@ void main() {
         for (int k = 0; k < count; ++k) {
             if (settled[k]) continue;
             float occ = 0.0;
-            uint rest = lost[k];
-            while (rest != 0u) {
-                int s = findLSB(rest);
-                rest &= rest - 1u;
+            Mask rest = lost[k];
+            while (mask_any(rest)) {
+                int s = mask_pop(rest);
                 uint w = winner[s];
-                occ += vis[w] / float(bitCount(won[w]));
+                occ += vis[w] / float(mask_count(won[w]));
             }
             vis[k] = clamp(area[k] - occ, 0.0, area[k]);
         }
@@ -293,7 +305,14 @@ void main() {
     // fragment shows through its samples' transmittance where no opaque winner lies in front of
     // it; an opaque one through the mean transmittance over the samples it keeps. Then clamped to
     // what nearer ones left, v = min(v, 1 - sum).
-    for (int s = 0; s < MASK_SAMPLES; ++s) trans[s] = 1.0;
+    // The transmittances are needed only where a fragment has holes.
+    pixel_holes = false;
+    for (int k = 0; k < count; ++k) {
+        pixel_holes = pixel_holes || (fl[k] & (FRAG_HOLES | FRAG_NONFINITE)) == FRAG_HOLES;
+    }
+    if (pixel_holes) {
+        for (int s = 0; s < MASK_SAMPLES; ++s) trans[s] = 1.0;
+    }
     bool any_holes = false;
     sum = 0.0;
     color = vec3(0.0);
@@ -311,17 +330,16 @@ void main() {
         float v = vis[k];
         // The samples it shows through: an alpha-tested one's whole mask, an opaque one's kept
         // samples (its mask where it lost them all: a fragment settled by the occlusion sum).
-        uint keep = holes ? masks[k] : masks[k] & ~lost[k];
-        if (keep == 0u) keep = masks[k];
+        Mask keep = holes ? masks[k] : masks[k] & ~lost[k];
+        if (!mask_any(keep)) keep = masks[k];
         if (holes || any_holes) {
             float t = 0.0;
             uint n = 0u;
-            uint rest = keep;
-            while (rest != 0u) {
-                int s = findLSB(rest);
-                rest &= rest - 1u;
+            Mask rest = keep;
+            while (mask_any(rest)) {
+                int s = mask_pop(rest);
                 // An alpha-tested fragment is hidden where an opaque winner is in front of it.
-                bool open = !holes || winner[s] == 0xFFu
+                bool open = !holes || !mask_has(claimed, s)
                     || wz[s] <= plane_depth(base + uint(k), mask_sample(s));
                 t += open ? trans[s] : 0.0;
                 ++n;
@@ -365,7 +383,7 @@ void main() {
     // facing away (of a closed mesh, behind its front). Each fills what the nearest left, in
     // proportion to the share of its mask's samples that no kept fragment (nor, for the back
     // tail, the front tail) holds: the tails lie behind the K.
-    uint held = 0u;
+    Mask held = Mask(0u);
     for (int k = 0; k < count; ++k) {
         if ((fl[k] & FRAG_HOLES) == 0u) held |= masks[k];
     }
@@ -376,21 +394,25 @@ void main() {
             ? u64vec4(tail[t], tail[t + 1u], tail[t + 2u], tail[t + 3u])
             : u64vec4(tail_back[t], tail_back[t + 1u], tail_back[t + 2u], tail_back[t + 3u]);
         float ta = float(sums.w) * unit;
-        uint tm = tail_masks[pixel * 2u + part];
-        if (ta > 0.0 && tm != 0u) {
+        Mask tm = Mask(0u);
+        for (int w = 0; w < MASK_WORDS; ++w)
+            mask_set_word(tm, w, tail_masks[(pixel * 2u + part) * uint(MASK_WORDS) + uint(w)]);
+        if (ta > 0.0 && mask_any(tm)) {
             vec3 tc = vec3(sums.xyz) * unit / ta;
             // Its summed coverage counts overlapping layers of the tail once each: no more than
             // the share of the pixel's samples it holds open.
-            uint open_mask = tm & ~held;
-            uint open_bits = bitCount(open_mask);
-            float open_share = float(open_bits) / float(bitCount(tm));
+            Mask open_mask = tm & ~held;
+            uint open_bits = uint(mask_count(open_mask));
+            float open_share = float(open_bits) / float(mask_count(tm));
             // Through the kept alpha-tested fragments: the mean transmittance of its open samples.
-            float t = 0.0;
-            uint rest = open_mask;
-            while (rest != 0u) {
-                int s = findLSB(rest);
-                rest &= rest - 1u;
-                t += trans[s];
+            float t = float(open_bits);
+            if (pixel_holes) {
+                t = 0.0;
+                Mask rest = open_mask;
+                while (mask_any(rest)) {
+                    int s = mask_pop(rest);
+                    t += trans[s];
+                }
             }
             t = open_bits > 0u ? t / float(open_bits) : 0.0;
             float v = min(min(ta * open_share, float(open_bits) / float(MASK_SAMPLES)) * t, 1.0 - sum);

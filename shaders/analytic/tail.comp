@@ -12,13 +12,15 @@
 // pixels the fragment's triangle does not touch (docs/analytic.md, Shading).
 #include "../inc/scene_types.glsl"
 #include "surface.glsl"
+#include "mask.glsl"
 #include "tail_record.glsl"
 
 layout(local_size_x = 64) in;
 
 layout(std430, set = 0, binding = BINDING_TAIL_RECORDS) readonly buffer TailRecords { TailRecord tail_records[]; };
 layout(std430, set = 0, binding = BINDING_TAIL_COUNT) readonly buffer TailCounts { TailCount tail_count; };
-// Per pixel, two tails (facing the camera, facing away), 4 sums each; and their masks' unions.
+// Per pixel, two tails (facing the camera, facing away), 4 sums each; and their masks' unions
+// (MASK_WORDS words each).
 layout(std430, set = 0, binding = BINDING_TAIL) buffer Tail { uint64_t tail[]; };
 layout(std430, set = 0, binding = BINDING_TAIL_BACK) buffer TailBack { uint64_t tail_back[]; };
 layout(std430, set = 0, binding = BINDING_TAIL_MASKS) buffer TailMasks { uint tail_masks[]; };
@@ -36,7 +38,7 @@ void main() {
     if (i >= min(tail_count.count, uint(tail_records.length()))) return;
     TailRecord rec = tail_records[i];
     uint pixel = rec.pixel;
-    uint mask = rec.mask;
+    Mask mask = tail_record_mask(rec);
     float coverage;
     uint material;
     bool facing_away;
@@ -59,5 +61,9 @@ void main() {
         ADD_TAIL(tail);
     }
 #undef ADD_TAIL
-    atomicOr(tail_masks[pixel * 2u + (facing_away ? 1u : 0u)], mask);
+    uint m = (pixel * 2u + (facing_away ? 1u : 0u)) * uint(MASK_WORDS);
+    for (int w = 0; w < MASK_WORDS; ++w) {
+        uint bits = mask_word(mask, w);
+        if (bits != 0u) atomicOr(tail_masks[m + uint(w)], bits);
+    }
 }

@@ -1,8 +1,8 @@
 // `analytic`: a fragment beyond its pixel's K nearest that is not hidden (raster.frag records it,
-// tail.comp lights it and adds it to the pixel's tail sums): 10 words, 40 bytes (std430, no
-// padding). The buffer's length sets the capacity; the count may run past it (the technique then
+// tail.comp lights it and adds it to the pixel's tail sums): 9 + MASK_WORDS words, 36 + 4
+// MASK_WORDS bytes (std430, no padding). The buffer's length sets the capacity; the count may run past it (the technique then
 // grows the buffer and renders the frame again: crates/cbr-render/src/techniques/analytic,
-// TAIL_RECORD_BYTES). Needs surface.glsl (the octahedral normal).
+// tail_record_bytes). Needs surface.glsl (the octahedral normal) and mask.glsl.
 #ifndef TAIL_RECORD_GLSL
 #define TAIL_RECORD_GLSL
 #define TAIL_FACING_AWAY 0x80000000u
@@ -22,7 +22,7 @@ struct TailCount {
 struct TailRecord {
     uint pixel;
     uint coverage;   // f32 bits
-    uint mask;       // the covered part's sample mask
+    uint mask;       // the covered part's sample mask (its first word)
     uint material;   // material index | TAIL_FACING_AWAY
     uint world_x;    // camera-relative shading point, f32 bits
     uint world_y;
@@ -30,15 +30,37 @@ struct TailRecord {
     uint normal;     // shading normal, octahedral, 2 x snorm16
     uint albedo_rg;  // albedo, 3 x f16
     uint albedo_b;
+#if MASK_WORDS > 1
+    uint mask_hi[MASK_WORDS - 1];  // the mask's other words
+#endif
 };
 
-TailRecord make_tail_record(uint pixel, float coverage, uint mask, uint material, bool facing_away,
+TailRecord make_tail_record(uint pixel, float coverage, Mask mask, uint material, bool facing_away,
                             vec3 world, vec3 normal, vec3 albedo) {
     uvec3 w = floatBitsToUint(world);
-    return TailRecord(pixel, floatBitsToUint(coverage), mask,
-                      material | (facing_away ? TAIL_FACING_AWAY : 0u), w.x, w.y, w.z,
-                      packSnorm2x16(oct_encode(normal)), packHalf2x16(albedo.rg),
-                      packHalf2x16(vec2(albedo.b, 0.0)));
+    TailRecord t;
+    t.pixel = pixel;
+    t.coverage = floatBitsToUint(coverage);
+    t.mask = mask_word(mask, 0);
+    t.material = material | (facing_away ? TAIL_FACING_AWAY : 0u);
+    t.world_x = w.x;
+    t.world_y = w.y;
+    t.world_z = w.z;
+    t.normal = packSnorm2x16(oct_encode(normal));
+    t.albedo_rg = packHalf2x16(albedo.rg);
+    t.albedo_b = packHalf2x16(vec2(albedo.b, 0.0));
+#if MASK_WORDS > 1
+    for (int i = 1; i < MASK_WORDS; ++i) t.mask_hi[i - 1] = mask_word(mask, i);
+#endif
+    return t;
+}
+
+Mask tail_record_mask(TailRecord t) {
+    Mask m = Mask(t.mask);
+#if MASK_WORDS > 1
+    for (int i = 1; i < MASK_WORDS; ++i) m[i] = t.mask_hi[i - 1];
+#endif
+    return m;
 }
 
 void read_tail_record(TailRecord t, out float coverage, out uint material, out bool facing_away,

@@ -16,7 +16,8 @@
 //! holds, the buffer grows to what the frame counted and the frame is rendered again (the
 //! timings are those of the second rendering). `:seed` replaces the exact area by the seed's column
 //! shortcut and flags where it is off; `:frags=K` keeps K fragments per pixel (1 to 32;
-//! default 32, lowered to what the device's largest storage buffer holds).
+//! default 32, lowered to what the device's largest storage buffer holds); `:samples=N` gives
+//! the visibility mask N samples (32, the default, 64 or 128; shaders/analytic/mask.glsl).
 
 pub mod reference;
 
@@ -36,7 +37,7 @@ use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, un
 
 pub const REGISTRATION: Registration = Registration {
     name: "analytic",
-    grammar: "analytic[:seed][:frags=K]",
+    grammar: "analytic[:seed][:frags=K][:samples=N]",
     about: "exact area of each pixel covered by each triangle, per-pixel fragment lists resolved \
             front to back; `seed`: the seed's column shortcut",
     layers: &["coverage", "analytic"],
@@ -48,10 +49,12 @@ pub const REGISTRATION: Registration = Registration {
             ctx.width,
             ctx.height,
             c.frags,
+            c.samples,
             ctx.caps.max_storage_buffer_range,
         )?;
         Ok(Analytic::estimate(
             frags,
+            c.samples,
             ctx.width,
             ctx.height,
             ctx.caps.max_storage_buffer_range,
@@ -83,16 +86,36 @@ pub const SURFACE_BYTES: u64 = 8;
 /// resolve takes the albedo of the part that shows when other fragments hide the rest
 /// (shaders/analytic/resolve.comp, `shown_albedo`).
 pub const QUADRANT_BYTES: u64 = 8;
-/// All of one kept fragment's bytes.
+/// All of one kept fragment's bytes with a 32-sample mask (the slot holds its one word).
 pub const FRAGMENT_BYTES: u64 =
     KEY_BYTES + SLOT_BYTES + PLANE_BYTES + SURFACE_BYTES + QUADRANT_BYTES;
+/// The visibility mask's sample counts (`samples=N`; shaders/analytic/mask.glsl) and the default.
+pub const MASK_SAMPLE_COUNTS: [u32; 3] = [32, 64, 128];
+pub const DEFAULT_SAMPLES: u32 = 64;
+/// 32-bit words of an N-sample mask.
+pub fn mask_words(samples: u32) -> u64 {
+    u64::from(samples / 32)
+}
+/// A kept fragment's mask words beyond the slot's first, in their own buffer (`slot_masks`).
+pub fn slot_mask_bytes(samples: u32) -> u64 {
+    4 * (mask_words(samples) - 1)
+}
+/// All of one kept fragment's bytes with an N-sample mask.
+pub fn fragment_bytes(samples: u32) -> u64 {
+    FRAGMENT_BYTES + slot_mask_bytes(samples)
+}
 /// Per pixel and tail, the fixed-point sums of the fragments beyond the K nearest (4 x u64); two
 /// tails (facing the camera, facing away), each in its own buffer.
 pub const TAIL_BYTES: u64 = 32;
-/// Per pixel, the two tails' sample-mask unions (2 x u32).
-pub const TAIL_MASK_BYTES: u64 = 8;
-/// One recorded fragment beyond the K nearest (shaders/analytic/tail_record.glsl: 10 words).
-pub const TAIL_RECORD_BYTES: u64 = 40;
+/// Per pixel, the two tails' sample-mask unions (2 masks of N / 32 words).
+pub fn tail_mask_bytes(samples: u32) -> u64 {
+    8 * mask_words(samples)
+}
+/// One recorded fragment beyond the K nearest (shaders/analytic/tail_record.glsl: 9 words and
+/// the mask's).
+pub fn tail_record_bytes(samples: u32) -> u64 {
+    36 + 4 * mask_words(samples)
+}
 /// Records the buffer starts with, per pixel (it grows to what a frame needs, up to the device's
 /// largest storage buffer).
 pub const TAIL_RECORDS_PER_PIXEL_START: u64 = 1;
@@ -110,23 +133,27 @@ pub const TAIL_COUNT_BYTES: u64 = 16;
 /// not fit one storage buffer: [`occluder_group`].
 pub const OCCLUDER_WORD_BYTES: u64 = 4;
 
-/// Samples per occluder word at `px` pixels: the fewest (1, 2, 4, ... 32) whose words fit
-/// `maxStorageBufferRange` (lavapipe's 128 MiB: 1 up to 1280x720, 2 at 1920x1080).
-pub fn occluder_group(px: u64, max_range: u32) -> u32 {
+/// Samples per occluder word at `px` pixels with an N-sample mask: the fewest (N / 32, ... 32)
+/// whose words fit `maxStorageBufferRange` (lavapipe's 128 MiB, 32 samples: 1 up to 1280x720, 2
+/// at 1920x1080). A group is consecutive samples, adjacent in x but far apart in y on the
+/// lattice, so a group is seldom covered whole by a partial occluder: grouping by default
+/// (N / 32 a word) lost the occluders the albedo of the part that shows needs (test
+/// `a_surface_seen_through_gaps_takes_the_albedo_of_the_part_that_shows`, 64 samples).
+pub fn occluder_group(px: u64, max_range: u32, samples: u32) -> u32 {
     let mut group = 1u32;
-    while group < 32 && px * occluder_pixel_bytes(group) > u64::from(max_range) {
+    while group < 32 && px * occluder_pixel_bytes(group, samples) > u64::from(max_range) {
         group *= 2;
     }
     group
 }
 
 /// Occluder bytes per pixel with `group` samples per word.
-fn occluder_pixel_bytes(group: u32) -> u64 {
-    u64::from(32 / group) * OCCLUDER_WORD_BYTES
+fn occluder_pixel_bytes(group: u32, samples: u32) -> u64 {
+    u64::from(samples / group) * OCCLUDER_WORD_BYTES
 }
 
-fn occluder_bytes(px: u64, max_range: u32) -> u64 {
-    px * occluder_pixel_bytes(occluder_group(px, max_range))
+fn occluder_bytes(px: u64, max_range: u32, samples: u32) -> u64 {
+    px * occluder_pixel_bytes(occluder_group(px, max_range, samples), samples)
 }
 
 /// Writes binding i of a set of storage buffers with `buffers[i]` (RASTER_BINDINGS and
@@ -140,8 +167,8 @@ fn buffer_writes<'a>(buffers: &[&'a Buffer]) -> Vec<Write<'a>> {
 }
 
 /// The most tail records one storage buffer holds on this device.
-fn max_tail_capacity(max_range: u32) -> u64 {
-    u64::from(max_range) / TAIL_RECORD_BYTES
+fn max_tail_capacity(max_range: u32, samples: u32) -> u64 {
+    u64::from(max_range) / tail_record_bytes(samples)
 }
 
 /// The tail-record capacity a frame that recorded `needed` fragments beyond its pixels' `frags`
@@ -150,24 +177,26 @@ fn max_tail_capacity(max_range: u32) -> u64 {
 pub fn grown_tail_capacity(
     needed: u64,
     frags: u32,
+    samples: u32,
     max_range: u32,
 ) -> std::result::Result<u64, String> {
-    let max = max_tail_capacity(max_range);
+    let max = max_tail_capacity(max_range, samples);
+    let record = tail_record_bytes(samples);
     if needed > max {
         return Err(format!(
             "analytic: this frame has {needed} fragments beyond the {frags} nearest of their \
-             pixels that no occluder hides; their records ({needed} x {TAIL_RECORD_BYTES} bytes) \
+             pixels that no occluder hides; their records ({needed} x {record} bytes) \
              exceed the largest storage buffer this device binds ({} bytes, \
              maxStorageBufferRange): lower the resolution",
-            max * TAIL_RECORD_BYTES
+            max * record
         ));
     }
     Ok((needed + needed / 4).min(max))
 }
 
 /// Tail records the buffer starts with at `px` pixels.
-fn start_tail_capacity(px: u64, max_range: u32) -> u64 {
-    (px * TAIL_RECORDS_PER_PIXEL_START).clamp(1, max_tail_capacity(max_range))
+fn start_tail_capacity(px: u64, max_range: u32, samples: u32) -> u64 {
+    (px * TAIL_RECORDS_PER_PIXEL_START).clamp(1, max_tail_capacity(max_range, samples))
 }
 
 /// Fragments kept per pixel unless `frags=K` says otherwise (lowered to what fits).
@@ -184,27 +213,37 @@ pub struct AnalyticConfig {
     pub seed: bool,
     /// Fragments kept per pixel asked for (`None`: the default, fitted to the device).
     pub frags: Option<u32>,
+    /// The visibility mask's samples (one of [`MASK_SAMPLE_COUNTS`]).
+    pub samples: u32,
 }
 
 pub fn parse(params: &[&str]) -> std::result::Result<AnalyticConfig, String> {
     let mut c = AnalyticConfig {
         seed: false,
         frags: None,
+        samples: DEFAULT_SAMPLES,
     };
     for p in params {
         match *p {
             "seed" => c.seed = true,
-            _ => match p.strip_prefix("frags=") {
-                Some(n) => {
+            _ => {
+                if let Some(n) = p.strip_prefix("frags=") {
                     let n: u32 = n
                         .parse()
                         .ok()
                         .filter(|&n| (1..=MAX_FRAGS).contains(&n))
                         .ok_or_else(|| format!("analytic frags=`{n}` (1 to {MAX_FRAGS})"))?;
                     c.frags = Some(n);
+                } else if let Some(n) = p.strip_prefix("samples=") {
+                    c.samples = n
+                        .parse()
+                        .ok()
+                        .filter(|n| MASK_SAMPLE_COUNTS.contains(n))
+                        .ok_or_else(|| format!("analytic samples=`{n}` (32, 64 or 128)"))?;
+                } else {
+                    return Err(unknown_param("analytic", p, "seed, frags=K, samples=N"));
                 }
-                None => return Err(unknown_param("analytic", p, "seed, frags=K")),
-            },
+            }
         }
     }
     Ok(c)
@@ -226,11 +265,13 @@ fn needs(_: &[&str], caps: &Caps) -> Option<String> {
 
 /// Fragments kept per pixel at `width` x `height`, or the refusal (before anything is allocated)
 /// with the bytes it would take and the device's limit: the keys and the two halves of the slots
-/// are storage buffers of `K x 8` bytes per pixel each, which must fit `maxStorageBufferRange`.
+/// are storage buffers of `K x 8` bytes per pixel each (the further mask words of an N-sample
+/// mask `K x 4 (N / 32 - 1)`), which must fit `maxStorageBufferRange`.
 pub fn plan_lists(
     width: u32,
     height: u32,
     frags: Option<u32>,
+    samples: u32,
     max_range: u32,
 ) -> std::result::Result<u32, String> {
     let px = u64::from(width) * u64::from(height);
@@ -238,16 +279,17 @@ pub fn plan_lists(
         .max(HALF_SLOT_BYTES)
         .max(PLANE_XY_BYTES)
         .max(SURFACE_BYTES)
-        .max(QUADRANT_BYTES);
+        .max(QUADRANT_BYTES)
+        .max(slot_mask_bytes(samples));
+    let fragment = fragment_bytes(samples);
     let fit = (u64::from(max_range) / (px * widest).max(1)).min(u64::from(MAX_FRAGS)) as u32;
     let refuse = |k: u32| {
         format!(
             "analytic at {width}x{height} with {k} fragments per pixel needs {} bytes of fragment \
-             lists ({k} x {} bytes per pixel), the largest buffer {} bytes; this device binds at \
-             most {max_range} bytes in one storage buffer (maxStorageBufferRange): lower the \
-             resolution or frags=K (at most {fit} fits)",
-            px * u64::from(k) * FRAGMENT_BYTES,
-            FRAGMENT_BYTES,
+             lists ({k} x {fragment} bytes per pixel), the largest buffer {} bytes; this device \
+             binds at most {max_range} bytes in one storage buffer (maxStorageBufferRange): lower \
+             the resolution or frags=K (at most {fit} fits)",
+            px * u64::from(k) * fragment,
             px * u64::from(k) * widest
         )
     };
@@ -260,7 +302,7 @@ pub fn plan_lists(
 }
 
 /// Set 2 of the raster passes (set 0: the scene's, set 1: the material's).
-pub const RASTER_BINDINGS: [BindingDesc; 11] = {
+pub const RASTER_BINDINGS: [BindingDesc; 12] = {
     use DescriptorKind::StorageBuffer as B;
     [
         BindingDesc::one("keys", 0, B),
@@ -274,6 +316,7 @@ pub const RASTER_BINDINGS: [BindingDesc; 11] = {
         BindingDesc::one("tail_records", 8, B),
         BindingDesc::one("tail_count", 9, B),
         BindingDesc::one("quadrants", 10, B),
+        BindingDesc::one("slot_masks", 11, B),
     ]
 };
 
@@ -289,7 +332,7 @@ pub const TAIL_BINDINGS: [BindingDesc; 5] = {
     ]
 };
 
-pub const RESOLVE_BINDINGS: [BindingDesc; 14] = {
+pub const RESOLVE_BINDINGS: [BindingDesc; 15] = {
     use DescriptorKind::{StorageBuffer as B, StorageImage as I};
     [
         BindingDesc::one("keys", 0, B),
@@ -306,6 +349,7 @@ pub const RESOLVE_BINDINGS: [BindingDesc; 14] = {
         BindingDesc::one("tail_masks", 11, B),
         BindingDesc::one("surfaces", 12, B),
         BindingDesc::one("quadrants", 13, B),
+        BindingDesc::one("slot_masks", 14, B),
     ]
 };
 
@@ -360,6 +404,7 @@ pub struct Analytic {
     planes_y: Buffer,
     surfaces: Buffer,
     quadrants: Buffer,
+    slot_masks: Buffer,
     /// Records of the fragments beyond the K (grows: [`Analytic::grow_tail_records`]), their
     /// count, and the count read back.
     tail_records: Buffer,
@@ -379,7 +424,7 @@ impl Analytic {
     /// halves of the slots (K x 8 bytes per pixel each), the fragment counts and tails, native's
     /// velocity, ID and depth targets (its colour target is freed as soon as it is made), the
     /// resolved colour, coverage and counts, and six readbacks.
-    pub fn estimate(frags: u32, w: u32, h: u32, max_range: u32) -> MemoryEstimate {
+    pub fn estimate(frags: u32, samples: u32, w: u32, h: u32, max_range: u32) -> MemoryEstimate {
         let mut e = MemoryEstimate::new();
         let px = u64::from(w) * u64::from(h);
         let kept = px * u64::from(frags);
@@ -390,14 +435,23 @@ impl Analytic {
         e.storage_buffer("analytic.planes_y", kept * PLANE_Y_BYTES, false);
         e.storage_buffer("analytic.surfaces", kept * SURFACE_BYTES, false);
         e.storage_buffer("analytic.quadrants", kept * QUADRANT_BYTES, false);
+        e.storage_buffer(
+            "analytic.slot_masks",
+            (kept * slot_mask_bytes(samples)).max(4),
+            false,
+        );
         e.storage_buffer("analytic.counts_buffer", px * 4, false);
         e.storage_buffer("analytic.tail", px * TAIL_BYTES, false);
         e.storage_buffer("analytic.tail_back", px * TAIL_BYTES, false);
-        e.storage_buffer("analytic.tail_masks", px * TAIL_MASK_BYTES, false);
-        e.storage_buffer("analytic.occluders", occluder_bytes(px, max_range), false);
+        e.storage_buffer("analytic.tail_masks", px * tail_mask_bytes(samples), false);
+        e.storage_buffer(
+            "analytic.occluders",
+            occluder_bytes(px, max_range, samples),
+            false,
+        );
         e.storage_buffer(
             "analytic.tail_records",
-            start_tail_capacity(px, max_range) * TAIL_RECORD_BYTES,
+            start_tail_capacity(px, max_range, samples) * tail_record_bytes(samples),
             false,
         );
         e.storage_buffer("analytic.tail_count", TAIL_COUNT_BYTES, false);
@@ -426,9 +480,10 @@ impl Analytic {
     pub fn new(ctx: &BuildCtx, c: AnalyticConfig) -> Result<Analytic> {
         let (gpu, w, h) = (ctx.gpu, ctx.width, ctx.height);
         let max_range = gpu.caps().max_storage_buffer_range;
-        let frags = plan_lists(w, h, c.frags, max_range).map_err(GpuError::Other)?;
+        let samples = c.samples;
+        let frags = plan_lists(w, h, c.frags, samples, max_range).map_err(GpuError::Other)?;
         let px = u64::from(w) * u64::from(h);
-        let occluder_group = occluder_group(px, max_range);
+        let occluder_group = occluder_group(px, max_range, samples);
         if ctx.scene.draws.len() > MAX_OBJECTS
             || ctx
                 .scene
@@ -461,6 +516,11 @@ impl Analytic {
             ("K_SLOTS".to_string(), frags.to_string()),
             ("OCCLUDER_GROUP".to_string(), occluder_group.to_string()),
             ("TAIL_ROW_GROUPS".to_string(), TAIL_ROW_GROUPS.to_string()),
+            ("MASK_SAMPLES".to_string(), samples.to_string()),
+            (
+                "MASK_GEN".to_string(),
+                reference::mask_generator(samples).to_string(),
+            ),
         ];
         defines.extend(common.iter().cloned());
         if c.seed {
@@ -546,14 +606,27 @@ impl Analytic {
         let planes_y = buffer("analytic.planes_y", kept * PLANE_Y_BYTES, storage)?;
         let surfaces = buffer("analytic.surfaces", kept * SURFACE_BYTES, storage)?;
         let quadrants = buffer("analytic.quadrants", kept * QUADRANT_BYTES, storage)?;
+        let slot_masks = buffer(
+            "analytic.slot_masks",
+            (kept * slot_mask_bytes(samples)).max(4),
+            storage,
+        )?;
         let counts_buf = buffer("analytic.counts_buffer", px * 4, storage)?;
         let tail = buffer("analytic.tail", px * TAIL_BYTES, storage)?;
         let tail_back = buffer("analytic.tail_back", px * TAIL_BYTES, storage)?;
-        let tail_masks = buffer("analytic.tail_masks", px * TAIL_MASK_BYTES, storage)?;
-        let occluders = buffer("analytic.occluders", occluder_bytes(px, max_range), storage)?;
+        let tail_masks = buffer(
+            "analytic.tail_masks",
+            px * tail_mask_bytes(samples),
+            storage,
+        )?;
+        let occluders = buffer(
+            "analytic.occluders",
+            occluder_bytes(px, max_range, samples),
+            storage,
+        )?;
         let tail_records = buffer(
             "analytic.tail_records",
-            start_tail_capacity(px, max_range) * TAIL_RECORD_BYTES,
+            start_tail_capacity(px, max_range, samples) * tail_record_bytes(samples),
             storage,
         )?;
         let tail_count = buffer(
@@ -611,6 +684,7 @@ impl Analytic {
                 &tail_records,
                 &tail_count,
                 &quadrants,
+                &slot_masks,
             ]),
         )?;
         let tail_set = DescriptorSet::new(
@@ -638,6 +712,7 @@ impl Analytic {
                 Write::Buffer(11, &tail_masks),
                 Write::Buffer(12, &surfaces),
                 Write::Buffer(13, &quadrants),
+                Write::Buffer(14, &slot_masks),
             ],
         )?;
         let rb = |name: &str, image: &Image| Readback::for_image(gpu, name, image);
@@ -677,6 +752,7 @@ impl Analytic {
             planes_y,
             surfaces,
             quadrants,
+            slot_masks,
             tail_records,
             max_range,
             tail_count,
@@ -742,6 +818,7 @@ impl Analytic {
                 &self.tail_masks,
                 &self.surfaces,
                 &self.quadrants,
+                &self.slot_masks,
             ] {
                 cmd.use_buffer(buf, Access::ComputeSampled);
             }
@@ -781,7 +858,7 @@ impl Analytic {
 
     /// Tail records the buffer holds.
     fn tail_capacity(&self) -> u64 {
-        self.tail_records.size() / TAIL_RECORD_BYTES
+        self.tail_records.size() / tail_record_bytes(self.c.samples)
     }
 
     /// Fragments the last submitted frame recorded for the tails (some beyond the capacity
@@ -796,8 +873,8 @@ impl Analytic {
     /// the device's largest storage buffer) and points the two sets that bind it at the new one;
     /// or the refusal where one buffer cannot hold `needed`.
     fn grow_tail_records(&mut self, gpu: &cbr_gpu::Gpu, needed: u64) -> Result<()> {
-        let capacity =
-            grown_tail_capacity(needed, self.frags, self.max_range).map_err(GpuError::Other)?;
+        let capacity = grown_tail_capacity(needed, self.frags, self.c.samples, self.max_range)
+            .map_err(GpuError::Other)?;
         tracing::info!(
             "analytic: {needed} tail records this frame, {} held: the buffer grows to {capacity}",
             self.tail_capacity()
@@ -806,7 +883,7 @@ impl Analytic {
         self.tail_records = Buffer::new(
             gpu,
             "analytic.tail_records",
-            capacity * TAIL_RECORD_BYTES,
+            capacity * tail_record_bytes(self.c.samples),
             usage,
             Location::GpuOnly,
         )?;
@@ -848,6 +925,7 @@ impl Analytic {
             &self.tail_records,
             &self.tail_count,
             &self.quadrants,
+            &self.slot_masks,
         ] {
             cmd.use_buffer(buf, Access::FragmentStorageWrite);
         }
@@ -970,15 +1048,17 @@ impl Technique for Analytic {
 
     fn target_bytes(&self) -> u64 {
         let px = u64::from(self.color.width) * u64::from(self.color.height);
-        // K x (key + slot + plane + surface + quadrants) + the fragment count (4), tails (2 x 32) and their
-        // masks (8), the occluder words (4 x 32 / group) + colour (8), coverage (4), counts (16),
-        // depth (4), velocity (8), IDs (8); and the tail records the buffer holds now.
+        // K x (key + slot + plane + surface + quadrants + further mask words) + the fragment
+        // count (4), tails (2 x 32) and their masks (2 x 4 N / 32), the occluder words (4 N /
+        // group) + colour (8), coverage (4), counts (16), depth (4), velocity (8), IDs (8); and
+        // the tail records the buffer holds now.
+        let samples = self.c.samples;
         self.tail_records.size()
-            + px * (u64::from(self.frags) * FRAGMENT_BYTES
+            + px * (u64::from(self.frags) * fragment_bytes(samples)
                 + 4
                 + 2 * TAIL_BYTES
-                + TAIL_MASK_BYTES
-                + occluder_pixel_bytes(self.occluder_group)
+                + tail_mask_bytes(samples)
+                + occluder_pixel_bytes(self.occluder_group, samples)
                 + 8
                 + 4
                 + 16

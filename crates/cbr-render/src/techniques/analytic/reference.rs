@@ -1,7 +1,7 @@
 //! The CPU reference of `analytic`, in f64 and by a different method than the shader: clip the
 //! polygon to the pixel square (Sutherland-Hodgman) and take the clipped polygon's area and
 //! centroid (shoelace), where the shader integrates edge by edge. Also the seed's column shortcut
-//! and the 32-sample mask with the shader's tie rule.
+//! and the N-sample mask (32, 64, 128) with the shader's tie rule.
 
 /// A polygon's vertices in screen pixels (y down).
 pub type Poly = Vec<[f64; 2]>;
@@ -63,12 +63,31 @@ pub fn coverage(poly: &[[f64; 2]], x: i64, y: i64) -> (f64, Option<[f64; 2]>) {
     (a.abs(), Some([cen[0] - x as f64, cen[1] - y as f64]))
 }
 
-/// Sample `k` of the visibility mask, pixel-local (coverage.glsl's `mask_sample`).
-pub fn mask_sample(k: u32) -> [f64; 2] {
+/// The rank-1 lattice's generator of an N-sample mask (shaders/analytic/mask.glsl, which takes
+/// it as the define MASK_GEN): of the odd generators, the one with the least RMS error of the
+/// sample share against the exact area over random half-planes crossing the pixel (13 for 32
+/// samples, kept from before; docs/analytic.md, The mask's sample count).
+pub fn mask_generator(samples: u32) -> u32 {
+    match samples {
+        32 => 13,
+        64 => 19,
+        128 => 47,
+        _ => panic!("no {samples}-sample mask (32, 64 or 128)"),
+    }
+}
+
+/// Sample `k` of the N-sample visibility mask, pixel-local (coverage.glsl's `mask_sample`).
+pub fn mask_sample_of(k: u32, samples: u32) -> [f64; 2] {
+    let n = f64::from(samples);
     [
-        (f64::from(k) + 0.5) / 32.0,
-        (f64::from((k * 13) & 31) + 0.5) / 32.0,
+        (f64::from(k) + 0.5) / n,
+        (f64::from((k * mask_generator(samples)) & (samples - 1)) + 0.5) / n,
     ]
+}
+
+/// Sample `k` of the 32-sample visibility mask.
+pub fn mask_sample(k: u32) -> [f64; 2] {
+    mask_sample_of(k, 32)
 }
 
 /// Whether pixel-local point `q` is in the polygon (pixel-local too), with the shader's rule for
@@ -89,24 +108,34 @@ pub fn inside(poly: &[[f64; 2]], q: [f64; 2]) -> bool {
     true
 }
 
-/// The 32-sample mask of pixel (x, y).
-pub fn sample_mask(poly: &[[f64; 2]], x: i64, y: i64) -> u32 {
+/// The N-sample mask of pixel (x, y), sample k in bit k.
+pub fn sample_mask_of(poly: &[[f64; 2]], x: i64, y: i64, samples: u32) -> u128 {
     let local: Poly = poly
         .iter()
         .map(|p| [p[0] - x as f64, p[1] - y as f64])
         .collect();
-    (0..32)
-        .filter(|&k| inside(&local, mask_sample(k)))
+    (0..samples)
+        .filter(|&k| inside(&local, mask_sample_of(k, samples)))
         .fold(0, |m, k| m | 1 << k)
+}
+
+/// The 32-sample mask of pixel (x, y).
+pub fn sample_mask(poly: &[[f64; 2]], x: i64, y: i64) -> u32 {
+    sample_mask_of(poly, x, y, 32) as u32
 }
 
 /// The seed's shortcut for pixel (x, y): the polygon's vertical extent on the column's centre line
 /// clipped to the pixel, or the mask's fraction where the column holds a vertex.
 pub fn seed_coverage(poly: &[[f64; 2]], x: i64, y: i64) -> f64 {
+    seed_coverage_of(poly, x, y, 32)
+}
+
+/// The same with an N-sample mask in the vertex columns.
+pub fn seed_coverage_of(poly: &[[f64; 2]], x: i64, y: i64, samples: u32) -> f64 {
     let (xf, yf) = (x as f64, y as f64);
     let cx = xf + 0.5;
     if poly.iter().any(|p| p[0] >= xf && p[0] <= xf + 1.0) {
-        return f64::from(sample_mask(poly, x, y).count_ones()) / 32.0;
+        return f64::from(sample_mask_of(poly, x, y, samples).count_ones()) / f64::from(samples);
     }
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for i in 0..poly.len() {
