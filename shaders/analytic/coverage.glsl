@@ -300,17 +300,30 @@ Mask sample_mask(vec2 p[MAX_POLY], int n, float orient) {
 }
 
 // A covered part too small to hold a sample still needs one bit for the visibility test: the
-// sample nearest its centroid.
+// sample nearest its centroid (the lowest k among equally near ones). Sample k lies at x = (k +
+// 1/2) / N, so the search runs outwards from q's column and stops where the columns alone are
+// farther than the nearest sample found: the same sample as a scan of all N.
 Mask nearest_sample_bit(vec2 q) {
-    int best = 0;
-    float bd = 1e30;
-    for (int k = 0; k < MASK_SAMPLES; ++k) {
-        vec2 d = mask_sample(k) - q;
-        float dd = dot(d, d);
-        if (dd < bd) {
-            bd = dd;
-            best = k;
+    const float N = float(MASK_SAMPLES);
+    int c = isnan(q.x) ? 0 : int(clamp(floor(q.x * N), 0.0, N - 1.0));
+    int best = c;
+    vec2 d0 = mask_sample(c) - q;
+    float bd = dot(d0, d0);
+    for (int i = 1; i < MASK_SAMPLES; ++i) {
+        bool any_near = false;
+        for (int side = 0; side < 2; ++side) {
+            int k = side == 0 ? c - i : c + i;
+            if (k < 0 || k >= MASK_SAMPLES) continue;
+            vec2 d = mask_sample(k) - q;
+            if (d.x * d.x > bd) continue;
+            any_near = true;
+            float dd = dot(d, d);
+            if (dd < bd || (dd == bd && k < best)) {
+                bd = dd;
+                best = k;
+            }
         }
+        if (!any_near) break;
     }
     return mask_bit(best);
 }

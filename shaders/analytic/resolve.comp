@@ -232,18 +232,26 @@ void main() {
     for (int k = 0; k < count; ++k) {
         Mask l = Mask(0u);
         bool own = true;  // every lost sample lost to its own object
-        if ((fl[k] & FRAG_HOLES) == 0u) {
+        if ((fl[k] & (FRAG_HOLES | FRAG_STAND_IN)) == 0u) {
+            // A real sample is lost to any winner but itself: every sample of the mask it did not
+            // win. Whether all went to its own object matters only where it lost them all.
+            l = masks[k] & ~won[k];
+            if (l == masks[k]) {
+                for (int j = 0; j < count; ++j) {
+                    if (objs[j] != objs[k] && mask_any(won[j] & l)) own = false;
+                }
+            }
+        } else if ((fl[k] & FRAG_HOLES) == 0u) {
             Mask rest = masks[k] & ~won[k];
             while (mask_any(rest)) {
                 int s = mask_pop(rest);
                 uint w = winner[s];
                 float zk = plane_depth(base + uint(k), mask_sample(s));
-                bool stand_in = (fl[k] & FRAG_STAND_IN) != 0u;
                 bool same_object = objs[w] == objs[k];
                 // A stand-in is behind the winner where its plane, extrapolated to its sample,
                 // is (beyond 1e-3 of the depth when the winner is its own object: the same
-                // surface); a real sample is lost to any winner but itself.
-                bool behind = !stand_in || (wz[s] > zk && !(same_object && wz[s] - zk <= 1e-3 * abs(zk)));
+                // surface).
+                bool behind = wz[s] > zk && !(same_object && wz[s] - zk <= 1e-3 * abs(zk));
                 if (behind) {
                     l |= mask_bit(s);
                     own = own && same_object;
@@ -285,15 +293,18 @@ void main() {
             settled[k] = true;
         }
     }
+    // Fragment by fragment: winner j occludes k by v(j) times the share of j's samples that k
+    // lost to it (the sum over k's lost samples, grouped by their winner: a pixel has far fewer
+    // fragments than a fragment has samples).
+    float won_count[K_SLOTS];
+    for (int j = 0; j < count; ++j) won_count[j] = float(mask_count(won[j]));
     for (int sweep = 0; sweep < 2; ++sweep) {
         for (int k = 0; k < count; ++k) {
             if (settled[k]) continue;
             float occ = 0.0;
-            Mask rest = lost[k];
-            while (mask_any(rest)) {
-                int s = mask_pop(rest);
-                uint w = winner[s];
-                occ += vis[w] / float(mask_count(won[w]));
+            for (int j = 0; j < count; ++j) {
+                Mask by_j = lost[k] & won[j];
+                if (mask_any(by_j)) occ += vis[j] * float(mask_count(by_j)) / won_count[j];
             }
             vis[k] = clamp(area[k] - occ, 0.0, area[k]);
         }

@@ -290,9 +290,10 @@ fn coverage_kernel_is_within_1e5_of_the_f64_area_on_10000_random_triangles() {
         "{centre_mismatch} of {n} centre tests differ"
     );
     assert!(seed_bad * 1000 <= n, "{seed_bad} of {n} seed areas differ");
-    // The wider masks (`samples=64`, `samples=128`): every word against the f64 reference's,
-    // and the nearest sample to the centroid is the nearest of the N.
-    for samples in [64, 128] {
+    // Every mask size (`samples=N`): every word against the f64 reference's, and the sample
+    // nearest the centroid (coverage.glsl searches outwards from its column) is a nearest of
+    // the N (within 1e-6: f32 distances break near-ties either way).
+    for samples in [32, 64, 128] {
         let results = run_kernel(&gpu, &cases, samples);
         let (mut mismatch, mut wrong_nearest) = (0usize, 0usize);
         for ((_, poly, x, y), (f, m, info)) in polys.iter().zip(&results) {
