@@ -267,9 +267,11 @@ void main() {
     vec4 zc4 = vec4(depth_at(corner), depth_at(corner + vec2(1.0, 0.0)),
                     depth_at(corner + vec2(0.0, 1.0)), depth_at(corner + 1.0));
 #ifndef SELECT_PASS
-    // The slots hold the K nearest keys sorted (the select pass): a binary search.
+    // The slots hold the K nearest keys sorted (the select pass): a binary search, its steps the
+    // powers of two from the largest not above K (halving K itself, e.g. 18, 9, 4, 2, 1, skips
+    // positions: a kept fragment was not found, and its slot was left unwritten).
     int first = 0;
-    for (int step = K_SLOTS; step > 0; step >>= 1) {
+    for (int step = 1 << findMSB(K_SLOTS); step > 0; step >>= 1) {
         int probe = first + step - 1;
         if (probe < K_SLOTS && keys[base + uint(probe)] < key) first = probe + 1;
     }
@@ -337,7 +339,7 @@ void main() {
     // for a fragment behind a full pixel's K nearest.
     uint hi = uint(key >> 32);
     int first = 0;
-    for (int step = K_SLOTS; step > 0; step >>= 1) {
+    for (int step = 1 << findMSB(K_SLOTS); step > 0; step >>= 1) {
         int probe = first + step - 1;
         if (probe < K_SLOTS && key_words[(base + uint(probe)) * 2u + 1u] < hi) first = probe + 1;
     }

@@ -331,7 +331,7 @@ void main() {
     visible = 0u;
     float shown[K_SLOTS];  // the composited v of the fragments in `show`
     float scale[K_SLOTS];  // and their shown_albedo
-    uint show = 0u;
+    uvec2 show = uvec2(0u);  // slot k in bit k % 32 of word k / 32 (K_SLOTS <= 64)
     for (int k = 0; k < count; ++k) {
         uint fflags = fl[k];
         float a = area[k];
@@ -363,7 +363,7 @@ void main() {
         if (v <= 0.0) continue;
         shown[k] = v;
         scale[k] = shown_albedo(base + uint(k), masks[k], keep);
-        show |= 1u << uint(k);
+        show[k >> 5] |= 1u << uint(k & 31);
         sum += v;
         ++visible;
         if (a < 1.0 - 1e-6) flags |= FLAG_EDGE;
@@ -371,9 +371,10 @@ void main() {
     // The light of the composited fragments only, in key order; each invocation walks its own
     // list (a SIMD group pays for its longest, not for every slot).
     bool again = false;
-    while (show != 0u) {
-        int k = findLSB(show);
-        show &= show - 1u;
+    while (show != uvec2(0u)) {
+        int w = show.x != 0u ? 0 : 1;
+        int k = w * 32 + findLSB(show[w]);
+        show[w] &= show[w] - 1u;
         vec3 c = shade_slot(base + uint(k), objs[k], px, scale[k]);
         if (any(isnan(c)) || any(isinf(c))) {
             fl[k] |= FRAG_HOLES | FRAG_NONFINITE;

@@ -15,7 +15,7 @@
 //! kept fragments it composites. When a frame records more fragments than the record buffer
 //! holds, the buffer grows to what the frame counted and the frame is rendered again (the
 //! timings are those of the second rendering). `:seed` replaces the exact area by the seed's column
-//! shortcut and flags where it is off; `:frags=K` keeps K fragments per pixel (1 to 32;
+//! shortcut and flags where it is off; `:frags=K` keeps K fragments per pixel (1 to 64;
 //! default 32, lowered to what the device's largest storage buffer holds); `:samples=N` gives
 //! the visibility mask N samples (32, the default, 64 or 128; shaders/analytic/mask.glsl).
 
@@ -202,8 +202,8 @@ fn start_tail_capacity(px: u64, max_range: u32, samples: u32) -> u64 {
 /// Fragments kept per pixel unless `frags=K` says otherwise (lowered to what fits).
 pub const DEFAULT_FRAGS: u32 = 32;
 /// The most `frags=K` may ask for: resolve.comp holds the set of a pixel's kept fragments it
-/// composites as the bits of one 32-bit word.
-pub const MAX_FRAGS: u32 = 32;
+/// composites as the bits of two 32-bit words.
+pub const MAX_FRAGS: u32 = 64;
 /// The key's identity field: object IDs below 2^12, primitive IDs below 2^20.
 pub const MAX_OBJECTS: usize = (1 << 12) - 1;
 pub const MAX_PRIMITIVES: usize = 1 << 20;
