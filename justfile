@@ -44,7 +44,7 @@ bench: setup
     python3 scripts/antialiasing.py --cbr ./target/release/cbr -o {{out}}/bench/aa
     @echo "[bench] temporal anti-aliasing: FXAA, TAA, checkerboard + TAA against ssaa:16, cost at 1280x720 -> docs/post-aa.md"
     python3 scripts/post-aa.py --cbr ./target/release/cbr -o {{out}}/bench/post-aa
-    @echo "[bench] analytic coverage AA against ssaa:32 (demo 320x180, Sibenik 160x90) -> docs/analytic.md"
+    @echo "[bench] analytic coverage AA against ssaa:32 (demo and Sibenik at 320x180) -> docs/analytic.md"
     just bench-analytic
     @echo "[bench] interleaved many-light shading against every VPL at every pixel -> docs/interleaved.md"
     just bench-interleaved
