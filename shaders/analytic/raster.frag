@@ -144,6 +144,39 @@ vec4 texture_aniso(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
     return sum / float(n);
 }
 
+// `analytic:box` (TEXTURE_BOX): the albedo's footprint integrated as a box, by the midpoint rule
+// over a grid of cells, each looked up (trilinear) over its own cell: BOX_CELLS cells across the
+// footprint's shorter side (or across each texel where it is under one texel), as many along the
+// longer side as keep the cells about square, at most 16 along it and BOX_MAX_TAPS in all. A single trilinear lookup at the footprint's level filters
+// with a tent two of that level's texels wide, twice the pixel: on textures minified several
+// levels (Šibenik's stone at 320x180) it blurs what the supersampled reference keeps
+// (docs/analytic.md, The texture's box).
+#define BOX_CELLS 3.0
+#define BOX_MAX_TAPS 16
+vec4 texture_box(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
+    vec2 size = vec2(textureSize(t, 0));
+    float lx = length(gx * size);
+    float ly = length(gy * size);
+    float unit = max(min(lx, ly), 1.0);
+    if (isnan(unit) || isinf(unit)) return texture_aniso(t, uv, gx, gy);
+    // Cells along the longer side first: beyond BOX_MAX_TAPS the shorter side has fewer cells,
+    // down to one (then the lookups are texture_aniso's, finer along the longer side).
+    bool x_long = lx >= ly;
+    int n_long = int(clamp(ceil(BOX_CELLS * max(lx, ly) / unit), 1.0, 16.0));
+    int n_short = int(clamp(ceil(BOX_CELLS * min(lx, ly) / unit), 1.0, BOX_CELLS));
+    n_short = clamp(BOX_MAX_TAPS / n_long, 1, n_short);
+    int nx = x_long ? n_long : n_short;
+    int ny = x_long ? n_short : n_long;
+    vec4 sum = vec4(0.0);
+    for (int i = 0; i < nx; ++i) {
+        for (int j = 0; j < ny; ++j) {
+            vec2 o = vec2((float(i) + 0.5) / float(nx) - 0.5, (float(j) + 0.5) / float(ny) - 0.5);
+            sum += textureGrad(t, uv + gx * o.x + gy * o.y, gx / float(nx), gy / float(ny));
+        }
+    }
+    return sum / float(nx * ny);
+}
+
 // Alpha-tested materials, per sample. The mask slot holds the material's coverage texture
 // (cbr_scene::Texture::alpha_coverage): the passing share in alpha, the albedo premultiplied by it
 // in rgb, both averaged by the mips, so one lookup gives the test and the colour of the part that
@@ -379,7 +412,11 @@ void main() {
                 fx = gx * f[0].x + gy * f[0].y;
                 fy = gx * f[1].x + gy * f[1].y;
             }
+#ifdef TEXTURE_BOX
+            albedo *= texture_box(albedo_tex, uv, fx, fy).rgb;
+#else
             albedo *= texture_aniso(albedo_tex, uv, fx, fy).rgb;
+#endif
 #ifndef SELECT_PASS
             // Each quadrant's own footprint (half the pixel's, centred in it), for the part of
             // the fragment that shows when nearer ones hide the rest (resolve.comp). Needed only

@@ -17,7 +17,9 @@
 //! timings are those of the second rendering). `:seed` replaces the exact area by the seed's column
 //! shortcut and flags where it is off; `:frags=K` keeps K fragments per pixel (1 to 64;
 //! default 32, lowered to what the device's largest storage buffer holds); `:samples=N` gives
-//! the visibility mask N samples (32, the default, 64 or 128; shaders/analytic/mask.glsl).
+//! the visibility mask N samples (32, the default, 64 or 128; shaders/analytic/mask.glsl); `:box`
+//! integrates the albedo texture over the footprint as a box (a grid of lookups, raster.frag's
+//! `texture_box`) instead of one anisotropic trilinear filter.
 
 pub mod reference;
 
@@ -37,9 +39,10 @@ use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, un
 
 pub const REGISTRATION: Registration = Registration {
     name: "analytic",
-    grammar: "analytic[:seed][:frags=K][:samples=N]",
+    grammar: "analytic[:seed][:frags=K][:samples=N][:box]",
     about: "exact area of each pixel covered by each triangle, per-pixel fragment lists resolved \
-            front to back; `seed`: the seed's column shortcut",
+            front to back; `seed`: the seed's column shortcut; `samples=N`: the visibility mask's \
+            samples (32, 64, 128); `box`: the albedo texture integrated as a box over the footprint",
     layers: &["coverage", "analytic"],
     check: |p| parse(p).map(|_| ()),
     needs,
@@ -215,6 +218,8 @@ pub struct AnalyticConfig {
     pub frags: Option<u32>,
     /// The visibility mask's samples (one of [`MASK_SAMPLE_COUNTS`]).
     pub samples: u32,
+    /// The albedo texture integrated over the footprint as a box (`box`).
+    pub box_filter: bool,
 }
 
 pub fn parse(params: &[&str]) -> std::result::Result<AnalyticConfig, String> {
@@ -222,10 +227,12 @@ pub fn parse(params: &[&str]) -> std::result::Result<AnalyticConfig, String> {
         seed: false,
         frags: None,
         samples: DEFAULT_SAMPLES,
+        box_filter: false,
     };
     for p in params {
         match *p {
             "seed" => c.seed = true,
+            "box" => c.box_filter = true,
             _ => {
                 if let Some(n) = p.strip_prefix("frags=") {
                     let n: u32 = n
@@ -241,7 +248,11 @@ pub fn parse(params: &[&str]) -> std::result::Result<AnalyticConfig, String> {
                         .filter(|n| MASK_SAMPLE_COUNTS.contains(n))
                         .ok_or_else(|| format!("analytic samples=`{n}` (32, 64 or 128)"))?;
                 } else {
-                    return Err(unknown_param("analytic", p, "seed, frags=K, samples=N"));
+                    return Err(unknown_param(
+                        "analytic",
+                        p,
+                        "seed, frags=K, samples=N, box",
+                    ));
                 }
             }
         }
@@ -525,6 +536,9 @@ impl Analytic {
         defines.extend(common.iter().cloned());
         if c.seed {
             defines.push(("SEED".into(), "1".into()));
+        }
+        if c.box_filter {
+            defines.push(("TEXTURE_BOX".into(), "1".into()));
         }
         let vs = ctx.shaders.compile("scene/forward.vert", &defines)?;
         let gs = ctx.shaders.compile("analytic/raster.geom", &defines)?;
