@@ -144,15 +144,19 @@ vec4 texture_aniso(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
     return sum / float(n);
 }
 
-// `analytic:box` (TEXTURE_BOX): the albedo's footprint integrated as a box, by the midpoint rule
+// TEXTURE_BOX (the default; `analytic:aniso` leaves it out): the albedo's footprint integrated as
+// a box, by the midpoint rule
 // over a grid of cells, each looked up (trilinear) over its own cell: BOX_CELLS cells across the
 // footprint's shorter side (or across each texel where it is under one texel), as many along the
 // longer side as keep the cells about square, at most 16 along it and BOX_MAX_TAPS in all. A single trilinear lookup at the footprint's level filters
 // with a tent two of that level's texels wide, twice the pixel: on textures minified several
 // levels (Šibenik's stone at 320x180) it blurs what the supersampled reference keeps
-// (docs/analytic.md, The texture's box).
+// (docs/analytic.md, The texture's box). Only for a fragment covering at least BOX_MIN_AREA of
+// its pixel: the smaller ones weigh little in the pixel and cost the most lookups (a sliver's
+// footprint is long and thin).
 #define BOX_CELLS 3.0
 #define BOX_MAX_TAPS 16
+#define BOX_MIN_AREA 0.25
 vec4 texture_box(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
     vec2 size = vec2(textureSize(t, 0));
     float lx = length(gx * size);
@@ -413,7 +417,8 @@ void main() {
                 fy = gx * f[1].x + gy * f[1].y;
             }
 #ifdef TEXTURE_BOX
-            albedo *= texture_box(albedo_tex, uv, fx, fy).rgb;
+            albedo *= (cov.area >= BOX_MIN_AREA ? texture_box(albedo_tex, uv, fx, fy)
+                                                 : texture_aniso(albedo_tex, uv, fx, fy)).rgb;
 #else
             albedo *= texture_aniso(albedo_tex, uv, fx, fy).rgb;
 #endif

@@ -1586,8 +1586,8 @@ fn textures_are_filtered_over_the_anisotropic_footprint() {
     let mut s = scene(vec![floor], vec![m, Material::named("plain")], [0.0; 3]);
     s.textures = vec![Texture::from_rgba8("stripes", texels, 4, rgba, false)];
     s.settings.ambient = [1.0; 3];
-    let out = render(&gpu, &s, "analytic");
-    let boxed = render(&gpu, &s, "analytic:box");
+    let out = render(&gpu, &s, "analytic:aniso");
+    let boxed = render(&gpu, &s, "analytic");
     assert_clean(&gpu);
 
     let cam = s.camera.at(0.0);
@@ -1658,7 +1658,8 @@ fn textures_are_filtered_over_the_anisotropic_footprint() {
     assert!(n > 500, "{n} floor pixels");
     // Measured: 0.0086; isotropic filtering (MAX_ANISO 1) gives 0.0164.
     assert!(mean < 0.011, "mean |error| {mean}");
-    // `box` on a grazing floor of one-texel stripes: about as good (measured 0.0088), not better;
+    // The default, the texture's box, on a grazing floor of one-texel stripes: about as good
+    // (measured 0.0088), not better;
     // where it is better: `box_filters_a_minified_texture_as_the_supersampled_pixel_does`.
     assert!(mean_box < 0.011, "box: mean |error| {mean_box}");
 }
@@ -1669,8 +1670,9 @@ fn box_filters_a_minified_texture_as_the_supersampled_pixel_does() {
     // values, about 3.4 texels to a pixel (between mip levels 1 and 2). One trilinear lookup at
     // the footprint's level filters with a tent two texels of that level wide, twice the pixel;
     // the supersampled reference averages the texture's bilinear reconstruction over the
-    // pixel's square. CPU reference in f64: 32 x 32 points per pixel. `analytic:box` takes a grid
-    // of lookups over the footprint (raster.frag's texture_box).
+    // pixel's square. CPU reference in f64: 32 x 32 points per pixel. `analytic` takes a grid
+    // of lookups over the footprint (raster.frag's texture_box, the default; `analytic:aniso`
+    // takes one anisotropic trilinear filter).
     let gpu = gpu();
     let n = 64u32;
     let texel = |x: u32, y: u32| -> u8 {
@@ -1702,7 +1704,7 @@ fn box_filters_a_minified_texture_as_the_supersampled_pixel_does() {
     let mut s = scene(vec![plane], vec![m], [0.0; 3]);
     s.textures = vec![Texture::from_rgba8("noise", n, n, rgba, false)];
     s.settings.ambient = [1.0; 3];
-    let outs = ["analytic", "analytic:box"].map(|spec| render(&gpu, &s, spec));
+    let outs = ["analytic:aniso", "analytic"].map(|spec| render(&gpu, &s, spec));
     assert_clean(&gpu);
 
     let cam = s.camera.at(0.0);
@@ -2146,6 +2148,9 @@ fn fragments_kept_per_pixel_default_to_32_lowered_to_what_one_storage_buffer_hol
     );
     assert_eq!(parse(&["samples=64"]).map(|c| c.samples), Ok(64));
     assert_eq!(parse(&[]).map(|c| c.samples), Ok(DEFAULT_SAMPLES));
+    // The texture's box by default; `aniso` the single anisotropic filter.
+    assert_eq!(parse(&[]).map(|c| c.box_filter), Ok(true));
+    assert_eq!(parse(&["aniso"]).map(|c| c.box_filter), Ok(false));
     for bad in ["samples=48", "samples=256", "samples=x"] {
         let err = parse(&[bad]).unwrap_err();
         assert!(err.contains("(32, 64 or 128)"), "{bad}: {err}");

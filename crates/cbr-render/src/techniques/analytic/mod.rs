@@ -17,9 +17,10 @@
 //! timings are those of the second rendering). `:seed` replaces the exact area by the seed's column
 //! shortcut and flags where it is off; `:frags=K` keeps K fragments per pixel (1 to 64;
 //! default 32, lowered to what the device's largest storage buffer holds); `:samples=N` gives
-//! the visibility mask N samples (32, the default, 64 or 128; shaders/analytic/mask.glsl); `:box`
-//! integrates the albedo texture over the footprint as a box (a grid of lookups, raster.frag's
-//! `texture_box`) instead of one anisotropic trilinear filter.
+//! the visibility mask N samples (32, 64 the default, or 128; shaders/analytic/mask.glsl); the
+//! albedo texture is integrated over the footprint as a box (a grid of lookups, raster.frag's
+//! `texture_box`), or with `:aniso` by one anisotropic trilinear filter (the taps along the
+//! longer side only).
 
 pub mod reference;
 
@@ -39,10 +40,10 @@ use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, un
 
 pub const REGISTRATION: Registration = Registration {
     name: "analytic",
-    grammar: "analytic[:seed][:frags=K][:samples=N][:box]",
+    grammar: "analytic[:seed][:frags=K][:samples=N][:aniso]",
     about: "exact area of each pixel covered by each triangle, per-pixel fragment lists resolved \
             front to back; `seed`: the seed's column shortcut; `samples=N`: the visibility mask's \
-            samples (32, 64, 128); `box`: the albedo texture integrated as a box over the footprint",
+            samples (32, 64, 128); `aniso`: the albedo texture filtered anisotropically, not as a box",
     layers: &["coverage", "analytic"],
     check: |p| parse(p).map(|_| ()),
     needs,
@@ -218,7 +219,8 @@ pub struct AnalyticConfig {
     pub frags: Option<u32>,
     /// The visibility mask's samples (one of [`MASK_SAMPLE_COUNTS`]).
     pub samples: u32,
-    /// The albedo texture integrated over the footprint as a box (`box`).
+    /// The albedo texture integrated over the footprint as a box (the default; `aniso`: one
+    /// anisotropic trilinear filter).
     pub box_filter: bool,
 }
 
@@ -227,12 +229,12 @@ pub fn parse(params: &[&str]) -> std::result::Result<AnalyticConfig, String> {
         seed: false,
         frags: None,
         samples: DEFAULT_SAMPLES,
-        box_filter: false,
+        box_filter: true,
     };
     for p in params {
         match *p {
             "seed" => c.seed = true,
-            "box" => c.box_filter = true,
+            "aniso" => c.box_filter = false,
             _ => {
                 if let Some(n) = p.strip_prefix("frags=") {
                     let n: u32 = n
@@ -251,7 +253,7 @@ pub fn parse(params: &[&str]) -> std::result::Result<AnalyticConfig, String> {
                     return Err(unknown_param(
                         "analytic",
                         p,
-                        "seed, frags=K, samples=N, box",
+                        "seed, frags=K, samples=N, aniso",
                     ));
                 }
             }
