@@ -285,10 +285,11 @@ Mask sample_mask(vec2 p[MAX_POLY], int n, float orient) {
         xmax = max(xmax, p[i].x);
     }
     const float N = float(MASK_SAMPLES);
-    float lo = clamp(floor(xmin * N - 0.5) - 1.0, 0.0, N - 1.0);
-    float hi = clamp(ceil(xmax * N - 0.5) + 1.0, 0.0, N - 1.0);
-    int k0 = isnan(lo) ? 0 : int(lo);
-    int k1 = isnan(hi) ? MASK_SAMPLES - 1 : int(hi);
+    // NaN is tested before the clamp, which need not pass it through.
+    float lo = floor(xmin * N - 0.5) - 1.0;
+    float hi = ceil(xmax * N - 0.5) + 1.0;
+    int k0 = isnan(lo) ? 0 : int(clamp(lo, 0.0, N - 1.0));
+    int k1 = isnan(hi) ? MASK_SAMPLES - 1 : int(clamp(hi, 0.0, N - 1.0));
     Mask m = Mask(0u);
     for (int k = k0; k <= k1; ++k) {
         vec2 q = mask_sample(k);

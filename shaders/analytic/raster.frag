@@ -161,8 +161,9 @@ vec4 texture_box(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
     vec2 size = vec2(textureSize(t, 0));
     float lx = length(gx * size);
     float ly = length(gy * size);
+    // Lengths that are not finite take texture_aniso's own guard (min and max need not pass NaN).
+    if (isnan(lx) || isnan(ly) || isinf(lx) || isinf(ly)) return texture_aniso(t, uv, gx, gy);
     float unit = max(min(lx, ly), 1.0);
-    if (isnan(unit) || isinf(unit)) return texture_aniso(t, uv, gx, gy);
     // Cells along the longer side first: beyond BOX_MAX_TAPS the shorter side has fewer cells,
     // down to one (then the lookups are texture_aniso's, finer along the longer side).
     bool x_long = lx >= ly;

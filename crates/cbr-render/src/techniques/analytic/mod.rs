@@ -137,7 +137,7 @@ pub const TAIL_COUNT_BYTES: u64 = 16;
 /// not fit one storage buffer: [`occluder_group`].
 pub const OCCLUDER_WORD_BYTES: u64 = 4;
 
-/// Samples per occluder word at `px` pixels with an N-sample mask: the fewest (N / 32, ... 32)
+/// Samples per occluder word at `px` pixels with an N-sample mask: the fewest (1, 2, 4, ... 32)
 /// whose words fit `maxStorageBufferRange` (lavapipe's 128 MiB, 32 samples: 1 up to 1280x720, 2
 /// at 1920x1080). A group is consecutive samples, adjacent in x but far apart in y on the
 /// lattice, so a group is seldom covered whole by a partial occluder: grouping by default
