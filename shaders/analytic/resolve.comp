@@ -12,7 +12,8 @@
 //    holds.
 // 2. Fragment k loses a sample of its mask to the winner there. A stand-in loses its sample only
 //    where the winner is in front of its plane there, by more than 1e-3 of the depth if the
-//    winner is its own object (else the same surface: a sliver beside its neighbour); and it is
+//    winner is its own object (else the same surface: a sliver beside its neighbour), by more
+//    than 1e-5 if another (the planes' rounding: coplanar objects abutting); and it is
 //    hidden where the rest of its surface in the pixel is hidden at every sample (its object, its
 //    facing, a normal within SAME_SURFACE_COS, a plane through its depth within
 //    SAME_SURFACE_DEPTH). A fragment that loses no sample is unoccluded: it adds its exact
@@ -249,9 +250,10 @@ void main() {
                 float zk = plane_depth(base + uint(k), mask_sample(s));
                 bool same_object = objs[w] == objs[k];
                 // A stand-in is behind the winner where its plane, extrapolated to its sample,
-                // is (beyond 1e-3 of the depth when the winner is its own object: the same
-                // surface).
-                bool behind = wz[s] > zk && !(same_object && wz[s] - zk <= 1e-3 * abs(zk));
+                // is: beyond 1e-3 of the depth when the winner is its own object (the same
+                // surface), beyond 1e-5 (the planes' rounding) when it is another: coplanar
+                // surfaces of two objects abutting in the pixel keep their slivers.
+                bool behind = wz[s] - zk > (same_object ? 1e-3 : 1e-5) * abs(zk);
                 if (behind) {
                     l |= mask_bit(s);
                     own = own && same_object;
