@@ -2124,6 +2124,28 @@ fn any_k_that_holds_every_fragment_renders_as_a_power_of_two_does() {
     assert_clean(&gpu);
 }
 
+/// A disc of radius 1 at height 0 around the origin (which projects onto a pixel corner) cut into
+/// `sectors` equal sectors, dealt in turn to `objects` meshes (material = the mesh's index).
+fn fan(sectors: usize, objects: usize) -> Vec<Object> {
+    let point = |i: usize| {
+        let a = (i % sectors) as f32 / sectors as f32 * std::f32::consts::TAU;
+        [a.cos(), a.sin(), 0.0]
+    };
+    (0..objects)
+        .map(|o| {
+            let mut verts = vec![[0.0f32; 3]];
+            let mut indices = Vec::new();
+            for i in (o..sectors).step_by(objects) {
+                let base = verts.len() as u32;
+                verts.push(point(i));
+                verts.push(point(i + 1));
+                indices.extend([0, base, base + 1]);
+            }
+            mesh(&format!("fan{o}"), &verts, indices, o as u32)
+        })
+        .collect()
+}
+
 #[test]
 fn a_pixel_of_more_than_32_fragments_composites_every_one_at_k_64() {
     // A fan of 160 sectors of one emissive mesh around the origin, which projects onto the
@@ -2136,20 +2158,11 @@ fn a_pixel_of_more_than_32_fragments_composites_every_one_at_k_64() {
     // rounding; docs/analytic.md, the visibility model.)
     let gpu = gpu();
     let sectors = 160usize;
-    let point = |i: usize| {
-        let a = (i % sectors) as f32 / sectors as f32 * std::f32::consts::TAU;
-        [a.cos(), a.sin(), 0.0]
-    };
-    let mut verts = vec![[0.0f32; 3]];
-    let mut indices = Vec::new();
-    for i in 0..sectors {
-        let base = verts.len() as u32;
-        verts.push(point(i));
-        verts.push(point(i + 1));
-        indices.extend([0, base, base + 1]);
-    }
-    let fan = mesh("fan", &verts, indices, 0);
-    let s = scene(vec![fan], vec![emissive("e", [0.25, 0.5, 1.0])], [0.0; 3]);
+    let s = scene(
+        fan(sectors, 1),
+        vec![emissive("e", [0.25, 0.5, 1.0])],
+        [0.0; 3],
+    );
     let out = render(&gpu, &s, "analytic:frags=64");
     assert_clean(&gpu);
     let a = out.analytic.as_ref().unwrap();
@@ -2200,27 +2213,10 @@ fn abutting_coplanar_objects_keep_their_slivers() {
         [0.0, 0.0, 1.0],
         [1.0, 1.0, 0.0],
     ];
-    let point = |i: usize| {
-        let a = (i % sectors) as f32 / sectors as f32 * std::f32::consts::TAU;
-        [a.cos(), a.sin(), 0.0]
-    };
-    let objects = (0..4)
-        .map(|o| {
-            let mut verts = vec![[0.0f32; 3]];
-            let mut indices = Vec::new();
-            for i in (o..sectors).step_by(4) {
-                let base = verts.len() as u32;
-                verts.push(point(i));
-                verts.push(point(i + 1));
-                indices.extend([0, base, base + 1]);
-            }
-            mesh(&format!("fan{o}"), &verts, indices, o as u32)
-        })
-        .collect::<Vec<_>>();
     let materials = (0..4)
         .map(|o| emissive(&format!("c{o}"), colours[o]))
         .collect();
-    let s = scene(objects, materials, [0.0; 3]);
+    let s = scene(fan(sectors, 4), materials, [0.0; 3]);
     let (cx, cy) = (W as i64 / 2, H as i64 / 2);
     for samples in [32, 64, 128] {
         let out = render(&gpu, &s, &format!("analytic:frags=64:samples={samples}"));
