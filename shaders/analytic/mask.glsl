@@ -73,14 +73,6 @@ void mask_set_word(inout Mask m, int w, uint v) {
 #endif
 }
 
-void mask_and_word(inout Mask m, int w, uint v) {
-#if MASK_WORDS == 1
-    m &= v;
-#else
-    m[w] &= v;
-#endif
-}
-
 // The lowest sample of a non-empty mask, taken out of it: `while (mask_any(rest)) { int s =
 // mask_pop(rest); ... }` visits the samples in order.
 int mask_pop(inout Mask m) {

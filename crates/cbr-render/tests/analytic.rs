@@ -233,11 +233,14 @@ fn coverage_kernel_is_within_1e5_of_the_f64_area_on_10000_random_triangles() {
             polys.push((i % 6, poly.clone(), x, y));
         }
     }
-    let results = run_kernel(&gpu, &cases, 32);
+    // One run per mask size (`samples=N`); the area, centroid, centre and seed are the 32-sample
+    // kernel's (they do not depend on N).
+    let runs = [32u32, 64, 128].map(|samples| (samples, run_kernel(&gpu, &cases, samples)));
+    let results = &runs[0].1;
     let (mut worst, mut worst_case) = (0.0f64, String::new());
-    let (mut mask_mismatch, mut centre_mismatch, mut seed_bad) = (0usize, 0usize, 0usize);
+    let (mut centre_mismatch, mut seed_bad) = (0usize, 0usize);
     let mut touched = 0usize;
-    for ((kind, poly, x, y), (f, m, info)) in polys.iter().zip(&results) {
+    for ((kind, poly, x, y), (f, _, info)) in polys.iter().zip(results) {
         let (area, cen) = reference::coverage(poly, *x, *y);
         let err = (f64::from(f[0]) - area).abs();
         if err > worst {
@@ -256,9 +259,6 @@ fn coverage_kernel_is_within_1e5_of_the_f64_area_on_10000_random_triangles() {
                 "centroid {f:?} vs {c:?} ({area}) of {poly:?} at {x},{y}"
             );
         }
-        if m[0] != reference::sample_mask(poly, *x, *y) {
-            mask_mismatch += 1;
-        }
         let local: Poly = poly
             .iter()
             .map(|p| [p[0] - *x as f64, p[1] - *y as f64])
@@ -273,30 +273,26 @@ fn coverage_kernel_is_within_1e5_of_the_f64_area_on_10000_random_triangles() {
         }
     }
     println!(
-        "{} cases ({touched} touched): worst area error {worst:e}; mask mismatches {mask_mismatch}, \
-         centre {centre_mismatch}, seed {seed_bad}",
+        "{} cases ({touched} touched): worst area error {worst:e}; centre {centre_mismatch}, \
+         seed {seed_bad}",
         results.len()
     );
     assert!(worst <= 1e-5, "worst area error {worst:e}: {worst_case}");
     assert!(touched > 50_000, "{touched}");
-    // Samples within f32 rounding of an edge may fall either way (the test is in f32 on the GPU).
     let n = results.len();
-    assert!(
-        mask_mismatch * 1000 <= n,
-        "{mask_mismatch} of {n} masks differ"
-    );
     assert!(
         centre_mismatch * 1000 <= n,
         "{centre_mismatch} of {n} centre tests differ"
     );
     assert!(seed_bad * 1000 <= n, "{seed_bad} of {n} seed areas differ");
-    // Every mask size (`samples=N`): every word against the f64 reference's, and the sample
-    // nearest the centroid (coverage.glsl searches outwards from its column) is a nearest of
-    // the N (within 1e-6: f32 distances break near-ties either way).
-    for samples in [32, 64, 128] {
-        let results = run_kernel(&gpu, &cases, samples);
+    // Every mask size: every word against the f64 reference's (samples within f32 rounding of an
+    // edge may fall either way: the test is in f32 on the GPU), and the sample nearest the
+    // centroid (coverage.glsl searches outwards from its column) is a nearest of the N (within
+    // 1e-6: f32 distances break near-ties either way).
+    for (samples, results) in &runs {
+        let samples = *samples;
         let (mut mismatch, mut wrong_nearest) = (0usize, 0usize);
-        for ((_, poly, x, y), (f, m, info)) in polys.iter().zip(&results) {
+        for ((_, poly, x, y), (f, m, info)) in polys.iter().zip(results) {
             let words = (samples / 32) as usize;
             let gpu_mask = m[..words]
                 .iter()
