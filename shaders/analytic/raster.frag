@@ -54,9 +54,10 @@ layout(std430, set = 2, binding = BINDING_COUNTS) buffer Counts { uint counts[];
 layout(std430, set = 2, binding = BINDING_OCCLUDERS) buffer Occluders { uint occluders[]; };
 // A kept fragment's shading normal and point, for the resolve's lighting (surface.glsl).
 layout(std430, set = 2, binding = BINDING_SURFACES) buffer Surfaces { uvec2 surfaces[]; };
-// Its albedo's luminance in the pixel's four quadrants (4 x f16), for the resolve's albedo of
-// the part that shows (resolve.comp, shown_albedo).
-layout(std430, set = 2, binding = BINDING_QUADRANTS) buffer Quadrants { uvec2 quadrants[]; };
+// Its albedo's luminance in the cells of a grid over the pixel (surface.glsl's pack_cells), for
+// the resolve's albedo of the part that shows (resolve.comp, shown_albedo).
+layout(std430, set = 2, binding = BINDING_CELLS) buffer Cells { uvec2 cells[]; };
+layout(std430, set = 2, binding = BINDING_CELLS_HI) buffer CellsHi { uvec2 cells_hi[]; };
 #ifndef SELECT_PASS
 // The fragments beyond the K nearest that are not hidden, for the tail pass (tail.comp) to light
 // and sum into the tails (tail_record.glsl); the buffer's length is the capacity, and the count
@@ -127,14 +128,16 @@ vec3 bump_from(vec3 n, vec3 dpdx, vec3 dpdy, float dhdx, float dhdy) {
 // MAX_ANISO), each filtered at the shorter side's level, and their mean taken: a box filter
 // along the long side, as the supersampled reference integrates it.
 #define MAX_ANISO 16
-vec4 texture_aniso(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
+// The albedo grid's cells (below): at most this many lookups each.
+#define CELL_ANISO 4
+vec4 texture_aniso_n(sampler2D t, vec2 uv, vec2 gx, vec2 gy, int max_taps) {
     vec2 size = vec2(textureSize(t, 0));
     float lx = length(gx * size);
     float ly = length(gy * size);
     vec2 major = lx >= ly ? gx : gy;
     vec2 minor = lx >= ly ? gy : gx;
     float ratio = max(lx, ly) / max(min(lx, ly), 1e-6);
-    int n = isnan(ratio) ? 1 : int(clamp(ceil(ratio), 1.0, float(MAX_ANISO)));
+    int n = isnan(ratio) ? 1 : int(clamp(ceil(ratio), 1.0, float(max_taps)));
     if (n == 1) return textureGrad(t, uv, gx, gy);
     vec2 step_uv = major / float(n);
     vec4 sum = vec4(0.0);
@@ -142,6 +145,10 @@ vec4 texture_aniso(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
         sum += textureGrad(t, uv + step_uv * (float(i) + 0.5 - 0.5 * float(n)), step_uv, minor);
     }
     return sum / float(n);
+}
+
+vec4 texture_aniso(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
+    return texture_aniso_n(t, uv, gx, gy, MAX_ANISO);
 }
 
 // TEXTURE_BOX (the default; `analytic:aniso` leaves it out): the albedo's footprint integrated as
@@ -199,8 +206,7 @@ vec4 texture_box(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
 // composites it through the transmittance of the alpha-tested fragments in front.
 #define ALPHA_SAMPLE_FILTER 0.0625
 Mask alpha_test(Mask geo_mask, vec2 uv, vec2 dx, vec2 dy, vec2 gx, vec2 gy, vec2 mean_point,
-                out float pass, out vec3 albedo, out vec4 quad_luma) {
-    quad_luma = vec4(1.0);
+                out float pass, out vec3 albedo, inout float cell_luma[CELLS]) {
     if (!mask_any(geo_mask)) {
         float a = textureGrad(mask_tex, uv, gx, gy).a;
         float ax = textureGrad(mask_tex, uv + gx, gx, gy).a;
@@ -217,7 +223,8 @@ Mask alpha_test(Mask geo_mask, vec2 uv, vec2 dx, vec2 dy, vec2 gx, vec2 gy, vec2
     Mask passing = Mask(0u);
     Mask rest = geo_mask;
     vec4 sum = vec4(0.0);
-    vec4 qsum[4] = vec4[4](vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0));
+    vec2 csum[CELLS];  // per cell: the passing samples' premultiplied albedo luminance, and alpha
+    for (int i = 0; i < CELLS; ++i) csum[i] = vec2(0.0);
     while (mask_any(rest)) {
         int k = mask_pop(rest);
         vec2 d = mask_sample(k) - mean_point;
@@ -226,19 +233,15 @@ Mask alpha_test(Mask geo_mask, vec2 uv, vec2 dx, vec2 dy, vec2 gx, vec2 gy, vec2
         if (c.a >= 0.5) {
             passing |= mask_bit(k);
             sum += c;
-            qsum[sample_quadrant(k)] += c;
-#ifdef SELECT_PASS
-            break;  // the select pass needs only whether any sample passes
-#endif
+            csum[cell_of(mask_sample(k))] += vec2(albedo_luma(c.rgb), c.a);
         }
     }
     pass = float(mask_count(passing)) / float(mask_count(geo_mask));
     albedo = sum.a > 0.0 ? sum.rgb / sum.a : vec3(1.0);
-    // Each quadrant's passing samples' albedo (the mean where the quadrant has none: it holds no
+    // Each cell's passing samples' albedo (the mean where the cell has none: it holds no
     // sample of the mask, so the resolve never weighs it).
-    for (int q = 0; q < 4; ++q) {
-        quad_luma[q] = albedo_luma(qsum[q].a > 0.0 ? qsum[q].rgb / qsum[q].a : albedo);
-    }
+    float mean_luma = albedo_luma(albedo);
+    for (int i = 0; i < CELLS; ++i) cell_luma[i] = csum[i].y > 0.0 ? csum[i].x / csum[i].y : mean_luma;
     return passing;
 }
 
@@ -296,8 +299,9 @@ void main() {
     // passes nowhere is dropped before it takes a slot.
     float alpha_pass = 1.0;
     vec3 alpha_albedo = vec3(1.0);
-    // The albedo's luminance in the pixel's four quadrants (equal: untextured).
-    vec4 quad_luma = vec4(1.0);
+    // The albedo's luminance in the cells of the pixel's grid (surface.glsl; equal: untextured).
+    float cell_luma[CELLS];
+    for (int i = 0; i < CELLS; ++i) cell_luma[i] = 1.0;
     Mask alpha_mask = Mask(0u);
     Mask geo_mask = Mask(0u);
     // The plane's depth at the pixel's corners: over the covered part (inside the pixel) the
@@ -335,7 +339,7 @@ void main() {
     if (mat.tex.y >= 0) {
         geo_mask = sample_mask(p, n, orient);
         alpha_mask = alpha_test(geo_mask, uv, dx, dy, gx, gy, cov.mean_point, alpha_pass,
-                                alpha_albedo, quad_luma);
+                                alpha_albedo, cell_luma);
         if (alpha_pass <= 0.0) discard;
     }
 #endif
@@ -424,25 +428,38 @@ void main() {
             albedo *= texture_aniso(albedo_tex, uv, fx, fy).rgb;
 #endif
 #ifndef SELECT_PASS
-            // Each quadrant's own footprint (half the pixel's, centred in it), for the part of
-            // the fragment that shows when nearer ones hide the rest (resolve.comp). Needed only
-            // where a surface strictly in front (an occluder word: its farthest depth in the
-            // pixel nearer than this fragment's nearest) holds some of the fragment's samples
-            // but not all: not for the pixel's nearest fragment (slot 0), nor for abutting
-            // triangles of one surface, nor for a fragment hidden everywhere. Each lane's loops
-            // end with its own work, so a SIMD group with none skips them.
-            Mask in_front = Mask(0u);
-            Mask rest = slot > 0 ? geo_mask : Mask(0u);
+            // Each cell's own footprint (a quarter of the pixel's, centred in it: surface.glsl's
+            // grid; anisotropic, at most CELL_ANISO lookups), for the part of the fragment that
+            // shows when other fragments hide the rest (resolve.comp). Needed only where some
+            // but not all of its samples may be hidden: where an occluder word (the farthest
+            // depth in the pixel of an opaque fragment holding the sample, the select pass) is
+            // nearer than this fragment's farthest depth in the pixel, so a surface in front or
+            // one crossing it (a card standing on the ground) may hide the sample. Not in a
+            // pixel of one fragment, nor for a fragment hidden or open at every sample; and only
+            // the cells holding samples of its mask (the resolve weighs no other). Each lane's
+            // loops end with its own work, so a SIMD group with none skips them.
+            Mask maybe_hidden = Mask(0u);
+            Mask rest = counts[pixel] > 1u ? geo_mask : Mask(0u);
+            float far = min(min(zc4.x, zc4.y), min(zc4.z, zc4.w));
+            far = isnan(far) ? zlo : max(far, zlo);
             while (mask_any(rest)) {
                 int k = mask_pop(rest);
                 uint word = pixel * uint(OCCLUDER_WORDS) + uint(k / OCCLUDER_GROUP);
-                if (near < uintBitsToFloat(occluders[word]) * (1.0 - 1e-5)) in_front |= mask_bit(k);
+                if (far < uintBitsToFloat(occluders[word]) * (1.0 - 1e-5)) maybe_hidden |= mask_bit(k);
             }
-            bool need_quadrants = mask_any(in_front) && in_front != geo_mask;
-            for (int q = 0; q < (need_quadrants ? 4 : 0); ++q) {
-                vec2 d = vec2(float(q & 1), float(q >> 1)) * 0.5 + 0.25 - cov.mean_point;
-                quad_luma[q] = albedo_luma(
-                    texture_aniso(albedo_tex, uv + dx * d.x + dy * d.y, 0.5 * gx, 0.5 * gy).rgb);
+            uint cells = 0u;
+            if (mask_any(maybe_hidden) && maybe_hidden != geo_mask) {
+                Mask left = geo_mask;
+                while (mask_any(left)) cells |= 1u << uint(cell_of(mask_sample(mask_pop(left))));
+            }
+            while (cells != 0u) {
+                int i = findLSB(cells);
+                cells &= cells - 1u;
+                vec2 d = (vec2(float(i % CELLS_SIDE), float(i / CELLS_SIDE)) + 0.5) / float(CELLS_SIDE)
+                    - cov.mean_point;
+                const float side = 1.0 / float(CELLS_SIDE);
+                cell_luma[i] = albedo_luma(texture_aniso_n(albedo_tex, uv + dx * d.x + dy * d.y,
+                                                           side * gx, side * gy, CELL_ANISO).rgb);
             }
 #endif
         }
@@ -509,7 +526,9 @@ void main() {
         for (int w = 1; w < MASK_WORDS; ++w)
             slot_masks[(base + uint(slot)) * uint(MASK_WORDS - 1) + uint(w - 1)] = mask_word(mask, w);
         surfaces[base + uint(slot)] = pack_surface(nrm, cov.mean_point);
-        quadrants[base + uint(slot)] = uvec2(packHalf2x16(quad_luma.xy), packHalf2x16(quad_luma.zw));
+        uvec4 packed_cells = pack_cells(cell_luma);
+        cells[base + uint(slot)] = packed_cells.xy;
+        cells_hi[base + uint(slot)] = packed_cells.zw;
         colors[base + uint(slot)] = uvec2(packHalf2x16(color.rg),
                                           (packHalf2x16(vec2(color.b, 0.0)) & 0xFFFFu) | (flags << 16u)
                                           | (uint(round(alpha_pass * 255.0)) << 24u));

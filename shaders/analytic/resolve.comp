@@ -68,7 +68,8 @@ layout(std430, set = 0, binding = BINDING_TAIL_MASKS) readonly buffer TailMasks 
 layout(std430, set = 0, binding = BINDING_PLANES) readonly buffer Planes { vec2 planes[]; };
 layout(std430, set = 0, binding = BINDING_PLANES_Y) readonly buffer PlanesY { float planes_y[]; };
 layout(std430, set = 0, binding = BINDING_SURFACES) readonly buffer Surfaces { uvec2 surfaces[]; };
-layout(std430, set = 0, binding = BINDING_QUADRANTS) readonly buffer Quadrants { uvec2 quadrants[]; };
+layout(std430, set = 0, binding = BINDING_CELLS) readonly buffer Cells { uvec2 cells[]; };
+layout(std430, set = 0, binding = BINDING_CELLS_HI) readonly buffer CellsHi { uvec2 cells_hi[]; };
 // The scene's set, for the lighting.
 layout(set = 1, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
 layout(std430, set = 1, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
@@ -116,20 +117,25 @@ float plane_depth(uint slot, vec2 q) {
 // ones (the floor between a fence's slats, behind leaves) shows only the part of it in the gap.
 float shown_albedo(uint slot, Mask mask, Mask kept) {
     if (kept == mask) return 1.0;
-    uvec2 packed = quadrants[slot];
-    vec4 luma = vec4(unpackHalf2x16(packed.x), unpackHalf2x16(packed.y));
-    if (all(equal(luma, luma.xxxx))) return 1.0;  // one albedo over the pixel (untextured)
-    vec4 in_mask = vec4(0.0);
-    vec4 in_kept = vec4(0.0);
+    uvec4 packed = uvec4(cells[slot], cells_hi[slot]);
+    if (all(equal(packed, uvec4(0xFFFFFFFFu)))) return 1.0;  // one albedo over the pixel
+    float all_luma = 0.0;
+    float shown_luma = 0.0;
+    float in_mask = 0.0;
+    float in_kept = 0.0;
     Mask rest = mask;
     while (mask_any(rest)) {
         int s = mask_pop(rest);
-        int q = sample_quadrant(s);
-        in_mask[q] += 1.0;
-        if (mask_has(kept, s)) in_kept[q] += 1.0;
+        float l = unpack_cell(packed, cell_of(mask_sample(s)));
+        all_luma += l;
+        in_mask += 1.0;
+        if (mask_has(kept, s)) {
+            shown_luma += l;
+            in_kept += 1.0;
+        }
     }
-    float all_luma = dot(in_mask, luma) / dot(in_mask, vec4(1.0));
-    float shown_luma = dot(in_kept, luma) / dot(in_kept, vec4(1.0));
+    all_luma /= in_mask;
+    shown_luma /= in_kept;
     return all_luma > 0.0 ? shown_luma / all_luma : 1.0;
 }
 

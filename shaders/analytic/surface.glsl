@@ -12,6 +12,36 @@ float albedo_luma(vec3 c) {
     return dot(c, vec3(0.2126, 0.7152, 0.0722));
 }
 
+// The albedo grid: a kept fragment's albedo luminance in each cell of a CELLS_SIDE x CELLS_SIDE grid
+// over its pixel, by which the resolve takes the albedo of the part that shows when nearer
+// fragments hide the rest (resolve.comp's shown_albedo). 16 cells of 8 bits, relative to the
+// largest and square-root encoded (a dark cell beside a white one keeps about 1% of its value),
+// in a uvec4; all cells equal (255) means one albedo over the pixel.
+#define CELLS_SIDE 4
+#define CELLS (CELLS_SIDE * CELLS_SIDE)
+
+// The cell of pixel-local point q.
+int cell_of(vec2 q) {
+    ivec2 c = clamp(ivec2(q * float(CELLS_SIDE)), ivec2(0), ivec2(CELLS_SIDE - 1));
+    return c.x + CELLS_SIDE * c.y;
+}
+
+uvec4 pack_cells(float luma[CELLS]) {
+    float top = 0.0;
+    for (int i = 0; i < CELLS; ++i) top = max(top, luma[i]);
+    uvec4 packed = uvec4(0u);
+    for (int i = 0; i < CELLS; ++i) {
+        float v = top > 0.0 && !isinf(top) ? sqrt(clamp(luma[i] / top, 0.0, 1.0)) : 1.0;
+        packed[i >> 2] |= uint(round(v * 255.0)) << (8u * uint(i & 3));
+    }
+    return packed;
+}
+
+float unpack_cell(uvec4 packed, int i) {
+    float v = float((packed[i >> 2] >> (8u * uint(i & 3))) & 0xFFu) / 255.0;
+    return v * v;
+}
+
 // Octahedral encoding of a unit vector (Meyer et al. 2010) into [-1, 1]^2, and back.
 vec2 oct_encode(vec3 n) {
     n /= abs(n.x) + abs(n.y) + abs(n.z);

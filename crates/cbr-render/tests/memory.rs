@@ -261,10 +261,10 @@ fn what_cannot_fit_is_refused_before_anything_is_allocated() {
         err.contains("`unpack.out` takes 12.0 GiB"),
         "the unpacked frame is named: {err}"
     );
-    // analytic keeps its own refusal (its lists, fitted to maxStorageBufferRange; 8 x 56 bytes a
+    // analytic keeps its own refusal (its lists, fitted to maxStorageBufferRange; 8 x 64 bytes a
     // pixel with the default 64-sample mask).
     let settings = RenderSettings::parse(8192, 8192, "analytic:frags=8").expect("spec");
     let err = Renderer::estimate(gpu.caps(), &scene, &settings).expect_err("refused");
-    assert!(err.contains("30064771072 bytes"), "{err}");
+    assert!(err.contains("34359738368 bytes"), "{err}");
     assert_clean(&gpu);
 }

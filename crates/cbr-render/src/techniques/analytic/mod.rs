@@ -86,13 +86,15 @@ pub const PLANE_BYTES: u64 = PLANE_XY_BYTES + PLANE_Y_BYTES;
 /// A kept fragment's shading normal (octahedral, 2 x snorm16) and shading point in the pixel
 /// (2 x unorm16), from the raster pass to the resolve's lighting (shaders/analytic/surface.glsl).
 pub const SURFACE_BYTES: u64 = 8;
-/// A kept fragment's albedo luminance in each quadrant of the pixel (4 x f16), by which the
-/// resolve takes the albedo of the part that shows when other fragments hide the rest
-/// (shaders/analytic/resolve.comp, `shown_albedo`).
-pub const QUADRANT_BYTES: u64 = 8;
+/// A kept fragment's albedo grid: its albedo luminance in each cell of a 4 x 4 grid over the
+/// pixel (16 x 8 bits), by which the resolve takes the albedo of the part that shows when other
+/// fragments hide the rest (shaders/analytic/surface.glsl's pack_cells, resolve.comp's
+/// `shown_albedo`); in two buffers of 8 bytes (`cells`, `cells_hi`), so that no buffer takes
+/// more than 8 bytes a fragment (the kept fragments' K is what one buffer holds).
+pub const HALF_CELLS_BYTES: u64 = 8;
+pub const CELLS_BYTES: u64 = 2 * HALF_CELLS_BYTES;
 /// All of one kept fragment's bytes with a 32-sample mask (the slot holds its one word).
-pub const FRAGMENT_BYTES: u64 =
-    KEY_BYTES + SLOT_BYTES + PLANE_BYTES + SURFACE_BYTES + QUADRANT_BYTES;
+pub const FRAGMENT_BYTES: u64 = KEY_BYTES + SLOT_BYTES + PLANE_BYTES + SURFACE_BYTES + CELLS_BYTES;
 /// The visibility mask's sample counts (`samples=N`; shaders/analytic/mask.glsl) and the default.
 pub const MASK_SAMPLE_COUNTS: [u32; 3] = [32, 64, 128];
 pub const DEFAULT_SAMPLES: u32 = 64;
@@ -292,7 +294,7 @@ pub fn plan_lists(
         .max(HALF_SLOT_BYTES)
         .max(PLANE_XY_BYTES)
         .max(SURFACE_BYTES)
-        .max(QUADRANT_BYTES)
+        .max(HALF_CELLS_BYTES)
         .max(slot_mask_bytes(samples));
     let fragment = fragment_bytes(samples);
     let fit = (u64::from(max_range) / (px * widest).max(1)).min(u64::from(MAX_FRAGS)) as u32;
@@ -315,7 +317,7 @@ pub fn plan_lists(
 }
 
 /// Set 2 of the raster passes (set 0: the scene's, set 1: the material's).
-pub const RASTER_BINDINGS: [BindingDesc; 12] = {
+pub const RASTER_BINDINGS: [BindingDesc; 13] = {
     use DescriptorKind::StorageBuffer as B;
     [
         BindingDesc::one("keys", 0, B),
@@ -328,8 +330,9 @@ pub const RASTER_BINDINGS: [BindingDesc; 12] = {
         BindingDesc::one("surfaces", 7, B),
         BindingDesc::one("tail_records", 8, B),
         BindingDesc::one("tail_count", 9, B),
-        BindingDesc::one("quadrants", 10, B),
+        BindingDesc::one("cells", 10, B),
         BindingDesc::one("slot_masks", 11, B),
+        BindingDesc::one("cells_hi", 12, B),
     ]
 };
 
@@ -345,7 +348,7 @@ pub const TAIL_BINDINGS: [BindingDesc; 5] = {
     ]
 };
 
-pub const RESOLVE_BINDINGS: [BindingDesc; 15] = {
+pub const RESOLVE_BINDINGS: [BindingDesc; 16] = {
     use DescriptorKind::{StorageBuffer as B, StorageImage as I};
     [
         BindingDesc::one("keys", 0, B),
@@ -361,8 +364,9 @@ pub const RESOLVE_BINDINGS: [BindingDesc; 15] = {
         BindingDesc::one("tail_back", 10, B),
         BindingDesc::one("tail_masks", 11, B),
         BindingDesc::one("surfaces", 12, B),
-        BindingDesc::one("quadrants", 13, B),
+        BindingDesc::one("cells", 13, B),
         BindingDesc::one("slot_masks", 14, B),
+        BindingDesc::one("cells_hi", 15, B),
     ]
 };
 
@@ -416,7 +420,8 @@ pub struct Analytic {
     planes: Buffer,
     planes_y: Buffer,
     surfaces: Buffer,
-    quadrants: Buffer,
+    cells: Buffer,
+    cells_hi: Buffer,
     slot_masks: Buffer,
     /// Records of the fragments beyond the K (grows: [`Analytic::grow_tail_records`]), their
     /// count, and the count read back.
@@ -447,7 +452,8 @@ impl Analytic {
         e.storage_buffer("analytic.planes", kept * PLANE_XY_BYTES, false);
         e.storage_buffer("analytic.planes_y", kept * PLANE_Y_BYTES, false);
         e.storage_buffer("analytic.surfaces", kept * SURFACE_BYTES, false);
-        e.storage_buffer("analytic.quadrants", kept * QUADRANT_BYTES, false);
+        e.storage_buffer("analytic.cells", kept * HALF_CELLS_BYTES, false);
+        e.storage_buffer("analytic.cells_hi", kept * HALF_CELLS_BYTES, false);
         e.storage_buffer(
             "analytic.slot_masks",
             (kept * slot_mask_bytes(samples)).max(4),
@@ -621,7 +627,8 @@ impl Analytic {
         let planes = buffer("analytic.planes", kept * PLANE_XY_BYTES, storage)?;
         let planes_y = buffer("analytic.planes_y", kept * PLANE_Y_BYTES, storage)?;
         let surfaces = buffer("analytic.surfaces", kept * SURFACE_BYTES, storage)?;
-        let quadrants = buffer("analytic.quadrants", kept * QUADRANT_BYTES, storage)?;
+        let cells = buffer("analytic.cells", kept * HALF_CELLS_BYTES, storage)?;
+        let cells_hi = buffer("analytic.cells_hi", kept * HALF_CELLS_BYTES, storage)?;
         let slot_masks = buffer(
             "analytic.slot_masks",
             (kept * slot_mask_bytes(samples)).max(4),
@@ -699,8 +706,9 @@ impl Analytic {
                 &surfaces,
                 &tail_records,
                 &tail_count,
-                &quadrants,
+                &cells,
                 &slot_masks,
+                &cells_hi,
             ]),
         )?;
         let tail_set = DescriptorSet::new(
@@ -727,8 +735,9 @@ impl Analytic {
                 Write::Buffer(10, &tail_back),
                 Write::Buffer(11, &tail_masks),
                 Write::Buffer(12, &surfaces),
-                Write::Buffer(13, &quadrants),
+                Write::Buffer(13, &cells),
                 Write::Buffer(14, &slot_masks),
+                Write::Buffer(15, &cells_hi),
             ],
         )?;
         let rb = |name: &str, image: &Image| Readback::for_image(gpu, name, image);
@@ -767,7 +776,8 @@ impl Analytic {
             planes,
             planes_y,
             surfaces,
-            quadrants,
+            cells,
+            cells_hi,
             slot_masks,
             tail_records,
             max_range,
@@ -833,7 +843,8 @@ impl Analytic {
                 &self.tail_back,
                 &self.tail_masks,
                 &self.surfaces,
-                &self.quadrants,
+                &self.cells,
+                &self.cells_hi,
                 &self.slot_masks,
             ] {
                 cmd.use_buffer(buf, Access::ComputeSampled);
@@ -940,7 +951,8 @@ impl Analytic {
             &self.surfaces,
             &self.tail_records,
             &self.tail_count,
-            &self.quadrants,
+            &self.cells,
+            &self.cells_hi,
             &self.slot_masks,
         ] {
             cmd.use_buffer(buf, Access::FragmentStorageWrite);
@@ -1064,7 +1076,7 @@ impl Technique for Analytic {
 
     fn target_bytes(&self) -> u64 {
         let px = u64::from(self.color.width) * u64::from(self.color.height);
-        // K x (key + slot + plane + surface + quadrants + further mask words) + the fragment
+        // K x (key + slot + plane + surface + albedo grid + further mask words) + the fragment
         // count (4), tails (2 x 32) and their masks (2 x 4 N / 32), the occluder words (4 N /
         // group) + colour (8), coverage (4), counts (16), depth (4), velocity (8), IDs (8); and
         // the tail records the buffer holds now.
