@@ -33,7 +33,8 @@
 //    an opaque one through that of the samples it keeps. Then v is clamped to what nearer ones
 //    left, v = min(v, 1 - sum): colour += v c.
 //    A fragment some of whose samples are hidden shows only the rest of its mask: its albedo is
-//    scaled to their quadrants' (shown_albedo; the raster pass filtered it over the pixel).
+//    scaled to their cells' in its albedo grid (shown_albedo; surface.glsl), and it is lit at
+//    their centroid.
 //    Only the fragments composited with v > 0 are lit, here, after the visibility (shaders
 //    /inc/shading.glsl's `shade` at the fragment's shading point: the albedo, normal and point
 //    the raster pass left in its slot, surface.glsl; the point's camera-relative position is its
@@ -112,7 +113,7 @@ float plane_depth(uint slot, vec2 q) {
 
 // The albedo of the part of a fragment that shows, relative to its albedo over its mask: where
 // nearer fragments hide some of its samples (`kept` is the rest of `mask`), the mean of its
-// quadrants' albedo luminance over the kept samples against that over the mask. The raster pass
+// albedo grid's cells (surface.glsl) over the kept samples against that over the mask. The raster pass
 // filtered the albedo over the pixel's footprint; a surface seen through a gap between nearer
 // ones (the floor between a fence's slats, behind leaves) shows only the part of it in the gap.
 float shown_albedo(uint slot, Mask mask, Mask kept) {
@@ -140,13 +141,15 @@ float shown_albedo(uint slot, Mask mask, Mask kept) {
 }
 
 // The light of the fragment in `slot` (of object `object`) at pixel px, its albedo scaled by
-// `albedo_scale` (shown_albedo).
-vec3 shade_slot(uint slot, uint object, ivec2 px, float albedo_scale) {
+// `albedo_scale` (shown_albedo), lit at pixel-local point `at` where at.x >= 0 (the part of it
+// that shows), else at its own shading point.
+vec3 shade_slot(uint slot, uint object, ivec2 px, float albedo_scale, vec2 at) {
     uvec2 cl = colors[slot];
     vec3 albedo = vec3(unpackHalf2x16(cl.x), unpackHalf2x16(cl.y).x) * albedo_scale;
     vec3 nrm;
     vec2 point;
     unpack_surface(surfaces[slot], nrm, point);
+    if (at.x >= 0.0) point = at;
     float z = plane_depth(slot, point);
     vec2 jitter = frame.screen_jitter.xy * 2.0 * frame.output_size.zw;
     vec2 ndc = (vec2(px) + point) * frame.output_size.zw * 2.0 - 1.0 - jitter;
@@ -339,6 +342,7 @@ void main() {
     visible = 0u;
     float shown[K_SLOTS];  // the composited v of the fragments in `show`
     float scale[K_SLOTS];  // and their shown_albedo
+    vec2 at[K_SLOTS];      // and where they are lit (x < 0: at their own shading point)
     uvec2 show = uvec2(0u);  // slot k in bit k % 32 of word k / 32 (K_SLOTS <= 64)
     for (int k = 0; k < count; ++k) {
         uint fflags = fl[k];
@@ -371,6 +375,20 @@ void main() {
         if (v <= 0.0) continue;
         shown[k] = v;
         scale[k] = shown_albedo(base + uint(k), masks[k], keep);
+        // A fragment of which only a part shows is lit at that part's centroid (its kept
+        // samples' mean): near a point light the light changes across the pixel (the ground
+        // seen through leaves, by a lamp among them).
+        at[k] = vec2(-1.0);
+        if (keep != masks[k]) {
+            vec2 sum_at = vec2(0.0);
+            float n_at = 0.0;
+            Mask rest = keep;
+            while (mask_any(rest)) {
+                sum_at += mask_sample(mask_pop(rest));
+                n_at += 1.0;
+            }
+            at[k] = sum_at / n_at;
+        }
         show[k >> 5] |= 1u << uint(k & 31);
         sum += v;
         ++visible;
@@ -383,7 +401,7 @@ void main() {
         int w = show.x != 0u ? 0 : 1;
         int k = w * 32 + findLSB(show[w]);
         show[w] &= show[w] - 1u;
-        vec3 c = shade_slot(base + uint(k), objs[k], px, scale[k]);
+        vec3 c = shade_slot(base + uint(k), objs[k], px, scale[k], at[k]);
         if (any(isnan(c)) || any(isinf(c))) {
             fl[k] |= FRAG_HOLES | FRAG_NONFINITE;
             area[k] = 0.0;
