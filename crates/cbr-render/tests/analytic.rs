@@ -407,6 +407,23 @@ fn project(s: &Scene, p: [f32; 3]) -> [f64; 2] {
     [(ndc.x * 0.5 + 0.5) * w, (ndc.y * 0.5 + 0.5) * h]
 }
 
+/// The camera's position and the unit directions of n x n rays through the stratum centres of
+/// pixel (x, y), in f64 (the CPU references' ray casting).
+fn pixel_rays(s: &Scene, x: i64, y: i64, n: u32) -> (DVec3, Vec<DVec3>) {
+    let cam = s.camera.at(0.0);
+    let inv = (cam.projection(f64::from(W) / f64::from(H)) * cam.rotation()).inverse();
+    let dirs = (0..n * n)
+        .map(|k| {
+            let sx = x as f64 + (f64::from(k % n) + 0.5) / f64::from(n);
+            let sy = y as f64 + (f64::from(k / n) + 0.5) / f64::from(n);
+            let ndc = [sx / f64::from(W) * 2.0 - 1.0, sy / f64::from(H) * 2.0 - 1.0];
+            let far = inv * DVec4::new(ndc[0], ndc[1], 0.5, 1.0);
+            (far.truncate() / far.w).normalize()
+        })
+        .collect();
+    (cam.position, dirs)
+}
+
 fn screen_poly(s: &Scene, o: &Object, tri: usize) -> Poly {
     (0..3)
         .map(|k| project(s, o.vertices[o.indices[tri * 3 + k] as usize].pos))
@@ -1621,55 +1638,31 @@ fn a_surface_crossed_by_a_card_standing_on_it_takes_the_albedo_of_the_part_that_
         let f = t - j;
         (1.0 - f) * texel(j as i64) + f * texel(j as i64 + 1)
     };
-    let cam = s.camera.at(0.0);
-    let inv = (cam.projection(f64::from(W) / f64::from(H)) * cam.rotation()).inverse();
-    // Per pixel: (the floor's mean green over the pixel where it shows, the card's coverage).
-    let pixel = |x: i64, y: i64| -> (f64, f64) {
-        let n = 64;
-        let (mut green, mut on_card) = (0.0, 0usize);
-        for j in 0..n {
-            for i in 0..n {
-                let sx = x as f64 + (f64::from(i) + 0.5) / f64::from(n);
-                let sy = y as f64 + (f64::from(j) + 0.5) / f64::from(n);
-                let ndc = [sx / f64::from(W) * 2.0 - 1.0, sy / f64::from(H) * 2.0 - 1.0];
-                let far = inv * DVec4::new(ndc[0], ndc[1], 0.5, 1.0);
-                let d = (far.truncate() / far.w).normalize();
-                let o = cam.position;
-                // The card's plane z = cz, then the floor's z = -2 (y + 1).
-                let tc = (f64::from(cz) - o.z) / d.z;
-                let pc = o + d * tc;
-                if (f64::from(cx0)..=f64::from(cx1)).contains(&pc.x)
-                    && (f64::from(cy0)..=f64::from(cy1)).contains(&pc.y)
-                {
-                    on_card += 1;
-                    continue;
-                }
-                // o.z + t d.z = -2 (o.y + t d.y + 1)
-                let tf = (-2.0 * (o.y + 1.0) - o.z) / (d.z + 2.0 * d.y);
-                let pf = o + d * tf;
-                green += floor_at((f64::from(fy1) - pf.y) / f64::from(fy1 - fy0));
-            }
-        }
-        let m = f64::from(n * n);
-        (green / m, on_card as f64 / m)
+    // The floor's green where ray d from o meets it: o.z + t d.z = -2 (o.y + t d.y + 1).
+    let floor_green = |o: DVec3, d: DVec3| {
+        let pf = o + d * ((-2.0 * (o.y + 1.0) - o.z) / (d.z + 2.0 * d.y));
+        floor_at((f64::from(fy1) - pf.y) / f64::from(fy1 - fy0))
     };
-    let pixel_floor = |x: i64, y: i64| -> f64 {
-        let n = 64;
-        let mut green = 0.0;
-        for j in 0..n {
-            for i in 0..n {
-                let sx = x as f64 + (f64::from(i) + 0.5) / f64::from(n);
-                let sy = y as f64 + (f64::from(j) + 0.5) / f64::from(n);
-                let ndc = [sx / f64::from(W) * 2.0 - 1.0, sy / f64::from(H) * 2.0 - 1.0];
-                let far = inv * DVec4::new(ndc[0], ndc[1], 0.5, 1.0);
-                let d = (far.truncate() / far.w).normalize();
-                let o = cam.position;
-                let tf = (-2.0 * (o.y + 1.0) - o.z) / (d.z + 2.0 * d.y);
-                let pf = o + d * tf;
-                green += floor_at((f64::from(fy1) - pf.y) / f64::from(fy1 - fy0));
+    // Per pixel: (the floor's mean green over the pixel where it shows, the card's coverage,
+    // the floor's mean green over the whole pixel).
+    let pixel = |x: i64, y: i64| -> (f64, f64, f64) {
+        let (o, dirs) = pixel_rays(&s, x, y, 64);
+        let (mut green, mut on_card, mut whole) = (0.0, 0usize, 0.0);
+        for &d in &dirs {
+            let g = floor_green(o, d);
+            whole += g;
+            // The card's plane z = cz.
+            let pc = o + d * ((f64::from(cz) - o.z) / d.z);
+            if (f64::from(cx0)..=f64::from(cx1)).contains(&pc.x)
+                && (f64::from(cy0)..=f64::from(cy1)).contains(&pc.y)
+            {
+                on_card += 1;
+            } else {
+                green += g;
             }
         }
-        green / f64::from(n * n)
+        let m = dirs.len() as f64;
+        (green / m, on_card as f64 / m, whole / m)
     };
     let [lx, ly] = project(&s, [cx0, cy0, cz]);
     let [rx, _] = project(&s, [cx1, cy0, cz]);
@@ -1680,14 +1673,14 @@ fn a_surface_crossed_by_a_card_standing_on_it_takes_the_albedo_of_the_part_that_
     // share it shows (what the resolve would composite without the grid).
     let (mut sum, mut worst, mut whole, mut n) = (0.0f64, 0.0f64, 0.0f64, 0usize);
     for x in (lx.ceil() as i64 + 1)..(rx.floor() as i64 - 1) {
-        let (want, card) = pixel(x, row);
+        let (want, card, floor_whole) = pixel(x, row);
         assert!(
             card > 0.05 && card < 0.95,
             "pixel ({x}, {row}) is on the card's base ({card})"
         );
         let i = (row * i64::from(W) + x) as usize;
         let e = (rgb(&out, i)[1] - want).abs();
-        whole = whole.max((pixel_floor(x, row) * (1.0 - card) - want).abs());
+        whole = whole.max((floor_whole * (1.0 - card) - want).abs());
         sum += e;
         worst = worst.max(e);
         n += 1;
@@ -1766,30 +1759,20 @@ fn a_partly_hidden_fragment_is_lit_where_it_shows() {
         let w = (1.0 - r * r * r * r).clamp(0.0, 1.0);
         w * w
     };
-    let cam = s.camera.at(0.0);
-    let inv = (cam.projection(f64::from(W) / f64::from(H)) * cam.rotation()).inverse();
     let truth = |x: i64, y: i64| -> f64 {
-        let n = 64;
+        let (o, dirs) = pixel_rays(&s, x, y, 64);
         let mut sum = 0.0;
-        for j in 0..n {
-            for i in 0..n {
-                let sx = x as f64 + (f64::from(i) + 0.5) / f64::from(n);
-                let sy = y as f64 + (f64::from(j) + 0.5) / f64::from(n);
-                let ndc = [sx / f64::from(W) * 2.0 - 1.0, sy / f64::from(H) * 2.0 - 1.0];
-                let far = inv * DVec4::new(ndc[0], ndc[1], 0.5, 1.0);
-                let d = (far.truncate() / far.w).normalize();
-                let o = cam.position;
-                let at_occluder = o + d * ((oz - o.z) / d.z);
-                if at_occluder.y >= oy {
-                    continue;
-                }
-                let p = o + d * (-o.z / d.z);
-                let l = light - p;
-                let d2 = l.length_squared();
-                sum += 0.01 * (l.z / d2.sqrt()).max(0.0) * window(d2.sqrt()) / d2;
+        for &d in &dirs {
+            let at_occluder = o + d * ((oz - o.z) / d.z);
+            if at_occluder.y >= oy {
+                continue;
             }
+            let p = o + d * (-o.z / d.z);
+            let l = light - p;
+            let d2 = l.length_squared();
+            sum += 0.01 * (l.z / d2.sqrt()).max(0.0) * window(d2.sqrt()) / d2;
         }
-        sum / f64::from(n * n)
+        sum / dirs.len() as f64
     };
     let out = render(&gpu, &s, "analytic");
     assert_clean(&gpu);
