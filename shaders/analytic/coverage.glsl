@@ -212,13 +212,6 @@ vec2 mask_sample(int k) {
     return (vec2(float(k), float((k * MASK_GEN) & (MASK_SAMPLES - 1))) + 0.5) / float(MASK_SAMPLES);
 }
 
-// The quadrant of the pixel that mask sample k lies in: x half + 2 x y half (the 32-sample lattice
-// puts 10, 6, 6 and 10 samples in quadrants 0-3).
-int sample_quadrant(int k) {
-    ivec2 half_ = ivec2(mask_sample(k) * 2.0);
-    return half_.x + 2 * half_.y;
-}
-
 // Which of the mask samples lie in the polygon. A sample exactly on an edge goes to the polygon
 // on the positive side of the edge in its canonical direction (lower y, then lower x, first), so
 // of two polygons sharing an edge exactly one takes it, whatever their windings. `orient` is the
