@@ -12,11 +12,11 @@ float albedo_luma(vec3 c) {
     return dot(c, vec3(0.2126, 0.7152, 0.0722));
 }
 
-// The albedo grid: a kept fragment's albedo luminance in each cell of a CELLS_SIDE x CELLS_SIDE grid
-// over its pixel, by which the resolve takes the albedo of the part that shows when nearer
+// The albedo grid: a kept fragment's albedo luminance in each cell of a CELLS_SIDE x CELLS_SIDE
+// grid over its pixel, by which the resolve takes the albedo of the part that shows when other
 // fragments hide the rest (resolve.comp's shown_albedo). 16 cells of 8 bits, relative to the
-// largest and square-root encoded (a dark cell beside a white one keeps about 1% of its value),
-// in a uvec4; all cells equal (255) means one albedo over the pixel.
+// largest and square-root encoded (a dark cell beside a white one is kept within about 1% of
+// its value), in a uvec4; all cells equal (255) means one albedo over the pixel.
 #define CELLS_SIDE 4
 #define CELLS (CELLS_SIDE * CELLS_SIDE)
 
