@@ -159,12 +159,12 @@ vec4 texture_aniso(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
 // with a tent two of that level's texels wide, twice the pixel: on textures minified several
 // levels (Šibenik's stone at 320x180) it blurs what the supersampled reference keeps
 // (docs/analytic.md, The texture's box). Only for a fragment covering at least BOX_MIN_AREA of
-// its pixel: the smaller ones weigh little in the pixel and cost the most lookups (a sliver's
-// footprint is long and thin).
+// its pixel (`boxed`): the smaller ones weigh little in the pixel and cost the most lookups (a
+// sliver's footprint is long and thin), and take texture_aniso's lookups.
 #define BOX_CELLS 3.0
 #define BOX_MAX_TAPS 16
 #define BOX_MIN_AREA 0.25
-vec4 texture_box(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
+vec4 texture_box(sampler2D t, vec2 uv, vec2 gx, vec2 gy, bool boxed) {
     vec2 size = vec2(textureSize(t, 0));
     float lx = length(gx * size);
     float ly = length(gy * size);
@@ -177,6 +177,15 @@ vec4 texture_box(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
     int n_long = int(clamp(ceil(BOX_CELLS * max(lx, ly) / unit), 1.0, 16.0));
     int n_short = int(clamp(ceil(BOX_CELLS * min(lx, ly) / unit), 1.0, BOX_CELLS));
     n_short = clamp(BOX_MAX_TAPS / n_long, 1, n_short);
+    if (!boxed) {
+        // texture_aniso's lookups (one per unit of the footprint's aspect ratio along its longer
+        // side, at most MAX_ANISO) through the same loop: a SIMD group holding fragments of both
+        // kinds runs one loop, not both functions (Sibenik at 160x90: the raster pass 550-564
+        // -> 528-548 ms).
+        float ratio = max(lx, ly) / max(min(lx, ly), 1e-6);
+        n_long = int(clamp(ceil(ratio), 1.0, float(MAX_ANISO)));
+        n_short = 1;
+    }
     int nx = x_long ? n_long : n_short;
     int ny = x_long ? n_short : n_long;
     vec4 sum = vec4(0.0);
@@ -422,8 +431,7 @@ void main() {
                 fy = gx * f[1].x + gy * f[1].y;
             }
 #ifdef TEXTURE_BOX
-            albedo *= (cov.area >= BOX_MIN_AREA ? texture_box(albedo_tex, uv, fx, fy)
-                                                 : texture_aniso(albedo_tex, uv, fx, fy)).rgb;
+            albedo *= texture_box(albedo_tex, uv, fx, fy, cov.area >= BOX_MIN_AREA).rgb;
 #else
             albedo *= texture_aniso(albedo_tex, uv, fx, fy).rgb;
 #endif
