@@ -317,6 +317,9 @@ void main() {
     // affine z / w lies between their extremes.
     vec4 zc4 = vec4(depth_at(corner), depth_at(corner + vec2(1.0, 0.0)),
                     depth_at(corner + vec2(0.0, 1.0)), depth_at(corner + 1.0));
+    // The fragment's farthest depth in the pixel (reverse-Z: the least).
+    float far = min(min(zc4.x, zc4.y), min(zc4.z, zc4.w));
+    far = isnan(far) ? zlo : max(far, zlo);
 #ifndef SELECT_PASS
     // The slots hold the K nearest keys sorted (the select pass): a binary search, its steps the
     // powers of two from the largest not above K (halving K itself, e.g. 18, 9, 4, 2, 1, skips
@@ -356,8 +359,6 @@ void main() {
     // The samples where this fragment is opaque (an alpha-tested one's passing samples) are
     // hidden behind its farthest depth in the pixel; each keeps the nearest such depth.
     {
-        float far = min(min(zc4.x, zc4.y), min(zc4.z, zc4.w));
-        far = isnan(far) ? zlo : max(far, zlo);
         Mask opaque = mat.tex.y >= 0 ? alpha_mask : sample_mask(p, n, orient);
         if (far > 0.0 && !isinf(far)) {
             uint fb = floatBitsToUint(far);
@@ -448,8 +449,6 @@ void main() {
             // loops end with its own work, so a SIMD group with none skips them.
             Mask maybe_hidden = Mask(0u);
             Mask rest = counts[pixel] > 1u ? geo_mask : Mask(0u);
-            float far = min(min(zc4.x, zc4.y), min(zc4.z, zc4.w));
-            far = isnan(far) ? zlo : max(far, zlo);
             while (mask_any(rest)) {
                 int k = mask_pop(rest);
                 uint word = pixel * uint(OCCLUDER_WORDS) + uint(k / OCCLUDER_GROUP);

@@ -279,9 +279,10 @@ fn needs(_: &[&str], caps: &Caps) -> Option<String> {
 }
 
 /// Fragments kept per pixel at `width` x `height`, or the refusal (before anything is allocated)
-/// with the bytes it would take and the device's limit: the keys and the two halves of the slots
-/// are storage buffers of `K x 8` bytes per pixel each (the further mask words of an N-sample
-/// mask `K x 4 (N / 32 - 1)`), which must fit `maxStorageBufferRange`.
+/// with the bytes it would take and the device's limit: the keys, the two halves of the slots, the
+/// surfaces and the two halves of the albedo grid are storage buffers of `K x 8` bytes per pixel
+/// each (the further mask words of an N-sample mask `K x 4 (N / 32 - 1)`), which must fit
+/// `maxStorageBufferRange`.
 pub fn plan_lists(
     width: u32,
     height: u32,
