@@ -59,8 +59,12 @@ strip "$stage"/target/release/cbr "$stage"/target/debug/cbr "$stage"/target/debu
 say "compressing the binaries (xz, 256 MiB dictionary: the test binaries share most of their code)"
 tar -C "$stage" -cf - target | xz -T0 --lzma2=preset=6,dict=256MiB >.gpu/bins.tar.xz
 tar -C .. -cf - shared/scenes shared/testdata | xz -T0 -6 >.gpu/shared.tar.xz
-say "downloading Debian's Vulkan loader and validation layers"
+say "downloading Debian's Vulkan loader, validation layers and GL vendor-neutral dispatch"
 (cd .gpu/deb && apt-get download libvulkan1 vulkan-validationlayers >&2)
+# NVIDIA's Vulkan driver is libGLX_nvidia.so.0, which needs libglvnd's libGLdispatch: without
+# these the loader found no physical device on the H100 machine (first call, 2026-11-27).
+mkdir -p .gpu/deb/glvnd
+(cd .gpu/deb/glvnd && apt-get download libglvnd0 libglx0 libegl1 libgl1 libopengl0 libgles2 >&2)
 # libstdc++ and libgcc for a device whose userland lacks them (used only then).
 mkdir -p .gpu/deb/fallback
 (cd .gpu/deb/fallback && apt-get download libstdc++6 libgcc-s1 >&2)

@@ -134,21 +134,28 @@ impl Buffer {
         self.size
     }
 
-    /// Host-visible contents (for `CpuToGpu`/`GpuToCpu` buffers).
+    /// Host-visible contents (for `CpuToGpu`/`GpuToCpu` buffers): the buffer's `size` bytes. The
+    /// allocation's mapped slice is as long as the memory requirements, which a driver may round
+    /// up (NVIDIA's did: tests/readback.rs).
     pub fn bytes(&self) -> Result<&[u8]> {
+        let size = self.size as usize;
         self.alloc
             .as_ref()
             .and_then(|a| a.mapped_slice())
+            .and_then(|s| s.get(..size))
             .ok_or_else(|| GpuError::Other("buffer is not host visible".into()))
     }
 
     /// Writes `data` at `offset` of a host-visible buffer.
     pub fn write(&mut self, offset: usize, data: &[u8]) -> Result<()> {
+        let size = self.size;
         let dst = self
             .alloc
             .as_mut()
             .and_then(|a| a.mapped_slice_mut())
             .ok_or_else(|| GpuError::Other("buffer is not host visible".into()))?;
+        let n = (size as usize).min(dst.len());
+        let dst = &mut dst[..n];
         let end = offset + data.len();
         if end > dst.len() {
             return Err(GpuError::Other(format!(

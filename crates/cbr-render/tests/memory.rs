@@ -74,7 +74,9 @@ fn flush(gpu: &Gpu) {
 
 /// Where the estimate and the allocations differ: names on one side only (but a staging buffer,
 /// freed after its upload), counts, and sizes below the estimate or above it by more than
-/// padding (lavapipe pads small images by up to a quarter: 1/4 + 4 KiB).
+/// padding: lavapipe pads small images by up to a quarter, and the NVIDIA driver 580 (H100, the GPU
+/// study in docs/resolve.md) by up to 12.6 KiB on images of a few tens of KiB (the 68x45 `upscale`
+/// images: 24480 bytes became 37376), hence 1/4 + 16 KiB.
 fn differences(estimate: &MemoryEstimate, real: &[(String, u64)]) -> Vec<String> {
     let est = by_name(estimate.items.iter().map(|i| (i.name.clone(), i.bytes)));
     let real = by_name(real.iter().cloned());
@@ -88,7 +90,7 @@ fn differences(estimate: &MemoryEstimate, real: &[(String, u64)]) -> Vec<String>
         match (e, r) {
             (Some(e), Some(r)) if e.len() == r.len() => {
                 for (&e, &r) in e.iter().zip(r) {
-                    if r < e || r > e + e / 4 + 4096 {
+                    if r < e || r > e + e / 4 + 16384 {
                         out.push(format!("`{name}`: estimated {e} bytes, allocated {r}"));
                     }
                 }
