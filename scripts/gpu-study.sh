@@ -130,7 +130,7 @@ nproc=$(nproc)
 
 # --- 2. tests --------------------------------------------------------------------------------------
 run_tests() {
-    local end=${CBR_GPU_TESTS_END:-190} first='^(layouts|msaa|resolve|timestamps)$' list
+    local end=${CBR_GPU_TESTS_END:-190} first='^(filtering|readback|layouts|msaa|resolve|timestamps)$' list
     printf 'test\tstatus\tpassed\tfailed\tSKIPPED lines\tVUID lines\tseconds\n' >"$out/tests.tsv"
     # The GPU-only checks first (msaa2x, sample locations, 2x MSAA), then the rest in pack order.
     list=$(awk -F'\t' -v re="$first" '$3 ~ re' .gpu/tests.txt; awk -F'\t' -v re="$first" '$3 !~ re' .gpu/tests.txt)

@@ -34,6 +34,9 @@ pub struct Caps {
     pub max_framebuffer: [u32; 2],
     pub viewport_sub_pixel_bits: u32,
     pub sub_pixel_precision_bits: u32,
+    /// Bits of the linear filter's weights a device guarantees (lavapipe reports 8 and filters
+    /// float formats exactly; tests/filtering.rs measures it).
+    pub sub_texel_precision_bits: u32,
     /// float16 arithmetic in shaders (the resolve's `--resolve-fp16`).
     pub shader_float16: bool,
     /// Largest storage buffer range one descriptor can bind (lavapipe: 128 MiB).
@@ -198,6 +201,7 @@ mod tests {
             max_framebuffer: [16384, 16384],
             viewport_sub_pixel_bits: 0,
             sub_pixel_precision_bits: 8,
+            sub_texel_precision_bits: 8,
         }
     }
 

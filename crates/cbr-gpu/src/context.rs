@@ -305,6 +305,7 @@ fn caps_of(instance: &ash::Instance, pd: vk::PhysicalDevice, p: &Probe) -> Caps 
         max_framebuffer: [l.max_framebuffer_width, l.max_framebuffer_height],
         viewport_sub_pixel_bits: l.viewport_sub_pixel_bits,
         sub_pixel_precision_bits: l.sub_pixel_precision_bits,
+        sub_texel_precision_bits: l.sub_texel_precision_bits,
         shader_float16: p.f12.shader_float16 != 0,
         max_storage_buffer_range: l.max_storage_buffer_range,
         device_local_heap_bytes,

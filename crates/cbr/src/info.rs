@@ -92,12 +92,13 @@ pub fn run(a: &InfoArgs) -> Result<()> {
         caps.pipeline_statistics
     );
     println!(
-        "  max image {}, max framebuffer {}x{}, sub-pixel bits {} (viewport {})",
+        "  max image {}, max framebuffer {}x{}, sub-pixel bits {} (viewport {}), sub-texel bits {}",
         caps.max_image_dimension_2d,
         caps.max_framebuffer[0],
         caps.max_framebuffer[1],
         caps.sub_pixel_precision_bits,
-        caps.viewport_sub_pixel_bits
+        caps.viewport_sub_pixel_bits,
+        caps.sub_texel_precision_bits
     );
     let bytes = cbr_render::memory::human_bytes;
     println!(
