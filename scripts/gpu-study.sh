@@ -193,8 +193,8 @@ run_bench() {
     # whole sweep took 89 s at 1080p (mostly pipeline builds and readbacks, ~2.7 s a
     # configuration) and did not finish in 81 s at 4K (2026-11-27); its other modes go last.
     local big=${sizes##* } small_sizes=${sizes% *} four_p four_m
-    four_p=$(printf 'checkerboard:%s:%s,' rotated:ours rotated:pq4k split:ours split:pq4k)
-    four_m=$(printf 'checkerboard:%s:%s,' msaa2x:ours msaa2x:pq4k)
+    four_p=$(printf 'checkerboard:%s,' rotated:ours rotated:pq4k split:ours split:pq4k)
+    four_m=$(printf 'checkerboard:%s,' msaa2x:ours msaa2x:pq4k)
     for res in $small_sizes; do
         runs+=("core-$res-portable|builtin:demo|$res|$csv_p|$sweep")
         can msaa2x && runs+=("core-$res-msaa2x|builtin:demo|$res|$csv_m|$sweep")
