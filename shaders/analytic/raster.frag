@@ -445,10 +445,11 @@ void main() {
             // nearer than this fragment's farthest depth in the pixel, so a surface in front or
             // one crossing it (a card standing on the ground) may hide the sample. Not in a
             // pixel of one fragment, nor for a fragment hidden or open at every sample; and only
-            // the cells holding samples of its mask (the resolve weighs no other). Each lane's
-            // loops end with its own work, so a SIMD group with none skips them.
+            // the cells holding samples of its mask (the resolve weighs no other); and only for a
+            // kept fragment (a slot): a record beyond the K carries no grid. Each lane's loops
+            // end with its own work, so a SIMD group with none skips them.
             Mask maybe_hidden = Mask(0u);
-            Mask rest = counts[pixel] > 1u ? geo_mask : Mask(0u);
+            Mask rest = slot >= 0 && counts[pixel] > 1u ? geo_mask : Mask(0u);
             while (mask_any(rest)) {
                 int k = mask_pop(rest);
                 uint word = pixel * uint(OCCLUDER_WORDS) + uint(k / OCCLUDER_GROUP);
