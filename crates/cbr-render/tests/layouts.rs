@@ -47,6 +47,7 @@ fn compare(name: &str, cb: &FrameOutput, native: &FrameOutput) -> f64 {
     let (w, h) = (cb.width, cb.height);
     let (mut shaded, mut id_diff, mut worst_color, mut worst_depth) =
         (0usize, 0usize, 0.0f32, 0.0f32);
+    let (mut at_color, mut at_depth) = (0usize, 0usize);
     for y in 0..h {
         for x in 0..w {
             let i = (y * w + x) as usize;
@@ -75,11 +76,17 @@ fn compare(name: &str, cb: &FrameOutput, native: &FrameOutput) -> f64 {
                     cb.color[4 * i + c].to_f32(),
                     native.color[4 * i + c].to_f32(),
                 );
-                worst_color = worst_color.max((a - b).abs() / b.abs().max(1.0));
+                let e = (a - b).abs() / b.abs().max(1.0);
+                if e > worst_color {
+                    (worst_color, at_color) = (e, i);
+                }
             }
             let (a, b) = (cb.depth[i], native.depth[i]);
             if a.is_finite() || b.is_finite() {
-                worst_depth = worst_depth.max((a - b).abs() / b.abs());
+                let e = (a - b).abs() / b.abs();
+                if e > worst_depth {
+                    (worst_depth, at_depth) = (e, i);
+                }
             }
         }
     }
@@ -92,6 +99,48 @@ fn compare(name: &str, cb: &FrameOutput, native: &FrameOutput) -> f64 {
     eprintln!(
         "{name}: {shaded} samples, {id_diff} with other IDs ({:.3}%), colour rel err {worst_color:.2e}, depth rel err {worst_depth:.2e}",
         100.0 * frac
+    );
+    // Where the worst sample is, and how far native's own values change over a pixel there (the
+    // same object's neighbours): an error that is a small fraction of a pixel's change is a
+    // sample evaluated a fraction of a pixel away (a rasteriser snapping each grid's vertices to
+    // its own sub-pixel grid); one near or above it is not. Printed for the GPU study.
+    let step = |i: usize, value: &dyn Fn(usize) -> f32| {
+        let (x, y) = ((i as u32 % w) as i64, (i as u32 / w) as i64);
+        let mut most = 0.0f32;
+        for (dx, dy) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
+            let (nx, ny) = (x + dx, y + dy);
+            if nx < 0 || ny < 0 || nx >= i64::from(w) || ny >= i64::from(h) {
+                continue;
+            }
+            let j = (ny * i64::from(w) + nx) as usize;
+            if native.ids[j] == native.ids[i] {
+                most = most.max((value(j) - value(i)).abs());
+            }
+        }
+        most
+    };
+    let depth_step = step(at_depth, &|j| native.depth[j]) / native.depth[at_depth].abs();
+    let color_step = step(at_color, &|j| {
+        (0..3)
+            .map(|c| native.color[4 * j + c].to_f32())
+            .fold(0.0, f32::max)
+    }) / (0..3)
+        .map(|c| native.color[4 * at_color + c].to_f32().abs())
+        .fold(0.0, f32::max)
+        .max(1.0);
+    let ratio = |e: f32, change: f32| match change > 0.0 {
+        true => format!("error / change {:.3}", e / change),
+        false => "no neighbour of the same object changes".to_string(),
+    };
+    eprintln!(
+        "{name}: worst depth at ({}, {}): native's change over a pixel there {depth_step:.2e} \
+         ({}); worst colour at ({}, {}): change {color_step:.2e} ({})",
+        at_depth as u32 % w,
+        at_depth as u32 / w,
+        ratio(worst_depth, depth_step),
+        at_color as u32 % w,
+        at_color as u32 / w,
+        ratio(worst_color, color_step)
     );
     assert!(
         worst_color <= 2e-3,
