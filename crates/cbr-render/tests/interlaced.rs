@@ -45,6 +45,29 @@ fn pixel_bits(o: &FrameOutput, i: usize) -> Vec<u32> {
     v
 }
 
+/// How far the differing pixels `d` of `a` are from `b`'s: the largest colour difference
+/// (relative, at least 1 in the denominator), the largest relative depth difference, and how many
+/// see other IDs (printed where the bits differ, on another driver: the GPU study).
+fn how_far(a: &FrameOutput, b: &FrameOutput, d: &[usize]) -> String {
+    let (mut color, mut depth, mut ids) = (0.0f32, 0.0f32, 0usize);
+    for &i in d {
+        if a.ids[i] != b.ids[i] {
+            ids += 1;
+            continue;
+        }
+        for c in 0..3 {
+            let (x, y) = (a.color[4 * i + c].to_f32(), b.color[4 * i + c].to_f32());
+            color = color.max((x - y).abs() / y.abs().max(1.0));
+        }
+        if a.depth[i].is_finite() && b.depth[i].is_finite() && b.depth[i] != 0.0 {
+            depth = depth.max((a.depth[i] - b.depth[i]).abs() / b.depth[i].abs());
+        }
+    }
+    format!(
+        "{ids} with other IDs; the others: colour up to {color:.2e}, depth up to {depth:.2e} relative"
+    )
+}
+
 /// Pixels whose layers differ from `b`'s in any bit.
 fn differing(a: &FrameOutput, b: &FrameOutput) -> Vec<usize> {
     (0..(a.width * a.height) as usize)
@@ -66,7 +89,13 @@ fn static_scene_equals_native_bit_for_bit_from_the_second_frame() {
     // Every layer of every pixel, texture lookups and thin features included.
     for o in &out[1..] {
         let d = differing(o, native);
-        assert!(d.is_empty(), "frame {}: {} pixels differ", o.index, d.len());
+        assert!(
+            d.is_empty(),
+            "frame {}: {} pixels differ ({})",
+            o.index,
+            d.len(),
+            how_far(o, native, &d)
+        );
     }
     assert_clean(&gpu);
 }
