@@ -392,6 +392,8 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
                 "disocclusion_frames": k,
                 "frame_ms": summary_json(summarize(&m.frame_ms)),
                 "cached_frames": m.cached_frames,
+                "setup_s": m.setup_s,
+                "frames_wall_s": m.frames_wall_s,
                 "passes": passes,
                 "fragment_invocations_median": fragments,
                 "images": images,

@@ -92,6 +92,11 @@ pub struct Snapshot {
 #[derive(Default)]
 pub struct Measured {
     pub lod_bias: f32,
+    /// Wall-clock seconds of setting the renderer up (shaders, pipelines, allocations, the
+    /// scene's upload) and of all its frames (warm-up, readbacks and metrics included): where a
+    /// run's time goes beside the GPU's passes (the GPU study's machine spent most of it there).
+    pub setup_s: f64,
+    pub frames_wall_s: f64,
     /// Frames read from the frame cache (not rendered, so not timed).
     pub cached_frames: u32,
     pub snapshot: Option<Snapshot>,
@@ -150,8 +155,10 @@ pub fn measure(
     bar: &ProgressBar,
 ) -> Result<(Measured, Vec<RefFrame>)> {
     let shaders = cbr_render::shader_library();
+    let started = std::time::Instant::now();
     let mut r = Renderer::new(gpu, &shaders, scene, config.settings.clone())
         .with_context(|| format!("setting up {} on {}", config.name, gpu.info().name))?;
+    let setup_s = started.elapsed().as_secs_f64();
     let keep = matches!(role, Role::Reference { .. });
     if keep && config.settings.spec.technique.name != "native" {
         let label = format!("reference {}", config.name);
@@ -166,6 +173,7 @@ pub fn measure(
     };
     let mut m = Measured {
         lod_bias: r.lod_bias(),
+        setup_s,
         ..Measured::default()
     };
     let mut kept = Vec::new();
@@ -229,6 +237,21 @@ pub fn measure(
         if last && !matches!(role, Role::Timing) {
             m.snapshot = Some(Snapshot { out, flip_map });
         }
+    }
+    m.frames_wall_s = started.elapsed().as_secs_f64() - setup_s;
+    let line = format!(
+        "{} {}x{}: set up in {:.1} s, {} frames in {:.1} s (wall clock)",
+        config.name,
+        scene.settings.width,
+        scene.settings.height,
+        m.setup_s,
+        warmup + frames,
+        m.frames_wall_s
+    );
+    if bar.is_hidden() {
+        eprintln!("{line}");
+    } else {
+        bar.println(line);
     }
     Ok((m, kept))
 }

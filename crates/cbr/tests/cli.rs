@@ -685,6 +685,10 @@ fn bench_timing_only_times_every_row_and_measures_no_error() {
             r["frame_ms"]["median"].as_f64().is_some_and(|t| t > 0.0),
             "{c}"
         );
+        // Where the run's wall-clock time went: the set-up and the frames.
+        for k in ["setup_s", "frames_wall_s"] {
+            assert!(r[k].as_f64().is_some_and(|t| t > 0.0), "{c}: {k}");
+        }
         if c.starts_with("checkerboard") {
             assert_eq!(r["passes"]["resolve"]["n"], 2, "{c}");
             assert_eq!(r["copy_floor_ms"]["n"], 2, "{c}");
