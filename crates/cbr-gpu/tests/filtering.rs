@@ -8,10 +8,12 @@
 //! must give the position's fraction; the distinct values and the worst deviation are printed.
 //! Lavapipe must be exact (the references' assumption); any device within 2^-bits of it.
 
+mod common;
+
 use cbr_gpu::{
-    Access, BindingDesc, Buffer, ComputeDesc, DescriptorKind, DescriptorSet, Gpu, GpuOptions,
-    Image, ImageDesc, LevelCopy, Location, Pipeline, Readback, Sampler, SamplerDesc, SetLayout,
-    Shaders, StaticTree, Write, vk,
+    Access, BindingDesc, Buffer, ComputeDesc, DescriptorKind, DescriptorSet, Image, ImageDesc,
+    LevelCopy, Location, Pipeline, Readback, Sampler, SamplerDesc, SetLayout, Shaders, StaticTree,
+    Write, vk,
 };
 use half::f16;
 
@@ -33,11 +35,7 @@ static TREE: [(&str, &str); 1] = [("ramp.comp", KERNEL)];
 
 #[test]
 fn linear_filtering_weights_are_measured() {
-    let gpu = Gpu::new(&GpuOptions {
-        device: std::env::var("CBR_TEST_DEVICE").ok(),
-        validation: true,
-    })
-    .expect("device");
+    let gpu = common::gpu();
     let shaders = Shaders::new(Box::new(StaticTree(&TREE)));
     let cs = shaders.compile("ramp.comp", &[]).expect("compile");
     let bindings = [

@@ -8,11 +8,13 @@
 //! this test does not yet fail when they are removed; the condition that produced PLATFORM.md's
 //! reading is still to be reproduced (the report's issue asks for a test that fails without them).
 
+mod common;
+
 use std::time::Instant;
 
 use cbr_gpu::{
-    Access, BindingDesc, Buffer, ComputeDesc, DescriptorKind, DescriptorSet, Gpu, GpuOptions,
-    Location, PassKind, Pipeline, Profiler, SetLayout, Shaders, StaticTree, Write, vk,
+    Access, BindingDesc, Buffer, ComputeDesc, DescriptorKind, DescriptorSet, Gpu, Location,
+    PassKind, Pipeline, Profiler, SetLayout, Shaders, StaticTree, Write, vk,
 };
 
 const KERNEL: &str = r#"#version 460
@@ -75,11 +77,7 @@ fn time_dispatch(gpu: &Gpu, fences: bool) -> (f64, f64) {
 
 #[test]
 fn compute_timestamps_measure_the_dispatch() {
-    let gpu = Gpu::new(&GpuOptions {
-        device: std::env::var("CBR_TEST_DEVICE").ok(),
-        validation: true,
-    })
-    .expect("device");
+    let gpu = common::gpu();
     let (gpu_ms, wall) = time_dispatch(&gpu, true);
     println!("with barriers: {gpu_ms:.2} ms GPU of {wall:.2} ms wall");
     let (bare, bare_wall) = time_dispatch(&gpu, false);
