@@ -132,6 +132,20 @@ def main():
         print(f"Total: {tot(2)} passed, {tot(3)} failed, {tot(5)} VUID lines.\n")
     tsv_table(os.path.join(work, "runs.tsv"), "Bench runs (`cbr bench --timing-only`)",
               ["run", "scene", "resolutions", "status", "s"])
+    # Where each finished run's wall clock went (bench.json's setup_s and frames_wall_s per row;
+    # absent from binaries before they were written). A killed run writes no bench.json: its
+    # log holds one line per row that finished.
+    walls = [(n, b["rows"]) for n, b in runs.items() if any("setup_s" in r for r in b["rows"])]
+    if walls:
+        print("## Wall clock of the finished runs\n")
+        print("| run | rows | set-up s (sum) | frames s (sum) | slowest set-up |")
+        print("|---|---|---|---|---|")
+        for n, rows in walls:
+            su = sum(r.get("setup_s") or 0.0 for r in rows)
+            fr = sum(r.get("frames_wall_s") or 0.0 for r in rows)
+            top = max(rows, key=lambda r: r.get("setup_s") or 0.0)
+            print(f"| {n} | {len(rows)} | {su:.1f} | {fr:.1f} | `{top['config']}` {top.get('setup_s') or 0.0:.1f} s |")
+        print()
 
     for res, rows in resolve_rows(runs, "core-").items():
         b = next(b for n, b in runs.items()
