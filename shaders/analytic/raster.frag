@@ -20,6 +20,7 @@
 #include "surface.glsl"
 #include "mask.glsl"
 #include "tail_record.glsl"
+#include "albedo_job.glsl"
 
 layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
 layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
@@ -64,6 +65,9 @@ layout(std430, set = 2, binding = BINDING_CELLS_HI) buffer CellsHi { uvec2 cells
 // runs on past it when the frame needs more (the technique grows the buffer and renders again).
 layout(std430, set = 2, binding = BINDING_TAIL_RECORDS) writeonly buffer TailRecords { TailRecord tail_records[]; };
 layout(std430, set = 2, binding = BINDING_TAIL_COUNT) buffer TailCounts { TailCount tail_count; };
+// The textured fragments' albedo lookups, for the albedo pass (albedo_job.glsl).
+layout(std430, set = 2, binding = BINDING_ALBEDO_JOBS) writeonly buffer AlbedoJobs { AlbedoJob albedo_jobs[]; };
+layout(std430, set = 2, binding = BINDING_ALBEDO_COUNT) buffer AlbedoCounts { AlbedoCount albedo_count; };
 #endif
 layout(push_constant) uniform Push { uint object_index; } pc;
 
@@ -121,82 +125,7 @@ vec3 bump_from(vec3 n, vec3 dpdx, vec3 dpdy, float dhdx, float dhdy) {
     return normalize(abs(det) * n - grad);
 }
 
-// Anisotropic filtering in the shader: the pixel's footprint in the texture is the parallelogram
-// spanned by the UV map's screen derivatives gx, gy; isotropic trilinear filtering takes the mip
-// level of its longer side and blurs the shorter direction too (the receding floor's checks). So
-// the footprint is cut along its longer side into n = ceil(long / short) pieces (at most
-// MAX_ANISO), each filtered at the shorter side's level, and their mean taken: a box filter
-// along the long side, as the supersampled reference integrates it.
-#define MAX_ANISO 16
-// The albedo grid's cells (below): at most this many lookups each.
-#define CELL_ANISO 4
-vec4 texture_aniso_n(sampler2D t, vec2 uv, vec2 gx, vec2 gy, int max_taps) {
-    vec2 size = vec2(textureSize(t, 0));
-    float lx = length(gx * size);
-    float ly = length(gy * size);
-    vec2 major = lx >= ly ? gx : gy;
-    vec2 minor = lx >= ly ? gy : gx;
-    float ratio = max(lx, ly) / max(min(lx, ly), 1e-6);
-    int n = isnan(ratio) ? 1 : int(clamp(ceil(ratio), 1.0, float(max_taps)));
-    if (n == 1) return textureGrad(t, uv, gx, gy);
-    vec2 step_uv = major / float(n);
-    vec4 sum = vec4(0.0);
-    for (int i = 0; i < n; ++i) {
-        sum += textureGrad(t, uv + step_uv * (float(i) + 0.5 - 0.5 * float(n)), step_uv, minor);
-    }
-    return sum / float(n);
-}
-
-vec4 texture_aniso(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
-    return texture_aniso_n(t, uv, gx, gy, MAX_ANISO);
-}
-
-// TEXTURE_BOX (the default; `analytic:aniso` leaves it out): the albedo's footprint integrated as
-// a box, by the midpoint rule
-// over a grid of cells, each looked up (trilinear) over its own cell: BOX_CELLS cells across the
-// footprint's shorter side (or across each texel where it is under one texel), as many along the
-// longer side as keep the cells about square, at most 16 along it and BOX_MAX_TAPS in all. A single trilinear lookup at the footprint's level filters
-// with a tent two of that level's texels wide, twice the pixel: on textures minified several
-// levels (Šibenik's stone at 320x180) it blurs what the supersampled reference keeps
-// (docs/analytic.md, The texture's box). Only for a fragment covering at least BOX_MIN_AREA of
-// its pixel (`boxed`): the smaller ones weigh little in the pixel and cost the most lookups (a
-// sliver's footprint is long and thin), and take texture_aniso's lookups.
-#define BOX_CELLS 3.0
-#define BOX_MAX_TAPS 16
-#define BOX_MIN_AREA 0.25
-vec4 texture_box(sampler2D t, vec2 uv, vec2 gx, vec2 gy, bool boxed) {
-    vec2 size = vec2(textureSize(t, 0));
-    float lx = length(gx * size);
-    float ly = length(gy * size);
-    // Lengths that are not finite take texture_aniso's own guard (min and max need not pass NaN).
-    if (isnan(lx) || isnan(ly) || isinf(lx) || isinf(ly)) return texture_aniso(t, uv, gx, gy);
-    float unit = max(min(lx, ly), 1.0);
-    // Cells along the longer side first: beyond BOX_MAX_TAPS the shorter side has fewer cells,
-    // down to one (then the lookups are texture_aniso's, finer along the longer side).
-    bool x_long = lx >= ly;
-    int n_long = int(clamp(ceil(BOX_CELLS * max(lx, ly) / unit), 1.0, 16.0));
-    int n_short = int(clamp(ceil(BOX_CELLS * min(lx, ly) / unit), 1.0, BOX_CELLS));
-    n_short = clamp(BOX_MAX_TAPS / n_long, 1, n_short);
-    if (!boxed) {
-        // texture_aniso's lookups (one per unit of the footprint's aspect ratio along its longer
-        // side, at most MAX_ANISO) through the same loop: a SIMD group holding fragments of both
-        // kinds runs one loop, not both functions (Sibenik at 160x90: the raster pass 550-564
-        // -> 528-548 ms).
-        float ratio = max(lx, ly) / max(min(lx, ly), 1e-6);
-        n_long = int(clamp(ceil(ratio), 1.0, float(MAX_ANISO)));
-        n_short = 1;
-    }
-    int nx = x_long ? n_long : n_short;
-    int ny = x_long ? n_short : n_long;
-    vec4 sum = vec4(0.0);
-    for (int i = 0; i < nx; ++i) {
-        for (int j = 0; j < ny; ++j) {
-            vec2 o = vec2((float(i) + 0.5) / float(nx) - 0.5, (float(j) + 0.5) / float(ny) - 0.5);
-            sum += textureGrad(t, uv + gx * o.x + gy * o.y, gx / float(nx), gy / float(ny));
-        }
-    }
-    return sum / float(nx * ny);
-}
+#include "texture.glsl"
 
 // Alpha-tested materials, per sample. The mask slot holds the material's coverage texture
 // (cbr_scene::Texture::alpha_coverage): the passing share in alpha, the albedo premultiplied by it
@@ -253,6 +182,18 @@ Mask alpha_test(Mask geo_mask, vec2 uv, vec2 dx, vec2 dy, vec2 gx, vec2 gy, vec2
     for (int i = 0; i < CELLS; ++i) cell_luma[i] = csum[i].y > 0.0 ? csum[i].x / csum[i].y : mean_luma;
     return passing;
 }
+
+#ifndef SELECT_PASS
+// Appends a job for the albedo pass; past the buffer's capacity only counted (the technique grows
+// it and renders the frame again). The first job of a row of the pass's dispatch adds the row.
+void emit_albedo_job(uint target, vec2 uv, vec2 fx, vec2 fy, vec2 dx, vec2 dy, vec2 mean_point,
+                     uint material, uint info) {
+    uint j = atomicAdd(albedo_count.count, 1u);
+    if (j >= uint(albedo_jobs.length())) return;
+    albedo_jobs[j] = AlbedoJob(uv, fx, fy, dx, dy, mean_point, target, material, info, 0u);
+    if (j % (64u * uint(TAIL_ROW_GROUPS)) == 0u) atomicAdd(albedo_count.groups_y, 1u);
+}
+#endif
 
 void main() {
     ivec2 pix = ivec2(gl_FragCoord.xy);
@@ -409,6 +350,11 @@ void main() {
     // The covered part's mask samples (an alpha-tested fragment's: above).
     if (mat.tex.y < 0) geo_mask = sample_mask(p, n, orient);
     vec3 albedo = mat.kd.rgb;
+    // A textured fragment's albedo lookups, deferred to the albedo pass (albedo_job.glsl).
+    bool job = false;
+    vec2 job_fx = vec2(0.0);
+    vec2 job_fy = vec2(0.0);
+    uint job_info = 0u;
     // An alpha-tested fragment's albedo is that of its passing part (alpha_test); the others'
     // is filtered over the footprint of the part of the pixel they cover.
 #if (MAT_FEATURES & MAT_MASK) != 0
@@ -431,11 +377,13 @@ void main() {
                 fx = gx * f[0].x + gy * f[0].y;
                 fy = gx * f[1].x + gy * f[1].y;
             }
-#ifdef TEXTURE_BOX
-            albedo *= texture_box(albedo_tex, uv, fx, fy, cov.area >= BOX_MIN_AREA).rgb;
-#else
-            albedo *= texture_aniso(albedo_tex, uv, fx, fy).rgb;
-#endif
+            // The lookups themselves run in the albedo pass (albedo.comp, over the dense list of
+            // these jobs): texture_box over (fx, fy) (`boxed` where the fragment covers at least
+            // BOX_MIN_AREA), or texture_aniso without TEXTURE_BOX; the albedo stays kd here.
+            job = true;
+            job_fx = fx;
+            job_fy = fy;
+            job_info = cov.area >= BOX_MIN_AREA ? JOB_BOXED : 0u;
 #ifndef SELECT_PASS
             // Each cell's own footprint (a quarter of the pixel's, centred in it: surface.glsl's
             // grid; anisotropic, at most CELL_ANISO lookups), for the part of the fragment that
@@ -460,15 +408,9 @@ void main() {
                 Mask left = geo_mask;
                 while (mask_any(left)) cells |= 1u << uint(cell_of(mask_sample(mask_pop(left))));
             }
-            while (cells != 0u) {
-                int i = findLSB(cells);
-                cells &= cells - 1u;
-                vec2 d = (vec2(float(i % CELLS_SIDE), float(i / CELLS_SIDE)) + 0.5) / float(CELLS_SIDE)
-                    - cov.mean_point;
-                const float side = 1.0 / float(CELLS_SIDE);
-                cell_luma[i] = albedo_luma(texture_aniso_n(albedo_tex, uv + dx * d.x + dy * d.y,
-                                                           side * gx, side * gy, CELL_ANISO).rgb);
-            }
+            // The cells' lookups (the albedo pass): each a quarter of the pixel's footprint
+            // centred in the cell, at most CELL_ANISO taps.
+            job_info |= cells;
 #endif
         }
 #endif
@@ -540,6 +482,8 @@ void main() {
         colors[base + uint(slot)] = uvec2(packHalf2x16(color.rg),
                                           (packHalf2x16(vec2(color.b, 0.0)) & 0xFFFFu) | (flags << 16u)
                                           | (uint(round(alpha_pass * 255.0)) << 24u));
+        if (job && finite) emit_albedo_job(base + uint(slot), uv, job_fx, job_fy, dx, dy,
+                                           cov.mean_point, o.ids.y, job_info);
     } else if (coverage > 0.0) {
         // Beyond the K: recorded for the tail pass (tail_record.glsl), which lights it and adds
         // it to the pixel's tail, facing the camera or away.
@@ -547,6 +491,8 @@ void main() {
         if (i < uint(tail_records.length())) {
             tail_records[i] = make_tail_record(pixel, coverage, mask, o.ids.y, facing_away, world,
                                                nrm, albedo);
+            if (job) emit_albedo_job(i | JOB_TAIL, uv, job_fx, job_fy, dx, dy, cov.mean_point,
+                                     o.ids.y, job_info);
             // The first record of a row of the tail pass's dispatch adds the row.
             if (i % (64u * uint(TAIL_ROW_GROUPS)) == 0u) atomicAdd(tail_count.groups_y, 1u);
         }

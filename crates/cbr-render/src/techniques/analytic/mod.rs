@@ -205,6 +205,39 @@ fn start_tail_capacity(px: u64, max_range: u32, samples: u32) -> u64 {
     (px * TAIL_RECORDS_PER_PIXEL_START).clamp(1, max_tail_capacity(max_range, samples))
 }
 
+/// One textured fragment's albedo lookups, left by the raster pass for the albedo pass
+/// (shaders/analytic/albedo_job.glsl: 16 words).
+pub const ALBEDO_JOB_BYTES: u64 = 64;
+/// Jobs the buffer starts with, per pixel (it grows as the tail records' do).
+pub const ALBEDO_JOBS_PER_PIXEL_START: u64 = 2;
+/// The jobs' count and the albedo pass's VkDispatchIndirectCommand (4 x u32).
+pub const ALBEDO_COUNT_BYTES: u64 = 16;
+
+/// The most albedo jobs one storage buffer holds on this device.
+fn max_job_capacity(max_range: u32) -> u64 {
+    u64::from(max_range) / ALBEDO_JOB_BYTES
+}
+
+/// The job capacity a frame that asked for `needed` grows the buffer to: `needed` and a quarter
+/// more, at most what one storage buffer holds; or the refusal where that cannot hold `needed`.
+pub fn grown_job_capacity(needed: u64, max_range: u32) -> std::result::Result<u64, String> {
+    let max = max_job_capacity(max_range);
+    if needed > max {
+        return Err(format!(
+            "analytic: this frame has {needed} textured fragments to filter; their jobs ({needed} \
+             x {ALBEDO_JOB_BYTES} bytes) exceed the largest storage buffer this device binds ({} \
+             bytes, maxStorageBufferRange): lower the resolution",
+            max * ALBEDO_JOB_BYTES
+        ));
+    }
+    Ok((needed + needed / 4).min(max))
+}
+
+/// Albedo jobs the buffer starts with at `px` pixels.
+fn start_job_capacity(px: u64, max_range: u32) -> u64 {
+    (px * ALBEDO_JOBS_PER_PIXEL_START).clamp(1, max_job_capacity(max_range))
+}
+
 /// Fragments kept per pixel unless `frags=K` says otherwise (lowered to what fits).
 pub const DEFAULT_FRAGS: u32 = 32;
 /// The most `frags=K` may ask for: resolve.comp holds the set of a pixel's kept fragments it
@@ -318,7 +351,7 @@ pub fn plan_lists(
 }
 
 /// Set 2 of the raster passes (set 0: the scene's, set 1: the material's).
-pub const RASTER_BINDINGS: [BindingDesc; 13] = {
+pub const RASTER_BINDINGS: [BindingDesc; 15] = {
     use DescriptorKind::StorageBuffer as B;
     [
         BindingDesc::one("keys", 0, B),
@@ -334,6 +367,21 @@ pub const RASTER_BINDINGS: [BindingDesc; 13] = {
         BindingDesc::one("cells", 10, B),
         BindingDesc::one("slot_masks", 11, B),
         BindingDesc::one("cells_hi", 12, B),
+        BindingDesc::one("albedo_jobs", 13, B),
+        BindingDesc::one("albedo_count", 14, B),
+    ]
+};
+
+/// Set 0 of the albedo pass (set 1: the scene's, set 2: the material's).
+pub const ALBEDO_BINDINGS: [BindingDesc; 6] = {
+    use DescriptorKind::StorageBuffer as B;
+    [
+        BindingDesc::one("albedo_jobs", 0, B),
+        BindingDesc::one("albedo_count", 1, B),
+        BindingDesc::one("colors", 2, B),
+        BindingDesc::one("cells", 3, B),
+        BindingDesc::one("cells_hi", 4, B),
+        BindingDesc::one("tail_records", 5, B),
     ]
 };
 
@@ -402,12 +450,22 @@ pub struct Analytic {
     raster: Raster,
     raster_layout: SetLayout,
     tail_layout: SetLayout,
+    albedo_layout: SetLayout,
     _layouts: Vec<SetLayout>,
     scene_set: DescriptorSet,
     material_sets: Vec<DescriptorSet>,
     raster_set: DescriptorSet,
     tail_pass: Pipeline,
     tail_set: DescriptorSet,
+    /// The albedo pass, run once per textured material that is not alpha-tested (the ones whose
+    /// fragments leave jobs), with that material's set.
+    albedo_pass: Pipeline,
+    albedo_set: DescriptorSet,
+    albedo_materials: Vec<u32>,
+    /// The jobs (grows: [`Analytic::grow_albedo_jobs`]), their count, and the count read back.
+    albedo_jobs: Buffer,
+    albedo_count: Buffer,
+    albedo_count_rb: Readback,
     resolve: Pipeline,
     resolve_set: DescriptorSet,
     keys: Buffer,
@@ -476,6 +534,13 @@ impl Analytic {
         );
         e.storage_buffer("analytic.tail_count", TAIL_COUNT_BYTES, false);
         e.buffer("readback.analytic.tail_count", 4, true);
+        e.storage_buffer(
+            "analytic.albedo_jobs",
+            start_job_capacity(px, max_range) * ALBEDO_JOB_BYTES,
+            false,
+        );
+        e.storage_buffer("analytic.albedo_count", ALBEDO_COUNT_BYTES, false);
+        e.buffer("readback.analytic.albedo_count", 4, true);
         e.image("analytic.velocity", VELOCITY_FORMAT, w, h);
         e.image("analytic.ids", ID_FORMAT, w, h);
         e.image("analytic.depth", DEPTH_FORMAT, w, h);
@@ -529,6 +594,7 @@ impl Analytic {
         let raster_layout = SetLayout::new(gpu, "analytic.raster_layout", &RASTER_BINDINGS)?;
         let resolve_layout = SetLayout::new(gpu, "analytic.resolve_layout", &RESOLVE_BINDINGS)?;
         let tail_layout = SetLayout::new(gpu, "analytic.tail_layout", &TAIL_BINDINGS)?;
+        let albedo_layout = SetLayout::new(gpu, "analytic.albedo_layout", &ALBEDO_BINDINGS)?;
 
         let mut defines = scene_pass::shader_defines(scene_pass::LAYOUT_NATIVE);
         defines.extend(RASTER_BINDINGS.iter().map(BindingDesc::define));
@@ -607,6 +673,32 @@ impl Analytic {
                 push_constant_bytes: 0,
             },
         )?;
+        let mut adefines = scene_pass::shader_defines(scene_pass::LAYOUT_NATIVE);
+        adefines.extend(ALBEDO_BINDINGS.iter().map(BindingDesc::define));
+        adefines.extend(common.iter().cloned());
+        if c.box_filter {
+            adefines.push(("TEXTURE_BOX".into(), "1".into()));
+        }
+        let albedo_cs = ctx.shaders.compile("analytic/albedo.comp", &adefines)?;
+        let albedo_pass = Pipeline::compute(
+            gpu,
+            &ComputeDesc {
+                name: "analytic.albedo",
+                shader: &albedo_cs,
+                set_layouts: &[&albedo_layout, &scene_layout, &material_layout],
+                push_constant_bytes: 4,
+            },
+        )?;
+        // The materials whose fragments leave albedo jobs (raster.frag: an albedo texture, no
+        // alpha test).
+        let albedo_materials: Vec<u32> = ctx
+            .scene
+            .material_textures
+            .iter()
+            .zip(0u32..)
+            .filter(|(t, _)| t[0].is_some() && t[1].is_none())
+            .map(|(_, m)| m)
+            .collect();
         let cs = ctx.shaders.compile("analytic/resolve.comp", &rdefines)?;
         let resolve = Pipeline::compute(
             gpu,
@@ -659,6 +751,17 @@ impl Analytic {
             storage | vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::INDIRECT_BUFFER,
         )?;
         let tail_count_rb = Readback::for_buffer(gpu, "readback.analytic.tail_count", 4, 1, 1)?;
+        let albedo_jobs = buffer(
+            "analytic.albedo_jobs",
+            start_job_capacity(px, max_range) * ALBEDO_JOB_BYTES,
+            storage,
+        )?;
+        let albedo_count = buffer(
+            "analytic.albedo_count",
+            ALBEDO_COUNT_BYTES,
+            storage | vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::INDIRECT_BUFFER,
+        )?;
+        let albedo_count_rb = Readback::for_buffer(gpu, "readback.analytic.albedo_count", 4, 1, 1)?;
         // Native's colour target is not drawn (the resolve writes the colour).
         let FrameTargets {
             velocity,
@@ -710,6 +813,21 @@ impl Analytic {
                 &cells,
                 &slot_masks,
                 &cells_hi,
+                &albedo_jobs,
+                &albedo_count,
+            ]),
+        )?;
+        let albedo_set = DescriptorSet::new(
+            gpu,
+            "analytic.albedo_set",
+            &albedo_layout,
+            &buffer_writes(&[
+                &albedo_jobs,
+                &albedo_count,
+                &colors,
+                &cells,
+                &cells_hi,
+                &tail_records,
             ]),
         )?;
         let tail_set = DescriptorSet::new(
@@ -758,12 +876,19 @@ impl Analytic {
             raster,
             raster_layout,
             tail_layout,
+            albedo_layout,
             _layouts: vec![scene_layout, material_layout, resolve_layout],
             scene_set,
             material_sets,
             raster_set,
             tail_pass,
             tail_set,
+            albedo_pass,
+            albedo_set,
+            albedo_materials,
+            albedo_jobs,
+            albedo_count,
+            albedo_count_rb,
             resolve,
             resolve_set,
             keys,
@@ -811,12 +936,37 @@ impl Analytic {
             cmd.fill_buffer(&self.occluders, 0);
             // No records yet; the tail pass's dispatch: rows of TAIL_ROW_GROUPS groups, none.
             cmd.update_buffer(&self.tail_count, &[0, TAIL_ROW_GROUPS, 0, 1]);
+            cmd.update_buffer(&self.albedo_count, &[0, TAIL_ROW_GROUPS, 0, 1]);
             profiler.end(cmd, scope);
             cmd.use_buffer(counter, Access::FragmentStorageWrite);
             // The select pass writes no attachment (its fragments all discard); the second pass
             // clears and writes them.
             self.record_raster(cmd, profiler, scene, &self.select, false);
             self.record_raster(cmd, profiler, scene, &self.raster, true);
+
+            // The albedo pass: the textured fragments' lookups, one invocation per job, once per
+            // material (each dispatch writes other slots and records than the one before, but
+            // the same buffers: a barrier between them).
+            cmd.use_buffer(&self.albedo_jobs, Access::ComputeSampled);
+            cmd.use_buffer(&self.albedo_count, Access::ComputeIndirect);
+            let scope = profiler.begin(cmd, "analytic.albedo", PassKind::Compute);
+            cmd.bind_pipeline(&self.albedo_pass);
+            cmd.bind_set(&self.albedo_pass, 0, &self.albedo_set);
+            cmd.bind_set(&self.albedo_pass, 1, &self.scene_set);
+            for &m in &self.albedo_materials {
+                for buf in [
+                    &self.colors,
+                    &self.cells,
+                    &self.cells_hi,
+                    &self.tail_records,
+                ] {
+                    cmd.use_buffer(buf, Access::ComputeStorageReadWrite);
+                }
+                cmd.bind_set(&self.albedo_pass, 2, &self.material_sets[m as usize]);
+                cmd.push_constants(&self.albedo_pass, &m.to_le_bytes());
+                cmd.dispatch_indirect(&self.albedo_count, 4);
+            }
+            profiler.end(cmd, scope);
 
             // The tail pass: one invocation per record the buffer holds, in the rows the raster
             // pass counted (the count may run past the capacity: render() then grows the buffer
@@ -878,6 +1028,8 @@ impl Analytic {
             cmd.read_image(&self.targets.ids, ids);
             cmd.use_buffer(&self.tail_count, Access::TransferSrc);
             cmd.read_buffer(&self.tail_count, &self.tail_count_rb);
+            cmd.use_buffer(&self.albedo_count, Access::TransferSrc);
+            cmd.read_buffer(&self.albedo_count, &self.albedo_count_rb);
             profiler.end(cmd, scope);
             cmd.use_buffer(counter, Access::HostRead);
             Ok(())
@@ -920,13 +1072,45 @@ impl Analytic {
         for (set, layout, bindings) in [
             (&self.raster_set, &self.raster_layout, &RASTER_BINDINGS[..]),
             (&self.tail_set, &self.tail_layout, &TAIL_BINDINGS[..]),
+            (&self.albedo_set, &self.albedo_layout, &ALBEDO_BINDINGS[..]),
         ] {
             let binding = bindings
                 .iter()
                 .find(|b| b.name == "tail_records")
                 .map(|b| b.binding)
-                .expect("both sets bind the tail records");
+                .expect("the three sets bind the tail records");
             set.update(gpu, layout, &[Write::Buffer(binding, &self.tail_records)])?;
+        }
+        Ok(())
+    }
+
+    /// Replaces the albedo-job buffer by one holding `needed` jobs and a quarter more (at most
+    /// the device's largest storage buffer) and points the two sets that bind it at the new one;
+    /// or the refusal where one buffer cannot hold `needed`.
+    fn grow_albedo_jobs(&mut self, gpu: &cbr_gpu::Gpu, needed: u64) -> Result<()> {
+        let capacity = grown_job_capacity(needed, self.max_range).map_err(GpuError::Other)?;
+        tracing::info!(
+            "analytic: {needed} albedo jobs this frame, {} held: the buffer grows to {capacity}",
+            self.albedo_jobs.size() / ALBEDO_JOB_BYTES
+        );
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        self.albedo_jobs = Buffer::new(
+            gpu,
+            "analytic.albedo_jobs",
+            capacity * ALBEDO_JOB_BYTES,
+            usage,
+            Location::GpuOnly,
+        )?;
+        for (set, layout, bindings) in [
+            (&self.raster_set, &self.raster_layout, &RASTER_BINDINGS[..]),
+            (&self.albedo_set, &self.albedo_layout, &ALBEDO_BINDINGS[..]),
+        ] {
+            let binding = bindings
+                .iter()
+                .find(|b| b.name == "albedo_jobs")
+                .map(|b| b.binding)
+                .expect("both sets bind the albedo jobs");
+            set.update(gpu, layout, &[Write::Buffer(binding, &self.albedo_jobs)])?;
         }
         Ok(())
     }
@@ -1015,12 +1199,19 @@ impl Technique for Analytic {
         loop {
             self.submit_frame(ctx, world_from_clip)?;
             let recorded = self.recorded_tails()?;
-            if recorded <= self.tail_capacity() {
+            let jobs = u64::from(bytemuck::cast_slice::<u8, u32>(self.albedo_count_rb.bytes()?)[0]);
+            let jobs_held = self.albedo_jobs.size() / ALBEDO_JOB_BYTES;
+            if recorded <= self.tail_capacity() && jobs <= jobs_held {
                 return Ok(());
             }
-            // More fragments beyond the K than the buffer holds: grow it and render the frame
-            // again (its timings replace the first rendering's).
-            self.grow_tail_records(ctx.gpu, recorded)?;
+            // More fragments beyond the K, or textured fragments, than a buffer holds: grow it
+            // and render the frame again (its timings replace the first rendering's).
+            if recorded > self.tail_capacity() {
+                self.grow_tail_records(ctx.gpu, recorded)?;
+            }
+            if jobs > jobs_held {
+                self.grow_albedo_jobs(ctx.gpu, jobs)?;
+            }
             ctx.timings = timings_before.clone();
         }
     }

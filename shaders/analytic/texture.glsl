@@ -1,0 +1,84 @@
+// `analytic`: the albedo texture's filters, shared by the raster pass (raster.frag: the alpha
+// test's lookups) and the albedo pass (albedo.comp: the kept and recorded fragments' albedo and
+// their cells). Explicit gradients only, so they run in any stage.
+#ifndef ANALYTIC_TEXTURE_GLSL
+#define ANALYTIC_TEXTURE_GLSL
+
+// Anisotropic filtering in the shader: the pixel's footprint in the texture is the parallelogram
+// spanned by the UV map's screen derivatives gx, gy; isotropic trilinear filtering takes the mip
+// level of its longer side and blurs the shorter direction too (the receding floor's checks). So
+// the footprint is cut along its longer side into n = ceil(long / short) pieces (at most
+// MAX_ANISO), each filtered at the shorter side's level, and their mean taken: a box filter
+// along the long side, as the supersampled reference integrates it.
+#define MAX_ANISO 16
+// The albedo grid's cells (below): at most this many lookups each.
+#define CELL_ANISO 4
+vec4 texture_aniso_n(sampler2D t, vec2 uv, vec2 gx, vec2 gy, int max_taps) {
+    vec2 size = vec2(textureSize(t, 0));
+    float lx = length(gx * size);
+    float ly = length(gy * size);
+    vec2 major = lx >= ly ? gx : gy;
+    vec2 minor = lx >= ly ? gy : gx;
+    float ratio = max(lx, ly) / max(min(lx, ly), 1e-6);
+    int n = isnan(ratio) ? 1 : int(clamp(ceil(ratio), 1.0, float(max_taps)));
+    if (n == 1) return textureGrad(t, uv, gx, gy);
+    vec2 step_uv = major / float(n);
+    vec4 sum = vec4(0.0);
+    for (int i = 0; i < n; ++i) {
+        sum += textureGrad(t, uv + step_uv * (float(i) + 0.5 - 0.5 * float(n)), step_uv, minor);
+    }
+    return sum / float(n);
+}
+
+vec4 texture_aniso(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
+    return texture_aniso_n(t, uv, gx, gy, MAX_ANISO);
+}
+
+// TEXTURE_BOX (the default; `analytic:aniso` leaves it out): the albedo's footprint integrated as
+// a box, by the midpoint rule
+// over a grid of cells, each looked up (trilinear) over its own cell: BOX_CELLS cells across the
+// footprint's shorter side (or across each texel where it is under one texel), as many along the
+// longer side as keep the cells about square, at most 16 along it and BOX_MAX_TAPS in all. A single trilinear lookup at the footprint's level filters
+// with a tent two of that level's texels wide, twice the pixel: on textures minified several
+// levels (Šibenik's stone at 320x180) it blurs what the supersampled reference keeps
+// (docs/analytic.md, The texture's box). Only for a fragment covering at least BOX_MIN_AREA of
+// its pixel (`boxed`): the smaller ones weigh little in the pixel and cost the most lookups (a
+// sliver's footprint is long and thin), and take texture_aniso's lookups.
+#define BOX_CELLS 3.0
+#define BOX_MAX_TAPS 16
+#define BOX_MIN_AREA 0.25
+vec4 texture_box(sampler2D t, vec2 uv, vec2 gx, vec2 gy, bool boxed) {
+    vec2 size = vec2(textureSize(t, 0));
+    float lx = length(gx * size);
+    float ly = length(gy * size);
+    // Lengths that are not finite take texture_aniso's own guard (min and max need not pass NaN).
+    if (isnan(lx) || isnan(ly) || isinf(lx) || isinf(ly)) return texture_aniso(t, uv, gx, gy);
+    float unit = max(min(lx, ly), 1.0);
+    // Cells along the longer side first: beyond BOX_MAX_TAPS the shorter side has fewer cells,
+    // down to one (then the lookups are texture_aniso's, finer along the longer side).
+    bool x_long = lx >= ly;
+    int n_long = int(clamp(ceil(BOX_CELLS * max(lx, ly) / unit), 1.0, 16.0));
+    int n_short = int(clamp(ceil(BOX_CELLS * min(lx, ly) / unit), 1.0, BOX_CELLS));
+    n_short = clamp(BOX_MAX_TAPS / n_long, 1, n_short);
+    if (!boxed) {
+        // texture_aniso's lookups (one per unit of the footprint's aspect ratio along its longer
+        // side, at most MAX_ANISO) through the same loop: a SIMD group holding fragments of both
+        // kinds runs one loop, not both functions (Sibenik at 160x90: the raster pass 550-564
+        // -> 528-548 ms).
+        float ratio = max(lx, ly) / max(min(lx, ly), 1e-6);
+        n_long = int(clamp(ceil(ratio), 1.0, float(MAX_ANISO)));
+        n_short = 1;
+    }
+    int nx = x_long ? n_long : n_short;
+    int ny = x_long ? n_short : n_long;
+    vec4 sum = vec4(0.0);
+    for (int i = 0; i < nx; ++i) {
+        for (int j = 0; j < ny; ++j) {
+            vec2 o = vec2((float(i) + 0.5) / float(nx) - 0.5, (float(j) + 0.5) / float(ny) - 0.5);
+            sum += textureGrad(t, uv + gx * o.x + gy * o.y, gx / float(nx), gy / float(ny));
+        }
+    }
+    return sum / float(nx * ny);
+}
+
+#endif
