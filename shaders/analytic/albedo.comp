@@ -7,8 +7,9 @@
 // wrote) or the tail record; and, for a slot, the albedo grid's cells the raster pass asked for
 // (surface.glsl's pack_cells). The same arithmetic as the lookups had in the raster pass.
 // lavapipe indexes no sampler array non-uniformly, so the pass runs once per textured material
-// with that material's set bound, and each invocation skips the other materials' jobs (the raster
-// pass appends them draw by draw: a SIMD group mostly holds one material).
+// with that material's set bound, over that material's jobs (albedo_bin.comp sorts them by
+// material first: run over every job, each dispatch found a few of its own in most SIMD groups
+// and ran the loops for all the lanes).
 #include "../inc/scene_types.glsl"
 #include "surface.glsl"
 #include "mask.glsl"
@@ -18,7 +19,8 @@
 layout(local_size_x = 64) in;
 
 layout(std430, set = 0, binding = BINDING_ALBEDO_JOBS) readonly buffer AlbedoJobs { AlbedoJob albedo_jobs[]; };
-layout(std430, set = 0, binding = BINDING_ALBEDO_COUNT) readonly buffer AlbedoCounts { AlbedoCount albedo_count; };
+layout(std430, set = 0, binding = BINDING_ALBEDO_BINS) readonly buffer AlbedoBins { AlbedoBin albedo_bins[]; };
+layout(std430, set = 0, binding = BINDING_ALBEDO_ORDER) readonly buffer AlbedoOrder { uint albedo_order[]; };
 layout(std430, set = 0, binding = BINDING_COLORS) buffer Colors { uvec2 colors[]; };
 layout(std430, set = 0, binding = BINDING_CELLS) writeonly buffer Cells { uvec2 cells[]; };
 layout(std430, set = 0, binding = BINDING_CELLS_HI) writeonly buffer CellsHi { uvec2 cells_hi[]; };
@@ -32,10 +34,10 @@ layout(push_constant) uniform Push { uint material; } pc;
 #include "texture.glsl"
 
 void main() {
-    uint i = gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u + gl_GlobalInvocationID.x;
-    if (i >= min(albedo_count.count, uint(albedo_jobs.length()))) return;
-    AlbedoJob j = albedo_jobs[i];
-    if (j.material != pc.material) return;
+    // This material's jobs, in the order albedo_bin.comp put them in.
+    AlbedoBin bin = albedo_bins[pc.material];
+    if (gl_GlobalInvocationID.x >= bin.count) return;
+    AlbedoJob j = albedo_jobs[albedo_order[bin.offset + gl_GlobalInvocationID.x]];
     vec3 albedo = materials[j.material].kd.rgb;
 #ifdef TEXTURE_BOX
     albedo *= texture_box(albedo_tex, j.uv, j.fx, j.fy, (j.info & JOB_BOXED) != 0u).rgb;

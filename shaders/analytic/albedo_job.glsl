@@ -19,6 +19,20 @@ struct AlbedoCount {
     uint groups_z;
 };
 
+// Per material, its jobs' place in the order (albedo_bin.comp): how many, where they start,
+// the scatter's cursor, and the albedo pass's dispatch for that material (a
+// VkDispatchIndirectCommand at word 4: ceil(count / 64) groups).
+struct AlbedoBin {
+    uint count;
+    uint offset;
+    uint cursor;
+    uint pad;
+    uint groups_x;
+    uint groups_y;
+    uint groups_z;
+    uint pad2;
+};
+
 struct AlbedoJob {
     vec2 uv;          // the UV at the shading point
     vec2 fx;          // the footprint the albedo is filtered over (the covered part's)

@@ -68,6 +68,7 @@ layout(std430, set = 2, binding = BINDING_TAIL_COUNT) buffer TailCounts { TailCo
 // The textured fragments' albedo lookups, for the albedo pass (albedo_job.glsl).
 layout(std430, set = 2, binding = BINDING_ALBEDO_JOBS) writeonly buffer AlbedoJobs { AlbedoJob albedo_jobs[]; };
 layout(std430, set = 2, binding = BINDING_ALBEDO_COUNT) buffer AlbedoCounts { AlbedoCount albedo_count; };
+layout(std430, set = 2, binding = BINDING_ALBEDO_BINS) buffer AlbedoBins { AlbedoBin albedo_bins[]; };
 #endif
 layout(push_constant) uniform Push { uint object_index; } pc;
 
@@ -191,6 +192,7 @@ void emit_albedo_job(uint target, vec2 uv, vec2 fx, vec2 fy, vec2 dx, vec2 dy, v
     uint j = atomicAdd(albedo_count.count, 1u);
     if (j >= uint(albedo_jobs.length())) return;
     albedo_jobs[j] = AlbedoJob(uv, fx, fy, dx, dy, mean_point, target, material, info, 0u);
+    atomicAdd(albedo_bins[material].count, 1u);
     if (j % (64u * uint(TAIL_ROW_GROUPS)) == 0u) atomicAdd(albedo_count.groups_y, 1u);
 }
 #endif

@@ -162,6 +162,8 @@ pub struct AnalyticLayers {
     /// Fragments beyond their pixel's K that no occluder hid: lit by the tail pass and merged
     /// into the tails.
     pub tail_fragments: u64,
+    /// Textured fragments (kept or in a tail) whose albedo the albedo pass filtered.
+    pub albedo_jobs: u64,
 }
 
 impl FrameOutput {

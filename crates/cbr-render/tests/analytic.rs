@@ -12,7 +12,8 @@ use cbr_gpu::{
 };
 use cbr_render::techniques::analytic::reference::{self, Poly, Surface};
 use cbr_render::techniques::analytic::{
-    DEFAULT_SAMPLES, grown_tail_capacity, occluder_group, parse, plan_lists,
+    ALBEDO_JOBS_PER_PIXEL_START, DEFAULT_SAMPLES, grown_job_capacity, grown_tail_capacity,
+    occluder_group, parse, plan_lists,
 };
 use cbr_render::{FrameOutput, RenderSettings, Renderer, Spec};
 use cbr_scene::{
@@ -2347,6 +2348,81 @@ fn fragments_beyond_k_are_lit_by_the_tail_pass_and_the_record_buffer_grows_to_ho
     assert!(
         worst < 0.15 && mean < 0.01,
         "K = 1 off K = 16 by {worst} (mean {mean}, relative)"
+    );
+    assert_clean(&gpu);
+}
+
+#[test]
+fn textured_fragments_are_filtered_by_the_albedo_pass_and_its_job_buffer_grows() {
+    // A jittered grid of small triangles (about 4 fragments a pixel, all kept with K = 16, more
+    // than the job buffer starts with: 2 a pixel), textured with one colour: the albedo pass
+    // (albedo.comp) must give the frame of the same grid untextured with that colour as kd, so a
+    // job lost, written to another slot, or never run shows. The frame that grows the buffer is
+    // rendered again (render()): the same frame once more, with room from the start, must be the
+    // same bit for bit.
+    let gpu = gpu();
+    let grid = |rng: &mut Rng| {
+        let mut g = jittered_grid(rng, 40, -3.0, 3.0, -2.0, 2.0, 0.0);
+        for v in &mut g.vertices {
+            v.uv = [(v.pos[0] + 3.0) / 6.0, (v.pos[1] + 2.0) / 4.0];
+        }
+        g
+    };
+    let texel = [51u8, 128, 204, 255];
+    let colour = [51.0f32 / 255.0, 128.0 / 255.0, 204.0 / 255.0];
+    let mut textured = Material::named("textured");
+    textured.kd = [1.0; 3];
+    textured.kd_tex = Some(0);
+    let mut s = scene(vec![grid(&mut Rng(5))], vec![textured], [0.05, 0.05, 0.1]);
+    s.textures = vec![Texture::from_rgba8(
+        "one colour",
+        4,
+        4,
+        texel.repeat(16),
+        false,
+    )];
+    s.settings.ambient = [1.0; 3];
+    let mut plain = Material::named("plain");
+    plain.kd = colour;
+    let mut p = scene(vec![grid(&mut Rng(5))], vec![plain], [0.05, 0.05, 0.1]);
+    p.settings.ambient = [1.0; 3];
+
+    let shaders = cbr_render::shader_library();
+    let settings = RenderSettings::new(W, H, Spec::parse("analytic:frags=16").unwrap());
+    let mut r = Renderer::new(&gpu, &shaders, &s, settings).expect("renderer");
+    let first = r.render(&s, 0).expect("frame");
+    let again = r.render(&s, 0).expect("frame");
+    let jobs = first.analytic.as_ref().unwrap().albedo_jobs;
+    let start = u64::from(W * H) * ALBEDO_JOBS_PER_PIXEL_START;
+    println!("{jobs} albedo jobs; the buffer starts with {start}");
+    assert!(jobs > start, "{jobs} jobs: the buffer did not have to grow");
+    assert_eq!(again.analytic.as_ref().unwrap().albedo_jobs, jobs);
+    assert!(
+        first.color == again.color,
+        "the grown frame differs from the same frame again"
+    );
+    let untextured = render(&gpu, &p, "analytic:frags=16");
+    let mut worst = 0.0f64;
+    for i in 0..(W * H) as usize {
+        let (a, b) = (rgb(&first, i), rgb(&untextured, i));
+        for k in 0..3 {
+            worst = worst.max((a[k] - b[k]).abs() / b[k].abs().max(0.05));
+        }
+    }
+    println!("textured with one colour against that colour as kd: worst {worst:.2e} relative");
+    assert!(
+        worst < 2e-3,
+        "textured off untextured by {worst} (relative)"
+    );
+    // The growth: the count and a quarter more, at most one storage buffer (lavapipe's 128 MiB
+    // holds 2,097,152 jobs of 64 bytes); beyond that the frame is refused with its count.
+    let range = 134_217_728;
+    assert_eq!(grown_job_capacity(1000, range), Ok(1250));
+    assert_eq!(grown_job_capacity(2_000_000, range), Ok(2_097_152));
+    let err = grown_job_capacity(2_097_153, range).unwrap_err();
+    assert!(
+        err.contains("2097153 textured fragments") && err.contains("maxStorageBufferRange"),
+        "{err}"
     );
     assert_clean(&gpu);
 }

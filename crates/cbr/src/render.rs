@@ -661,6 +661,7 @@ fn analytic_summary(out: &FrameOutput) -> serde_json::Value {
     json!({
         "kept_per_pixel": a.kept_per_pixel,
         "tail_fragments": a.tail_fragments,
+        "albedo_jobs": a.albedo_jobs,
         "fragments": a.fragments.iter().map(|&f| u64::from(f)).sum::<u64>(),
         "edge_pixels": edge,
         "overflow_pixels": a.overflow.iter().filter(|&&o| o > 0).count(),

@@ -212,6 +212,13 @@ pub const ALBEDO_JOB_BYTES: u64 = 64;
 pub const ALBEDO_JOBS_PER_PIXEL_START: u64 = 2;
 /// The jobs' count and the albedo pass's VkDispatchIndirectCommand (4 x u32).
 pub const ALBEDO_COUNT_BYTES: u64 = 16;
+/// Per material: its jobs' count, offset and cursor in the order, and its dispatch
+/// (albedo_job.glsl's AlbedoBin: 8 x u32).
+pub const ALBEDO_BIN_BYTES: u64 = 32;
+/// The most materials a scene may have (one bin each: 128 KiB).
+pub const MAX_MATERIALS: usize = 4096;
+/// Per job: its index in the order of materials (albedo_bin.comp).
+pub const ALBEDO_ORDER_BYTES: u64 = 4;
 
 /// The most albedo jobs one storage buffer holds on this device.
 fn max_job_capacity(max_range: u32) -> u64 {
@@ -351,7 +358,7 @@ pub fn plan_lists(
 }
 
 /// Set 2 of the raster passes (set 0: the scene's, set 1: the material's).
-pub const RASTER_BINDINGS: [BindingDesc; 15] = {
+pub const RASTER_BINDINGS: [BindingDesc; 16] = {
     use DescriptorKind::StorageBuffer as B;
     [
         BindingDesc::one("keys", 0, B),
@@ -369,11 +376,13 @@ pub const RASTER_BINDINGS: [BindingDesc; 15] = {
         BindingDesc::one("cells_hi", 12, B),
         BindingDesc::one("albedo_jobs", 13, B),
         BindingDesc::one("albedo_count", 14, B),
+        BindingDesc::one("albedo_bins", 15, B),
     ]
 };
 
-/// Set 0 of the albedo pass (set 1: the scene's, set 2: the material's).
-pub const ALBEDO_BINDINGS: [BindingDesc; 6] = {
+/// Set 0 of the albedo pass (set 1: the scene's, set 2: the material's) and of the two passes
+/// that order its jobs by material (albedo_bin.comp).
+pub const ALBEDO_BINDINGS: [BindingDesc; 8] = {
     use DescriptorKind::StorageBuffer as B;
     [
         BindingDesc::one("albedo_jobs", 0, B),
@@ -382,6 +391,8 @@ pub const ALBEDO_BINDINGS: [BindingDesc; 6] = {
         BindingDesc::one("cells", 3, B),
         BindingDesc::one("cells_hi", 4, B),
         BindingDesc::one("tail_records", 5, B),
+        BindingDesc::one("albedo_bins", 6, B),
+        BindingDesc::one("albedo_order", 7, B),
     ]
 };
 
@@ -466,6 +477,11 @@ pub struct Analytic {
     albedo_jobs: Buffer,
     albedo_count: Buffer,
     albedo_count_rb: Readback,
+    /// Ordering the jobs by material: the plan (offsets, dispatches) and the scatter.
+    bin_plan: Pipeline,
+    bin_scatter: Pipeline,
+    albedo_bins: Buffer,
+    albedo_order: Buffer,
     resolve: Pipeline,
     resolve_set: DescriptorSet,
     keys: Buffer,
@@ -540,6 +556,16 @@ impl Analytic {
             false,
         );
         e.storage_buffer("analytic.albedo_count", ALBEDO_COUNT_BYTES, false);
+        e.storage_buffer(
+            "analytic.albedo_bins",
+            MAX_MATERIALS as u64 * ALBEDO_BIN_BYTES,
+            false,
+        );
+        e.storage_buffer(
+            "analytic.albedo_order",
+            start_job_capacity(px, max_range) * ALBEDO_ORDER_BYTES,
+            false,
+        );
         e.buffer("readback.analytic.albedo_count", 4, true);
         e.image("analytic.velocity", VELOCITY_FORMAT, w, h);
         e.image("analytic.ids", ID_FORMAT, w, h);
@@ -587,6 +613,13 @@ impl Analytic {
                     .map(|d| d.index_count / 3)
                     .max()
                     .unwrap_or(0)
+            )));
+        }
+        if ctx.scene.material_textures.len() > MAX_MATERIALS {
+            return Err(GpuError::Other(format!(
+                "analytic orders its albedo lookups by material, at most {MAX_MATERIALS}; this \
+                 scene has {}",
+                ctx.scene.material_textures.len()
             )));
         }
         let scene_layout = SetLayout::new(gpu, "analytic.scene_layout", &SCENE_BINDINGS)?;
@@ -680,6 +713,24 @@ impl Analytic {
             adefines.push(("TEXTURE_BOX".into(), "1".into()));
         }
         let albedo_cs = ctx.shaders.compile("analytic/albedo.comp", &adefines)?;
+        let bin_pipeline = |name: &str, plan: bool| -> Result<Pipeline> {
+            let mut d = adefines.clone();
+            if plan {
+                d.push(("BIN_PLAN".into(), "1".into()));
+            }
+            let cs = ctx.shaders.compile("analytic/albedo_bin.comp", &d)?;
+            Pipeline::compute(
+                gpu,
+                &ComputeDesc {
+                    name,
+                    shader: &cs,
+                    set_layouts: &[&albedo_layout],
+                    push_constant_bytes: 0,
+                },
+            )
+        };
+        let bin_plan = bin_pipeline("analytic.albedo_plan", true)?;
+        let bin_scatter = bin_pipeline("analytic.albedo_scatter", false)?;
         let albedo_pass = Pipeline::compute(
             gpu,
             &ComputeDesc {
@@ -762,6 +813,16 @@ impl Analytic {
             storage | vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::INDIRECT_BUFFER,
         )?;
         let albedo_count_rb = Readback::for_buffer(gpu, "readback.analytic.albedo_count", 4, 1, 1)?;
+        let albedo_bins = buffer(
+            "analytic.albedo_bins",
+            MAX_MATERIALS as u64 * ALBEDO_BIN_BYTES,
+            storage | vk::BufferUsageFlags::INDIRECT_BUFFER,
+        )?;
+        let albedo_order = buffer(
+            "analytic.albedo_order",
+            start_job_capacity(px, max_range) * ALBEDO_ORDER_BYTES,
+            storage,
+        )?;
         // Native's colour target is not drawn (the resolve writes the colour).
         let FrameTargets {
             velocity,
@@ -815,6 +876,7 @@ impl Analytic {
                 &cells_hi,
                 &albedo_jobs,
                 &albedo_count,
+                &albedo_bins,
             ]),
         )?;
         let albedo_set = DescriptorSet::new(
@@ -828,6 +890,8 @@ impl Analytic {
                 &cells,
                 &cells_hi,
                 &tail_records,
+                &albedo_bins,
+                &albedo_order,
             ]),
         )?;
         let tail_set = DescriptorSet::new(
@@ -889,6 +953,10 @@ impl Analytic {
             albedo_jobs,
             albedo_count,
             albedo_count_rb,
+            bin_plan,
+            bin_scatter,
+            albedo_bins,
+            albedo_order,
             resolve,
             resolve_set,
             keys,
@@ -937,6 +1005,7 @@ impl Analytic {
             // No records yet; the tail pass's dispatch: rows of TAIL_ROW_GROUPS groups, none.
             cmd.update_buffer(&self.tail_count, &[0, TAIL_ROW_GROUPS, 0, 1]);
             cmd.update_buffer(&self.albedo_count, &[0, TAIL_ROW_GROUPS, 0, 1]);
+            cmd.fill_buffer(&self.albedo_bins, 0);
             profiler.end(cmd, scope);
             cmd.use_buffer(counter, Access::FragmentStorageWrite);
             // The select pass writes no attachment (its fragments all discard); the second pass
@@ -945,11 +1014,26 @@ impl Analytic {
             self.record_raster(cmd, profiler, scene, &self.raster, true);
 
             // The albedo pass: the textured fragments' lookups, one invocation per job, once per
-            // material (each dispatch writes other slots and records than the one before, but
-            // the same buffers: a barrier between them).
+            // material over that material's jobs (ordered by material first: the plan's offsets
+            // and dispatches, then the scatter). Each dispatch writes other slots and records
+            // than the one before, but the same buffers: a barrier between them.
+            let scope = profiler.begin(cmd, "analytic.albedo", PassKind::Compute);
+            cmd.use_buffer(&self.albedo_bins, Access::ComputeStorageReadWrite);
+            cmd.bind_pipeline(&self.bin_plan);
+            cmd.bind_set(&self.bin_plan, 0, &self.albedo_set);
+            cmd.dispatch(1, 1, 1);
             cmd.use_buffer(&self.albedo_jobs, Access::ComputeSampled);
             cmd.use_buffer(&self.albedo_count, Access::ComputeIndirect);
-            let scope = profiler.begin(cmd, "analytic.albedo", PassKind::Compute);
+            cmd.use_buffer(&self.albedo_bins, Access::ComputeStorageReadWrite);
+            cmd.use_buffer(&self.albedo_order, Access::ComputeStorageWrite);
+            cmd.bind_pipeline(&self.bin_scatter);
+            cmd.bind_set(&self.bin_scatter, 0, &self.albedo_set);
+            cmd.dispatch_indirect(&self.albedo_count, 4);
+            // The bins are read both as the dispatches' parameters and by the shader: one barrier
+            // for both kinds of read.
+            cmd.full_barrier();
+            cmd.use_buffer(&self.albedo_order, Access::ComputeSampled);
+            cmd.use_buffer(&self.albedo_bins, Access::ComputeSampled);
             cmd.bind_pipeline(&self.albedo_pass);
             cmd.bind_set(&self.albedo_pass, 0, &self.albedo_set);
             cmd.bind_set(&self.albedo_pass, 1, &self.scene_set);
@@ -964,7 +1048,7 @@ impl Analytic {
                 }
                 cmd.bind_set(&self.albedo_pass, 2, &self.material_sets[m as usize]);
                 cmd.push_constants(&self.albedo_pass, &m.to_le_bytes());
-                cmd.dispatch_indirect(&self.albedo_count, 4);
+                cmd.dispatch_indirect(&self.albedo_bins, u64::from(m) * ALBEDO_BIN_BYTES + 16);
             }
             profiler.end(cmd, scope);
 
@@ -1036,6 +1120,14 @@ impl Analytic {
         })
     }
 
+    /// Albedo jobs the last submitted frame asked for (some beyond the capacity when it exceeds
+    /// it).
+    fn recorded_jobs(&self) -> Result<u64> {
+        Ok(u64::from(
+            bytemuck::cast_slice::<u8, u32>(self.albedo_count_rb.bytes()?)[0],
+        ))
+    }
+
     /// Tail records the buffer holds.
     fn tail_capacity(&self) -> u64 {
         self.tail_records.size() / tail_record_bytes(self.c.samples)
@@ -1101,6 +1193,23 @@ impl Analytic {
             usage,
             Location::GpuOnly,
         )?;
+        self.albedo_order = Buffer::new(
+            gpu,
+            "analytic.albedo_order",
+            capacity * ALBEDO_ORDER_BYTES,
+            usage,
+            Location::GpuOnly,
+        )?;
+        let order = ALBEDO_BINDINGS
+            .iter()
+            .find(|b| b.name == "albedo_order")
+            .map(|b| b.binding)
+            .expect("the albedo set binds the order");
+        self.albedo_set.update(
+            gpu,
+            &self.albedo_layout,
+            &[Write::Buffer(order, &self.albedo_order)],
+        )?;
         for (set, layout, bindings) in [
             (&self.raster_set, &self.raster_layout, &RASTER_BINDINGS[..]),
             (&self.albedo_set, &self.albedo_layout, &ALBEDO_BINDINGS[..]),
@@ -1139,6 +1248,9 @@ impl Analytic {
             &self.cells,
             &self.cells_hi,
             &self.slot_masks,
+            &self.albedo_jobs,
+            &self.albedo_count,
+            &self.albedo_bins,
         ] {
             cmd.use_buffer(buf, Access::FragmentStorageWrite);
         }
@@ -1199,7 +1311,7 @@ impl Technique for Analytic {
         loop {
             self.submit_frame(ctx, world_from_clip)?;
             let recorded = self.recorded_tails()?;
-            let jobs = u64::from(bytemuck::cast_slice::<u8, u32>(self.albedo_count_rb.bytes()?)[0]);
+            let jobs = self.recorded_jobs()?;
             let jobs_held = self.albedo_jobs.size() / ALBEDO_JOB_BYTES;
             if recorded <= self.tail_capacity() && jobs <= jobs_held {
                 return Ok(());
@@ -1262,6 +1374,7 @@ impl Technique for Analytic {
                 .collect(),
             kept_per_pixel: self.frags,
             tail_fragments: self.recorded_tails()?,
+            albedo_jobs: self.recorded_jobs()?,
         });
         Ok(out)
     }
