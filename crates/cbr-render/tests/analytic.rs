@@ -12,8 +12,8 @@ use cbr_gpu::{
 };
 use cbr_render::techniques::analytic::reference::{self, Poly, Surface};
 use cbr_render::techniques::analytic::{
-    ALBEDO_JOBS_PER_PIXEL_START, DEFAULT_SAMPLES, grown_job_capacity, grown_tail_capacity,
-    occluder_group, parse, plan_lists,
+    ALBEDO_JOBS_PER_PIXEL_START, DEFAULT_SAMPLES, MAX_MATERIALS, grown_job_capacity,
+    grown_tail_capacity, occluder_group, parse, plan_lists,
 };
 use cbr_render::{FrameOutput, RenderSettings, Renderer, Spec};
 use cbr_scene::{
@@ -2422,6 +2422,29 @@ fn textured_fragments_are_filtered_by_the_albedo_pass_and_its_job_buffer_grows()
     let err = grown_job_capacity(2_097_153, range).unwrap_err();
     assert!(
         err.contains("2097153 textured fragments") && err.contains("maxStorageBufferRange"),
+        "{err}"
+    );
+    assert_clean(&gpu);
+}
+
+#[test]
+fn a_scene_of_more_materials_than_the_albedo_pass_orders_is_refused() {
+    // The albedo pass orders its jobs by material in MAX_MATERIALS bins (a fixed 128 KiB, which
+    // the memory estimate counts without the scene): one more material is a clear refusal.
+    let gpu = gpu();
+    let tri = quad_mesh("one", 1.0, 0.0, 0);
+    let materials = (0..=MAX_MATERIALS)
+        .map(|i| emissive(&format!("m{i}"), [1.0; 3]))
+        .collect();
+    let s = scene(vec![tri], materials, [0.0; 3]);
+    let shaders = cbr_render::shader_library();
+    let settings = RenderSettings::new(W, H, Spec::parse("analytic").unwrap());
+    let err = match Renderer::new(&gpu, &shaders, &s, settings) {
+        Ok(_) => panic!("{} materials were not refused", MAX_MATERIALS + 1),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        err.contains(&format!("at most {MAX_MATERIALS}")) && err.contains("this scene has 4097"),
         "{err}"
     );
     assert_clean(&gpu);
