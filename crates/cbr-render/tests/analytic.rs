@@ -2414,6 +2414,25 @@ fn textured_fragments_are_filtered_by_the_albedo_pass_and_its_job_buffer_grows()
         worst < 2e-3,
         "textured off untextured by {worst} (relative)"
     );
+    // With K = 1 most fragments go to the tails: their jobs write the tail records' albedo.
+    let (t1, p1) = (
+        render(&gpu, &s, "analytic:frags=1"),
+        render(&gpu, &p, "analytic:frags=1"),
+    );
+    let tails = t1.analytic.as_ref().unwrap().tail_fragments;
+    assert!(tails > u64::from(W * H), "{tails} tail fragments");
+    let mut worst = 0.0f64;
+    for i in 0..(W * H) as usize {
+        let (a, b) = (rgb(&t1, i), rgb(&p1, i));
+        for k in 0..3 {
+            worst = worst.max((a[k] - b[k]).abs() / b[k].abs().max(0.05));
+        }
+    }
+    println!("K = 1 ({tails} tail fragments): worst {worst:.2e} relative");
+    assert!(
+        worst < 2e-3,
+        "textured tails off untextured by {worst} (relative)"
+    );
     // The growth: the count and a quarter more, at most one storage buffer (lavapipe's 128 MiB
     // holds 2,097,152 jobs of 64 bytes); beyond that the frame is refused with its count.
     let range = 134_217_728;
