@@ -442,6 +442,19 @@ fn rgb(out: &FrameOutput, i: usize) -> [f64; 3] {
     [0, 1, 2].map(|c| f64::from(out.color[i * 4 + c].to_f32()))
 }
 
+/// The largest difference of `a`'s colour from `b`'s over the frame, relative to `b`'s (at least
+/// 0.05 in the denominator).
+fn worst_relative(a: &FrameOutput, b: &FrameOutput) -> f64 {
+    let mut worst = 0.0f64;
+    for i in 0..(W * H) as usize {
+        let (x, y) = (rgb(a, i), rgb(b, i));
+        for k in 0..3 {
+            worst = worst.max((x[k] - y[k]).abs() / y[k].abs().max(0.05));
+        }
+    }
+    worst
+}
+
 fn coverage_of(out: &FrameOutput) -> &[f32] {
     &out.coverage.as_ref().expect("coverage layer").fraction
 }
@@ -2402,13 +2415,7 @@ fn textured_fragments_are_filtered_by_the_albedo_pass_and_its_job_buffer_grows()
         "the grown frame differs from the same frame again"
     );
     let untextured = render(&gpu, &p, "analytic:frags=16");
-    let mut worst = 0.0f64;
-    for i in 0..(W * H) as usize {
-        let (a, b) = (rgb(&first, i), rgb(&untextured, i));
-        for k in 0..3 {
-            worst = worst.max((a[k] - b[k]).abs() / b[k].abs().max(0.05));
-        }
-    }
+    let worst = worst_relative(&first, &untextured);
     println!("textured with one colour against that colour as kd: worst {worst:.2e} relative");
     assert!(
         worst < 2e-3,
@@ -2421,13 +2428,7 @@ fn textured_fragments_are_filtered_by_the_albedo_pass_and_its_job_buffer_grows()
     );
     let tails = t1.analytic.as_ref().unwrap().tail_fragments;
     assert!(tails > u64::from(W * H), "{tails} tail fragments");
-    let mut worst = 0.0f64;
-    for i in 0..(W * H) as usize {
-        let (a, b) = (rgb(&t1, i), rgb(&p1, i));
-        for k in 0..3 {
-            worst = worst.max((a[k] - b[k]).abs() / b[k].abs().max(0.05));
-        }
-    }
+    let worst = worst_relative(&t1, &p1);
     println!("K = 1 ({tails} tail fragments): worst {worst:.2e} relative");
     assert!(
         worst < 2e-3,
