@@ -386,7 +386,6 @@ void main() {
             job_fx = fx;
             job_fy = fy;
             job_info = cov.area >= BOX_MIN_AREA ? JOB_BOXED : 0u;
-#ifndef SELECT_PASS
             // Each cell's own footprint (a quarter of the pixel's, centred in it: surface.glsl's
             // grid; anisotropic, at most CELL_ANISO lookups), for the part of the fragment that
             // shows when other fragments hide the rest (resolve.comp). Needed only where some
@@ -413,7 +412,6 @@ void main() {
             // The cells' lookups (the albedo pass): each a quarter of the pixel's footprint
             // centred in the cell, at most CELL_ANISO taps.
             job_info |= cells;
-#endif
         }
 #endif
     }

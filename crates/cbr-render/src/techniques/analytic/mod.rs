@@ -162,6 +162,21 @@ fn occluder_bytes(px: u64, max_range: u32, samples: u32) -> u64 {
     px * occluder_pixel_bytes(occluder_group(px, max_range, samples), samples)
 }
 
+/// The binding number of `name` in `bindings` (a set's list: RASTER_BINDINGS, ...).
+fn binding_of(bindings: &[BindingDesc], name: &str) -> u32 {
+    bindings
+        .iter()
+        .find(|b| b.name == name)
+        .map(|b| b.binding)
+        .unwrap_or_else(|| panic!("no binding `{name}`"))
+}
+
+/// The count a compute pass left in the first word of a buffer, read back (`tail_count`,
+/// `albedo_count`; some past its buffer's capacity when the frame needed more).
+fn count_read(rb: &Readback) -> Result<u64> {
+    Ok(u64::from(bytemuck::cast_slice::<u8, u32>(rb.bytes()?)[0]))
+}
+
 /// Writes binding i of a set of storage buffers with `buffers[i]` (RASTER_BINDINGS and
 /// TAIL_BINDINGS list their buffers in binding order).
 fn buffer_writes<'a>(buffers: &[&'a Buffer]) -> Vec<Write<'a>> {
@@ -1123,9 +1138,7 @@ impl Analytic {
     /// Albedo jobs the last submitted frame asked for (some beyond the capacity when it exceeds
     /// it).
     fn recorded_jobs(&self) -> Result<u64> {
-        Ok(u64::from(
-            bytemuck::cast_slice::<u8, u32>(self.albedo_count_rb.bytes()?)[0],
-        ))
+        count_read(&self.albedo_count_rb)
     }
 
     /// Tail records the buffer holds.
@@ -1136,9 +1149,7 @@ impl Analytic {
     /// Fragments the last submitted frame recorded for the tails (some beyond the capacity
     /// when it exceeds it).
     fn recorded_tails(&self) -> Result<u64> {
-        Ok(u64::from(
-            bytemuck::cast_slice::<u8, u32>(self.tail_count_rb.bytes()?)[0],
-        ))
+        count_read(&self.tail_count_rb)
     }
 
     /// Replaces the tail-record buffer by one holding `needed` records and a quarter more (at most
@@ -1166,11 +1177,7 @@ impl Analytic {
             (&self.tail_set, &self.tail_layout, &TAIL_BINDINGS[..]),
             (&self.albedo_set, &self.albedo_layout, &ALBEDO_BINDINGS[..]),
         ] {
-            let binding = bindings
-                .iter()
-                .find(|b| b.name == "tail_records")
-                .map(|b| b.binding)
-                .expect("the three sets bind the tail records");
+            let binding = binding_of(bindings, "tail_records");
             set.update(gpu, layout, &[Write::Buffer(binding, &self.tail_records)])?;
         }
         Ok(())
@@ -1200,27 +1207,28 @@ impl Analytic {
             usage,
             Location::GpuOnly,
         )?;
-        let order = ALBEDO_BINDINGS
-            .iter()
-            .find(|b| b.name == "albedo_order")
-            .map(|b| b.binding)
-            .expect("the albedo set binds the order");
+        self.raster_set.update(
+            gpu,
+            &self.raster_layout,
+            &[Write::Buffer(
+                binding_of(&RASTER_BINDINGS, "albedo_jobs"),
+                &self.albedo_jobs,
+            )],
+        )?;
         self.albedo_set.update(
             gpu,
             &self.albedo_layout,
-            &[Write::Buffer(order, &self.albedo_order)],
+            &[
+                Write::Buffer(
+                    binding_of(&ALBEDO_BINDINGS, "albedo_jobs"),
+                    &self.albedo_jobs,
+                ),
+                Write::Buffer(
+                    binding_of(&ALBEDO_BINDINGS, "albedo_order"),
+                    &self.albedo_order,
+                ),
+            ],
         )?;
-        for (set, layout, bindings) in [
-            (&self.raster_set, &self.raster_layout, &RASTER_BINDINGS[..]),
-            (&self.albedo_set, &self.albedo_layout, &ALBEDO_BINDINGS[..]),
-        ] {
-            let binding = bindings
-                .iter()
-                .find(|b| b.name == "albedo_jobs")
-                .map(|b| b.binding)
-                .expect("both sets bind the albedo jobs");
-            set.update(gpu, layout, &[Write::Buffer(binding, &self.albedo_jobs)])?;
-        }
         Ok(())
     }
 
