@@ -52,17 +52,19 @@ bench: setup
 # analytic coverage AA (its default mask of 64 samples, and 32 and 128; `aniso`: the single anisotropic texture filter in place of the box), its seed shortcut and the
 # sample-based techniques against the 1024-sample ground truth (ssaa:32: ~3 min a frame of the
 # demo at 320x180 on lavapipe, cached in out/cache); ssaa:16 is rendered and timed in the same run
-# (--time-cached-rows). The demo and the demo without textures (geometric aliasing alone), frames
+# (--time-cached-rows), and so is a supersampling ladder (ssaa:6 ... ssaa:12) on which each row's
+# edge error is placed (bench.json's equal_error_ssaa: the ssaa:N of equal error and its frame
+# time). The demo and the demo without textures (geometric aliasing alone), frames
 # 1-2; Sibenik and Sibenik without textures, frame 0 (each ssaa:32 frame about 2.5 min), all at
 # 320x180; then Sibenik's frame times alone, warm (one warm-up frame, two measured), at 160x90 and
 # 320x180.
 bench-analytic: setup
     for s in builtin:demo scenes/demo-untextured.toml; do \
         n=$(basename "$s" .toml | sed 's/builtin://'); \
-        CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench "$s" --width 320 --height 180 --warmup 1 --frames 2 --reference ssaa:32 --time-cached-rows --techniques native,msaa:4,ssaa:16,analytic,analytic:samples=32,analytic:samples=128,analytic:aniso,analytic:seed -o {{out}}/bench/analytic/$n || exit 1; \
+        CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench "$s" --width 320 --height 180 --warmup 1 --frames 2 --reference ssaa:32 --time-cached-rows --techniques native,msaa:4,ssaa:6,ssaa:8,ssaa:10,ssaa:12,ssaa:16,analytic,analytic:samples=32,analytic:samples=128,analytic:aniso,analytic:seed -o {{out}}/bench/analytic/$n || exit 1; \
     done
     for s in sibenik sibenik-untextured; do \
-        CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench scenes/$s.toml --width 320 --height 180 --warmup 0 --frames 1 --reference ssaa:32 --time-cached-rows --techniques native,msaa:4,ssaa:16,analytic,analytic:samples=32,analytic:samples=128,analytic:aniso,analytic:seed -o {{out}}/bench/analytic/$s || exit 1; \
+        CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench scenes/$s.toml --width 320 --height 180 --warmup 0 --frames 1 --reference ssaa:32 --time-cached-rows --techniques native,msaa:4,ssaa:6,ssaa:8,ssaa:10,ssaa:12,ssaa:16,analytic,analytic:samples=32,analytic:samples=128,analytic:aniso,analytic:seed -o {{out}}/bench/analytic/$s || exit 1; \
     done
     for r in 160x90 320x180; do \
         CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench scenes/sibenik.toml --width ${r%x*} --height ${r#*x} --warmup 1 --frames 2 --time-cached-rows --techniques native,ssaa:16,analytic,analytic:samples=32,analytic:samples=128,analytic:aniso -o {{out}}/bench/analytic/sibenik-time-$r || exit 1; \

@@ -13,6 +13,7 @@
 pub mod analytic_attribution;
 pub mod attribution;
 pub mod config;
+pub mod equal_error;
 pub mod measure;
 pub mod output;
 pub mod stats;
@@ -460,6 +461,8 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
     for (r, f) in rows.iter_mut().zip(&on_front) {
         r["pareto"] = json!(f);
     }
+    // Each row's error placed on the run's own supersampling ladder (its ssaa:N rows), if any.
+    equal_error::annotate(&mut rows);
     let messages = gpu.validation().messages();
     // The protocol's error entries, or what a timing-only run says instead.
     let measured = |text: &str| if a.timing_only { NOT_MEASURED } else { text }.to_string();
