@@ -36,7 +36,7 @@ struct Col {
     tip: &'static str,
 }
 
-const COLS: [Col; 14] = [
+const COLS: [Col; 16] = [
     Col {
         key: "frame_ms",
         title: "GPU ms (median)",
@@ -116,6 +116,26 @@ const COLS: [Col; 14] = [
         higher: Some(false),
         optional: true,
         tip: "FLIP mean over the reference's edge pixels: more than one object ID among its samples",
+    },
+    Col {
+        key: "equal_ssaa",
+        title: "ssaa N of equal edge FLIP",
+        get: |r| num(&r["equal_error_ssaa"]["flip_edge"]["n"]),
+        digits: 1,
+        error: true,
+        higher: Some(true),
+        optional: true,
+        tip: "the supersampling (N x N samples a pixel) whose edge FLIP equals this row's, interpolated on the run's own ssaa:N rows (bench.json equal_error_ssaa); blank where the row is better than the finest rung or worse than the coarsest",
+    },
+    Col {
+        key: "equal_ssaa_speedup",
+        title: "x faster than that ssaa",
+        get: |r| num(&r["equal_error_ssaa"]["flip_edge"]["speedup"]),
+        digits: 1,
+        error: false,
+        higher: Some(true),
+        optional: true,
+        tip: "the frame time of the supersampling of equal edge FLIP (interpolated between the rungs, same run) over this row's",
     },
     Col {
         key: "flip_interior",

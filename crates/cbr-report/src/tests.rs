@@ -555,3 +555,42 @@ fn attribution_panel_appears_with_its_shares() {
         "no disoccluded cell"
     );
 }
+
+#[test]
+fn rows_placed_on_a_supersampling_ladder_show_its_n_and_the_speedup() {
+    let mut json = fixture_json(true, "ssaa:32");
+    // The checkerboard row at 8x6 placed between two rungs; native there worse than the ladder.
+    let rows = json["rows"].as_array_mut().unwrap();
+    rows[1]["equal_error_ssaa"] = serde_json::json!({
+        "flip_edge": {"n": 9.76, "samples_per_pixel": 95.3, "between": [8.0, 10.0],
+                      "frame_ms": 3000.0, "speedup": 9.04},
+        "ladder": [8.0, 10.0],
+    });
+    rows[0]["equal_error_ssaa"] = serde_json::json!({"flip_edge": {"worse_than": 8.0}});
+    let html = report(&[("a", json)]);
+    let table = &summary_headers(&html)[0];
+    let header = |key: &str| &table.iter().find(|(k, _)| k == key).unwrap().1;
+    assert!(header("equal_ssaa").ends_with("vs ssaa:32</span>"));
+    assert!(!header("equal_ssaa_speedup").contains("vs "));
+    let rows = summary_rows(&html, 0);
+    assert_eq!(
+        cell(&rows, "checkerboard:rotated:ours@8x6", "equal_ssaa"),
+        "9.8"
+    );
+    assert_eq!(
+        cell(&rows, "checkerboard:rotated:ours@8x6", "equal_ssaa_speedup"),
+        "9.0"
+    );
+    assert_eq!(cell(&rows, "native@8x6", "equal_ssaa"), "–");
+    assert_eq!(
+        cell(&rows, "upscale:bilinear@16x12", "equal_ssaa_speedup"),
+        "–"
+    );
+    // Without any placed row the columns are not shown.
+    let html = report(&[("a", fixture_json(true, "ssaa:32"))]);
+    assert!(
+        summary_headers(&html)[0]
+            .iter()
+            .all(|(k, _)| !k.starts_with("equal_ssaa"))
+    );
+}
