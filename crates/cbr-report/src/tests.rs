@@ -573,19 +573,14 @@ fn rows_placed_on_a_supersampling_ladder_show_its_n_and_the_speedup() {
     assert!(header("equal_ssaa").ends_with("vs ssaa:32</span>"));
     assert!(!header("equal_ssaa_speedup").contains("vs "));
     let rows = summary_rows(&html, 0);
-    assert_eq!(
-        cell(&rows, "checkerboard:rotated:ours@8x6", "equal_ssaa"),
-        "9.8"
-    );
-    assert_eq!(
-        cell(&rows, "checkerboard:rotated:ours@8x6", "equal_ssaa_speedup"),
-        "9.0"
-    );
-    assert_eq!(cell(&rows, "native@8x6", "equal_ssaa"), "–");
-    assert_eq!(
-        cell(&rows, "upscale:bilinear@16x12", "equal_ssaa_speedup"),
-        "–"
-    );
+    for (row, key, text) in [
+        ("checkerboard:rotated:ours@8x6", "equal_ssaa", "9.8"),
+        ("checkerboard:rotated:ours@8x6", "equal_ssaa_speedup", "9.0"),
+        ("native@8x6", "equal_ssaa", "–"),
+        ("upscale:bilinear@16x12", "equal_ssaa_speedup", "–"),
+    ] {
+        assert_eq!(cell(&rows, row, key), text, "{row} {key}");
+    }
     // Without any placed row the columns are not shown.
     let html = report(&[("a", fixture_json(true, "ssaa:32"))]);
     assert!(
