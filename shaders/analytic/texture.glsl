@@ -13,14 +13,24 @@
 #define MAX_ANISO 16
 // The albedo grid's cells (below): at most this many lookups each.
 #define CELL_ANISO 4
-vec4 texture_aniso_n(sampler2D t, vec2 uv, vec2 gx, vec2 gy, int max_taps) {
+// The footprint's sides gx, gy in texels of level 0.
+vec2 footprint_texels(sampler2D t, vec2 gx, vec2 gy) {
     vec2 size = vec2(textureSize(t, 0));
-    float lx = length(gx * size);
-    float ly = length(gy * size);
-    vec2 major = lx >= ly ? gx : gy;
-    vec2 minor = lx >= ly ? gy : gx;
-    float ratio = max(lx, ly) / max(min(lx, ly), 1e-6);
-    int n = isnan(ratio) ? 1 : int(clamp(ceil(ratio), 1.0, float(max_taps)));
+    return vec2(length(gx * size), length(gy * size));
+}
+
+// Lookups along the longer side: one per unit of the footprint's aspect ratio, 1 to max_taps
+// (1 where the ratio is not a number).
+int aniso_taps(vec2 l, int max_taps) {
+    float ratio = max(l.x, l.y) / max(min(l.x, l.y), 1e-6);
+    return isnan(ratio) ? 1 : int(clamp(ceil(ratio), 1.0, float(max_taps)));
+}
+
+vec4 texture_aniso_n(sampler2D t, vec2 uv, vec2 gx, vec2 gy, int max_taps) {
+    vec2 l = footprint_texels(t, gx, gy);
+    vec2 major = l.x >= l.y ? gx : gy;
+    vec2 minor = l.x >= l.y ? gy : gx;
+    int n = aniso_taps(l, max_taps);
     if (n == 1) return textureGrad(t, uv, gx, gy);
     vec2 step_uv = major / float(n);
     vec4 sum = vec4(0.0);
@@ -48,9 +58,9 @@ vec4 texture_aniso(sampler2D t, vec2 uv, vec2 gx, vec2 gy) {
 #define BOX_MAX_TAPS 16
 #define BOX_MIN_AREA 0.25
 vec4 texture_box(sampler2D t, vec2 uv, vec2 gx, vec2 gy, bool boxed) {
-    vec2 size = vec2(textureSize(t, 0));
-    float lx = length(gx * size);
-    float ly = length(gy * size);
+    vec2 l = footprint_texels(t, gx, gy);
+    float lx = l.x;
+    float ly = l.y;
     // Lengths that are not finite take texture_aniso's own guard (min and max need not pass NaN).
     if (isnan(lx) || isnan(ly) || isinf(lx) || isinf(ly)) return texture_aniso(t, uv, gx, gy);
     float unit = max(min(lx, ly), 1.0);
@@ -65,8 +75,7 @@ vec4 texture_box(sampler2D t, vec2 uv, vec2 gx, vec2 gy, bool boxed) {
         // side, at most MAX_ANISO) through the same loop: a SIMD group holding fragments of both
         // kinds runs one loop, not both functions (Sibenik at 160x90: the raster pass 550-564
         // -> 528-548 ms).
-        float ratio = max(lx, ly) / max(min(lx, ly), 1e-6);
-        n_long = int(clamp(ceil(ratio), 1.0, float(MAX_ANISO)));
+        n_long = aniso_taps(l, MAX_ANISO);
         n_short = 1;
     }
     int nx = x_long ? n_long : n_short;
