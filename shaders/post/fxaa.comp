@@ -5,16 +5,14 @@
 // clamp-to-edge addressing, so the CPU reference (crates/cbr-render/src/post/fxaa.rs) matches it
 // within float rounding; the steps below follow it one for one.
 // Display luma comes from the first pass (fxaa_luma.comp), read once per tap.
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 
 layout(set = 0, binding = BINDING_SRC) uniform sampler2D src;
-layout(set = 0, binding = BINDING_DST, rgba16f) uniform writeonly image2D dst;
-layout(set = 0, binding = BINDING_LUMA_IN) uniform sampler2D luma_in;
-layout(push_constant) uniform Push {
-    ivec4 size_steps;  // W, H, number of steps, 0
-    vec4 params;       // edge threshold, minimum edge threshold, sub-pixel quality, 2^exposure
-    float steps[MAX_STEPS];
-} pc;
+layout(set = 0, binding = BINDING_OUT, rgba16f) uniform writeonly image2D dst;
+layout(set = 0, binding = BINDING_LUMA) uniform sampler2D luma_in;
+// size_steps: W, H, number of steps, 0; params: edge threshold, minimum edge threshold,
+// sub-pixel quality, 2^exposure; steps[MAX_STEPS]
+PUSH_CONSTANTS
 
 vec4 texel(ivec2 p) {
     return texelFetch(src, clamp(p, ivec2(0), pc.size_steps.xy - 1), 0);

@@ -1,11 +1,11 @@
 #version 460
 // `+sharpen`: out = max(c + a (4 c - n - s - e - w), 0) per channel, edges clamped, alpha 1.
 // CPU reference: crates/cbr-render/src/post/sharpen.rs.
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 
 layout(set = 0, binding = BINDING_SRC) uniform sampler2D src;
-layout(set = 0, binding = BINDING_DST, rgba16f) uniform writeonly image2D dst;
-layout(push_constant) uniform Push { vec4 size_amount; } pc;  // W, H, amount, 0
+layout(set = 0, binding = BINDING_OUT, rgba16f) uniform writeonly image2D dst;
+PUSH_CONSTANTS  // size_amount: W, H, amount, 0
 
 vec3 at(ivec2 p) {
     ivec2 size = ivec2(pc.size_amount.xy);

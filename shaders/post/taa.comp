@@ -13,7 +13,7 @@
 //
 // Colours are compared in "perceptual" space: exposure-scaled, Reinhard-tonemapped on luminance,
 // YCoCg. History and output are linear HDR. A non-finite current sample never enters the history.
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 
 layout(set = 0, binding = BINDING_CUR) uniform sampler2D cur;
 layout(set = 0, binding = BINDING_VELOCITY) uniform sampler2D velocity;
@@ -26,26 +26,16 @@ layout(set = 0, binding = BINDING_HIST_GEOM) uniform usampler2D hist_geom;
 layout(set = 0, binding = BINDING_OUT_HIST, rgba16f) uniform writeonly image2D out_hist;
 layout(set = 0, binding = BINDING_OUT_GEOM, rg32ui) uniform writeonly uimage2D out_geom;
 
-#define F_RESET 1u
-#define F_DILATION 2u
-#define F_CLIP 4u
-#define F_IDS 8u
-#define F_DEPTH 16u
-#define F_CATMULL 32u
-#define F_MEAN 64u
-#define F_FILTER 128u  // reconstruct the current sample at the pixel centre (Karis' filter)
-// History geometry: x = object ID | MOVED where the pixel moved more than the still threshold.
-#define MOVED 0x80000000u
-#define ID_MASK 0x7fffffffu  // blend weight 1 / (n + 1): the running mean (known-answer tests)
+// F_RESET, F_DILATION, F_CLIP, F_IDS, F_DEPTH, F_CATMULL, F_MEAN (blend weight 1 / (n + 1): the
+// running mean), F_FILTER (reconstruct the current sample at the pixel centre, Karis' filter):
+// the flag bits, and MOVED / ID_MASK (history geometry: x = object ID | MOVED where the pixel
+// moved more than the still threshold), are defines from crates/cbr-render/src/post/taa.rs.
 
-layout(push_constant) uniform Push {
-    ivec4 size;    // W, H (of the output and the geometry), 0, 0
-    uvec4 flags;   // x: F_*, y: n (frames accumulated since the reset)
-    vec4 params;   // alpha (current-frame weight), gamma, depth tolerance, exposure scale
-    vec4 feedback_still;  // INSIDE feedback min, max; still threshold (pixels); 0
-    vec4 speed_jitter;    // x: current-frame weight at and above speed y (pixels per frame); 0: off;
-                   // zw: the frame's jitter (pixels)
-} pc;
+// size: W, H (of the output and the geometry), 0, 0; flags: x: F_*, y: n (frames accumulated
+// since the reset); params: alpha (current-frame weight), gamma, depth tolerance, exposure
+// scale; feedback_still: INSIDE feedback min, max, still threshold (pixels), 0; speed_jitter:
+// x: current-frame weight at and above speed y (pixels per frame; 0: off), zw: the jitter.
+PUSH_CONSTANTS
 
 bool has(uint f) { return (pc.flags.x & f) != 0u; }
 

@@ -3,18 +3,16 @@
 // fp32 accumulation (MODE_ACCUMULATE), or divides the sum by the sample count into the RGBA16F
 // output (MODE_RESOLVE). Coverage: aux.x = the first sample's object ID; aux.y = samples on
 // geometry, bit 31 set once a sample shows another object ID than the first (an edge pixel).
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 
 layout(set = 0, binding = BINDING_COLOR) uniform sampler2D color;
 layout(set = 0, binding = BINDING_IDS) uniform usampler2D ids;
 layout(set = 0, binding = BINDING_ACCUM, rgba32f) uniform image2D accum;
 layout(set = 0, binding = BINDING_AUX, rg32ui) uniform uimage2D aux;
 layout(set = 0, binding = BINDING_OUT, rgba16f) uniform writeonly image2D outc;
-// x, y: size; z: the sample's index (0 starts the sum); w: 0 accumulate, 1 resolve.
-// samples.x: the number of samples.
-layout(push_constant) uniform Push { ivec4 size_sample_mode; vec4 samples; } pc;
-
-const uint EDGE = 0x80000000u;
+// size_sample_mode: x, y: size; z: the sample's index (0 starts the sum); w: 0 accumulate,
+// 1 resolve. samples.x: the number of samples. EDGE: a define from crates/cbr-render/src/techniques/ssaa.rs.
+PUSH_CONSTANTS
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);

@@ -16,6 +16,8 @@ pub enum Access {
     ComputeSampled,
     ComputeStorageWrite,
     ComputeStorageReadWrite,
+    /// Storage image or buffer read (not written) in a compute shader.
+    ComputeStorageRead,
     TransferSrc,
     TransferDst,
     /// Read by the host after the submission completes (buffers).
@@ -38,7 +40,8 @@ impl Access {
             Access::FragmentSampled => S::FRAGMENT_SHADER,
             Access::ComputeSampled
             | Access::ComputeStorageWrite
-            | Access::ComputeStorageReadWrite => S::COMPUTE_SHADER,
+            | Access::ComputeStorageReadWrite
+            | Access::ComputeStorageRead => S::COMPUTE_SHADER,
             Access::TransferSrc | Access::TransferDst => S::COPY | S::BLIT | S::CLEAR,
             Access::HostRead => S::HOST,
             Access::GraphicsRead => {
@@ -62,6 +65,7 @@ impl Access {
             }
             Access::ComputeStorageWrite => A::SHADER_STORAGE_WRITE,
             Access::ComputeStorageReadWrite => A::SHADER_STORAGE_WRITE | A::SHADER_STORAGE_READ,
+            Access::ComputeStorageRead => A::SHADER_STORAGE_READ,
             Access::TransferSrc => A::TRANSFER_READ,
             Access::TransferDst => A::TRANSFER_WRITE,
             Access::HostRead => A::HOST_READ,
@@ -86,7 +90,9 @@ impl Access {
             Access::DepthAttachmentWrite => L::DEPTH_ATTACHMENT_OPTIMAL,
             Access::FragmentSampled | Access::ComputeSampled if depth => L::DEPTH_READ_ONLY_OPTIMAL,
             Access::FragmentSampled | Access::ComputeSampled => L::SHADER_READ_ONLY_OPTIMAL,
-            Access::ComputeStorageWrite | Access::ComputeStorageReadWrite => L::GENERAL,
+            Access::ComputeStorageWrite
+            | Access::ComputeStorageReadWrite
+            | Access::ComputeStorageRead => L::GENERAL,
             Access::TransferSrc => L::TRANSFER_SRC_OPTIMAL,
             Access::TransferDst => L::TRANSFER_DST_OPTIMAL,
             Access::HostRead

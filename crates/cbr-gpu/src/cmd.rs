@@ -11,6 +11,9 @@ use crate::resource::{Buffer, Image, Readback};
 pub struct Cmd {
     gpu: Gpu,
     pub(crate) cb: vk::CommandBuffer,
+    /// Descriptor sets made while recording (one per dispatch of a declared pass): kept until
+    /// the submission has completed, then handed to the deletion queue.
+    sets: Vec<DescriptorSet>,
 }
 
 /// One attachment of a rendering pass; `clear: None` loads the previous contents.
@@ -29,7 +32,16 @@ pub struct LevelCopy {
 
 impl Cmd {
     pub(crate) fn new(gpu: Gpu, cb: vk::CommandBuffer) -> Cmd {
-        Cmd { gpu, cb }
+        Cmd {
+            gpu,
+            cb,
+            sets: Vec::new(),
+        }
+    }
+
+    /// Keeps `set` alive until this command buffer's submission has completed.
+    pub fn keep(&mut self, set: DescriptorSet) {
+        self.sets.push(set);
     }
 
     pub fn gpu(&self) -> &Gpu {

@@ -720,6 +720,9 @@ impl Gpu {
         // SAFETY: execution finished (waited above) or never started.
         unsafe { dev.free_command_buffers(*pool, &[cb]) };
         drop(pool);
+        // The descriptor sets the recording made go to the deletion queue now that their
+        // submission has completed (or never started).
+        drop(cmd);
         self.inner.collect_garbage();
         result
     }

@@ -34,6 +34,14 @@ pub enum GpuError {
     Shader { file: String, message: String },
     #[error("shader source `{0}` not found")]
     ShaderNotFound(PathBuf),
+    /// A pass's declaration and what it was given disagree (a binding with nothing bound, one of
+    /// the wrong kind, push constants of another size): a programming error, reported when the
+    /// pass is built or recorded, never a panic.
+    #[error("pass `{pass}`: {message}")]
+    Declaration { pass: String, message: String },
+    /// A configuration the technique or post pass refuses: the spec and the parameter.
+    #[error("`{spec}`: {message}")]
+    Config { spec: String, message: String },
     #[error("{0}")]
     Other(String),
 }

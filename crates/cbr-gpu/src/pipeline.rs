@@ -163,13 +163,35 @@ impl DescriptorSet {
     /// Points the given bindings at new resources (the others keep theirs). The set must not be
     /// in use by a command buffer that has not completed.
     pub fn update(&self, gpu: &Gpu, layout: &SetLayout, writes: &[Write]) -> Result<()> {
-        let kind_of = |binding: u32| {
-            layout
+        // Each write's binding must exist and hold what the write gives: a buffer for a buffer
+        // binding, sampled images (no more than the binding's count) for a combined image
+        // sampler, one storage image for a storage image.
+        let check = |binding: u32, given: &str, n: u32| {
+            let b = layout
                 .bindings
                 .iter()
                 .find(|b| b.binding == binding)
-                .map(|b| b.kind)
-                .ok_or_else(|| GpuError::Other(format!("binding {binding} is not in the layout")))
+                .ok_or_else(|| {
+                    GpuError::Other(format!("binding {binding} is not in the layout"))
+                })?;
+            let fits = match b.kind {
+                DescriptorKind::UniformBuffer | DescriptorKind::StorageBuffer => given == "buffer",
+                DescriptorKind::CombinedImageSampler => given == "sampled image",
+                DescriptorKind::StorageImage => given == "storage image",
+            };
+            if !fits {
+                return Err(GpuError::Other(format!(
+                    "binding {binding} (`{}`) is a {:?}, given a {given}",
+                    b.name, b.kind
+                )));
+            }
+            if n == 0 || n > b.count {
+                return Err(GpuError::Other(format!(
+                    "binding {binding} (`{}`) holds {} descriptors, given {n}",
+                    b.name, b.count
+                )));
+            }
+            Ok(b.kind)
         };
         let mut buffer_infos = Vec::new();
         let mut image_infos = Vec::new();
@@ -178,7 +200,7 @@ impl DescriptorSet {
                 Write::Buffer(b, buf) => {
                     buffer_infos.push((
                         *b,
-                        kind_of(*b)?,
+                        check(*b, "buffer", 1)?,
                         [vk::DescriptorBufferInfo::default()
                             .buffer(buf.raw())
                             .range(vk::WHOLE_SIZE)],
@@ -199,7 +221,8 @@ impl DescriptorSet {
                                 .image_layout(layout)
                         })
                         .collect();
-                    image_infos.push((*b, kind_of(*b)?, infos));
+                    let kind = check(*b, "sampled image", infos.len() as u32)?;
+                    image_infos.push((*b, kind, infos));
                 }
                 Write::Storage(b, img) => {
                     let infos = vec![
@@ -207,7 +230,7 @@ impl DescriptorSet {
                             .image_view(img.view())
                             .image_layout(vk::ImageLayout::GENERAL),
                     ];
-                    image_infos.push((*b, kind_of(*b)?, infos));
+                    image_infos.push((*b, check(*b, "storage image", 1)?, infos));
                 }
             }
         }
@@ -230,7 +253,8 @@ impl DescriptorSet {
                     .image_info(info),
             );
         }
-        // SAFETY: every write targets a binding of this set's layout with the matching type.
+        // SAFETY: every write targets a binding of this set's layout with the matching type and
+        // no more descriptors than the binding holds (checked above).
         unsafe { gpu.device().update_descriptor_sets(&vk_writes, &[]) };
         Ok(())
     }

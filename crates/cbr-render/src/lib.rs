@@ -11,6 +11,7 @@ pub mod gpu_scene;
 pub mod gpu_types;
 pub mod layouts;
 pub mod memory;
+pub mod pass;
 pub mod post;
 pub mod renderer;
 pub mod resolve;

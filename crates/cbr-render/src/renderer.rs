@@ -278,20 +278,14 @@ impl Renderer {
                     ))
                 })?,
         };
+        if !post_regs.is_empty() && (0..2).any(|f| technique.color(f).is_none()) {
+            return Err(GpuError::Other(format!(
+                "`{spec}`: post passes need a full frame, and `{}` gives none",
+                spec.technique
+            )));
+        }
         let mut post: Vec<Box<dyn PostPass>> = Vec::new();
-        for (pr, part) in post_regs {
-            let inputs: Vec<&cbr_gpu::Image> = match post.last() {
-                Some(p) => vec![p.output(0), p.output(1)],
-                None => (0..2)
-                    .map(|f| technique.color(f))
-                    .collect::<Option<Vec<_>>>()
-                    .ok_or_else(|| {
-                        GpuError::Other(format!(
-                            "`{spec}`: post passes need a full frame, and `{}` gives none",
-                            spec.technique
-                        ))
-                    })?,
-            };
+        for (pr, part) in &post_regs {
             let pctx = PostBuildCtx {
                 gpu,
                 shaders,
@@ -300,21 +294,32 @@ impl Renderer {
                 exposure_stops: scene.settings.exposure,
                 geometry: &geometries,
             };
-            let p = (pr.build)(&pctx, &part.params(), &inputs)
-                .map_err(|e| GpuError::Other(format!("`+{part}`: {e}")))?;
+            let p = (pr.build)(&pctx, &part.params()).map_err(|e| match e {
+                e @ GpuError::Config { .. } => e,
+                e => GpuError::Other(format!("`+{part}`: {e}")),
+            })?;
             post.push(p);
         }
-        let jittering = post.iter().filter(|p| p.jitter(0).is_some()).count();
-        if jittering + usize::from(technique.jitters()) > 1 {
+        // At most one pass jitters the frame: name them.
+        let mut jittering: Vec<String> = post
+            .iter()
+            .zip(&post_regs)
+            .filter(|(p, _)| p.jitter(0).is_some())
+            .map(|(_, (_, part))| format!("`+{part}`"))
+            .collect();
+        if technique.jitters() {
+            jittering.insert(0, format!("`{}`", spec.technique));
+        }
+        if jittering.len() > 1 {
             return Err(GpuError::Other(format!(
-                "`{spec}`: more than one pass jitters the frame (`{}` jitters its own: use it \
-                 without +taa, or the technique's plain mode with +taa)",
-                spec.technique
+                "`{spec}`: more than one pass jitters the frame ({}); keep one of them (a \
+                 technique that jitters its own frames, like checkerboard `fused`, takes no +taa)",
+                jittering.join(", ")
             )));
         }
         drop(geometries);
         let post_rb = match post.last() {
-            Some(p) => Some(Readback::for_image(gpu, "readback.post", p.output(0))?),
+            Some(p) => Some(Readback::for_image(gpu, "readback.post", p.output(0)?)?),
             None => None,
         };
         let cache = match (&settings.cache, technique.cacheable()) {
@@ -518,18 +523,18 @@ impl Renderer {
                     false => None,
                 },
             };
-            let (post, rb, technique) = (&self.post, &self.post_rb, &self.technique);
+            let (post, rb, technique) = (&mut self.post, &self.post_rb, &self.technique);
             ctx.submit("post", |cmd, profiler, _| {
                 let mut input = technique.color(frame);
-                for p in post {
+                for p in post.iter_mut() {
                     if let Some(i) = input {
-                        p.record(cmd, profiler, &pf, i);
+                        p.record(cmd, profiler, &pf, i)?;
                     }
-                    input = Some(p.output(frame));
+                    input = Some(p.output(frame)?);
                 }
                 if let (Some(last), Some(rb)) = (post.last(), rb) {
                     let scope = profiler.begin(cmd, "readback.post", PassKind::Transfer);
-                    cmd.read_image(last.output(frame), rb);
+                    cmd.read_image(last.output(frame)?, rb);
                     profiler.end(cmd, scope);
                 }
                 Ok(())

@@ -190,6 +190,16 @@ pub fn find(name: &str) -> Option<&'static Registration> {
     TECHNIQUES.iter().find(|t| t.name == name)
 }
 
+/// A technique's refusal of its parameters: the spec (`name:params`) and why.
+pub fn refused(name: &str, params: &[&str], message: String) -> cbr_gpu::GpuError {
+    let mut spec = name.to_string();
+    for p in params {
+        spec.push(':');
+        spec.push_str(p);
+    }
+    cbr_gpu::GpuError::Config { spec, message }
+}
+
 /// The error for a parameter no registration reads.
 pub fn unknown_param(technique: &str, p: &str, expected: &str) -> String {
     format!("`{p}` is not a parameter of {technique} (expected {expected})")

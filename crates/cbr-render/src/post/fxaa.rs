@@ -10,13 +10,10 @@
 //! in [`reference`] alike, so the two agree within float rounding whatever a device's filtering
 //! precision; addressing clamps to the edge. shaders/post/fxaa.comp.
 
-use cbr_gpu::{
-    Access, BindingDesc, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Image, PassKind,
-    Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout, Write, vk,
-};
+use cbr_gpu::{Cmd, Image, Profiler, Result, vk};
 
 use super::{PostBuildCtx, PostFrame, PostPass, PostRegistration};
-use crate::memory::MemoryEstimate;
+use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, ResourceDecl, Resources, Use};
 use crate::targets::COLOR_FORMAT;
 
 pub const REGISTRATION: PostRegistration = PostRegistration {
@@ -25,15 +22,10 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
     about: "FXAA 3.11 quality presets 12, 29 (default), 39; luma in display space",
     check: |p| FxaaConfig::parse(p).map(|_| ()),
     geometry: false,
-    estimate: |ctx, _| {
-        let mut e = MemoryEstimate::new();
-        e.image("fxaa.out", COLOR_FORMAT, ctx.width, ctx.height);
-        e.image("fxaa.luma", vk::Format::R32_SFLOAT, ctx.width, ctx.height);
-        e
-    },
-    build: |ctx, p, inputs| {
-        let c = FxaaConfig::parse(p).map_err(cbr_gpu::GpuError::Other)?;
-        Ok(Box::new(Fxaa::new(ctx, c, inputs)?))
+    estimate: |ctx, _| crate::pass::estimate(&resources(ctx.width, ctx.height), "fxaa"),
+    build: |ctx, p| {
+        let c = FxaaConfig::parse(p).map_err(|e| super::refused("fxaa", p, e))?;
+        Ok(Box::new(Fxaa::new(ctx, c)?))
     },
 };
 
@@ -95,102 +87,62 @@ impl FxaaConfig {
 
 pub const MAX_STEPS: usize = 12;
 
-/// The filter pass (shaders/post/fxaa.comp).
-pub const BINDINGS: [BindingDesc; 3] = [
-    BindingDesc::one("src", 0, DescriptorKind::CombinedImageSampler),
-    BindingDesc::one("dst", 1, DescriptorKind::StorageImage),
-    BindingDesc::one("luma_in", 2, DescriptorKind::CombinedImageSampler),
-];
-
-/// The luma pass (shaders/post/fxaa_luma.comp): display luma once per pixel.
-pub const LUMA_BINDINGS: [BindingDesc; 2] = [
-    BindingDesc::one("src", 0, DescriptorKind::CombinedImageSampler),
-    BindingDesc::one("luma_out", 1, DescriptorKind::StorageImage),
-];
-
-/// Push constants of the luma pass (shaders/post/fxaa_luma.comp `Push`).
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct LumaPush {
-    /// W, H, 0, 0.
-    size: [i32; 4],
-    /// .w: the exposure scale (2^stops).
-    params: [f32; 4],
+crate::push_constants! {
+    /// The luma pass's.
+    struct LumaPush {
+        /// W, H, 0, 0.
+        size: [i32; 4],
+        /// .w: the exposure scale (2^stops).
+        params: [f32; 4],
+    }
 }
 
-/// Push constants (shaders/post/fxaa.comp `Push`).
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Push {
-    /// W, H, number of steps, 0.
-    size_steps: [i32; 4],
-    /// Edge threshold, minimum threshold, sub-pixel quality, exposure scale (2^stops).
-    params: [f32; 4],
-    steps: [f32; MAX_STEPS],
+crate::push_constants! {
+    struct Push {
+        /// W, H, number of steps, 0.
+        size_steps: [i32; 4],
+        /// Edge threshold, minimum threshold, sub-pixel quality, exposure scale (2^stops).
+        params: [f32; 4],
+        steps: [f32; MAX_STEPS] as array,
+    }
+}
+
+/// The luma pass (shaders/post/fxaa_luma.comp: display luma once per pixel), then FXAA
+/// (shaders/post/fxaa.comp).
+pub fn decls() -> [ComputeDecl; 2] {
+    [
+        ComputeDecl::new("fxaa.luma", "post/fxaa_luma.comp")
+            .bind(Binding::sampled("src"))
+            .bind(Binding::image("luma", Use::Write))
+            .push::<LumaPush>(),
+        ComputeDecl::new("fxaa", "post/fxaa.comp")
+            .define("MAX_STEPS", MAX_STEPS)
+            .bind(Binding::sampled("src"))
+            .bind(Binding::image("out", Use::Write))
+            .bind(Binding::sampled("luma"))
+            .push::<Push>(),
+    ]
+}
+
+fn resources(w: u32, h: u32) -> Vec<ResourceDecl> {
+    vec![
+        ResourceDecl::image("out", COLOR_FORMAT, w, h),
+        ResourceDecl::image("luma", vk::Format::R32_SFLOAT, w, h),
+    ]
 }
 
 pub struct Fxaa {
-    pipeline: Pipeline,
-    luma_pipeline: Pipeline,
-    _layouts: [SetLayout; 2],
-    sets: Vec<DescriptorSet>,
-    luma_sets: Vec<DescriptorSet>,
-    _sampler: Sampler,
-    luma: Image,
-    out: Image,
+    luma_pass: ComputePass,
+    pass: ComputePass,
+    res: Resources,
+    size: (u32, u32),
     push: Push,
     luma_push: LumaPush,
 }
 
 impl Fxaa {
-    fn new(ctx: &PostBuildCtx, c: FxaaConfig, inputs: &[&Image]) -> Result<Fxaa> {
-        let gpu = ctx.gpu;
-        let layout = SetLayout::new(gpu, "fxaa.set_layout", &BINDINGS)?;
-        let luma_layout = SetLayout::new(gpu, "fxaa.luma.set_layout", &LUMA_BINDINGS)?;
-        let mut defines: Vec<(String, String)> = BINDINGS.iter().map(BindingDesc::define).collect();
-        defines.push(("MAX_STEPS".into(), MAX_STEPS.to_string()));
-        let cs = ctx.shaders.compile("post/fxaa.comp", &defines)?;
-        let luma_defines: Vec<(String, String)> =
-            LUMA_BINDINGS.iter().map(BindingDesc::define).collect();
-        let luma_cs = ctx.shaders.compile("post/fxaa_luma.comp", &luma_defines)?;
-        let luma_pipeline = Pipeline::compute(
-            gpu,
-            &ComputeDesc {
-                name: "fxaa.luma",
-                shader: &luma_cs,
-                set_layouts: &[&luma_layout],
-                push_constant_bytes: std::mem::size_of::<LumaPush>() as u32,
-            },
-        )?;
-        let pipeline = Pipeline::compute(
-            gpu,
-            &ComputeDesc {
-                name: "fxaa",
-                shader: &cs,
-                set_layouts: &[&layout],
-                push_constant_bytes: std::mem::size_of::<Push>() as u32,
-            },
-        )?;
-        let sampler = Sampler::new(gpu, "fxaa.sampler", SamplerDesc::NEAREST)?;
-        let out = ctx.output("fxaa.out")?;
-        let luma = ctx.image("fxaa.luma", vk::Format::R32_SFLOAT)?;
-        let sets = ctx.sets_per_input(
-            "fxaa.set",
-            &layout,
-            inputs,
-            &sampler,
-            &[
-                Write::Storage(1, &out),
-                Write::Sampled(2, vec![(&luma, &sampler)]),
-            ],
-        )?;
-        let luma_sets = ctx.sets_per_input(
-            "fxaa.luma.set",
-            &luma_layout,
-            inputs,
-            &sampler,
-            &[Write::Storage(1, &luma)],
-        )?;
+    fn new(ctx: &PostBuildCtx, c: FxaaConfig) -> Result<Fxaa> {
+        let [luma, fxaa] = decls();
         let mut steps = [0.0; MAX_STEPS];
         steps[..c.steps().len()].copy_from_slice(c.steps());
         let push = Push {
@@ -209,14 +161,10 @@ impl Fxaa {
             steps,
         };
         Ok(Fxaa {
-            pipeline,
-            luma_pipeline,
-            _layouts: [layout, luma_layout],
-            sets,
-            luma_sets,
-            _sampler: sampler,
-            luma,
-            out,
+            luma_pass: luma.build(ctx.gpu, ctx.shaders)?,
+            pass: fxaa.build(ctx.gpu, ctx.shaders)?,
+            res: Resources::new(ctx.gpu, "fxaa", &resources(ctx.width, ctx.height))?,
+            size: (ctx.width, ctx.height),
             luma_push: LumaPush {
                 size: [push.size_steps[0], push.size_steps[1], 0, 0],
                 params: push.params,
@@ -227,29 +175,22 @@ impl Fxaa {
 }
 
 impl PostPass for Fxaa {
-    fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler, frame: &PostFrame, input: &Image) {
-        let k = frame.frame as usize % self.sets.len();
-        let groups = (self.out.width.div_ceil(8), self.out.height.div_ceil(8));
-        cmd.use_image(input, Access::ComputeSampled);
-        cmd.use_image(&self.luma, Access::ComputeStorageWrite);
-        let scope = profiler.begin(cmd, "fxaa.luma", PassKind::Compute);
-        cmd.bind_pipeline(&self.luma_pipeline);
-        cmd.bind_set(&self.luma_pipeline, 0, &self.luma_sets[k]);
-        cmd.push_constants(&self.luma_pipeline, bytemuck::bytes_of(&self.luma_push));
-        cmd.dispatch(groups.0, groups.1, 1);
-        profiler.end(cmd, scope);
-        cmd.use_image(&self.luma, Access::ComputeSampled);
-        cmd.use_image(&self.out, Access::ComputeStorageWrite);
-        let scope = profiler.begin(cmd, "fxaa", PassKind::Compute);
-        cmd.bind_pipeline(&self.pipeline);
-        cmd.bind_set(&self.pipeline, 0, &self.sets[k]);
-        cmd.push_constants(&self.pipeline, bytemuck::bytes_of(&self.push));
-        cmd.dispatch(groups.0, groups.1, 1);
-        profiler.end(cmd, scope);
+    fn record(
+        &mut self,
+        cmd: &mut Cmd,
+        profiler: &mut Profiler,
+        _frame: &PostFrame,
+        input: &Image,
+    ) -> Result<()> {
+        let binds = Binds::of(&self.res).image("src", input);
+        self.luma_pass
+            .dispatch_2d(cmd, profiler, &binds, &self.luma_push, self.size)?;
+        self.pass
+            .dispatch_2d(cmd, profiler, &binds, &self.push, self.size)
     }
 
-    fn output(&self, _frame: u32) -> &Image {
-        &self.out
+    fn output(&self, _frame: u32) -> Result<&Image> {
+        self.res.image("out")
     }
 }
 

@@ -1,19 +1,15 @@
 //! Post passes: a full-resolution HDR frame in, one out, chained after any technique that gives
 //! a full frame (`SPEC+sharpen+...`). One module and shader folder each, one line in
-//! [`POST_PASSES`]. Every link gets one input per frame parity (techniques and passes with
-//! ping-pong histories alternate their output image).
+//! [`POST_PASSES`]. Each pass is declared once (crate::pass); its input (the technique's colour or
+//! the previous link's output) is bound when it records.
 
 pub mod fxaa;
 pub mod sharpen;
 pub mod taa;
 
-use cbr_gpu::{Cmd, vk};
-use cbr_gpu::{
-    DescriptorSet, Gpu, Image, ImageDesc, Profiler, Result, Sampler, SetLayout, Shaders, Write,
-};
+use cbr_gpu::{Cmd, Gpu, GpuError, Image, Profiler, Result, Shaders};
 
 use crate::memory::MemoryEstimate;
-use crate::targets::COLOR_FORMAT;
 use crate::technique::{EstimateCtx, Geometry};
 
 /// What a post pass's constructor gets.
@@ -24,48 +20,19 @@ pub struct PostBuildCtx<'a> {
     pub height: u32,
     /// The scene's display exposure in stops (passes that judge display-space luma use it).
     pub exposure_stops: f32,
-    /// The technique's geometry, one per frame parity like the first link's inputs; empty unless
-    /// a pass of the chain registered `geometry` (and then the technique gives it).
+    /// The technique's geometry, one per frame parity; empty unless a pass of the chain
+    /// registered `geometry` (and then the technique gives it).
     pub geometry: &'a [Geometry<'a>],
 }
 
-impl PostBuildCtx<'_> {
-    /// A full-resolution image of `format` that a pass writes (storage) and the next link reads
-    /// (sampled).
-    pub fn image(&self, name: &str, format: vk::Format) -> Result<Image> {
-        let usage = vk::ImageUsageFlags::STORAGE
-            | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::TRANSFER_SRC;
-        Image::new(
-            self.gpu,
-            &ImageDesc::new_2d(name, format, self.width, self.height, usage),
-        )
+/// A post pass's refusal of its parameters: `+name:params` and why.
+pub fn refused(name: &str, params: &[&str], message: String) -> GpuError {
+    let mut spec = format!("+{name}");
+    for p in params {
+        spec.push(':');
+        spec.push_str(p);
     }
-
-    /// The pass's RGBA16F output.
-    pub fn output(&self, name: &str) -> Result<Image> {
-        self.image(name, COLOR_FORMAT)
-    }
-
-    /// One descriptor set per input image: the input sampled at binding 0, then `rest`.
-    pub fn sets_per_input(
-        &self,
-        name: &str,
-        layout: &SetLayout,
-        inputs: &[&Image],
-        sampler: &Sampler,
-        rest: &[Write],
-    ) -> Result<Vec<DescriptorSet>> {
-        inputs
-            .iter()
-            .enumerate()
-            .map(|(i, src)| {
-                let mut writes = vec![Write::Sampled(0, vec![(*src, sampler)])];
-                writes.extend(rest.iter().cloned());
-                DescriptorSet::new(self.gpu, &format!("{name}[{i}]"), layout, &writes)
-            })
-            .collect()
-    }
+    GpuError::Config { spec, message }
 }
 
 /// The frame a post pass records for.
@@ -81,11 +48,18 @@ pub struct PostFrame<'a> {
 }
 
 pub trait PostPass {
-    /// Records the pass over `input`: input `frame % n` of the n it was built with.
-    fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler, frame: &PostFrame, input: &Image);
+    /// Records the pass over `input` (the technique's colour or the previous link's output
+    /// this frame).
+    fn record(
+        &mut self,
+        cmd: &mut Cmd,
+        profiler: &mut Profiler,
+        frame: &PostFrame,
+        input: &Image,
+    ) -> Result<()>;
     /// Its full-resolution RGBA16F output for frame `frame` (sampled by the next link, read back
     /// after the last): passes with a ping-pong history give the history slot they just wrote.
-    fn output(&self, frame: u32) -> &Image;
+    fn output(&self, frame: u32) -> Result<&Image>;
     /// The sub-pixel jitter (pixels) the pass wants frame `frame` rendered with (TAA's Halton
     /// sequence); at most one pass of a chain jitters.
     fn jitter(&self, _frame: u32) -> Option<[f32; 2]> {
@@ -98,8 +72,8 @@ pub trait PostPass {
     }
 }
 
-/// A post pass's constructor: context, parameters, its input images (one per frame parity).
-pub type PostBuild = fn(&PostBuildCtx, &[&str], &[&Image]) -> Result<Box<dyn PostPass>>;
+/// A post pass's constructor: context and parameters.
+pub type PostBuild = fn(&PostBuildCtx, &[&str]) -> Result<Box<dyn PostPass>>;
 
 pub struct PostRegistration {
     pub name: &'static str,

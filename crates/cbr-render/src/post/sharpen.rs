@@ -3,13 +3,10 @@
 //! (shaders/post/sharpen.comp). The simplest post pass: it exercises the chain, and its CPU
 //! reference [`reference`] holds the shader to the formula.
 
-use cbr_gpu::{
-    Access, BindingDesc, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Image, PassKind,
-    Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout, Write,
-};
+use cbr_gpu::{Cmd, Image, Profiler, Result};
 
 use super::{PostBuildCtx, PostFrame, PostPass, PostRegistration};
-use crate::memory::MemoryEstimate;
+use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, ResourceDecl, Resources, Use};
 use crate::targets::COLOR_FORMAT;
 
 pub const REGISTRATION: PostRegistration = PostRegistration {
@@ -18,14 +15,10 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
     about: "5-tap unsharp mask on linear HDR colour (AMOUNT 0..4, default 0.5)",
     check: |p| parse(p).map(|_| ()),
     geometry: false,
-    estimate: |ctx, _| {
-        let mut e = MemoryEstimate::new();
-        e.image("sharpen.out", COLOR_FORMAT, ctx.width, ctx.height);
-        e
-    },
-    build: |ctx, p, inputs| {
-        let amount = parse(p).map_err(cbr_gpu::GpuError::Other)?;
-        Ok(Box::new(Sharpen::new(ctx, amount, inputs)?))
+    estimate: |ctx, _| crate::pass::estimate(&resources(ctx.width, ctx.height), "sharpen"),
+    build: |ctx, p| {
+        let amount = parse(p).map_err(|e| super::refused("sharpen", p, e))?;
+        Ok(Box::new(Sharpen::new(ctx, amount)?))
     },
 };
 
@@ -42,70 +35,62 @@ fn parse(params: &[&str]) -> std::result::Result<f32, String> {
     }
 }
 
-pub const BINDINGS: [BindingDesc; 2] = [
-    BindingDesc::one("src", 0, DescriptorKind::CombinedImageSampler),
-    BindingDesc::one("dst", 1, DescriptorKind::StorageImage),
-];
+crate::push_constants! {
+    struct Push {
+        /// W, H, amount, 0.
+        size_amount: [f32; 4],
+    }
+}
+
+/// The pass (shaders/post/sharpen.comp).
+pub fn decl() -> ComputeDecl {
+    ComputeDecl::new("sharpen", "post/sharpen.comp")
+        .bind(Binding::sampled("src"))
+        .bind(Binding::image("out", Use::Write))
+        .push::<Push>()
+}
+
+fn resources(w: u32, h: u32) -> Vec<ResourceDecl> {
+    vec![ResourceDecl::image("out", COLOR_FORMAT, w, h)]
+}
 
 pub struct Sharpen {
-    pipeline: Pipeline,
-    _layout: SetLayout,
-    sets: Vec<DescriptorSet>,
-    _sampler: Sampler,
-    out: Image,
-    push: [f32; 4],
+    pass: ComputePass,
+    res: Resources,
+    push: Push,
 }
 
 impl Sharpen {
-    fn new(ctx: &PostBuildCtx, amount: f32, inputs: &[&Image]) -> Result<Sharpen> {
-        let gpu = ctx.gpu;
-        let layout = SetLayout::new(gpu, "sharpen.set_layout", &BINDINGS)?;
-        let defines: Vec<(String, String)> = BINDINGS.iter().map(BindingDesc::define).collect();
-        let cs = ctx.shaders.compile("post/sharpen.comp", &defines)?;
-        let pipeline = Pipeline::compute(
-            gpu,
-            &ComputeDesc {
-                name: "sharpen",
-                shader: &cs,
-                set_layouts: &[&layout],
-                push_constant_bytes: 16,
-            },
-        )?;
-        let sampler = Sampler::new(gpu, "sharpen.sampler", SamplerDesc::NEAREST)?;
-        let out = ctx.output("sharpen.out")?;
-        let sets = ctx.sets_per_input(
-            "sharpen.set",
-            &layout,
-            inputs,
-            &sampler,
-            &[Write::Storage(1, &out)],
-        )?;
+    fn new(ctx: &PostBuildCtx, amount: f32) -> Result<Sharpen> {
         Ok(Sharpen {
-            pipeline,
-            _layout: layout,
-            sets,
-            _sampler: sampler,
-            out,
-            push: [ctx.width as f32, ctx.height as f32, amount, 0.0],
+            pass: decl().build(ctx.gpu, ctx.shaders)?,
+            res: Resources::new(ctx.gpu, "sharpen", &resources(ctx.width, ctx.height))?,
+            push: Push {
+                size_amount: [ctx.width as f32, ctx.height as f32, amount, 0.0],
+            },
         })
     }
 }
 
 impl PostPass for Sharpen {
-    fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler, frame: &PostFrame, input: &Image) {
-        let k = frame.frame as usize % self.sets.len();
-        cmd.use_image(input, Access::ComputeSampled);
-        cmd.use_image(&self.out, Access::ComputeStorageWrite);
-        let scope = profiler.begin(cmd, "sharpen", PassKind::Compute);
-        cmd.bind_pipeline(&self.pipeline);
-        cmd.bind_set(&self.pipeline, 0, &self.sets[k]);
-        cmd.push_constants(&self.pipeline, bytemuck::cast_slice(&self.push));
-        cmd.dispatch(self.out.width.div_ceil(8), self.out.height.div_ceil(8), 1);
-        profiler.end(cmd, scope);
+    fn record(
+        &mut self,
+        cmd: &mut Cmd,
+        profiler: &mut Profiler,
+        _frame: &PostFrame,
+        input: &Image,
+    ) -> Result<()> {
+        let binds = Binds::of(&self.res).image("src", input);
+        let size = (
+            self.push.size_amount[0] as u32,
+            self.push.size_amount[1] as u32,
+        );
+        self.pass
+            .dispatch_2d(cmd, profiler, &binds, &self.push, size)
     }
 
-    fn output(&self, _frame: u32) -> &Image {
-        &self.out
+    fn output(&self, _frame: u32) -> Result<&Image> {
+        self.res.image("out")
     }
 }
 

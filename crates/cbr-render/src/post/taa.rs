@@ -24,15 +24,10 @@
 //! mean of its finite neighbours, so NaN and Inf never enter the history. [`reference`] is the
 //! CPU reference, operation for operation.
 
-use std::cell::Cell;
-
-use cbr_gpu::{
-    Access, BindingDesc, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, GpuError, Image,
-    PassKind, Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout, Write, vk,
-};
+use cbr_gpu::{Cmd, GpuError, Image, Profiler, Result, vk};
 
 use super::{PostBuildCtx, PostFrame, PostPass, PostRegistration};
-use crate::memory::MemoryEstimate;
+use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, Filter, ResourceDecl, Resources, Use};
 use crate::targets::COLOR_FORMAT;
 use crate::technique::Geometry;
 
@@ -44,23 +39,10 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
             depth, catmull, speed); `inside`: Playdead's INSIDE TAA",
     check: |p| TaaConfig::parse(p).map(|_| ()),
     geometry: true,
-    estimate: |ctx, _| {
-        let mut e = MemoryEstimate::new();
-        for k in 0..2 {
-            e.image(
-                format!("taa.history[{k}]"),
-                COLOR_FORMAT,
-                ctx.width,
-                ctx.height,
-            );
-            let geom = format!("taa.history_geom[{k}]");
-            e.image(geom, vk::Format::R32G32_UINT, ctx.width, ctx.height);
-        }
-        e
-    },
-    build: |ctx, p, inputs| {
-        let c = TaaConfig::parse(p).map_err(GpuError::Other)?;
-        Ok(Box::new(Taa::new(ctx, c, inputs)?))
+    estimate: |ctx, _| crate::pass::estimate(&resources(ctx.width, ctx.height), "taa"),
+    build: |ctx, p| {
+        let c = TaaConfig::parse(p).map_err(|e| super::refused("taa", p, e))?;
+        Ok(Box::new(Taa::new(ctx, c)?))
     },
 };
 
@@ -267,105 +249,82 @@ pub fn jitter(length: u32, frame: u32) -> [f32; 2] {
     [halton(i, 2) - 0.5, halton(i, 3) - 0.5]
 }
 
-pub const BINDINGS: [BindingDesc; 8] = [
-    BindingDesc::one("cur", 0, DescriptorKind::CombinedImageSampler),
-    BindingDesc::one("velocity", 1, DescriptorKind::CombinedImageSampler),
-    BindingDesc::one("depth", 2, DescriptorKind::CombinedImageSampler),
-    BindingDesc::one("ids", 3, DescriptorKind::CombinedImageSampler),
-    BindingDesc::one("hist", 4, DescriptorKind::CombinedImageSampler),
-    BindingDesc::one("hist_geom", 5, DescriptorKind::CombinedImageSampler),
-    BindingDesc::one("out_hist", 6, DescriptorKind::StorageImage),
-    BindingDesc::one("out_geom", 7, DescriptorKind::StorageImage),
-];
+crate::push_constants! {
+    struct Push {
+        /// W, H (of the output and the geometry), 0, 0.
+        size: [i32; 4],
+        /// x: F_*, y: n (frames accumulated since the reset).
+        flags: [u32; 4],
+        /// alpha (current-frame weight), gamma, depth tolerance, exposure scale.
+        params: [f32; 4],
+        /// INSIDE feedback min, max; still threshold (pixels); 0.
+        feedback_still: [f32; 4],
+        /// x: current-frame weight at and above speed y (pixels per frame; 0: off); zw: the
+        /// frame's jitter (pixels).
+        speed_jitter: [f32; 4],
+    }
+}
 
-/// Push constants (shaders/post/taa.comp `Push`).
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Push {
-    size: [i32; 4],
-    flags: [u32; 4],
-    params: [f32; 4],
-    feedback_still: [f32; 4],
-    speed_jitter: [f32; 4],
+/// The pass (shaders/post/taa.comp): `inside` picks the mode; `packed` geometry is the
+/// checkerboard resolve's (object ID | moved, reverse-Z depth bits in one RG32UI image).
+pub fn decl(inside: bool, packed: bool) -> ComputeDecl {
+    ComputeDecl::new("taa", "post/taa.comp")
+        .define("MODE", u32::from(inside))
+        .define("PACKED", u32::from(packed))
+        .constants(&[
+            ("F_RESET", F_RESET),
+            ("F_DILATION", F_DILATION),
+            ("F_CLIP", F_CLIP),
+            ("F_IDS", F_IDS),
+            ("F_DEPTH", F_DEPTH),
+            ("F_CATMULL", F_CATMULL),
+            ("F_MEAN", F_MEAN),
+            ("F_FILTER", F_FILTER),
+            ("MOVED", MOVED),
+            ("ID_MASK", !MOVED),
+        ])
+        .bindings(&[
+            Binding::sampled("cur"),
+            Binding::sampled("velocity"),
+            Binding::sampled("depth"),
+            Binding::sampled("ids"),
+            Binding::sampled_with("hist", Filter::Linear),
+            Binding::sampled("hist_geom"),
+            Binding::image("out_hist", Use::Write),
+            Binding::image("out_geom", Use::Write),
+        ])
+        .push::<Push>()
+}
+
+/// The history: colour (linear HDR) and geometry (object ID | [`MOVED`], depth bits).
+fn resources(w: u32, h: u32) -> Vec<ResourceDecl> {
+    vec![
+        ResourceDecl::image("history", COLOR_FORMAT, w, h).history(),
+        ResourceDecl::image("history_geom", vk::Format::R32G32_UINT, w, h).history(),
+    ]
 }
 
 pub struct Taa {
     config: TaaConfig,
-    pipeline: Pipeline,
-    _layout: SetLayout,
-    _samplers: [Sampler; 2],
-    /// One per frame parity: reads history `(f + 1) % 2`, writes history `f % 2`.
-    sets: Vec<DescriptorSet>,
-    history: [Image; 2],
-    history_geom: [Image; 2],
+    pass: ComputePass,
+    res: Resources,
     push: Push,
     /// Frames accumulated since the last reset (the `mean` weight).
-    accumulated: Cell<u32>,
+    accumulated: u32,
 }
 
 impl Taa {
-    fn new(ctx: &PostBuildCtx, c: TaaConfig, inputs: &[&Image]) -> Result<Taa> {
-        let gpu = ctx.gpu;
+    fn new(ctx: &PostBuildCtx, c: TaaConfig) -> Result<Taa> {
         let geo: &[Geometry] = ctx.geometry;
-        if geo.is_empty() {
+        let Some(g0) = geo.first() else {
             return Err(GpuError::Other(
                 "taa needs the frame's geometry (velocity, depth, IDs)".into(),
             ));
-        }
-        let layout = SetLayout::new(gpu, "taa.set_layout", &BINDINGS)?;
-        let mut defines: Vec<(String, String)> = BINDINGS.iter().map(BindingDesc::define).collect();
-        defines.push(("MODE".into(), u32::from(c.inside).to_string()));
-        defines.push(("PACKED".into(), u32::from(geo[0].packed).to_string()));
-        let cs = ctx.shaders.compile("post/taa.comp", &defines)?;
-        let pipeline = Pipeline::compute(
-            gpu,
-            &ComputeDesc {
-                name: "taa",
-                shader: &cs,
-                set_layouts: &[&layout],
-                push_constant_bytes: std::mem::size_of::<Push>() as u32,
-            },
-        )?;
-        let nearest = Sampler::new(gpu, "taa.nearest", SamplerDesc::NEAREST)?;
-        let linear = Sampler::new(
-            gpu,
-            "taa.linear",
-            SamplerDesc {
-                linear: true,
-                ..SamplerDesc::NEAREST
-            },
-        )?;
-        let history = [ctx.output("taa.history[0]")?, ctx.output("taa.history[1]")?];
-        let history_geom = [
-            ctx.image("taa.history_geom[0]", vk::Format::R32G32_UINT)?,
-            ctx.image("taa.history_geom[1]", vk::Format::R32G32_UINT)?,
-        ];
-        let sets = (0..2)
-            .map(|f: usize| {
-                let g = &geo[f % geo.len()];
-                let (read, write) = ((f + 1) % 2, f % 2);
-                DescriptorSet::new(
-                    gpu,
-                    &format!("taa.set[{f}]"),
-                    &layout,
-                    &[
-                        Write::Sampled(0, vec![(inputs[f % inputs.len()], &nearest)]),
-                        Write::Sampled(1, vec![(g.velocity, &nearest)]),
-                        Write::Sampled(2, vec![(g.depth, &nearest)]),
-                        Write::Sampled(3, vec![(g.ids, &nearest)]),
-                        Write::Sampled(4, vec![(&history[read], &linear)]),
-                        Write::Sampled(5, vec![(&history_geom[read], &nearest)]),
-                        Write::Storage(6, &history[write]),
-                        Write::Storage(7, &history_geom[write]),
-                    ],
-                )
-            })
-            .collect::<Result<Vec<_>>>()?;
-        let g0 = geo[0].velocity;
-        if (g0.width, g0.height) != (ctx.width, ctx.height) {
+        };
+        if (g0.velocity.width, g0.velocity.height) != (ctx.width, ctx.height) {
             return Err(GpuError::Other(format!(
                 "taa needs the geometry at the output resolution {}x{} (it is {}x{})",
-                ctx.width, ctx.height, g0.width, g0.height
+                ctx.width, ctx.height, g0.velocity.width, g0.velocity.height
             )));
         }
         let push = Push {
@@ -382,54 +341,52 @@ impl Taa {
         };
         Ok(Taa {
             config: c,
-            pipeline,
-            _layout: layout,
-            _samplers: [nearest, linear],
-            sets,
-            history,
-            history_geom,
+            pass: decl(c.inside, g0.packed).build(ctx.gpu, ctx.shaders)?,
+            res: Resources::new(ctx.gpu, "taa", &resources(ctx.width, ctx.height))?,
             push,
-            accumulated: Cell::new(0),
+            accumulated: 0,
         })
     }
 }
 
 impl PostPass for Taa {
-    fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler, frame: &PostFrame, input: &Image) {
-        let f = frame.frame as usize % 2;
-        let n = if frame.reset {
-            0
-        } else {
-            self.accumulated.get() + 1
-        };
-        self.accumulated.set(n);
+    fn record(
+        &mut self,
+        cmd: &mut Cmd,
+        profiler: &mut Profiler,
+        frame: &PostFrame,
+        input: &Image,
+    ) -> Result<()> {
+        let f = frame.frame;
+        self.accumulated = if frame.reset { 0 } else { self.accumulated + 1 };
         let mut push = self.push;
         push.flags[0] |= if frame.reset { F_RESET } else { 0 };
-        push.flags[1] = n;
+        push.flags[1] = self.accumulated;
         push.speed_jitter[2] = frame.jitter[0];
         push.speed_jitter[3] = frame.jitter[1];
-        cmd.use_image(input, Access::ComputeSampled);
-        if let Some(g) = &frame.geometry {
-            for image in [g.velocity, g.depth, g.ids] {
-                cmd.use_image(image, Access::ComputeSampled);
-            }
-        }
-        cmd.use_image(&self.history[(f + 1) % 2], Access::ComputeSampled);
-        cmd.use_image(&self.history_geom[(f + 1) % 2], Access::ComputeSampled);
-        cmd.use_image(&self.history[f], Access::ComputeStorageWrite);
-        cmd.use_image(&self.history_geom[f], Access::ComputeStorageWrite);
-        let scope = profiler.begin(cmd, "taa", PassKind::Compute);
-        cmd.bind_pipeline(&self.pipeline);
-        cmd.bind_set(&self.pipeline, 0, &self.sets[f]);
-        cmd.push_constants(&self.pipeline, bytemuck::bytes_of(&push));
-        let out = &self.history[f];
-        cmd.dispatch(out.width.div_ceil(8), out.height.div_ceil(8), 1);
-        profiler.end(cmd, scope);
+        let g = frame
+            .geometry
+            .as_ref()
+            .ok_or_else(|| GpuError::Other("taa: the frame has no geometry".into()))?;
+        let binds = Binds::new()
+            .image("cur", input)
+            .image("velocity", g.velocity)
+            .image("depth", g.depth)
+            .image("ids", g.ids)
+            .history(self.res.history("history")?, f, "hist", "out_hist")
+            .history(
+                self.res.history("history_geom")?,
+                f,
+                "hist_geom",
+                "out_geom",
+            );
+        let size = (push.size[0] as u32, push.size[1] as u32);
+        self.pass.dispatch_2d(cmd, profiler, &binds, &push, size)
     }
 
     /// The history slot written this frame is the output.
-    fn output(&self, frame: u32) -> &Image {
-        &self.history[frame as usize % 2]
+    fn output(&self, frame: u32) -> Result<&Image> {
+        Ok(self.res.history("history")?.write(frame))
     }
 
     fn jitter(&self, frame: u32) -> Option<[f32; 2]> {

@@ -9,15 +9,13 @@
 //! ID, background included) and the fraction of samples on geometry. Texture LOD: each sample's
 //! footprint is 1/N pixel, so the default LOD bias is -log2 N. docs/antialiasing.md.
 
-use cbr_gpu::{
-    Access, BindingDesc, ComputeDesc, DescriptorKind, DescriptorSet, Image, ImageDesc, PassKind,
-    Pipeline, Readback, Result, Sampler, SamplerDesc, SetLayout, Write, vk,
-};
+use cbr_gpu::{Image, PassKind, Readback, Result, vk};
 use cbr_scene::rng::SplitMix;
 use half::f16;
 
 use super::LayerReadbacks;
 use crate::memory::MemoryEstimate;
+use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, ResourceDecl, Resources, Use};
 use crate::renderer::{Coverage, FrameOutput};
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::{COLOR_FORMAT, FrameTargets};
@@ -32,7 +30,7 @@ pub const REGISTRATION: Registration = Registration {
     needs: |_, _| None,
     estimate: |ctx, _| Ok(Ssaa::estimate(ctx.width, ctx.height)),
     build: |ctx, p| {
-        let c = parse(p).map_err(cbr_gpu::GpuError::Other)?;
+        let c = parse(p).map_err(|e| crate::technique::refused("ssaa", p, e))?;
         Ok(Box::new(Ssaa::new(ctx, c)?))
     },
 };
@@ -77,23 +75,39 @@ pub fn sample_position(c: SsaaConfig, seed: u64, frame: u32, s: u32) -> [f64; 2]
     [(f64::from(i) + u) / n, (f64::from(j) + v) / n]
 }
 
-pub const BINDINGS: [BindingDesc; 5] = {
-    use DescriptorKind::{CombinedImageSampler as S, StorageImage as I};
-    [
-        BindingDesc::one("color", 0, S),
-        BindingDesc::one("ids", 1, S),
-        BindingDesc::one("accum", 2, I),
-        BindingDesc::one("aux", 3, I),
-        BindingDesc::one("out", 4, I),
-    ]
-};
+/// Coverage: set in `aux.y` once a sample shows another object ID than the first.
+pub const EDGE: u32 = 0x8000_0000;
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Push {
-    size_sample_mode: [i32; 4],
-    /// x: the number of samples (the divisor of the resolve).
-    samples: [f32; 4],
+crate::push_constants! {
+    struct Push {
+        /// W, H; the sample's index (0 starts the sum); 0 accumulate, 1 resolve.
+        size_sample_mode: [i32; 4],
+        /// x: the number of samples (the divisor of the resolve).
+        samples: [f32; 4],
+    }
+}
+
+/// The accumulation and resolve pass (shaders/ssaa/accumulate.comp).
+pub fn decl() -> ComputeDecl {
+    ComputeDecl::new("ssaa.accumulate", "ssaa/accumulate.comp")
+        .constants(&[("EDGE", EDGE)])
+        .bindings(&[
+            Binding::sampled("color"),
+            Binding::sampled("ids"),
+            Binding::image("accum", Use::ReadWrite),
+            Binding::image("aux", Use::ReadWrite),
+            Binding::image("out", Use::Write),
+        ])
+        .push::<Push>()
+}
+
+/// The fp32 accumulation, the coverage and the resolved frame (post passes read it).
+fn resources(w: u32, h: u32) -> Vec<ResourceDecl> {
+    vec![
+        ResourceDecl::image("accum", vk::Format::R32G32B32A32_SFLOAT, w, h),
+        ResourceDecl::image("aux", vk::Format::R32G32_UINT, w, h),
+        ResourceDecl::image("out", COLOR_FORMAT, w, h),
+    ]
 }
 
 pub struct Ssaa {
@@ -101,27 +115,21 @@ pub struct Ssaa {
     pass: ScenePass,
     config: RasterConfig,
     targets: FrameTargets,
-    pipeline: Pipeline,
-    _layout: SetLayout,
-    set: DescriptorSet,
-    _sampler: Sampler,
-    accum: Image,
-    aux: Image,
-    out: Image,
+    accumulate: ComputePass,
+    res: Resources,
+    size: (u32, u32),
     centre: LayerReadbacks,
     out_rb: Readback,
     aux_rb: Readback,
 }
 
 impl Ssaa {
-    /// What [`Ssaa::new`] allocates, whatever N: native's targets and readbacks, the fp32
-    /// accumulation, coverage and output images, and the readbacks of the last two.
+    /// What [`Ssaa::new`] allocates, whatever N: native's targets and readbacks, the declared
+    /// resources, and the readbacks of the frame and its coverage.
     pub fn estimate(w: u32, h: u32) -> MemoryEstimate {
         let mut e = MemoryEstimate::new();
         FrameTargets::estimate(&mut e, "ssaa", w, h, 1, 1);
-        e.image("ssaa.accum", vk::Format::R32G32B32A32_SFLOAT, w, h);
-        e.image("ssaa.aux", vk::Format::R32G32_UINT, w, h);
-        e.image("ssaa.out", COLOR_FORMAT, w, h);
+        e.append(crate::pass::estimate(&resources(w, h), "ssaa"));
         LayerReadbacks::estimate(&mut e, w, h);
         e.readback("readback.ssaa.out", COLOR_FORMAT, w, h, 1);
         e.readback("readback.ssaa.aux", vk::Format::R32G32_UINT, w, h, 1);
@@ -140,74 +148,37 @@ impl Ssaa {
             ctx.counter,
         )?;
         let targets = FrameTargets::new(gpu, "ssaa", w, h)?;
-        let layout = SetLayout::new(gpu, "ssaa.set_layout", &BINDINGS)?;
-        let defines: Vec<(String, String)> = BINDINGS.iter().map(BindingDesc::define).collect();
-        let cs = ctx.shaders.compile("ssaa/accumulate.comp", &defines)?;
-        let pipeline = Pipeline::compute(
-            gpu,
-            &ComputeDesc {
-                name: "ssaa.accumulate",
-                shader: &cs,
-                set_layouts: &[&layout],
-                push_constant_bytes: std::mem::size_of::<Push>() as u32,
-            },
-        )?;
-        let sampler = Sampler::new(gpu, "ssaa.sampler", SamplerDesc::NEAREST)?;
-        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
-        let img = |name: &str, format, extra| {
-            Image::new(gpu, &ImageDesc::new_2d(name, format, w, h, usage | extra))
-        };
-        let accum = img(
-            "ssaa.accum",
-            vk::Format::R32G32B32A32_SFLOAT,
-            vk::ImageUsageFlags::empty(),
-        )?;
-        let aux = img(
-            "ssaa.aux",
-            vk::Format::R32G32_UINT,
-            vk::ImageUsageFlags::empty(),
-        )?;
-        // SAMPLED: post passes read the resolved frame.
-        let out = img("ssaa.out", COLOR_FORMAT, vk::ImageUsageFlags::SAMPLED)?;
-        let set = DescriptorSet::new(
-            gpu,
-            "ssaa.set",
-            &layout,
-            &[
-                Write::Sampled(0, vec![(&targets.color, &sampler)]),
-                Write::Sampled(1, vec![(&targets.ids, &sampler)]),
-                Write::Storage(2, &accum),
-                Write::Storage(3, &aux),
-                Write::Storage(4, &out),
-            ],
-        )?;
+        let accumulate = decl().build(gpu, ctx.shaders)?;
+        let res = Resources::new(gpu, "ssaa", &resources(w, h))?;
         let centre = LayerReadbacks::new(gpu, targets.layers())?;
-        let out_rb = Readback::for_image(gpu, "readback.ssaa.out", &out)?;
-        let aux_rb = Readback::for_image(gpu, "readback.ssaa.aux", &aux)?;
+        let out_rb = Readback::for_image(gpu, "readback.ssaa.out", res.image("out")?)?;
+        let aux_rb = Readback::for_image(gpu, "readback.ssaa.aux", res.image("aux")?)?;
         Ok(Ssaa {
             c,
             pass,
             config,
             targets,
-            pipeline,
-            _layout: layout,
-            set,
-            _sampler: sampler,
-            accum,
-            aux,
-            out,
+            accumulate,
+            res,
+            size: (w, h),
             centre,
             out_rb,
             aux_rb,
         })
     }
 
+    fn binds(&self) -> Binds<'_> {
+        Binds::of(&self.res)
+            .image("color", &self.targets.color)
+            .image("ids", &self.targets.ids)
+    }
+
     fn push(&self, sample: u32, resolve: bool) -> Push {
         let samples = self.c.n * self.c.n;
         Push {
             size_sample_mode: [
-                self.out.width as i32,
-                self.out.height as i32,
+                self.size.0 as i32,
+                self.size.1 as i32,
                 sample as i32,
                 i32::from(resolve),
             ],
@@ -239,24 +210,12 @@ impl Ssaa {
                 self.centre.record(cmd, profiler, t.layers());
             }
             if let Some(push) = push {
-                cmd.use_image(&t.color, Access::ComputeSampled);
-                cmd.use_image(&t.ids, Access::ComputeSampled);
-                cmd.use_image(&self.accum, Access::ComputeStorageReadWrite);
-                cmd.use_image(&self.aux, Access::ComputeStorageReadWrite);
-                cmd.use_image(&self.out, Access::ComputeStorageWrite);
-                let scope = profiler.begin(cmd, "ssaa.accumulate", PassKind::Compute);
-                self.dispatch(cmd, &push);
-                profiler.end(cmd, scope);
+                let binds = self.binds();
+                self.accumulate
+                    .dispatch_2d(cmd, profiler, &binds, &push, self.size)?;
             }
             Ok(())
         })
-    }
-
-    fn dispatch(&self, cmd: &mut cbr_gpu::Cmd, push: &Push) {
-        cmd.bind_pipeline(&self.pipeline);
-        cmd.bind_set(&self.pipeline, 0, &self.set);
-        cmd.push_constants(&self.pipeline, bytemuck::bytes_of(push));
-        cmd.dispatch(self.out.width.div_ceil(8), self.out.height.div_ceil(8), 1);
     }
 }
 
@@ -279,23 +238,25 @@ impl Technique for Ssaa {
         let push = self.push(0, true);
         let counter = ctx.counter;
         ctx.submit("ssaa.resolve", |cmd, profiler, _| {
-            cmd.use_image(&self.accum, Access::ComputeStorageReadWrite);
-            cmd.use_image(&self.aux, Access::ComputeStorageReadWrite);
-            cmd.use_image(&self.out, Access::ComputeStorageWrite);
+            let binds = self.binds();
+            self.accumulate.prepare(cmd, &binds)?;
             let scope = profiler.begin(cmd, "ssaa.resolve", PassKind::Compute);
-            self.dispatch(cmd, &push);
+            let [x, y] = self.accumulate.decl.group;
+            let groups = [self.size.0.div_ceil(x), self.size.1.div_ceil(y), 1];
+            let r = self.accumulate.dispatch_untimed(cmd, &binds, &push, groups);
             profiler.end(cmd, scope);
+            r?;
             let scope = profiler.begin(cmd, "readback", PassKind::Transfer);
-            cmd.read_image(&self.out, &self.out_rb);
-            cmd.read_image(&self.aux, &self.aux_rb);
+            cmd.read_image(self.res.image("out")?, &self.out_rb);
+            cmd.read_image(self.res.image("aux")?, &self.aux_rb);
             profiler.end(cmd, scope);
-            cmd.use_buffer(counter, Access::HostRead);
+            cmd.use_buffer(counter, cbr_gpu::Access::HostRead);
             Ok(())
         })
     }
 
     fn color(&self, _frame: u32) -> Option<&Image> {
-        Some(&self.out)
+        self.res.image("out").ok()
     }
 
     fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput> {
@@ -305,13 +266,10 @@ impl Technique for Ssaa {
         let aux: &[[u32; 2]] = bytemuck::cast_slice(self.aux_rb.bytes()?);
         let samples = (self.c.n * self.c.n) as f32;
         out.coverage = Some(Coverage {
-            edge: aux
-                .iter()
-                .map(|a| u8::from(a[1] & 0x8000_0000 != 0))
-                .collect(),
+            edge: aux.iter().map(|a| u8::from(a[1] & EDGE != 0)).collect(),
             fraction: aux
                 .iter()
-                .map(|a| (a[1] & 0x7fff_ffff) as f32 / samples)
+                .map(|a| (a[1] & !EDGE) as f32 / samples)
                 .collect(),
         });
         Ok(out)
@@ -323,7 +281,7 @@ impl Technique for Ssaa {
 
     fn target_bytes(&self) -> u64 {
         // The native targets plus the fp32 accumulation, coverage and output images.
-        let px = u64::from(self.out.width) * u64::from(self.out.height);
+        let px = u64::from(self.size.0) * u64::from(self.size.1);
         self.targets.bytes() + px * (16 + 8 + 8)
     }
 

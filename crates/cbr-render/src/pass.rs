@@ -1,0 +1,942 @@
+//! Passes declared once. A compute pass is one [`ComputeDecl`]: its shader and defines, its
+//! bindings by name and kind (with how the shader uses each: read, write or both), its
+//! push-constant struct ([`push_constants!`]), its shader-side constants (flag bits) and its
+//! group size. From that one value come
+//! - the descriptor set layout and the pipeline ([`ComputeDecl::build`]: no image, no memory, no
+//!   command buffer: the compile-only build);
+//! - every shader-side number: `BINDING_<NAME>` (binding numbers are the bindings' positions:
+//!   none is written by hand), `PUSH_CONSTANTS` (the GLSL block of the Rust struct, checked for
+//!   matching offsets when the struct is declared), `LOCAL_SIZE_X/Y` and the declared constants;
+//! - at record time, from one [`Binds`] list naming what each binding holds this frame: the
+//!   descriptor writes (by name, kind checked: a missing or unknown name or a wrong kind is an
+//!   error, never a panic) and the barriers (derived from the binding's declared use).
+//!
+//! Resources a technique owns are declared as [`ResourceDecl`]s ([`Resources`]): the memory
+//! estimate and the allocation come from the same list, and a binding whose name matches a
+//! resource binds it without being named again. A resource declared [`ResourceDecl::history`]
+//! is a ping-pong pair ([`History`]): one type for every temporal pass.
+//!
+//! Descriptor sets are made per dispatch from the binds (kept by the command buffer until its
+//! submission completes), so a pass has no per-parity or per-input set to keep in step with its
+//! resources.
+
+use std::collections::BTreeMap;
+
+use cbr_gpu::{
+    Access, BindingDesc, Buffer, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Gpu, GpuError,
+    Image, ImageDesc, PassKind, Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout,
+    Shaders, Write, vk,
+};
+
+use crate::memory::MemoryEstimate;
+
+/// How a shader uses a storage binding (the barrier before the dispatch follows from it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Use {
+    Read,
+    Write,
+    ReadWrite,
+}
+
+/// The sampler a sampled binding reads through (made once per pass).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Filter {
+    Nearest,
+    /// Bilinear, clamp to edge, normalised coordinates: TAA's history reads.
+    Linear,
+}
+
+impl Filter {
+    fn desc(self) -> SamplerDesc {
+        match self {
+            Filter::Nearest => SamplerDesc::NEAREST,
+            Filter::Linear => SamplerDesc {
+                linear: true,
+                ..SamplerDesc::NEAREST
+            },
+        }
+    }
+}
+
+/// What one binding holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BindKind {
+    /// `count` combined image samplers (an array where count > 1).
+    Sampled {
+        filter: Filter,
+        count: u32,
+    },
+    StorageImage(Use),
+    StorageBuffer(Use),
+    Uniform,
+}
+
+impl BindKind {
+    fn descriptor(self) -> (DescriptorKind, u32) {
+        match self {
+            BindKind::Sampled { count, .. } => (DescriptorKind::CombinedImageSampler, count),
+            BindKind::StorageImage(_) => (DescriptorKind::StorageImage, 1),
+            BindKind::StorageBuffer(_) => (DescriptorKind::StorageBuffer, 1),
+            BindKind::Uniform => (DescriptorKind::UniformBuffer, 1),
+        }
+    }
+
+    fn what(self) -> &'static str {
+        match self {
+            BindKind::Sampled { .. } => "sampled image",
+            BindKind::StorageImage(_) => "storage image",
+            BindKind::StorageBuffer(_) | BindKind::Uniform => "buffer",
+        }
+    }
+
+    /// The access a compute dispatch makes.
+    fn compute_access(self) -> Access {
+        match self {
+            BindKind::Sampled { .. } => Access::ComputeSampled,
+            BindKind::StorageImage(u) | BindKind::StorageBuffer(u) => match u {
+                Use::Read => Access::ComputeStorageRead,
+                Use::Write => Access::ComputeStorageWrite,
+                Use::ReadWrite => Access::ComputeStorageReadWrite,
+            },
+            BindKind::Uniform => Access::ComputeStorageRead,
+        }
+    }
+}
+
+/// One binding of a pass: its name (the shader's `BINDING_<NAME>`) and what it holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Binding {
+    pub name: &'static str,
+    pub kind: BindKind,
+}
+
+impl Binding {
+    pub const fn sampled(name: &'static str) -> Binding {
+        Binding::sampled_with(name, Filter::Nearest)
+    }
+    pub const fn sampled_with(name: &'static str, filter: Filter) -> Binding {
+        Binding {
+            name,
+            kind: BindKind::Sampled { filter, count: 1 },
+        }
+    }
+    pub const fn sampled_array(name: &'static str, filter: Filter, count: u32) -> Binding {
+        Binding {
+            name,
+            kind: BindKind::Sampled { filter, count },
+        }
+    }
+    pub const fn image(name: &'static str, u: Use) -> Binding {
+        Binding {
+            name,
+            kind: BindKind::StorageImage(u),
+        }
+    }
+    pub const fn buffer(name: &'static str, u: Use) -> Binding {
+        Binding {
+            name,
+            kind: BindKind::StorageBuffer(u),
+        }
+    }
+    pub const fn uniform(name: &'static str) -> Binding {
+        Binding {
+            name,
+            kind: BindKind::Uniform,
+        }
+    }
+}
+
+/// A GLSL type a push-constant member may have: its name and its std430 alignment.
+pub trait GlslType {
+    const NAME: &'static str;
+    const ALIGN: usize;
+}
+
+macro_rules! glsl_types {
+    ($($t:ty => $name:literal, $align:literal;)*) => {
+        $(impl GlslType for $t {
+            const NAME: &'static str = $name;
+            const ALIGN: usize = $align;
+        })*
+    };
+}
+
+glsl_types! {
+    f32 => "float", 4;
+    u32 => "uint", 4;
+    i32 => "int", 4;
+    [f32; 2] => "vec2", 8;
+    [u32; 2] => "uvec2", 8;
+    [i32; 2] => "ivec2", 8;
+    [f32; 4] => "vec4", 16;
+    [u32; 4] => "uvec4", 16;
+    [i32; 4] => "ivec4", 16;
+    [[f32; 4]; 4] => "mat4", 16;
+}
+
+/// An array member of a push-constant block (`name: [f32; N] as array`): std430 arrays of
+/// scalars have the scalar's stride and alignment, as `repr(C)` arrays do.
+pub trait GlslArray {
+    const ELEM: &'static str;
+    const LEN: usize;
+    const ALIGN: usize;
+}
+
+impl<T: GlslType, const N: usize> GlslArray for [T; N] {
+    const ELEM: &'static str = T::NAME;
+    const LEN: usize = N;
+    const ALIGN: usize = T::ALIGN;
+}
+
+/// One member of a push-constant block.
+#[derive(Clone, Copy, Debug)]
+pub struct PushField {
+    pub glsl_type: &'static str,
+    pub name: &'static str,
+    /// Array length (0: not an array).
+    pub len: usize,
+}
+
+/// A push-constant struct declared with [`push_constants!`]: its bytes and its GLSL block.
+pub trait PushConstants: bytemuck::Pod {
+    const FIELDS: &'static [PushField];
+
+    /// `layout(push_constant) uniform Push { ... } pc;`, the `PUSH_CONSTANTS` define.
+    fn glsl() -> String {
+        let members: String = Self::FIELDS
+            .iter()
+            .map(|f| match f.len {
+                0 => format!(" {} {};", f.glsl_type, f.name),
+                n => format!(" {} {}[{n}];", f.glsl_type, f.name),
+            })
+            .collect();
+        format!("layout(push_constant) uniform Push {{{members} }} pc;")
+    }
+}
+
+/// Declares a `#[repr(C)]` push-constant struct and its GLSL block in one place. Member types
+/// are Rust types with a GLSL name (`[f32; 4]` = vec4, `u32` = uint, ...); an array of scalars
+/// is `name: [f32; N] as array`. A member whose offset would differ between `repr(C)` and
+/// GLSL's std430 is a compile error.
+#[macro_export]
+macro_rules! push_constants {
+    ($(#[$m:meta])* $vis:vis struct $name:ident {
+        $($(#[$fm:meta])* $f:ident : $t:ty $(as $array:ident)?),* $(,)?
+    }) => {
+        $(#[$m])*
+        #[repr(C)]
+        #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+        $vis struct $name { $($(#[$fm])* pub $f: $t),* }
+
+        impl $crate::pass::PushConstants for $name {
+            const FIELDS: &'static [$crate::pass::PushField] = &[$(
+                $crate::push_constants!(@field $f : $t $(as $array)?)
+            ),*];
+        }
+
+        const _: () = {
+            $(assert!(
+                ::std::mem::offset_of!($name, $f)
+                    % $crate::push_constants!(@align $t $(as $array)?) == 0,
+                "a push-constant member is not at its std430 offset: reorder the struct"
+            );)*
+        };
+    };
+    (@field $f:ident : $t:ty) => {
+        $crate::pass::PushField {
+            glsl_type: <$t as $crate::pass::GlslType>::NAME,
+            name: stringify!($f),
+            len: 0,
+        }
+    };
+    (@field $f:ident : $t:ty as array) => {
+        $crate::pass::PushField {
+            glsl_type: <$t as $crate::pass::GlslArray>::ELEM,
+            name: stringify!($f),
+            len: <$t as $crate::pass::GlslArray>::LEN,
+        }
+    };
+    (@align $t:ty) => { <$t as $crate::pass::GlslType>::ALIGN };
+    (@align $t:ty as array) => { <$t as $crate::pass::GlslArray>::ALIGN };
+}
+
+/// One compute pass, declared once.
+#[derive(Clone, Debug)]
+pub struct ComputeDecl {
+    /// The pipeline's name (debug utils) and the profiler scope of [`ComputePass::dispatch`].
+    pub name: String,
+    /// Path under `shaders/`.
+    pub shader: &'static str,
+    pub defines: Vec<(String, String)>,
+    pub bindings: Vec<Binding>,
+    /// The push-constant block's bytes and GLSL (`PUSH_CONSTANTS`).
+    pub push: Option<(u32, String)>,
+    /// Local size x, y (`LOCAL_SIZE_X`, `LOCAL_SIZE_Y`).
+    pub group: [u32; 2],
+}
+
+impl ComputeDecl {
+    pub fn new(name: impl Into<String>, shader: &'static str) -> ComputeDecl {
+        ComputeDecl {
+            name: name.into(),
+            shader,
+            defines: Vec::new(),
+            bindings: Vec::new(),
+            push: None,
+            group: [8, 8],
+        }
+    }
+
+    pub fn define(mut self, name: &str, value: impl ToString) -> ComputeDecl {
+        self.defines.push((name.to_string(), value.to_string()));
+        self
+    }
+
+    /// Shader-side constants (flag bits, limits) from their Rust values.
+    pub fn constants(mut self, c: &[(&str, u32)]) -> ComputeDecl {
+        for (name, v) in c {
+            self.defines.push((name.to_string(), format!("{v}u")));
+        }
+        self
+    }
+
+    pub fn bind(mut self, b: Binding) -> ComputeDecl {
+        self.bindings.push(b);
+        self
+    }
+
+    pub fn bindings(mut self, b: &[Binding]) -> ComputeDecl {
+        self.bindings.extend_from_slice(b);
+        self
+    }
+
+    pub fn push<P: PushConstants>(mut self) -> ComputeDecl {
+        self.push = Some((std::mem::size_of::<P>() as u32, P::glsl()));
+        self
+    }
+
+    pub fn group(mut self, x: u32, y: u32) -> ComputeDecl {
+        self.group = [x, y];
+        self
+    }
+
+    /// The set layout's bindings: numbered by position.
+    pub fn binding_descs(&self) -> Vec<BindingDesc> {
+        self.bindings
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                let (kind, count) = b.kind.descriptor();
+                BindingDesc {
+                    name: b.name,
+                    binding: i as u32,
+                    kind,
+                    count,
+                }
+            })
+            .collect()
+    }
+
+    /// Every define the shader is compiled with.
+    pub fn all_defines(&self) -> Vec<(String, String)> {
+        let mut d = self.defines.clone();
+        d.extend(self.binding_descs().iter().map(BindingDesc::define));
+        if let Some((_, glsl)) = &self.push {
+            d.push(("PUSH_CONSTANTS".into(), glsl.clone()));
+        }
+        d.push(("LOCAL_SIZE_X".into(), self.group[0].to_string()));
+        d.push(("LOCAL_SIZE_Y".into(), self.group[1].to_string()));
+        d
+    }
+
+    /// Checks the declaration itself: unique binding names.
+    fn check(&self) -> Result<()> {
+        for (i, b) in self.bindings.iter().enumerate() {
+            if self.bindings[..i].iter().any(|o| o.name == b.name) {
+                return Err(declaration(
+                    &self.name,
+                    format!("binding `{}` twice", b.name),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The compile-only build: set layout, samplers and pipeline; no image, no memory.
+    pub fn build(&self, gpu: &Gpu, shaders: &Shaders) -> Result<ComputePass> {
+        self.check()?;
+        let layout = SetLayout::new(
+            gpu,
+            &format!("{}.set_layout", self.name),
+            &self.binding_descs(),
+        )?;
+        let cs = shaders.compile(self.shader, &self.all_defines())?;
+        let pipeline = Pipeline::compute(
+            gpu,
+            &ComputeDesc {
+                name: &self.name,
+                shader: &cs,
+                set_layouts: &[&layout],
+                push_constant_bytes: self.push.as_ref().map_or(0, |p| p.0),
+            },
+        )?;
+        let mut samplers = BTreeMap::new();
+        for b in &self.bindings {
+            if let BindKind::Sampled { filter, .. } = b.kind
+                && !samplers.contains_key(&(filter as u8))
+            {
+                let s = Sampler::new(
+                    gpu,
+                    &format!("{}.{filter:?}", self.name).to_lowercase(),
+                    filter.desc(),
+                )?;
+                samplers.insert(filter as u8, s);
+            }
+        }
+        Ok(ComputePass {
+            decl: self.clone(),
+            layout,
+            pipeline,
+            samplers,
+        })
+    }
+}
+
+fn declaration(pass: &str, message: String) -> GpuError {
+    GpuError::Declaration {
+        pass: pass.to_string(),
+        message,
+    }
+}
+
+/// What one binding holds this frame.
+#[derive(Clone)]
+pub enum Bound<'a> {
+    Images(Vec<&'a Image>),
+    Image(&'a Image),
+    Buffer(&'a Buffer),
+}
+
+/// The resources of one dispatch, by binding name: what [`Resources`] hold of the same names,
+/// plus what is named here (the technique's targets, a post pass's input).
+#[derive(Clone, Default)]
+pub struct Binds<'a> {
+    list: Vec<(&'static str, Bound<'a>)>,
+}
+
+impl<'a> Binds<'a> {
+    pub fn new() -> Binds<'a> {
+        Binds::default()
+    }
+
+    /// Every resource of `res` under its own name (histories: see [`Binds::history`]).
+    pub fn of(res: &'a Resources) -> Binds<'a> {
+        let mut b = Binds::new();
+        for (name, r) in &res.items {
+            match r {
+                Owned::Image(i) => b.list.push((name, Bound::Image(i))),
+                Owned::Buffer(x) => b.list.push((name, Bound::Buffer(x))),
+                Owned::History(_) => {}
+            }
+        }
+        b
+    }
+
+    /// Binds `name` (a sampled or storage image binding).
+    pub fn image(mut self, name: &'static str, image: &'a Image) -> Binds<'a> {
+        self.set(name, Bound::Image(image));
+        self
+    }
+
+    /// Binds an array of sampled images.
+    pub fn images(mut self, name: &'static str, images: Vec<&'a Image>) -> Binds<'a> {
+        self.set(name, Bound::Images(images));
+        self
+    }
+
+    pub fn buffer(mut self, name: &'static str, buffer: &'a Buffer) -> Binds<'a> {
+        self.set(name, Bound::Buffer(buffer));
+        self
+    }
+
+    /// A history's slots for `frame`: the one read (written last frame) at `read`, the one
+    /// written this frame at `write`.
+    pub fn history(
+        self,
+        h: &'a History<Image>,
+        frame: u32,
+        read: &'static str,
+        write: &'static str,
+    ) -> Binds<'a> {
+        self.image(read, h.read(frame)).image(write, h.write(frame))
+    }
+
+    fn set(&mut self, name: &'static str, b: Bound<'a>) {
+        match self.list.iter_mut().find(|(n, _)| *n == name) {
+            Some(e) => e.1 = b,
+            None => self.list.push((name, b)),
+        }
+    }
+
+    fn get(&self, name: &str) -> Option<&Bound<'a>> {
+        self.list.iter().find(|(n, _)| *n == name).map(|(_, b)| b)
+    }
+}
+
+/// A built compute pass: pipeline, set layout and the samplers its sampled bindings read
+/// through.
+pub struct ComputePass {
+    pub decl: ComputeDecl,
+    layout: SetLayout,
+    pipeline: Pipeline,
+    samplers: BTreeMap<u8, Sampler>,
+}
+
+impl ComputePass {
+    pub fn name(&self) -> &str {
+        &self.decl.name
+    }
+
+    /// Checks that `binds` give every binding of the declaration something of its kind
+    /// (extra names are resources other passes bind, and are ignored).
+    pub fn check(&self, binds: &Binds) -> Result<()> {
+        for b in &self.decl.bindings {
+            let given = binds.get(b.name).ok_or_else(|| {
+                declaration(&self.decl.name, format!("nothing bound to `{}`", b.name))
+            })?;
+            let ok = match (b.kind, given) {
+                (BindKind::Sampled { count, .. }, Bound::Images(v)) => {
+                    !v.is_empty() && v.len() as u32 <= count
+                }
+                (BindKind::Sampled { .. } | BindKind::StorageImage(_), Bound::Image(_)) => true,
+                (BindKind::StorageBuffer(_) | BindKind::Uniform, Bound::Buffer(_)) => true,
+                _ => false,
+            };
+            if !ok {
+                let got = match given {
+                    Bound::Images(v) => format!("{} images", v.len()),
+                    Bound::Image(_) => "an image".into(),
+                    Bound::Buffer(_) => "a buffer".into(),
+                };
+                return Err(declaration(
+                    &self.decl.name,
+                    format!("`{}` is a {}, given {got}", b.name, b.kind.what()),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Records the barriers for `binds`, then (timed under the pass's name) one dispatch of
+    /// `groups` work groups with `push`.
+    pub fn dispatch<P: PushConstants>(
+        &self,
+        cmd: &mut Cmd,
+        profiler: &mut Profiler,
+        binds: &Binds,
+        push: &P,
+        groups: [u32; 3],
+    ) -> Result<()> {
+        self.prepare(cmd, binds)?;
+        let scope = profiler.begin(cmd, &self.decl.name, PassKind::Compute);
+        let r = self.dispatch_untimed(cmd, binds, push, groups);
+        profiler.end(cmd, scope);
+        r
+    }
+
+    /// [`ComputePass::dispatch`] over the pixels of a `width` x `height` image.
+    pub fn dispatch_2d<P: PushConstants>(
+        &self,
+        cmd: &mut Cmd,
+        profiler: &mut Profiler,
+        binds: &Binds,
+        push: &P,
+        (width, height): (u32, u32),
+    ) -> Result<()> {
+        let g = self.decl.group;
+        self.dispatch(
+            cmd,
+            profiler,
+            binds,
+            push,
+            [width.div_ceil(g[0]), height.div_ceil(g[1]), 1],
+        )
+    }
+
+    /// The barriers `binds` need before a dispatch (for passes that time several dispatches
+    /// as one scope).
+    pub fn prepare(&self, cmd: &mut Cmd, binds: &Binds) -> Result<()> {
+        self.check(binds)?;
+        for b in &self.decl.bindings {
+            let access = b.kind.compute_access();
+            match binds.get(b.name) {
+                Some(Bound::Image(i)) => cmd.use_image(i, access),
+                Some(Bound::Images(v)) => v.iter().for_each(|i| cmd.use_image(i, access)),
+                Some(Bound::Buffer(x)) => cmd.use_buffer(x, access),
+                None => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// One dispatch without barriers or timing (after [`ComputePass::prepare`]).
+    pub fn dispatch_untimed<P: PushConstants>(
+        &self,
+        cmd: &mut Cmd,
+        binds: &Binds,
+        push: &P,
+        groups: [u32; 3],
+    ) -> Result<()> {
+        let want = self.decl.push.as_ref().map_or(0, |p| p.0) as usize;
+        if std::mem::size_of::<P>() != want {
+            return Err(declaration(
+                &self.decl.name,
+                format!(
+                    "push constants of {} bytes, declared {want}",
+                    std::mem::size_of::<P>()
+                ),
+            ));
+        }
+        let set = self.set(cmd.gpu(), binds)?;
+        cmd.bind_pipeline(&self.pipeline);
+        cmd.bind_set(&self.pipeline, 0, &set);
+        if want > 0 {
+            cmd.push_constants(&self.pipeline, bytemuck::bytes_of(push));
+        }
+        cmd.dispatch(groups[0], groups[1], groups[2]);
+        cmd.keep(set);
+        Ok(())
+    }
+
+    fn set(&self, gpu: &Gpu, binds: &Binds) -> Result<DescriptorSet> {
+        self.check(binds)?;
+        let mut writes = Vec::with_capacity(self.decl.bindings.len());
+        for (i, b) in self.decl.bindings.iter().enumerate() {
+            let n = i as u32;
+            let sampler = match b.kind {
+                BindKind::Sampled { filter, .. } => self.samplers.get(&(filter as u8)),
+                _ => None,
+            };
+            match (binds.get(b.name), sampler) {
+                (Some(Bound::Image(img)), Some(s)) => {
+                    writes.push(Write::Sampled(n, vec![(*img, s)]));
+                }
+                (Some(Bound::Images(v)), Some(s)) => {
+                    writes.push(Write::Sampled(n, v.iter().map(|i| (*i, s)).collect()));
+                }
+                (Some(Bound::Image(img)), None) => writes.push(Write::Storage(n, img)),
+                (Some(Bound::Buffer(x)), _) => writes.push(Write::Buffer(n, x)),
+                _ => {
+                    return Err(declaration(
+                        &self.decl.name,
+                        format!("`{}` cannot be bound as given", b.name),
+                    ));
+                }
+            }
+        }
+        DescriptorSet::new(
+            gpu,
+            &format!("{}.set", self.decl.name),
+            &self.layout,
+            &writes,
+        )
+    }
+}
+
+/// A ping-pong pair: frame f writes slot f % 2 and reads the other (written by frame f - 1).
+pub struct History<T> {
+    slots: [T; 2],
+}
+
+impl<T> History<T> {
+    pub fn new(mut make: impl FnMut(usize) -> Result<T>) -> Result<History<T>> {
+        Ok(History {
+            slots: [make(0)?, make(1)?],
+        })
+    }
+
+    /// The slot frame `frame` writes (and the next frame reads).
+    pub fn write(&self, frame: u32) -> &T {
+        &self.slots[frame as usize % 2]
+    }
+
+    /// The slot frame `frame` reads: the one frame `frame - 1` wrote.
+    pub fn read(&self, frame: u32) -> &T {
+        &self.slots[(frame as usize + 1) % 2]
+    }
+
+    pub fn slots(&self) -> &[T; 2] {
+        &self.slots
+    }
+}
+
+/// One resource a technique or pass owns, declared once: allocation and memory estimate come
+/// from it.
+#[derive(Clone, Debug)]
+pub struct ResourceDecl {
+    /// The binding name it is bound under; allocated as `<owner>.<name>` (`[0]`, `[1]` for a
+    /// history's slots).
+    pub name: &'static str,
+    pub kind: ResourceKind,
+    /// A ping-pong pair ([`History`]).
+    pub history: bool,
+}
+
+#[derive(Clone, Debug)]
+pub enum ResourceKind {
+    Image {
+        format: vk::Format,
+        width: u32,
+        height: u32,
+        usage: vk::ImageUsageFlags,
+    },
+    /// A device-local storage buffer.
+    Buffer {
+        bytes: u64,
+        usage: vk::BufferUsageFlags,
+    },
+}
+
+impl ResourceDecl {
+    /// A `width` x `height` image of `format` (STORAGE, SAMPLED and TRANSFER_SRC: written by a
+    /// pass, read by the next or a post pass, read back).
+    pub fn image(name: &'static str, format: vk::Format, width: u32, height: u32) -> ResourceDecl {
+        ResourceDecl {
+            name,
+            kind: ResourceKind::Image {
+                format,
+                width,
+                height,
+                usage: vk::ImageUsageFlags::STORAGE
+                    | vk::ImageUsageFlags::SAMPLED
+                    | vk::ImageUsageFlags::TRANSFER_SRC,
+            },
+            history: false,
+        }
+    }
+
+    /// A storage buffer of `bytes`.
+    pub fn buffer(name: &'static str, bytes: u64) -> ResourceDecl {
+        ResourceDecl {
+            name,
+            kind: ResourceKind::Buffer {
+                bytes,
+                usage: vk::BufferUsageFlags::STORAGE_BUFFER
+                    | vk::BufferUsageFlags::TRANSFER_SRC
+                    | vk::BufferUsageFlags::TRANSFER_DST,
+            },
+            history: false,
+        }
+    }
+
+    /// As a ping-pong pair.
+    pub fn history(mut self) -> ResourceDecl {
+        self.history = true;
+        self
+    }
+
+    fn slot_names(&self, owner: &str) -> Vec<String> {
+        if self.history {
+            (0..2)
+                .map(|i| format!("{owner}.{}[{i}]", self.name))
+                .collect()
+        } else {
+            vec![format!("{owner}.{}", self.name)]
+        }
+    }
+
+    /// What allocating it takes (crate::memory), under the names [`Resources::new`] uses.
+    pub fn estimate(&self, e: &mut MemoryEstimate, owner: &str) {
+        for name in self.slot_names(owner) {
+            match &self.kind {
+                ResourceKind::Image {
+                    format,
+                    width,
+                    height,
+                    ..
+                } => e.image(name, *format, *width, *height),
+                ResourceKind::Buffer { bytes, .. } => e.storage_buffer(name, *bytes, false),
+            }
+        }
+    }
+}
+
+/// The estimate of a list of declarations.
+pub fn estimate(decls: &[ResourceDecl], owner: &str) -> MemoryEstimate {
+    let mut e = MemoryEstimate::new();
+    for d in decls {
+        d.estimate(&mut e, owner);
+    }
+    e
+}
+
+enum Owned {
+    Image(Image),
+    Buffer(Buffer),
+    History(History<Image>),
+}
+
+/// The resources of one owner, allocated from their declarations, found by name.
+pub struct Resources {
+    owner: String,
+    items: Vec<(&'static str, Owned)>,
+}
+
+impl Resources {
+    pub fn new(gpu: &Gpu, owner: &str, decls: &[ResourceDecl]) -> Result<Resources> {
+        let mut items = Vec::with_capacity(decls.len());
+        for d in decls {
+            if items.iter().any(|(n, _)| *n == d.name) {
+                return Err(declaration(owner, format!("resource `{}` twice", d.name)));
+            }
+            let names = d.slot_names(owner);
+            let make = |name: &str| -> Result<Owned> {
+                Ok(match &d.kind {
+                    ResourceKind::Image {
+                        format,
+                        width,
+                        height,
+                        usage,
+                    } => Owned::Image(Image::new(
+                        gpu,
+                        &ImageDesc::new_2d(name, *format, *width, *height, *usage),
+                    )?),
+                    ResourceKind::Buffer { bytes, usage } => Owned::Buffer(Buffer::new(
+                        gpu,
+                        name,
+                        *bytes,
+                        *usage,
+                        cbr_gpu::Location::GpuOnly,
+                    )?),
+                })
+            };
+            let owned = if d.history {
+                let image = |o: Owned| match o {
+                    Owned::Image(i) => Ok(i),
+                    _ => Err(declaration(
+                        owner,
+                        format!("history `{}` of buffers", d.name),
+                    )),
+                };
+                Owned::History(History::new(|i| image(make(&names[i])?))?)
+            } else {
+                make(&names[0])?
+            };
+            items.push((d.name, owned));
+        }
+        Ok(Resources {
+            owner: owner.to_string(),
+            items,
+        })
+    }
+
+    fn find(&self, name: &str) -> Result<&Owned> {
+        self.items
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|(_, o)| o)
+            .ok_or_else(|| declaration(&self.owner, format!("no resource `{name}`")))
+    }
+
+    pub fn image(&self, name: &str) -> Result<&Image> {
+        match self.find(name)? {
+            Owned::Image(i) => Ok(i),
+            _ => Err(declaration(
+                &self.owner,
+                format!("`{name}` is not an image"),
+            )),
+        }
+    }
+
+    pub fn buffer(&self, name: &str) -> Result<&Buffer> {
+        match self.find(name)? {
+            Owned::Buffer(b) => Ok(b),
+            _ => Err(declaration(
+                &self.owner,
+                format!("`{name}` is not a buffer"),
+            )),
+        }
+    }
+
+    pub fn history(&self, name: &str) -> Result<&History<Image>> {
+        match self.find(name)? {
+            Owned::History(h) => Ok(h),
+            _ => Err(declaration(
+                &self.owner,
+                format!("`{name}` is not a history"),
+            )),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    push_constants! {
+        struct TestPush {
+            size: [i32; 4],
+            scale: f32,
+            count: u32,
+            pad: [f32; 2],
+            taps: [f32; 3] as array,
+        }
+    }
+
+    #[test]
+    fn push_constants_give_their_glsl_block() {
+        assert_eq!(
+            TestPush::glsl(),
+            "layout(push_constant) uniform Push { ivec4 size; float scale; uint count; \
+             vec2 pad; float taps[3]; } pc;"
+        );
+        assert_eq!(std::mem::size_of::<TestPush>(), 44);
+    }
+
+    #[test]
+    fn bindings_are_numbered_by_position_and_named_in_defines() {
+        let d = ComputeDecl::new("t", "t.comp")
+            .bind(Binding::sampled("src"))
+            .bind(Binding::image("dst", Use::Write))
+            .bind(Binding::buffer("list", Use::Read))
+            .constants(&[("FLAG_X", 4)])
+            .push::<TestPush>()
+            .group(16, 4);
+        let defs = d.all_defines();
+        let get = |k: &str| defs.iter().find(|(n, _)| n == k).map(|(_, v)| v.clone());
+        assert_eq!(get("BINDING_SRC").as_deref(), Some("0"));
+        assert_eq!(get("BINDING_DST").as_deref(), Some("1"));
+        assert_eq!(get("BINDING_LIST").as_deref(), Some("2"));
+        assert_eq!(get("FLAG_X").as_deref(), Some("4u"));
+        assert_eq!(get("LOCAL_SIZE_X").as_deref(), Some("16"));
+        assert_eq!(get("LOCAL_SIZE_Y").as_deref(), Some("4"));
+        assert!(get("PUSH_CONSTANTS").is_some_and(|p| p.contains("float scale;")));
+        let dup = ComputeDecl::new("t", "t.comp")
+            .bind(Binding::sampled("src"))
+            .bind(Binding::sampled("src"));
+        assert!(dup.check().is_err());
+    }
+
+    #[test]
+    fn history_slots_alternate() {
+        let h = History::new(Ok).expect("history");
+        assert_eq!((*h.write(0), *h.read(0)), (0, 1));
+        assert_eq!((*h.write(1), *h.read(1)), (1, 0));
+        assert_eq!((*h.write(6), *h.read(7)), (0, 0));
+    }
+
+    #[test]
+    fn estimates_name_what_is_allocated() {
+        let decls = [
+            ResourceDecl::image("out", vk::Format::R16G16B16A16_SFLOAT, 4, 2),
+            ResourceDecl::image("hist", vk::Format::R32G32_UINT, 4, 2).history(),
+            ResourceDecl::buffer("list", 100),
+        ];
+        let e = estimate(&decls, "p");
+        let names: Vec<&str> = e.items.iter().map(|i| i.name.as_str()).collect();
+        assert_eq!(names, ["p.out", "p.hist[0]", "p.hist[1]", "p.list"]);
+        assert_eq!(e.items[0].bytes, 64);
+        assert_eq!(e.items[1].bytes, 64);
+        assert_eq!(e.items[3].bytes, 100);
+    }
+}

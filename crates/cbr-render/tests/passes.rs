@@ -1,0 +1,91 @@
+//! Passes declared once (crate::pass): the declared passes build their pipelines without a
+//! single allocation (the compile-only build), with zero validation messages; binds that do not
+//! fit the declaration are errors, not panics.
+
+mod common;
+
+use cbr_gpu::{GpuError, Image, ImageDesc, vk};
+use cbr_render::pass::{Binding, Binds, ComputeDecl, Use};
+use cbr_render::post::{fxaa, sharpen, taa};
+use cbr_render::techniques::ssaa;
+
+/// Every pass declared through crate::pass so far, with every variant its parameters select.
+fn declared() -> Vec<ComputeDecl> {
+    let mut d = vec![sharpen::decl(), ssaa::decl()];
+    d.extend(fxaa::decls());
+    for inside in [false, true] {
+        for packed in [false, true] {
+            d.push(taa::decl(inside, packed));
+        }
+    }
+    d
+}
+
+#[test]
+fn declared_passes_build_without_allocating() {
+    let gpu = common::gpu();
+    let shaders = cbr_render::shader_library();
+    let before = gpu.allocations_made();
+    let built: Vec<_> = declared()
+        .iter()
+        .map(|d| {
+            d.build(&gpu, &shaders)
+                .unwrap_or_else(|e| panic!("{}: {e}", d.name))
+        })
+        .collect();
+    assert_eq!(built.len(), 8);
+    assert_eq!(
+        gpu.allocations_made(),
+        before,
+        "a compile-only build allocated memory"
+    );
+    common::assert_clean(&gpu);
+}
+
+#[test]
+fn binds_that_do_not_fit_the_declaration_are_errors() {
+    let gpu = common::gpu();
+    let shaders = cbr_render::shader_library();
+    let pass = sharpen::decl().build(&gpu, &shaders).expect("sharpen");
+    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED;
+    let img = |name| {
+        Image::new(
+            &gpu,
+            &ImageDesc::new_2d(name, vk::Format::R16G16B16A16_SFLOAT, 8, 8, usage),
+        )
+        .expect("image")
+    };
+    let (a, b) = (img("t.a"), img("t.b"));
+    let counter = cbr_gpu::Buffer::new(
+        &gpu,
+        "t.buffer",
+        16,
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        cbr_gpu::Location::GpuOnly,
+    )
+    .expect("buffer");
+    let declaration = |r: cbr_gpu::Result<()>| match r {
+        Err(GpuError::Declaration { pass, message }) => format!("{pass}: {message}"),
+        other => panic!("expected a declaration error, got {other:?}"),
+    };
+    assert!(
+        pass.check(&Binds::new().image("src", &a).image("out", &b))
+            .is_ok()
+    );
+    let missing = declaration(pass.check(&Binds::new().image("src", &a)));
+    assert!(missing.contains("nothing bound to `out`"), "{missing}");
+    let wrong = declaration(pass.check(&Binds::new().image("src", &a).buffer("out", &counter)));
+    assert!(
+        wrong.contains("`out` is a storage image, given a buffer"),
+        "{wrong}"
+    );
+    // A declaration naming a binding twice is refused when it is built.
+    let twice = ComputeDecl::new("twice", "post/sharpen.comp")
+        .bind(Binding::sampled("src"))
+        .bind(Binding::image("src", Use::Write));
+    assert!(matches!(
+        twice.build(&gpu, &shaders),
+        Err(GpuError::Declaration { .. })
+    ));
+    common::assert_clean(&gpu);
+}
