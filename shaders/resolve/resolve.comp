@@ -5,8 +5,7 @@
 // inputs, so they write identical images. The CPU reference is crates/cbr-render/src/resolve/
 // reference.rs: keep the two in step, operation for operation.
 //
-// Defines: LAYOUT (the raster layout, read through layout_fetch.glsl), MODE, MAPPING, GROUP
-// (workgroup side), FP16 (colour arithmetic in float16), OUT_FORMAT (rgba16f or rgba32f), DEBUG
+// Defines: LAYOUT (the raster layout, read through layout_fetch.glsl), MODE, MAPPING, FP16 (colour arithmetic in float16), OUT_FORMAT (rgba16f or rgba32f), DEBUG
 // (write the debug bits), OUT_VELOCITY (write the velocity used: debug, `+taa`), BINDING_* (crates/cbr-render/src/resolve/mod.rs).
 #if FP16
 #extension GL_EXT_shader_explicit_arithmetic_types_float16 : require
@@ -18,35 +17,14 @@
 #endif
 #include "../inc/layout_fetch.glsl"
 
-#define MODE_OURS 0
-#define MODE_PQ4K 1
-#define MODE_INTEL 2
-#define MODE_SPATIAL 3
-#define MODE_TEMPORAL 4
+// Defines from crates/cbr-render/src/resolve/mod.rs (`decl`): MODE_* (the modes), F_* (the
+// push-constant flags: F_RESET no usable history; F_NO_VELOCITY, F_NO_DEPTH, F_NO_IDS,
+// F_NO_CLAMP the ablations of `ours`; F_PREPASS the native-resolution depth + ID prepass is bound
+// and used), DBG_* (the debug bits, one R32UI per pixel; DBG_STILL: `ours` took the history at p
+// as it is in a still neighbourhood), ID_MOVED (history IDs carry it where the pixel moved more
+// than the static threshold) and ID_MASK; LOCAL_SIZE_X/Y (the workgroup side, 8 or 16).
 
-// Push-constant flags.
-#define F_RESET 1u        // no usable history (first frame, camera cut)
-#define F_NO_VELOCITY 2u  // ablations of `ours`
-#define F_NO_DEPTH 4u
-#define F_NO_IDS 8u
-#define F_NO_CLAMP 16u
-#define F_PREPASS 32u     // the native-resolution depth + ID prepass is bound and used
-
-// Debug bits (one R32UI per pixel).
-#define DBG_RENDERED 1u
-#define DBG_MISSING 2u
-#define DBG_REPROJECTED 4u
-#define DBG_REJECT_ID 8u
-#define DBG_REJECT_DEPTH 16u
-#define DBG_CLAMPED 32u
-#define DBG_SPATIAL 64u
-#define DBG_STILL 128u  // `ours`: still neighbourhood, history at p taken as it is
-
-// History IDs carry this bit when the pixel moved (|v| above the static threshold).
-#define ID_MOVED 0x80000000u
-#define ID_MASK 0x7fffffffu
-
-layout(local_size_x = GROUP, local_size_y = GROUP) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 
 layout(set = 0, binding = BINDING_COLOR) uniform CB_SAMPLER cur_color;
 layout(set = 0, binding = BINDING_VELOCITY) uniform CB_SAMPLER cur_velocity;
@@ -66,13 +44,10 @@ layout(set = 0, binding = BINDING_DEBUG_BITS, r32ui) uniform writeonly uimage2D 
 layout(set = 0, binding = BINDING_DEBUG_VELOCITY, rg32f) uniform writeonly image2D out_velocity;
 #endif
 
-layout(push_constant) uniform Push {
-    ivec4 size_parity_side;  // W, H, parity, tangram side
-    uvec4 flags;             // x: F_* flags
-    vec4 params;             // x: depth tolerance, y: static threshold (px), z: pq4k motion
-                             // threshold (px), w: 0
-    mat4 reproj;             // intel: previous clip from current (NDC x, NDC y, depth, 1)
-} pc;
+// size_parity_side: W, H, parity, tangram side; flags.x: F_* flags; params: x depth tolerance,
+// y static threshold (px), z pq4k motion threshold (px), w 0; reproj (intel): previous clip from
+// current (NDC x, NDC y, depth, 1).
+PUSH_CONSTANTS
 
 ivec2 size() { return pc.size_parity_side.xy; }
 // Every flag but F_RESET is fixed for the pass's lifetime and compiled in (STATIC_FLAGS, the same

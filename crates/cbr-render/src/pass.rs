@@ -44,6 +44,8 @@ pub enum Filter {
     Nearest,
     /// Bilinear, clamp to edge, normalised coordinates: TAA's history reads.
     Linear,
+    /// Bilinear in texel units (Vulkan's unnormalizedCoordinates): the resolve's history reads.
+    LinearTexels,
 }
 
 impl Filter {
@@ -52,6 +54,11 @@ impl Filter {
             Filter::Nearest => SamplerDesc::NEAREST,
             Filter::Linear => SamplerDesc {
                 linear: true,
+                ..SamplerDesc::NEAREST
+            },
+            Filter::LinearTexels => SamplerDesc {
+                linear: true,
+                unnormalized: true,
                 ..SamplerDesc::NEAREST
             },
         }
@@ -292,7 +299,8 @@ impl ComputeDecl {
         self
     }
 
-    /// Shader-side constants (flag bits, limits) from their Rust values.
+    /// Shader-side constants (flag bits, limits) from their Rust values, as `uint` literals
+    /// (`4u`): for expressions; values the preprocessor compares are plain [`ComputeDecl::define`]s.
     pub fn constants(mut self, c: &[(&str, u32)]) -> ComputeDecl {
         for (name, v) in c {
             self.defines.push((name.to_string(), format!("{v}u")));
@@ -665,8 +673,9 @@ impl<T> History<T> {
         &self.slots[(frame as usize + 1) % 2]
     }
 
-    pub fn slots(&self) -> &[T; 2] {
-        &self.slots
+    /// Slot `k` (passes that pick their slot themselves: the resolve's frame parity).
+    pub fn slot(&self, k: usize) -> &T {
+        &self.slots[k % 2]
     }
 }
 
@@ -727,6 +736,14 @@ impl ResourceDecl {
             },
             history: false,
         }
+    }
+
+    /// With more usages (an image another pass fills by a copy: TRANSFER_DST).
+    pub fn usage(mut self, more: vk::ImageUsageFlags) -> ResourceDecl {
+        if let ResourceKind::Image { usage, .. } = &mut self.kind {
+            *usage |= more;
+        }
+        self
     }
 
     /// As a ping-pong pair.

@@ -453,6 +453,13 @@ fn post_passes_chain_and_match_their_cpu_reference() {
     .expect("refused")
     .to_string();
     assert!(err.contains("full frame"), "{err}");
+    // Two jittering passes are refused naming both, not the technique (which does not jitter).
+    let err = Renderer::new(&gpu, &shaders, &s, spec(w, h, "native+taa+taa"))
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(err.contains("(`+taa`, `+taa`)"), "{err}");
+    assert!(!err.contains("`native` jitters"), "{err}");
     assert!(Spec::parse("native+blur").is_err());
     assert_clean(&gpu);
 }

@@ -4,9 +4,11 @@
 
 mod common;
 
-use cbr_gpu::{GpuError, Image, ImageDesc, vk};
+use cbr_gpu::{GpuError, Image, ImageDesc, Layout, vk};
+use cbr_render::layouts::LayoutPlan;
 use cbr_render::pass::{Binding, Binds, ComputeDecl, Use};
 use cbr_render::post::{fxaa, sharpen, taa};
+use cbr_render::resolve::{self, Mapping, ResolveMode, ResolveSettings};
 use cbr_render::techniques::ssaa;
 
 /// Every pass declared through crate::pass so far, with every variant its parameters select.
@@ -18,6 +20,22 @@ fn declared() -> Vec<ComputeDecl> {
             d.push(taa::decl(inside, packed));
         }
     }
+    // The resolve: every mode, pixel and quad, groups 8 and 16, with and without the prepass.
+    let plan = LayoutPlan::new(Layout::Rotated, 64, 36, 0);
+    for mode in ResolveMode::ALL {
+        for mapping in [Mapping::Pixel, Mapping::Quad] {
+            for group in [8, 16] {
+                let s = ResolveSettings {
+                    mode,
+                    mapping,
+                    group,
+                    ..ResolveSettings::default()
+                };
+                d.push(resolve::decl(&s, &plan, group == 16));
+            }
+        }
+    }
+    d.push(resolve::copy_floor_decl("resolve.copy_floor"));
     d
 }
 
@@ -33,7 +51,7 @@ fn declared_passes_build_without_allocating() {
                 .unwrap_or_else(|e| panic!("{}: {e}", d.name))
         })
         .collect();
-    assert_eq!(built.len(), 8);
+    assert_eq!(built.len(), 29);
     assert_eq!(
         gpu.allocations_made(),
         before,

@@ -205,15 +205,8 @@ impl Bench {
     ) -> GpuResult {
         let plan = LayoutPlan::new(Layout::Masked, s.w, s.h, parity);
         let pre = prepass.then_some((&self.pre_ids, &self.pre_depth));
-        let pass = ResolvePass::new(
-            &self.gpu,
-            &self.shaders,
-            settings,
-            &plan,
-            &self.targets,
-            pre,
-        )
-        .expect("resolve pass");
+        let pass = ResolvePass::new(&self.gpu, &self.shaders, settings, &plan, prepass)
+            .expect("resolve pass");
         pass.seed_history(&self.gpu, 1, &s.hist_color, &s.hist_depth, &s.hist_ids)
             .expect("seed");
         let rb = pass.readbacks(&self.gpu).expect("readbacks");
@@ -227,9 +220,8 @@ impl Bench {
         };
         self.gpu
             .submit("test.resolve", |cmd| {
-                pass.record(cmd, &mut profiler, &self.targets, pre, &frame);
-                pass.read(cmd, 0, &rb, true);
-                Ok(())
+                pass.record(cmd, &mut profiler, &self.targets, pre, &frame)?;
+                pass.read(cmd, 0, &rb, true)
             })
             .expect("submit");
         let (depth, ids) = rb.depth_ids().expect("depth and ids");

@@ -41,9 +41,9 @@ enum Command {
     /// Compare two images or two folders of frames: PSNR, SSIM, FLIP, HDR-FLIP, MSE, relMSE.
     /// Exit 0 when every --fail-above holds, 1 when one fails, 2 on errors.
     Compare(compare::CompareArgs),
-    /// Benchmark configurations over the scene's camera path against native: GPU time per pass
-    /// (median, p5, p95), pipeline statistics, copy-kernel floor, per-frame error; bench.json +
-    /// bench.csv.
+    /// Benchmark configurations over the scene's camera path against a reference (`native`, or
+    /// `--reference ssaa:N`): GPU time per pass (median, p5, p95), pipeline statistics,
+    /// copy-kernel floor, per-frame error; bench.json + bench.csv.
     Bench(bench::BenchArgs),
     /// One self-contained HTML report from `cbr bench` folders.
     Report(report::ReportArgs),

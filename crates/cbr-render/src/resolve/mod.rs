@@ -6,13 +6,13 @@
 pub mod reference;
 
 use cbr_gpu::{
-    Access, BindingDesc, Buffer, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Gpu, GpuError,
-    Image, ImageDesc, LevelCopy, Location, PassKind, Pipeline, Profiler, Readback, Result, Sampler,
-    SamplerDesc, SetLayout, Shaders, Write, vk,
+    Access, Buffer, Cmd, Gpu, GpuError, Image, LevelCopy, Location, Profiler, Readback, Result,
+    Shaders, vk,
 };
 
 use crate::layouts::LayoutPlan;
 use crate::memory::MemoryEstimate;
+use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, Filter, ResourceDecl, Resources, Use};
 use crate::scene_pass::layout_id;
 use crate::targets::FrameTargets;
 
@@ -248,33 +248,18 @@ impl ResolveSettings {
     }
 }
 
-pub const BINDINGS: [BindingDesc; 12] = {
-    use DescriptorKind::{CombinedImageSampler as S, StorageImage as I};
-    [
-        BindingDesc::one("color", 0, S),
-        BindingDesc::one("velocity", 1, S),
-        BindingDesc::one("ids", 2, S),
-        BindingDesc::one("depth", 3, S),
-        BindingDesc::one("hist_color", 4, S),
-        BindingDesc::one("hist_geom", 5, S),
-        BindingDesc::one("pre_depth", 6, S),
-        BindingDesc::one("pre_ids", 7, S),
-        BindingDesc::one("out_color", 8, I),
-        BindingDesc::one("out_geom", 9, I),
-        BindingDesc::one("debug_bits", 10, I),
-        BindingDesc::one("debug_velocity", 11, I),
-    ]
-};
-
-/// The push constants of resolve.comp (112 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ResolvePush {
-    pub size_parity_side: [i32; 4],
-    pub flags: [u32; 4],
-    pub params: [f32; 4],
-    /// Column-major: previous clip from current (NDC x, NDC y, depth, 1).
-    pub reproj: [f32; 16],
+crate::push_constants! {
+    /// The push constants of resolve.comp (112 bytes).
+    pub struct ResolvePush {
+        /// W, H, parity, tangram side.
+        size_parity_side: [i32; 4],
+        /// x: the F_* flags.
+        flags: [u32; 4],
+        /// x: depth tolerance, y: static threshold (px), z: pq4k motion threshold (px), w: 0.
+        params: [f32; 4],
+        /// Column-major: previous clip from current (NDC x, NDC y, depth, 1).
+        reproj: [[f32; 4]; 4],
+    }
 }
 
 /// What one frame's resolve needs besides the samples.
@@ -288,24 +273,111 @@ pub struct ResolveFrame {
     pub reproj: [f32; 16],
 }
 
-/// One history slot: the resolved colour, and in one texel the object ID (with `ID_MOVED`) and
-/// the reverse-Z depth bits it shows (one fetch per validation).
-pub struct History {
-    pub color: Image,
-    pub geom: Image,
-}
-
+/// History geometry, one texel per pixel: object ID (with `ID_MOVED`) and the reverse-Z depth
+/// bits it shows (one fetch per validation).
 pub const HISTORY_GEOM_FORMAT: vk::Format = vk::Format::R32G32_UINT;
 
+/// The resolve (shaders/resolve/resolve.comp) for `settings`, a layout plan's layout and
+/// sample locations, with or without the prepass.
+pub fn decl(settings: &ResolveSettings, plan: &LayoutPlan, prepass: bool) -> ComputeDecl {
+    let out_format = if settings.f32_history {
+        "rgba32f"
+    } else {
+        "rgba16f"
+    };
+    ComputeDecl::new("resolve", "resolve/resolve.comp")
+        .define("LAYOUT", layout_id(plan.layout))
+        .define("MSAA_LOCATIONS", u32::from(plan.sample_locations.is_some()))
+        .define("MODE", settings.mode.id())
+        .define("MAPPING", u32::from(settings.mapping == Mapping::Quad))
+        .define("FP16", u32::from(settings.fp16))
+        .define("OUT_FORMAT", out_format)
+        .define("DEBUG", u32::from(settings.debug))
+        .define("FUSED", u32::from(settings.fused))
+        // Every flag but F_RESET, compiled in (resolve.comp `has`).
+        .define("STATIC_FLAGS", settings.flags(false, prepass))
+        .define("FUSED_ALPHA", format!("{FUSED_ALPHA:?}"))
+        .define("FUSED_ALPHA_MAX", format!("{FUSED_ALPHA_MAX:?}"))
+        .define("FUSED_SPEED", format!("{FUSED_SPEED:?}"))
+        .define("HISTORY_WEIGHT", format!("{HISTORY_WEIGHT:?}"))
+        .define(
+            "HISTORY_WEIGHT_DETAIL",
+            format!("{HISTORY_WEIGHT_DETAIL:?}"),
+        )
+        .define("DETAIL_CONTRAST", format!("{DETAIL_CONTRAST:?}"))
+        .define("EDGE_CONTRAST", format!("{EDGE_CONTRAST:?}"))
+        .define(
+            "OUT_VELOCITY",
+            u32::from(settings.debug || settings.velocity),
+        )
+        // Plain integers: the preprocessor compares them (`#if MODE == MODE_OURS`).
+        .define("MODE_OURS", ResolveMode::Ours.id())
+        .define("MODE_PQ4K", ResolveMode::Pq4k.id())
+        .define("MODE_INTEL", ResolveMode::Intel.id())
+        .define("MODE_SPATIAL", ResolveMode::Spatial.id())
+        .define("MODE_TEMPORAL", ResolveMode::Temporal.id())
+        .constants(&[
+            ("F_RESET", F_RESET),
+            ("F_NO_VELOCITY", F_NO_VELOCITY),
+            ("F_NO_DEPTH", F_NO_DEPTH),
+            ("F_NO_IDS", F_NO_IDS),
+            ("F_NO_CLAMP", F_NO_CLAMP),
+            ("F_PREPASS", F_PREPASS),
+            ("DBG_RENDERED", DBG_RENDERED),
+            ("DBG_MISSING", DBG_MISSING),
+            ("DBG_REPROJECTED", DBG_REPROJECTED),
+            ("DBG_REJECT_ID", DBG_REJECT_ID),
+            ("DBG_REJECT_DEPTH", DBG_REJECT_DEPTH),
+            ("DBG_CLAMPED", DBG_CLAMPED),
+            ("DBG_SPATIAL", DBG_SPATIAL),
+            ("DBG_STILL", DBG_STILL),
+            ("ID_MOVED", ID_MOVED),
+            ("ID_MASK", ID_MASK),
+        ])
+        .bindings(&[
+            Binding::sampled("color"),
+            Binding::sampled("velocity"),
+            Binding::sampled("ids"),
+            Binding::sampled("depth"),
+            // `ours`' Catmull-Rom takes 5 bilinear taps in texel units (resolve.comp,
+            // history_resampled); texelFetch ignores the sampler.
+            Binding::sampled_with("hist_color", Filter::LinearTexels),
+            Binding::sampled("hist_geom"),
+            Binding::sampled("pre_depth"),
+            Binding::sampled("pre_ids"),
+            Binding::image("out_color", Use::Write),
+            Binding::image("out_geom", Use::Write),
+            Binding::image("debug_bits", Use::Write),
+            Binding::image("debug_velocity", Use::Write),
+        ])
+        .push::<ResolvePush>()
+        .group(settings.group, settings.group)
+}
+
+/// Two history slots (colour, geometry) and the debug bits and velocity, filled by copies too
+/// (tests seed the history).
+fn resources(settings: &ResolveSettings, w: u32, h: u32) -> Vec<ResourceDecl> {
+    let color = if settings.f32_history {
+        vk::Format::R32G32B32A32_SFLOAT
+    } else {
+        vk::Format::R16G16B16A16_SFLOAT
+    };
+    let dst = vk::ImageUsageFlags::TRANSFER_DST;
+    vec![
+        ResourceDecl::image("history_color", color, w, h)
+            .usage(dst)
+            .history(),
+        ResourceDecl::image("history_geom", HISTORY_GEOM_FORMAT, w, h)
+            .usage(dst)
+            .history(),
+        ResourceDecl::image("debug_bits", vk::Format::R32_UINT, w, h).usage(dst),
+        ResourceDecl::image("debug_velocity", vk::Format::R32G32_SFLOAT, w, h).usage(dst),
+    ]
+}
+
 pub struct ResolvePass {
-    pipeline: Pipeline,
-    _layout: SetLayout,
-    sets: [DescriptorSet; 2],
-    _sampler: Sampler,
-    _hist_sampler: Sampler,
-    pub history: [History; 2],
-    pub debug_bits: Image,
-    pub debug_velocity: Image,
+    pass: ComputePass,
+    res: Resources,
     floor: Option<CopyFloor>,
     settings: ResolveSettings,
     width: u32,
@@ -316,26 +388,10 @@ pub struct ResolvePass {
 
 impl ResolvePass {
     /// What [`ResolvePass::new`] and [`ResolvePass::readbacks`] allocate at `width` x `height`:
-    /// two history slots (colour, geometry), the debug bits and velocity, the copy floor's
-    /// buffers (`bandwidth_floor`), and the readbacks.
+    /// the declared resources, the copy floor's buffers (`bandwidth_floor`), and the readbacks.
     pub fn estimate(e: &mut MemoryEstimate, settings: &ResolveSettings, width: u32, height: u32) {
         let (w, h) = (width, height);
-        let color = if settings.f32_history {
-            vk::Format::R32G32B32A32_SFLOAT
-        } else {
-            vk::Format::R16G16B16A16_SFLOAT
-        };
-        for k in 0..2 {
-            e.image(format!("resolve.history[{k}].color"), color, w, h);
-            e.image(
-                format!("resolve.history[{k}].geom"),
-                HISTORY_GEOM_FORMAT,
-                w,
-                h,
-            );
-        }
-        e.image("resolve.debug_bits", vk::Format::R32_UINT, w, h);
-        e.image("resolve.debug_velocity", vk::Format::R32G32_SFLOAT, w, h);
+        e.append(crate::pass::estimate(&resources(settings, w, h), "resolve"));
         if settings.bandwidth_floor {
             CopyFloor::estimate(
                 e,
@@ -343,6 +399,11 @@ impl ResolvePass {
                 CopyFloor::bytes(w, h, settings.f32_history),
             );
         }
+        let color = if settings.f32_history {
+            vk::Format::R32G32B32A32_SFLOAT
+        } else {
+            vk::Format::R16G16B16A16_SFLOAT
+        };
         e.readback("readback.resolved", color, w, h, 1);
         e.readback("readback.resolved_geom", HISTORY_GEOM_FORMAT, w, h, 1);
         e.readback("readback.resolve_debug", vk::Format::R32_UINT, w, h, 1);
@@ -355,14 +416,13 @@ impl ResolvePass {
         );
     }
 
-    /// `prepass`: the native-resolution ID (RG32UI) and depth images, when the renderer has them.
+    /// `prepass`: whether the native-resolution ID and depth images are bound when it records.
     pub fn new(
         gpu: &Gpu,
         shaders: &Shaders,
         settings: &ResolveSettings,
         plan: &LayoutPlan,
-        targets: &FrameTargets,
-        prepass: Option<(&Image, &Image)>,
+        prepass: bool,
     ) -> Result<ResolvePass> {
         settings.validate().map_err(GpuError::Other)?;
         let (w, h) = (plan.width, plan.height);
@@ -377,138 +437,20 @@ impl ResolvePass {
                 feature: "--resolve-fp16 (shaderFloat16)".into(),
             });
         }
-        let layout = SetLayout::new(gpu, "resolve.set_layout", &BINDINGS)?;
-        let mut defines: Vec<(String, String)> = BINDINGS.iter().map(BindingDesc::define).collect();
-        let out_format = if settings.f32_history {
-            "rgba32f"
-        } else {
-            "rgba16f"
-        };
-        for (k, v) in [
-            ("LAYOUT", layout_id(plan.layout).to_string()),
-            (
-                "MSAA_LOCATIONS",
-                u32::from(plan.sample_locations.is_some()).to_string(),
-            ),
-            ("MODE", settings.mode.id().to_string()),
-            (
-                "MAPPING",
-                u32::from(settings.mapping == Mapping::Quad).to_string(),
-            ),
-            ("GROUP", settings.group.to_string()),
-            ("FP16", u32::from(settings.fp16).to_string()),
-            ("OUT_FORMAT", out_format.to_string()),
-            ("DEBUG", u32::from(settings.debug).to_string()),
-            ("FUSED", u32::from(settings.fused).to_string()),
-            // Every flag but F_RESET, compiled in (resolve.comp `has`).
-            (
-                "STATIC_FLAGS",
-                settings.flags(false, prepass.is_some()).to_string(),
-            ),
-            ("FUSED_ALPHA", format!("{FUSED_ALPHA:?}")),
-            ("FUSED_ALPHA_MAX", format!("{FUSED_ALPHA_MAX:?}")),
-            ("FUSED_SPEED", format!("{FUSED_SPEED:?}")),
-            ("HISTORY_WEIGHT", format!("{HISTORY_WEIGHT:?}")),
-            (
-                "HISTORY_WEIGHT_DETAIL",
-                format!("{HISTORY_WEIGHT_DETAIL:?}"),
-            ),
-            ("DETAIL_CONTRAST", format!("{DETAIL_CONTRAST:?}")),
-            ("EDGE_CONTRAST", format!("{EDGE_CONTRAST:?}")),
-            (
-                "OUT_VELOCITY",
-                u32::from(settings.debug || settings.velocity).to_string(),
-            ),
-        ] {
-            defines.push((k.into(), v));
-        }
-        let cs = shaders.compile("resolve/resolve.comp", &defines)?;
-        let pipeline = Pipeline::compute(
-            gpu,
-            &ComputeDesc {
-                name: "resolve",
-                shader: &cs,
-                set_layouts: &[&layout],
-                push_constant_bytes: std::mem::size_of::<ResolvePush>() as u32,
-            },
-        )?;
-        let sampler = Sampler::new(gpu, "resolve.sampler", SamplerDesc::NEAREST)?;
-        // The history colour's: `ours`' Catmull-Rom takes 5 bilinear taps (resolve.comp,
-        // history_resampled); texelFetch ignores the sampler.
-        let hist_sampler = Sampler::new(
-            gpu,
-            "resolve.hist_sampler",
-            SamplerDesc {
-                linear: true,
-                unnormalized: true,
-                ..SamplerDesc::NEAREST
-            },
-        )?;
-        let usage = vk::ImageUsageFlags::STORAGE
-            | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::TRANSFER_SRC
-            | vk::ImageUsageFlags::TRANSFER_DST;
-        let image =
-            |name: &str, format| Image::new(gpu, &ImageDesc::new_2d(name, format, w, h, usage));
-        let color_format = if settings.f32_history {
-            vk::Format::R32G32B32A32_SFLOAT
-        } else {
-            vk::Format::R16G16B16A16_SFLOAT
-        };
-        let slot = |k: usize| -> Result<History> {
-            Ok(History {
-                color: image(&format!("resolve.history[{k}].color"), color_format)?,
-                geom: image(&format!("resolve.history[{k}].geom"), HISTORY_GEOM_FORMAT)?,
-            })
-        };
-        let history = [slot(0)?, slot(1)?];
-        let debug_bits = image("resolve.debug_bits", vk::Format::R32_UINT)?;
-        let debug_velocity = image("resolve.debug_velocity", vk::Format::R32G32_SFLOAT)?;
-        let set = |k: usize| -> Result<DescriptorSet> {
-            let (out, prev) = (&history[k], &history[1 - k]);
-            // Without a prepass its bindings hold previous history images, never read.
-            let (pre_ids, pre_depth) = prepass.unwrap_or((&prev.geom, &prev.color));
-            DescriptorSet::new(
-                gpu,
-                &format!("resolve.set[{k}]"),
-                &layout,
-                &[
-                    Write::Sampled(0, vec![(&targets.color, &sampler)]),
-                    Write::Sampled(1, vec![(&targets.velocity, &sampler)]),
-                    Write::Sampled(2, vec![(&targets.ids, &sampler)]),
-                    Write::Sampled(3, vec![(&targets.depth, &sampler)]),
-                    Write::Sampled(4, vec![(&prev.color, &hist_sampler)]),
-                    Write::Sampled(5, vec![(&prev.geom, &sampler)]),
-                    Write::Sampled(6, vec![(pre_depth, &sampler)]),
-                    Write::Sampled(7, vec![(pre_ids, &sampler)]),
-                    Write::Storage(8, &out.color),
-                    Write::Storage(9, &out.geom),
-                    Write::Storage(10, &debug_bits),
-                    Write::Storage(11, &debug_velocity),
-                ],
-            )
-        };
-        let sets = [set(0)?, set(1)?];
         let floor = if settings.bandwidth_floor {
             Some(CopyFloor::new(gpu, shaders, w, h, settings.f32_history)?)
         } else {
             None
         };
         Ok(ResolvePass {
-            pipeline,
-            _layout: layout,
-            sets,
-            _sampler: sampler,
-            _hist_sampler: hist_sampler,
-            history,
-            debug_bits,
-            debug_velocity,
+            pass: decl(settings, plan, prepass).build(gpu, shaders)?,
+            res: Resources::new(gpu, "resolve", &resources(settings, w, h))?,
             floor,
             settings: *settings,
             width: w,
             height: h,
             tangram: plan.tangram,
-            has_prepass: prepass.is_some(),
+            has_prepass: prepass,
         })
     }
 
@@ -516,12 +458,17 @@ impl ResolvePass {
         &self.settings
     }
 
+    fn history(&self, name: &str, slot: usize) -> Result<&Image> {
+        Ok(self.res.history(name)?.slot(slot))
+    }
+
     /// The resolved colour written by the frame that used `slot`.
-    pub fn output(&self, slot: usize) -> &Image {
-        &self.history[slot].color
+    pub fn output(&self, slot: usize) -> Option<&Image> {
+        self.history("history_color", slot).ok()
     }
 
     /// Records the resolve of one frame (the raster targets are complete), then the copy floor.
+    /// `prepass`: the native-resolution (IDs, depth), when the pass was built with it.
     pub fn record(
         &self,
         cmd: &mut Cmd,
@@ -529,30 +476,26 @@ impl ResolvePass {
         targets: &FrameTargets,
         prepass: Option<(&Image, &Image)>,
         frame: &ResolveFrame,
-    ) {
-        let (out, prev) = (&self.history[frame.slot], &self.history[1 - frame.slot]);
-        for img in [
-            &targets.color,
-            &targets.velocity,
-            &targets.ids,
-            &targets.depth,
-            &prev.color,
-            &prev.geom,
-        ] {
-            cmd.use_image(img, Access::ComputeSampled);
-        }
-        if let Some((ids, depth)) = prepass {
-            cmd.use_image(ids, Access::ComputeSampled);
-            cmd.use_image(depth, Access::ComputeSampled);
-        }
-        for img in [
-            &out.color,
-            &out.geom,
-            &self.debug_bits,
-            &self.debug_velocity,
-        ] {
-            cmd.use_image(img, Access::ComputeStorageWrite);
-        }
+    ) -> Result<()> {
+        let (k, prev) = (frame.slot, 1 - frame.slot % 2);
+        let (prev_color, prev_geom) = (
+            self.history("history_color", prev)?,
+            self.history("history_geom", prev)?,
+        );
+        // Without a prepass its bindings hold the previous history, never read.
+        let (pre_ids, pre_depth) = prepass.unwrap_or((prev_geom, prev_color));
+        let binds = Binds::of(&self.res)
+            .image("color", &targets.color)
+            .image("velocity", &targets.velocity)
+            .image("ids", &targets.ids)
+            .image("depth", &targets.depth)
+            .image("hist_color", prev_color)
+            .image("hist_geom", prev_geom)
+            .image("pre_depth", pre_depth)
+            .image("pre_ids", pre_ids)
+            .image("out_color", self.history("history_color", k)?)
+            .image("out_geom", self.history("history_geom", k)?);
+        let r = frame.reproj;
         let push = ResolvePush {
             size_parity_side: [
                 self.width as i32,
@@ -562,31 +505,33 @@ impl ResolvePass {
             ],
             flags: [self.settings.flags(frame.reset, self.has_prepass), 0, 0, 0],
             params: self.settings.params(),
-            reproj: frame.reproj,
+            reproj: [
+                [r[0], r[1], r[2], r[3]],
+                [r[4], r[5], r[6], r[7]],
+                [r[8], r[9], r[10], r[11]],
+                [r[12], r[13], r[14], r[15]],
+            ],
         };
         let (gx, gy) = self.groups();
-        let scope = profiler.begin(cmd, "resolve", PassKind::Compute);
-        cmd.bind_pipeline(&self.pipeline);
-        cmd.bind_set(&self.pipeline, 0, &self.sets[frame.slot]);
-        cmd.push_constants(&self.pipeline, bytemuck::bytes_of(&push));
-        cmd.dispatch(gx, gy, 1);
-        profiler.end(cmd, scope);
+        self.pass
+            .dispatch(cmd, profiler, &binds, &push, [gx, gy, 1])?;
         if let Some(f) = &self.floor {
-            f.record(cmd, profiler);
+            f.record(cmd, profiler)?;
         }
+        Ok(())
     }
 
     /// The frame's geometry (`ResolveSettings::velocity`): the velocity each pixel used, and the
     /// history geometry of slot `slot` (object ID | moved bit, reverse-Z depth bits) as IDs and
     /// depth both.
-    pub fn geometry(&self, slot: usize) -> crate::technique::Geometry<'_> {
-        let g = &self.history[slot].geom;
-        crate::technique::Geometry {
-            velocity: &self.debug_velocity,
+    pub fn geometry(&self, slot: usize) -> Option<crate::technique::Geometry<'_>> {
+        let g = self.history("history_geom", slot).ok()?;
+        Some(crate::technique::Geometry {
+            velocity: self.res.image("debug_velocity").ok()?,
             depth: g,
             ids: g,
             packed: true,
-        }
+        })
     }
 
     /// Workgroups of the dispatch.
@@ -639,7 +584,10 @@ impl ResolvePass {
             Location::CpuToGpu,
         )?;
         staging.write(0, &bytes)?;
-        let h = &self.history[slot];
+        let (hc, hg) = (
+            self.history("history_color", slot)?,
+            self.history("history_geom", slot)?,
+        );
         let level = |offset| {
             [LevelCopy {
                 buffer_offset: offset,
@@ -649,38 +597,44 @@ impl ResolvePass {
             }]
         };
         gpu.submit("resolve.seed_history", |cmd| {
-            cmd.upload_levels(&staging, &h.color, &level(0), Access::ComputeSampled);
-            cmd.upload_levels(&staging, &h.geom, &level(geom_at), Access::ComputeSampled);
+            cmd.upload_levels(&staging, hc, &level(0), Access::ComputeSampled);
+            cmd.upload_levels(&staging, hg, &level(geom_at), Access::ComputeSampled);
             Ok(())
         })
     }
 
     /// Readbacks sized for the resolved colour, the debug bits and the debug velocity.
     pub fn readbacks(&self, gpu: &Gpu) -> Result<ResolveReadbacks> {
+        let rb = |name: &str, image: &Image| Readback::for_image(gpu, name, image);
         Ok(ResolveReadbacks {
-            color: Readback::for_image(gpu, "readback.resolved", &self.history[0].color)?,
-            geom: Readback::for_image(gpu, "readback.resolved_geom", &self.history[0].geom)?,
-            debug_bits: Readback::for_image(gpu, "readback.resolve_debug", &self.debug_bits)?,
-            debug_velocity: Readback::for_image(
-                gpu,
+            color: rb("readback.resolved", self.history("history_color", 0)?)?,
+            geom: rb("readback.resolved_geom", self.history("history_geom", 0)?)?,
+            debug_bits: rb("readback.resolve_debug", self.res.image("debug_bits")?)?,
+            debug_velocity: rb(
                 "readback.resolve_velocity",
-                &self.debug_velocity,
+                self.res.image("debug_velocity")?,
             )?,
         })
     }
 
     /// Records the copies of the frame's outputs (slot `slot`) into `rb`: the resolved colour,
     /// the debug views when enabled, and with `geometry` the history IDs and depths (tests).
-    pub fn read(&self, cmd: &mut Cmd, slot: usize, rb: &ResolveReadbacks, geometry: bool) {
-        let h = &self.history[slot];
-        cmd.read_image(&h.color, &rb.color);
+    pub fn read(
+        &self,
+        cmd: &mut Cmd,
+        slot: usize,
+        rb: &ResolveReadbacks,
+        geometry: bool,
+    ) -> Result<()> {
+        cmd.read_image(self.history("history_color", slot)?, &rb.color);
         if geometry {
-            cmd.read_image(&h.geom, &rb.geom);
+            cmd.read_image(self.history("history_geom", slot)?, &rb.geom);
         }
         if self.settings.debug {
-            cmd.read_image(&self.debug_bits, &rb.debug_bits);
-            cmd.read_image(&self.debug_velocity, &rb.debug_velocity);
+            cmd.read_image(self.res.image("debug_bits")?, &rb.debug_bits);
+            cmd.read_image(self.res.image("debug_velocity")?, &rb.debug_velocity);
         }
+        Ok(())
     }
 }
 
@@ -724,20 +678,34 @@ impl ResolveReadbacks {
 /// texel of colour, depth and ID per missing pixel; one colour, depth and ID per output pixel),
 /// as 16-byte words, in the same command buffer.
 pub struct CopyFloor {
-    name: &'static str,
-    pipeline: Pipeline,
-    _layout: SetLayout,
-    set: DescriptorSet,
-    _src: Buffer,
-    _dst: Buffer,
+    pass: ComputePass,
+    res: Resources,
     words_in: u32,
     words_out: u32,
 }
 
-pub const COPY_BINDINGS: [BindingDesc; 2] = [
-    BindingDesc::one("src", 0, DescriptorKind::StorageBuffer),
-    BindingDesc::one("dst", 1, DescriptorKind::StorageBuffer),
-];
+crate::push_constants! {
+    struct CopyPush {
+        words_in: u32,
+        words_out: u32,
+    }
+}
+
+/// The copy kernel (shaders/resolve/copy_floor.comp), timed as `name`.
+pub fn copy_floor_decl(name: &str) -> ComputeDecl {
+    ComputeDecl::new(name, "resolve/copy_floor.comp")
+        .bind(Binding::buffer("src", Use::Read))
+        .bind(Binding::buffer("dst", Use::Write))
+        .push::<CopyPush>()
+        .group(256, 1)
+}
+
+fn copy_floor_resources((read, write): (u64, u64)) -> Vec<ResourceDecl> {
+    vec![
+        ResourceDecl::buffer("src", read.div_ceil(16) * 16),
+        ResourceDecl::buffer("dst", write.div_ceil(16) * 16),
+    ]
+}
 
 impl CopyFloor {
     /// Bytes the resolve of a W x H frame reads and writes at least.
@@ -768,73 +736,28 @@ impl CopyFloor {
         shaders: &Shaders,
         name: &'static str,
         buffers: &str,
-        (read, write): (u64, u64),
+        bytes: (u64, u64),
     ) -> Result<CopyFloor> {
-        let layout = SetLayout::new(gpu, &format!("{buffers}.set_layout"), &COPY_BINDINGS)?;
-        let defines: Vec<(String, String)> =
-            COPY_BINDINGS.iter().map(BindingDesc::define).collect();
-        let cs = shaders.compile("resolve/copy_floor.comp", &defines)?;
-        let pipeline = Pipeline::compute(
-            gpu,
-            &ComputeDesc {
-                name,
-                shader: &cs,
-                set_layouts: &[&layout],
-                push_constant_bytes: 8,
-            },
-        )?;
-        let words_in = read.div_ceil(16) as u32;
-        let words_out = write.div_ceil(16) as u32;
-        let buf = |name: &str, words: u32| {
-            Buffer::new(
-                gpu,
-                name,
-                u64::from(words) * 16,
-                vk::BufferUsageFlags::STORAGE_BUFFER,
-                Location::GpuOnly,
-            )
-        };
-        let src = buf(&format!("{buffers}.src"), words_in)?;
-        let dst = buf(&format!("{buffers}.dst"), words_out)?;
-        let set = DescriptorSet::new(
-            gpu,
-            &format!("{buffers}.set"),
-            &layout,
-            &[Write::Buffer(0, &src), Write::Buffer(1, &dst)],
-        )?;
         Ok(CopyFloor {
-            name,
-            pipeline,
-            _layout: layout,
-            set,
-            _src: src,
-            _dst: dst,
-            words_in,
-            words_out,
+            pass: copy_floor_decl(name).build(gpu, shaders)?,
+            res: Resources::new(gpu, buffers, &copy_floor_resources(bytes))?,
+            words_in: bytes.0.div_ceil(16) as u32,
+            words_out: bytes.1.div_ceil(16) as u32,
         })
     }
 
     /// What [`CopyFloor::named`] allocates.
-    pub fn estimate(
-        e: &mut crate::memory::MemoryEstimate,
-        buffers: &str,
-        (read, write): (u64, u64),
-    ) {
-        e.storage_buffer(format!("{buffers}.src"), read.div_ceil(16) * 16, false);
-        e.storage_buffer(format!("{buffers}.dst"), write.div_ceil(16) * 16, false);
+    pub fn estimate(e: &mut crate::memory::MemoryEstimate, buffers: &str, bytes: (u64, u64)) {
+        e.append(crate::pass::estimate(&copy_floor_resources(bytes), buffers));
     }
 
-    pub fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler) {
-        cmd.use_buffer(&self._src, Access::ComputeSampled);
-        cmd.use_buffer(&self._dst, Access::ComputeStorageWrite);
-        let scope = profiler.begin(cmd, self.name, PassKind::Compute);
-        cmd.bind_pipeline(&self.pipeline);
-        cmd.bind_set(&self.pipeline, 0, &self.set);
-        cmd.push_constants(
-            &self.pipeline,
-            bytemuck::bytes_of(&[self.words_in, self.words_out]),
-        );
-        cmd.dispatch(self.words_out.div_ceil(256), 1, 1);
-        profiler.end(cmd, scope);
+    pub fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler) -> Result<()> {
+        let push = CopyPush {
+            words_in: self.words_in,
+            words_out: self.words_out,
+        };
+        let groups = [self.words_out.div_ceil(256), 1, 1];
+        self.pass
+            .dispatch(cmd, profiler, &Binds::of(&self.res), &push, groups)
     }
 }

@@ -146,8 +146,7 @@ impl Checkerboard {
                 let mut rs = *rs;
                 rs.bandwidth_floor = ctx.instrument;
                 rs.velocity = ctx.geometry;
-                let pre = prepass.as_ref().map(|p| (&p.ids, &p.depth));
-                let pass = ResolvePass::new(gpu, shaders, &rs, &plans[0], &targets, pre)?;
+                let pass = ResolvePass::new(gpu, shaders, &rs, &plans[0], prepass.is_some())?;
                 let rb = pass.readbacks(gpu)?;
                 Some(Resolve { pass, rb })
             }
@@ -224,8 +223,8 @@ impl Technique for Checkerboard {
                 .record_targets(cmd, profiler, gs, t, counter, config);
             if let Some(r) = &this.resolve {
                 let pre = this.prepass.as_ref().map(|p| (&p.ids, &p.depth));
-                r.pass.record(cmd, profiler, t, pre, &rf);
-                r.pass.read(cmd, rf.slot, &r.rb, false);
+                r.pass.record(cmd, profiler, t, pre, &rf)?;
+                r.pass.read(cmd, rf.slot, &r.rb, false)?;
             }
             this.unpack
                 .record(cmd, profiler, t, &this.plans[parity as usize]);
@@ -237,7 +236,7 @@ impl Technique for Checkerboard {
     fn color(&self, frame: u32) -> Option<&Image> {
         self.resolve
             .as_ref()
-            .map(|r| r.pass.output((frame % 2) as usize))
+            .and_then(|r| r.pass.output((frame % 2) as usize))
     }
 
     /// The resolved frame's geometry (with a resolve): the velocity each pixel used and its
@@ -245,7 +244,7 @@ impl Technique for Checkerboard {
     fn geometry(&self, frame: u32) -> Option<Geometry<'_>> {
         self.resolve
             .as_ref()
-            .map(|r| r.pass.geometry((frame % 2) as usize))
+            .and_then(|r| r.pass.geometry((frame % 2) as usize))
     }
 
     fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput> {

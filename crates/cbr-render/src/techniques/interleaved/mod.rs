@@ -468,7 +468,7 @@ impl Technique for Interleaved {
                 this.config.lights.vpls,
                 lights,
                 push.params[0],
-            );
+            )?;
             let interleaving = interleaving(&this.config, &this.split, this.debug.as_ref());
             this.lighting.record(
                 cmd,

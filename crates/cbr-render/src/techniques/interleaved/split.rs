@@ -396,7 +396,7 @@ impl SplitPasses {
         count: u32,
         lights: [u32; 3],
         clamp_d2: f32,
-    ) {
+    ) -> Result<()> {
         let vpls = sources.vpls;
         let push = SplitPush {
             size: self.size,
@@ -486,8 +486,9 @@ impl SplitPasses {
             self.dispatch(cmd, profiler, v, "interleaved.seed_blur_v", &push, full);
         }
         if let Some(floor) = &self.floor {
-            floor.record(cmd, profiler);
+            floor.record(cmd, profiler)?;
         }
+        Ok(())
     }
 
     /// Records the copy of the split mosaic (`debug`, split mode).
