@@ -164,6 +164,7 @@ fmt:
 lint:
     cargo fmt --all -- --check
     cargo clippy --workspace --all-targets -- -D warnings
+    python3 scripts/import-cycles.py crates/cbr-render/src
 
 # Fuzz the loaders of untrusted files, each for SECONDS one after the other, one process each:
 # obj (OBJ + MTL + texture, in memory), scene_toml, texture, image_input (`cbr compare`'s EXR/PNG

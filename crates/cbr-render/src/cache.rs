@@ -14,8 +14,9 @@ use cbr_gpu::{Gpu, GpuError, Result, Shaders};
 use cbr_scene::Scene;
 use half::f16;
 
+use crate::frame::{Coverage, FrameOutput};
 use crate::gpu_scene::FrameView;
-use crate::renderer::{Coverage, FrameOutput, RenderSettings};
+use crate::renderer::RenderSettings;
 
 const MAGIC: &[u8; 8] = b"CBRF0001";
 

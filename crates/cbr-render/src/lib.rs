@@ -1,5 +1,5 @@
 //! cbr's passes, techniques and the frame sequencer. A technique is a chain of passes registered
-//! in [`technique::TECHNIQUES`]; post passes in [`post::POST_PASSES`]; the sequencer
+//! in [`registry::TECHNIQUES`]; post passes in [`registry::POST_PASSES`]; the sequencer
 //! ([`Renderer`]) runs a [`Spec`] of them. Each pass is a struct: `new()` builds its pipelines
 //! once, `record()` records commands only.
 #![forbid(unsafe_code)]
@@ -7,12 +7,14 @@
 
 pub mod cache;
 mod cpu_math;
+pub mod frame;
 pub mod gpu_scene;
 pub mod gpu_types;
 pub mod layouts;
 pub mod memory;
 pub mod pass;
 pub mod post;
+pub mod registry;
 pub mod renderer;
 pub mod resolve;
 pub mod scene_pass;
@@ -21,10 +23,8 @@ pub mod targets;
 pub mod technique;
 pub mod techniques;
 
-pub use renderer::{
-    AnalyticLayers, Coverage, FrameOutput, InterleavedLayers, RenderSettings, Renderer,
-    ResolveOutput,
-};
+pub use frame::{AnalyticLayers, Coverage, FrameOutput, InterleavedLayers, ResolveOutput};
+pub use renderer::{RenderSettings, Renderer};
 pub use resolve::{Mapping, ResolveMode, ResolveSettings};
 pub use spec::Spec;
 pub use techniques::checkerboard::{self, CheckerboardConfig, LodMode};

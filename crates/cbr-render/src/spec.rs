@@ -8,7 +8,7 @@
 //!
 //! `native`, `ssaa:16`, `msaa:4:sample`, `checkerboard:rotated:ours`,
 //! `checkerboard:split:pq4k:prepass+sharpen:0.5`. The first part names a registered technique,
-//! the others registered post passes (crate::technique::TECHNIQUES, crate::post::POST_PASSES);
+//! the others registered post passes (crate::registry::TECHNIQUES, crate::registry::POST_PASSES);
 //! each registration reads its own parameters.
 
 use std::fmt;
@@ -59,7 +59,7 @@ impl serde::Serialize for Spec {
     }
 }
 
-fn split_part(text: &str) -> Part {
+pub(crate) fn split_part(text: &str) -> Part {
     let mut it = text.split(':').map(str::trim);
     Part {
         name: it.next().unwrap_or_default().to_string(),
@@ -68,44 +68,6 @@ fn split_part(text: &str) -> Part {
 }
 
 impl Spec {
-    /// Parses and checks a spec against the registries: an unknown name lists what is
-    /// registered; a bad parameter is named by its registration.
-    pub fn parse(text: &str) -> std::result::Result<Spec, String> {
-        let mut parts = text.split('+');
-        let head = split_part(parts.next().unwrap_or_default());
-        let post: Vec<Part> = parts.map(split_part).collect();
-        let t = crate::technique::find(&head.name).ok_or_else(|| {
-            format!(
-                "technique spec `{text}`: `{}` is no registered technique (registered: {})",
-                head.name,
-                crate::technique::TECHNIQUES
-                    .iter()
-                    .map(|t| t.grammar)
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )
-        })?;
-        (t.check)(&head.params()).map_err(|e| format!("technique spec `{text}`: {e}"))?;
-        for p in &post {
-            let pp = crate::post::find(&p.name).ok_or_else(|| {
-                format!(
-                    "technique spec `{text}`: `+{}` is no registered post pass (registered: {})",
-                    p.name,
-                    crate::post::POST_PASSES
-                        .iter()
-                        .map(|p| format!("+{}", p.grammar))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )
-            })?;
-            (pp.check)(&p.params()).map_err(|e| format!("technique spec `{text}`: {e}"))?;
-        }
-        Ok(Spec {
-            technique: head,
-            post,
-        })
-    }
-
     /// The spec of a technique without post passes (e.g. `native`).
     pub fn of(text: &str) -> Spec {
         let mut s = Spec {

@@ -25,8 +25,8 @@ pub struct FrameTargets {
 
 impl FrameTargets {
     /// Velocity, depth and IDs for temporal post passes.
-    pub fn geometry(&self) -> crate::technique::Geometry<'_> {
-        crate::technique::Geometry {
+    pub fn geometry(&self) -> crate::frame::Geometry<'_> {
+        crate::frame::Geometry {
             velocity: &self.velocity,
             depth: &self.depth,
             ids: &self.ids,

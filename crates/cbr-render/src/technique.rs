@@ -2,15 +2,14 @@
 //! the layers it writes, a constructor) and a [`Technique`] that renders one full-resolution
 //! frame per call through its own chain of passes. The sequencer (crate::renderer) knows no
 //! technique by name; adding one is a module under `techniques/`, a shader folder and one line in
-//! [`TECHNIQUES`] (docs/OVERVIEW.md walks through `upscale` as the example).
+//! crate::registry::TECHNIQUES (docs/OVERVIEW.md walks through `upscale` as the example).
 
 use cbr_gpu::{Buffer, Caps, Cmd, Gpu, Image, PassTiming, Profiler, Result, Shaders};
 use cbr_scene::Scene;
 
+use crate::frame::FrameOutput;
 use crate::gpu_scene::{FrameView, GpuScene};
 use crate::memory::MemoryEstimate;
-use crate::renderer::FrameOutput;
-use crate::techniques;
 
 /// What a technique's constructor gets: the device, the shader library, the uploaded scene, the
 /// shaded-fragment counter the scene shaders write, and the output resolution.
@@ -28,20 +27,7 @@ pub struct BuildCtx<'a> {
     pub geometry: bool,
 }
 
-/// A frame's geometry at the output resolution (`upscale` gives its upscaled layers), sampled by
-/// temporal post passes.
-pub struct Geometry<'a> {
-    /// RG32F: screen motion since the previous frame in pixels of this image (current - previous),
-    /// without the frame's jitter.
-    pub velocity: &'a Image,
-    /// Reverse-Z depth (0 = nothing drawn): D32 or R32F, read through `.r` of a sampler.
-    pub depth: &'a Image,
-    /// RG32UI: object ID (0 = background), primitive ID; or, when `packed`, (object ID | bit 31
-    /// set where the pixel moved, reverse-Z depth bits) and `depth` is this image too (the
-    /// checkerboard resolve's history geometry).
-    pub ids: &'a Image,
-    pub packed: bool,
-}
+pub use crate::frame::Geometry;
 
 /// What a technique gets for one frame. `view` is the frame's camera at the output resolution
 /// with no jitter and the generic flags (count shaded, debug LOD); a technique adjusts a copy
@@ -171,23 +157,6 @@ pub struct Registration {
     /// the constructor; the renderer refuses what cannot fit before anything is allocated.
     pub estimate: Estimate,
     pub build: Build,
-}
-
-/// Every technique, in the order `cbr render --help` and errors list them.
-pub const TECHNIQUES: &[Registration] = &[
-    techniques::native::REGISTRATION,
-    techniques::ssaa::REGISTRATION,
-    techniques::msaa::REGISTRATION,
-    techniques::checkerboard::REGISTRATION,
-    techniques::upscale::REGISTRATION,
-    techniques::interlaced::REGISTRATION,
-    techniques::analytic::REGISTRATION,
-    techniques::deferred::REGISTRATION,
-    techniques::interleaved::REGISTRATION,
-];
-
-pub fn find(name: &str) -> Option<&'static Registration> {
-    TECHNIQUES.iter().find(|t| t.name == name)
 }
 
 /// A technique's refusal of its parameters: the spec (`name:params`) and why.

@@ -113,7 +113,7 @@ fn estimates_list_what_every_technique_and_post_pass_allocates() {
     let shaders = cbr_render::shader_library();
     let scene = demo(W, H);
     // Every registration appears in the list.
-    for t in cbr_render::technique::TECHNIQUES {
+    for t in cbr_render::registry::TECHNIQUES {
         assert!(
             SPECS
                 .iter()
@@ -122,7 +122,7 @@ fn estimates_list_what_every_technique_and_post_pass_allocates() {
             t.name
         );
     }
-    for p in cbr_render::post::POST_PASSES {
+    for p in cbr_render::registry::POST_PASSES {
         let plus = format!("+{}", p.name);
         assert!(
             SPECS.iter().any(|s| s.contains(&plus)),
@@ -160,7 +160,7 @@ fn estimates_list_what_every_technique_and_post_pass_allocates() {
             problems.push(format!("{spec} (instrument {instrument}): {d}"));
         }
         // The technique's own part covers the targets it reports.
-        let t = cbr_render::technique::find(&settings.spec.technique.name).expect("registered");
+        let t = cbr_render::registry::find(&settings.spec.technique.name).expect("registered");
         let ctx = EstimateCtx {
             caps: gpu.caps(),
             width: W,

@@ -114,7 +114,7 @@ pub fn run(a: &InfoArgs) -> Result<()> {
         bytes(u64::from(caps.max_storage_buffer_range))
     );
     println!("\ntechniques (--technique SPEC, bench --techniques; post passes append +PASS):");
-    for t in cbr_render::technique::TECHNIQUES {
+    for t in cbr_render::registry::TECHNIQUES {
         let params: Vec<&str> = Vec::new();
         let runs = match (t.needs)(&params, caps) {
             None => String::new(),
@@ -122,7 +122,7 @@ pub fn run(a: &InfoArgs) -> Result<()> {
         };
         println!("  {:44} {}{runs}", t.grammar, t.about);
     }
-    for p in cbr_render::post::POST_PASSES {
+    for p in cbr_render::registry::POST_PASSES {
         println!("  +{:43} {}", p.grammar, p.about);
     }
     println!("\ncheckerboard layouts:");

@@ -1,6 +1,6 @@
 //! Post passes: a full-resolution HDR frame in, one out, chained after any technique that gives
 //! a full frame (`SPEC+sharpen+...`). One module and shader folder each, one line in
-//! [`POST_PASSES`]. Each pass is declared once (crate::pass); its input (the technique's colour or
+//! crate::registry::POST_PASSES. Each pass is declared once (crate::pass); its input (the technique's colour or
 //! the previous link's output) is bound when it records.
 
 pub mod fxaa;
@@ -85,11 +85,4 @@ pub struct PostRegistration {
     /// The GPU memory `build` allocates (crate::memory), written beside the constructor.
     pub estimate: fn(&EstimateCtx, &[&str]) -> MemoryEstimate,
     pub build: PostBuild,
-}
-
-pub const POST_PASSES: &[PostRegistration] =
-    &[fxaa::REGISTRATION, taa::REGISTRATION, sharpen::REGISTRATION];
-
-pub fn find(name: &str) -> Option<&'static PostRegistration> {
-    POST_PASSES.iter().find(|p| p.name == name)
 }

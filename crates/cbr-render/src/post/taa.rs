@@ -27,9 +27,9 @@
 use cbr_gpu::{Cmd, GpuError, Image, Profiler, Result, vk};
 
 use super::{PostBuildCtx, PostFrame, PostPass, PostRegistration};
+use crate::frame::Geometry;
 use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, Filter, ResourceDecl, Resources, Use};
 use crate::targets::COLOR_FORMAT;
-use crate::technique::Geometry;
 
 pub const REGISTRATION: PostRegistration = PostRegistration {
     name: "taa",

@@ -524,9 +524,9 @@ impl ResolvePass {
     /// The frame's geometry (`ResolveSettings::velocity`): the velocity each pixel used, and the
     /// history geometry of slot `slot` (object ID | moved bit, reverse-Z depth bits) as IDs and
     /// depth both.
-    pub fn geometry(&self, slot: usize) -> Option<crate::technique::Geometry<'_>> {
+    pub fn geometry(&self, slot: usize) -> Option<crate::frame::Geometry<'_>> {
         let g = self.history("history_geom", slot).ok()?;
-        Some(crate::technique::Geometry {
+        Some(crate::frame::Geometry {
             velocity: self.res.image("debug_velocity").ok()?,
             depth: g,
             ids: g,

@@ -1,4 +1,4 @@
-//! The registered techniques (crate::technique::TECHNIQUES), one module each, and what several
+//! The registered techniques (crate::registry::TECHNIQUES), one module each, and what several
 //! of them share: reading the four common layers back.
 
 pub mod analytic;
@@ -15,9 +15,9 @@ pub mod upscale;
 use cbr_gpu::{Buffer, Cmd, Gpu, Image, PassKind, Profiler, Readback, Result, Shaders};
 use half::f16;
 
+use crate::frame::FrameOutput;
 use crate::gpu_scene::GpuScene;
 use crate::memory::MemoryEstimate;
-use crate::renderer::FrameOutput;
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, FrameTargets, ID_FORMAT, VELOCITY_FORMAT};
 

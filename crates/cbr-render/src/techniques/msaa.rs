@@ -15,8 +15,8 @@ use cbr_gpu::{
 use half::f16;
 
 use super::IdPass;
+use crate::frame::FrameOutput;
 use crate::memory::MemoryEstimate;
-use crate::renderer::FrameOutput;
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, VELOCITY_FORMAT};
 use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, unknown_param};

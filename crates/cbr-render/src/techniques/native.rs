@@ -4,8 +4,8 @@
 use cbr_gpu::{Image, Result};
 
 use super::{LayerReadbacks, no_params};
+use crate::frame::FrameOutput;
 use crate::memory::MemoryEstimate;
-use crate::renderer::FrameOutput;
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::FrameTargets;
 use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique};

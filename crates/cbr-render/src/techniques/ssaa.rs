@@ -14,9 +14,9 @@ use cbr_scene::rng::SplitMix;
 use half::f16;
 
 use super::LayerReadbacks;
+use crate::frame::{Coverage, FrameOutput};
 use crate::memory::MemoryEstimate;
 use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, ResourceDecl, Resources, Use};
-use crate::renderer::{Coverage, FrameOutput};
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::{COLOR_FORMAT, FrameTargets};
 use crate::technique::{BuildCtx, FrameCtx, Registration, Technique, unknown_param};

@@ -7,9 +7,9 @@ use cbr_gpu::{
 };
 
 use super::LayerReadbacks;
+use crate::frame::FrameOutput;
 use crate::gpu_scene::RasterUniforms;
 use crate::memory::MemoryEstimate;
-use crate::renderer::FrameOutput;
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::{COLOR_FORMAT, FrameTargets, ID_FORMAT, VELOCITY_FORMAT};
 use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, unknown_param};

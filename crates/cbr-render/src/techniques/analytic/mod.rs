@@ -32,8 +32,8 @@ use cbr_gpu::{
 use half::f16;
 
 use super::linear_depths;
+use crate::frame::{AnalyticLayers, Coverage, FrameOutput};
 use crate::memory::MemoryEstimate;
-use crate::renderer::{AnalyticLayers, Coverage, FrameOutput};
 use crate::scene_pass::{self, BINDINGS as SCENE_BINDINGS, MATERIAL_BINDINGS};
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, FrameTargets, ID_FORMAT, VELOCITY_FORMAT};
 use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, unknown_param};

@@ -13,11 +13,11 @@ pub use config::{CheckerboardConfig, LodMode};
 use unpack::{UnpackPass, UnpackedPixel};
 
 use super::{IdPass, linear_depths};
+use crate::frame::{FrameOutput, ResolveOutput};
 use crate::gpu_scene::{FrameView, RasterUniforms};
 use crate::gpu_types::FLAG_PARITY;
 use crate::layouts::LayoutPlan;
 use crate::memory::MemoryEstimate;
-use crate::renderer::{FrameOutput, ResolveOutput};
 use crate::resolve::{ResolveFrame, ResolvePass, ResolveReadbacks, ResolveSettings};
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::FrameTargets;

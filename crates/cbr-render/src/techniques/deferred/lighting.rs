@@ -9,8 +9,9 @@ use cbr_gpu::{
     Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout, Write,
 };
 
-use super::lights::SunFrame;
-use super::{DeferredConfig, GBuffer};
+use super::config::DeferredConfig;
+use super::gbuffer::GBuffer;
+use super::vpl::SunView;
 use crate::technique::{BuildCtx, FrameCtx};
 
 /// The lighting pass's set: the one definition of its bindings.
@@ -39,6 +40,14 @@ pub const BINDINGS: [BindingDesc; 15] = {
         BindingDesc::one("specular", 14, S),
     ]
 };
+
+/// The sun's map this frame.
+pub struct SunFrame {
+    /// `None`: nothing of the scene within reach; the map stays empty.
+    pub view: Option<SunView>,
+    /// The VPL clamp c of 1/max(d^2, c), in m^2.
+    pub clamp_d2: f32,
+}
 
 pub fn shader_defines() -> Vec<(String, String)> {
     BINDINGS.iter().map(BindingDesc::define).collect()

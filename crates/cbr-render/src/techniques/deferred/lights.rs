@@ -6,21 +6,13 @@ use cbr_gpu::{Access, Buffer, Cmd, GpuError, Location, Profiler, Result, vk};
 use cbr_scene::PointLight;
 use glam::DVec3;
 
-use super::DeferredConfig;
-use super::lighting::LightSources;
+use super::config::DeferredConfig;
+use super::lighting::{LightSources, SunFrame};
 use super::rsm::{RsmPass, VplPass};
 use super::vpl::{self, SunView};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{LightData, Vpl};
 use crate::technique::{BuildCtx, FrameCtx};
-
-/// The sun's map this frame.
-pub struct SunFrame {
-    /// `None`: nothing of the scene within reach; the map stays empty.
-    pub view: Option<SunView>,
-    /// The VPL clamp c of 1/max(d^2, c), in m^2.
-    pub clamp_d2: f32,
-}
 
 pub struct ManyLights {
     config: DeferredConfig,

@@ -11,20 +11,24 @@
 //! extra lights it equals `native` within fp16 rounding (tests/deferred.rs). With them it is the
 //! reference the interleaved technique approximates: every light at every pixel.
 
+pub mod config;
+pub mod gbuffer;
 pub mod lighting;
 pub mod lights;
 pub mod rsm;
 pub mod vpl;
 
-use cbr_gpu::{Access, GpuError, Image, ImageDesc, Result, vk};
+use cbr_gpu::{Access, GpuError, Image, Result};
 
 use super::LayerReadbacks;
+use crate::frame::FrameOutput;
 use crate::gpu_types::{LightData, Vpl};
 use crate::memory::MemoryEstimate;
-use crate::renderer::FrameOutput;
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, GBUFFER_FORMAT, ID_FORMAT, VELOCITY_FORMAT};
-use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, unknown_param};
+use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique};
+pub use config::*;
+pub use gbuffer::GBuffer;
 use lighting::{LightingPass, LightingPush};
 use lights::ManyLights;
 
@@ -46,166 +50,6 @@ pub const REGISTRATION: Registration = Registration {
 
 /// The most VPLs: every pixel sums every VPL (16384 VPLs at 1280x720 are 15 G light terms a
 /// frame, minutes on lavapipe).
-pub const MAX_VPLS: u32 = 16384;
-/// The most extra point lights (each pixel sums them all too).
-pub const MAX_POINTS: u32 = 16384;
-/// The reflective shadow map's side unless `rsm=R` says otherwise, and its bounds.
-pub const DEFAULT_RSM: u32 = 512;
-pub const MIN_RSM: u32 = 16;
-pub const MAX_RSM: u32 = 4096;
-/// How far from the camera (metres, a cube's half-side) the map frames the scene unless
-/// `reach=D` says otherwise.
-pub const DEFAULT_REACH: f32 = 32.0;
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DeferredConfig {
-    /// VPLs from the sun's reflective shadow map (0: no indirect light).
-    pub vpls: u32,
-    /// Random point lights added to the scene's (deterministic per scene seed).
-    pub points: u32,
-    /// The reflective shadow map's side in texels.
-    pub rsm: u32,
-    /// The map frames the scene within this many metres of the camera (a cube's half-side); the
-    /// random point lights fill the scene within this many metres of the camera path.
-    pub reach: f32,
-    /// The VPL clamp distance in metres (1/max(d^2, clamp^2)); `None`: the VPLs' mean spacing,
-    /// sqrt(map area / N).
-    pub clamp: Option<f32>,
-}
-
-fn count(key: &str, value: &str, max: u32, what: &str) -> std::result::Result<u32, String> {
-    let n: u64 = value
-        .parse()
-        .map_err(|_| format!("deferred {key}=`{value}`: give a whole number from 0 to {max}"))?;
-    if n > u64::from(max) {
-        return Err(format!(
-            "deferred {key}={n}: at most {max} {what} (every pixel sums every one)"
-        ));
-    }
-    Ok(n as u32)
-}
-
-fn metres(key: &str, value: &str) -> std::result::Result<f32, String> {
-    value
-        .parse()
-        .ok()
-        .filter(|d: &f32| d.is_finite() && *d > 0.0 && *d <= 1e9)
-        .ok_or_else(|| {
-            format!("deferred {key}=`{value}`: a distance in metres, above 0, at most 1e9")
-        })
-}
-
-pub fn parse(params: &[&str]) -> std::result::Result<DeferredConfig, String> {
-    let mut c = DeferredConfig {
-        vpls: 0,
-        points: 0,
-        rsm: DEFAULT_RSM,
-        reach: DEFAULT_REACH,
-        clamp: None,
-    };
-    for p in params {
-        let (key, value) = p.split_once('=').unwrap_or((p, ""));
-        match key {
-            "vpls" => c.vpls = count(key, value, MAX_VPLS, "VPLs")?,
-            "points" => c.points = count(key, value, MAX_POINTS, "point lights")?,
-            "rsm" => {
-                c.rsm = value
-                    .parse()
-                    .ok()
-                    .filter(|r| (MIN_RSM..=MAX_RSM).contains(r))
-                    .ok_or_else(|| {
-                        format!("deferred rsm=`{value}`: a side from {MIN_RSM} to {MAX_RSM} texels")
-                    })?
-            }
-            "clamp" => c.clamp = Some(metres(key, value)?),
-            "reach" => c.reach = metres(key, value)?,
-            _ => {
-                return Err(unknown_param(
-                    "deferred",
-                    p,
-                    "vpls=N, points=N, rsm=R, reach=D, clamp=D",
-                ));
-            }
-        }
-    }
-    if u64::from(c.vpls) > u64::from(c.rsm) * u64::from(c.rsm) {
-        return Err(format!(
-            "deferred vpls={}: more VPLs than the {}x{} reflective shadow map has texels",
-            c.vpls, c.rsm, c.rsm
-        ));
-    }
-    Ok(c)
-}
-
-/// The G-buffer (the scene pass's targets with GBUFFER) and the lit frame.
-pub struct GBuffer {
-    pub position: Image,
-    pub normal: Image,
-    pub albedo: Image,
-    pub velocity: Image,
-    pub ids: Image,
-    pub depth: Image,
-    /// RGBA16F, written by the lighting pass.
-    pub color: Image,
-}
-
-impl GBuffer {
-    pub fn new(gpu: &cbr_gpu::Gpu, prefix: &str, width: u32, height: u32) -> Result<GBuffer> {
-        use vk::ImageUsageFlags as U;
-        let img = |name: &str, format, usage| {
-            let name = format!("{prefix}.{name}");
-            Image::new(gpu, &ImageDesc::new_2d(&name, format, width, height, usage))
-        };
-        let attachment = U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC;
-        Ok(GBuffer {
-            position: img("position", GBUFFER_FORMAT, attachment)?,
-            normal: img("normal", GBUFFER_FORMAT, attachment)?,
-            albedo: img("albedo", GBUFFER_FORMAT, attachment)?,
-            velocity: img("velocity", VELOCITY_FORMAT, attachment)?,
-            ids: img("ids", ID_FORMAT, attachment)?,
-            depth: img(
-                "depth",
-                DEPTH_FORMAT,
-                U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC,
-            )?,
-            color: img(
-                "color",
-                COLOR_FORMAT,
-                U::STORAGE | U::SAMPLED | U::TRANSFER_SRC,
-            )?,
-        })
-    }
-
-    /// The G-buffer pass's colour attachments, in the pipeline's order.
-    pub fn attachments(&self) -> [&Image; 5] {
-        [
-            &self.position,
-            &self.normal,
-            &self.albedo,
-            &self.velocity,
-            &self.ids,
-        ]
-    }
-
-    /// Velocity, depth and IDs for temporal post passes.
-    pub fn geometry(&self) -> Geometry<'_> {
-        Geometry {
-            velocity: &self.velocity,
-            depth: &self.depth,
-            ids: &self.ids,
-            packed: false,
-        }
-    }
-
-    /// Colour, depth, velocity, IDs: the common layers.
-    pub fn layers(&self) -> [&Image; 4] {
-        [&self.color, &self.depth, &self.velocity, &self.ids]
-    }
-
-    /// Bytes per pixel: three f32 RGBA surface layers, velocity, IDs, depth and the frame.
-    pub const BYTES_PER_PIXEL: u64 = 3 * 16 + 8 + 8 + 4 + 8;
-}
-
 /// The technique: G-buffer, optional RSM + VPLs, lighting, readbacks.
 pub struct Deferred {
     config: DeferredConfig,

@@ -12,9 +12,9 @@ use half::f16;
 pub use resolve::{InterlacedFrame, InterlacedResolve, InterlacedSettings, ResolvedReadbacks};
 
 use super::linear_depths;
+use crate::frame::{FrameOutput, ResolveOutput};
 use crate::gpu_types::FLAG_PARITY;
 use crate::memory::MemoryEstimate;
-use crate::renderer::{FrameOutput, ResolveOutput};
 use crate::scene_pass::{LAYOUT_INTERLACED, RasterConfig, ScenePass};
 use crate::targets::FrameTargets;
 use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, unknown_param};
