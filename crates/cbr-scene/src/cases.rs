@@ -461,92 +461,52 @@ pub fn far(distance: f64) -> Scene {
 
 /// The files of a scene whose OBJ carries its large coordinates itself, as a mesh exported in
 /// world coordinates does (georeferenced city models, CAD, survey data): a small mesh (about 6 m
-/// across: a textured ground, a box, a shiny ball with vertex normals, a 3 cm pole) with its
-/// vertices, camera keys and point light shifted by `distance` metres in x and z; vertices written
-/// with four decimals (0.1 mm), as exporters write fixed decimals. `far/far.toml` names `far/far.obj`, its `far.mtl` and `checker.png`;
-/// load it with [`crate::load_from`]. The stability tests compare it with the files at distance 0.
+/// across: a checker ground, a box, a shiny ball, a 3 cm pole without normals, so the loader
+/// computes them) with its vertices, camera keys and point light shifted by `distance` metres in x
+/// and z; vertices written with four decimals (0.1 mm), as exporters write fixed decimals.
+/// `far/far.toml` names `far/far.obj`, its `far.mtl` and `checker.png`; load it with
+/// [`crate::load_from`]. The stability tests compare it with the files at distance 0.
 pub fn far_obj(distance: f64) -> crate::files::MemoryFiles {
     use std::fmt::Write;
     let d = distance;
+    let mut bx = MeshBuilder::default();
+    bx.cuboid(Vec3::new(-1.6, 0.0, -3.9), Vec3::new(-0.2, 1.4, -2.5), 1.0);
+    let mut ball = MeshBuilder::default();
+    ball.sphere(Vec3::new(1.0, 0.8, -3.0), 0.8, 32, 16);
+    let mut pole = MeshBuilder::default();
+    pole.beam(Vec3::new(2.2, 0.0, -4.6), Vec3::new(2.25, 2.9, -4.57), 0.03);
     let mut obj = String::from("mtllib far.mtl\n");
-    // Every statement's numbers in world coordinates, x and z shifted.
-    let v = |obj: &mut String, p: Vec3| {
-        let (x, y, z) = (f64::from(p.x) + d, f64::from(p.y), f64::from(p.z) + d);
-        let _ = writeln!(obj, "v {x:.4} {y:.4} {z:.4}");
-    };
-    // The ground: 6 x 6 m, off-centre, its checker 8 x 8 tiles.
-    obj.push_str("o ground\nusemtl ground\n");
-    for (x, z) in [(-2.5, -5.5), (3.5, -5.5), (3.5, 0.5), (-2.5, 0.5)] {
-        v(&mut obj, Vec3::new(x, 0.0, z));
-    }
-    obj.push_str("vt 0 0\nvt 4 0\nvt 4 4\nvt 0 4\nvn 0 1 0\n");
-    obj.push_str("f 1/1/1 3/3/1 2/2/1\nf 1/1/1 4/4/1 3/3/1\n");
-    // The box and the pole: positions only (the loader computes smooth normals).
-    let mut nv = 4;
-    let mut cuboid = |obj: &mut String, name: &str, lo: Vec3, hi: Vec3| {
-        let _ = writeln!(obj, "o {name}\nusemtl box");
-        for k in 0..8 {
-            let c = |bit: u32, a: f32, b: f32| if k & bit == 0 { a } else { b };
-            v(
-                obj,
-                Vec3::new(c(1, lo.x, hi.x), c(2, lo.y, hi.y), c(4, lo.z, hi.z)),
-            );
+    let mut base = 0;
+    for (mesh, name, material, normals) in [
+        (ground(3.0, 0.75), "ground", "ground", true),
+        (bx, "box", "box", true),
+        (ball, "ball", "ball", true),
+        (pole, "pole", "box", false),
+    ] {
+        let o = mesh.object(name, 0);
+        let _ = writeln!(obj, "o {name}\nusemtl {material}");
+        for v in &o.vertices {
+            let [x, y, z] = v.pos.map(f64::from);
+            let (x, z) = (x + d, z + d);
+            let ([n0, n1, n2], [s, t]) = (v.normal, v.uv);
+            let _ = writeln!(obj, "v {x:.4} {y:.4} {z:.4}\nvt {s} {}", 1.0 - t);
+            if normals {
+                let _ = writeln!(obj, "vn {n0} {n1} {n2}");
+            }
         }
-        for q in [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ] {
-            let _ = writeln!(
-                obj,
-                "f {} {} {} {}",
-                nv + q[0] + 1,
-                nv + q[1] + 1,
-                nv + q[2] + 1,
-                nv + q[3] + 1
-            );
+        for t in o.indices.chunks_exact(3) {
+            let c = [t[0], t[1], t[2]].map(|i| base + i + 1);
+            let _ = if normals {
+                writeln!(
+                    obj,
+                    "f {0}/{0}/{0} {1}/{1}/{1} {2}/{2}/{2}",
+                    c[0], c[1], c[2]
+                )
+            } else {
+                writeln!(obj, "f {0}/{0} {1}/{1} {2}/{2}", c[0], c[1], c[2])
+            };
         }
-        nv += 8;
-    };
-    cuboid(
-        &mut obj,
-        "box",
-        Vec3::new(-1.6, 0.0, -3.9),
-        Vec3::new(-0.2, 1.4, -2.5),
-    );
-    cuboid(
-        &mut obj,
-        "pole",
-        Vec3::new(2.2, 0.0, -4.6),
-        Vec3::new(2.23, 2.9, -4.57),
-    );
-    // The ball: a UV sphere with vertex normals and UVs, specular.
-    obj.push_str("o ball\nusemtl ball\n");
-    let (c, r, (nu, nw)) = (Vec3::new(1.0, 0.8, -3.0), 0.8, (32u32, 16u32));
-    let (nt, nn) = (4u32, 1u32);
-    for j in 0..=nw {
-        for i in 0..=nu {
-            let (u, w) = (i as f32 / nu as f32, j as f32 / nw as f32);
-            let (th, ph) = (u * std::f32::consts::TAU, w * std::f32::consts::PI);
-            let n = Vec3::new(ph.sin() * th.cos(), ph.cos(), ph.sin() * th.sin());
-            v(&mut obj, c + n * r);
-            let _ = writeln!(obj, "vt {u} {w}\nvn {} {} {}", n.x, n.y, n.z);
-        }
-    }
-    let at = |i: u32, j: u32| j * (nu + 1) + i;
-    for j in 0..nw {
-        for i in 0..nu {
-            let q = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)]
-                .map(|k| format!("{}/{}/{}", nv + k + 1, nt + k + 1, nn + k + 1));
-            let _ = writeln!(
-                obj,
-                "f {} {} {}\nf {} {} {}",
-                q[0], q[2], q[1], q[0], q[3], q[2]
-            );
-        }
+        base += o.vertices.len() as u32;
     }
     let mtl = "newmtl ground\nKd 1 1 1\nmap_Kd checker.png\nnewmtl box\nKd 0.8 0.35 0.15\nnewmtl ball\nKd 0.2 0.4 0.9\nKs 0.6 0.6 0.6\nNs 120\n";
     let checker = checker_texture("checker");

@@ -55,13 +55,19 @@ fn read_text(files: &dyn Files, path: &Path) -> Result<String> {
         .replace('\r', "\n"))
 }
 
-fn parse_finite(tok: Option<&str>, file: &Path, line: usize, what: &str) -> Result<f32> {
+/// A finite number (`T`: f32, or f64 for vertex coordinates), or an error naming `what` and the line.
+fn parse_finite<T: std::str::FromStr + Into<f64> + Copy>(
+    tok: Option<&str>,
+    file: &Path,
+    line: usize,
+    what: &str,
+) -> Result<T> {
     let tok =
         tok.ok_or_else(|| SceneError::syntax(file, line, format!("{what}: missing number")))?;
-    let v: f32 = tok
+    let v: T = tok
         .parse()
         .map_err(|_| SceneError::syntax(file, line, format!("{what}: `{tok}` is not a number")))?;
-    if !v.is_finite() {
+    if !v.into().is_finite() {
         return Err(SceneError::syntax(
             file,
             line,
@@ -74,18 +80,7 @@ fn parse_finite(tok: Option<&str>, file: &Path, line: usize, what: &str) -> Resu
 /// A vertex coordinate, read in double precision as tobj reads it (`use_f64`): finite and within
 /// [`crate::MAX_COORDINATE`], where an f64 still resolves a millimetre.
 fn parse_coordinate(tok: Option<&str>, file: &Path, line: usize, what: &str) -> Result<f64> {
-    let tok =
-        tok.ok_or_else(|| SceneError::syntax(file, line, format!("{what}: missing number")))?;
-    let v: f64 = tok
-        .parse()
-        .map_err(|_| SceneError::syntax(file, line, format!("{what}: `{tok}` is not a number")))?;
-    if !v.is_finite() {
-        return Err(SceneError::syntax(
-            file,
-            line,
-            format!("{what}: `{tok}` is not a finite number"),
-        ));
-    }
+    let v = parse_finite::<f64>(tok, file, line, what)?;
     crate::check_coordinate(v)
         .map_err(|e| SceneError::syntax(file, line, format!("{what}: {e}")))?;
     Ok(v)
@@ -130,13 +125,18 @@ pub(crate) fn validate_obj(text: &str, file: &Path) -> Result<(String, ObjCounts
                     if axis == "v" && toks.clone().next().is_none() {
                         break;
                     }
-                    parse_finite(toks.next(), file, ln, &format!("texture coordinate {axis}"))?;
+                    parse_finite::<f32>(
+                        toks.next(),
+                        file,
+                        ln,
+                        &format!("texture coordinate {axis}"),
+                    )?;
                 }
                 nt += 1;
             }
             Some("vn") => {
                 for axis in ["x", "y", "z"] {
-                    parse_finite(toks.next(), file, ln, &format!("normal {axis}"))?;
+                    parse_finite::<f32>(toks.next(), file, ln, &format!("normal {axis}"))?;
                 }
                 nn += 1;
             }
@@ -246,7 +246,7 @@ pub(crate) fn validate_mtl(text: &str, file: &Path) -> Result<String> {
                 continue;
             }
             Some(k @ ("Ns" | "Ni" | "d")) => {
-                parse_finite(toks.next(), file, ln, k)?;
+                parse_finite::<f32>(toks.next(), file, ln, k)?;
             }
             Some("newmtl") if toks.next().is_none() => {
                 return Err(SceneError::syntax(file, ln, "newmtl without a name"));
