@@ -699,8 +699,12 @@ mod tests {
 
     #[test]
     fn coordinates_f64_cannot_hold_to_a_millimetre_name_the_line() {
-        // Read as f64: 1e39 (past f32) is a coordinate like any other, up to 2^43 m.
-        assert!(validate_obj("v 1e39 0 0\n", &f()).is_err());
+        // Read as f64, 1e39 (past f32's range) is finite, and refused as beyond 2^43 m.
+        let err = validate_obj("v 1e39 0 0\n", &f()).unwrap_err().to_string();
+        assert!(
+            err.contains("vertex x: the coordinate 1e39 is beyond"),
+            "{err}"
+        );
         assert!(validate_obj("v 8796093022207 0 -1e7\n", &f()).is_ok());
         let err = validate_obj("v 0 0 0\nv 0 -8796093022208 0\n", &f())
             .unwrap_err()
