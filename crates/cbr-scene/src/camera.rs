@@ -69,12 +69,10 @@ pub fn check_fov(fov_y_deg: f64) -> Result<(), String> {
     }
 }
 
-/// Why a point cannot be used: a coordinate that is not a finite number.
+/// Why a point cannot be used: a coordinate that is not a finite number, or one beyond
+/// [`crate::MAX_COORDINATE`] (f64 no longer holds it to a millimetre).
 pub fn check_finite(point: [f64; 3]) -> Result<(), String> {
-    match point.iter().find(|v| !v.is_finite()) {
-        Some(v) => Err(format!("the coordinate {v} is not a finite number")),
-        None => Ok(()),
-    }
+    point.into_iter().try_for_each(crate::check_coordinate)
 }
 
 /// Why a camera at `position` looking at `target` has no view direction: a non-finite coordinate,

@@ -459,6 +459,85 @@ pub fn far(distance: f64) -> Scene {
     p.scene()
 }
 
+/// The files of a scene whose OBJ carries its large coordinates itself, as a mesh exported in
+/// world coordinates does (georeferenced city models, CAD, survey data): a small mesh (about 6 m
+/// across: a checker ground, a box, a shiny ball, a 3 cm pole without normals, so the loader
+/// computes them) with its vertices, camera keys and point light shifted by `distance` metres in x
+/// and z; vertices written with four decimals (0.1 mm), as exporters write fixed decimals.
+/// `far/far.toml` names `far/far.obj`, its `far.mtl` and `checker.png`; load it with
+/// [`crate::load_from`]. The stability tests compare it with the files at distance 0.
+pub fn far_obj(distance: f64) -> crate::files::MemoryFiles {
+    use std::fmt::Write;
+    let d = distance;
+    let mut bx = MeshBuilder::default();
+    bx.cuboid(Vec3::new(-1.6, 0.0, -3.9), Vec3::new(-0.2, 1.4, -2.5), 1.0);
+    let mut ball = MeshBuilder::default();
+    ball.sphere(Vec3::new(1.0, 0.8, -3.0), 0.8, 32, 16);
+    let mut pole = MeshBuilder::default();
+    pole.beam(Vec3::new(2.2, 0.0, -4.6), Vec3::new(2.25, 2.9, -4.57), 0.03);
+    let mut obj = String::from("mtllib far.mtl\n");
+    let mut base = 0;
+    for (mesh, name, material, normals) in [
+        (ground(3.0, 0.75), "ground", "ground", true),
+        (bx, "box", "box", true),
+        (ball, "ball", "ball", true),
+        (pole, "pole", "box", false),
+    ] {
+        let o = mesh.object(name, 0);
+        let _ = writeln!(obj, "o {name}\nusemtl {material}");
+        for v in &o.vertices {
+            let [x, y, z] = v.pos.map(f64::from);
+            let (x, z) = (x + d, z + d);
+            let ([n0, n1, n2], [s, t]) = (v.normal, v.uv);
+            let _ = writeln!(obj, "v {x:.4} {y:.4} {z:.4}\nvt {s} {}", 1.0 - t);
+            if normals {
+                let _ = writeln!(obj, "vn {n0} {n1} {n2}");
+            }
+        }
+        for t in o.indices.chunks_exact(3) {
+            let c = [t[0], t[1], t[2]].map(|i| base + i + 1);
+            let _ = if normals {
+                writeln!(
+                    obj,
+                    "f {0}/{0}/{0} {1}/{1}/{1} {2}/{2}/{2}",
+                    c[0], c[1], c[2]
+                )
+            } else {
+                writeln!(obj, "f {0}/{0} {1}/{1} {2}/{2}", c[0], c[1], c[2])
+            };
+        }
+        base += o.vertices.len() as u32;
+    }
+    let mtl = "newmtl ground\nKd 1 1 1\nmap_Kd checker.png\nnewmtl box\nKd 0.8 0.35 0.15\nnewmtl ball\nKd 0.2 0.4 0.9\nKs 0.6 0.6 0.6\nNs 120\n";
+    let checker = checker_texture("checker");
+    let l = &checker.levels[0];
+    let mut png = Vec::new();
+    image::RgbaImage::from_raw(l.width, l.height, l.rgba.clone())
+        .expect("checker texels")
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .expect("PNG in memory");
+    let at = |x: f64, y: f64, z: f64| format!("[{}, {y}, {}]", x + d, z + d);
+    let toml = format!(
+        "obj = \"far.obj\"\nwidth = 320\nheight = 180\nframes = 8\nambient = [0.05, 0.05, 0.05]\n\
+         [camera]\nfov_y_deg = 50\n\
+         [[camera.keys]]\ntime = 0\nposition = {}\ntarget = {}\n\
+         [[camera.keys]]\ntime = 1\nposition = {}\ntarget = {}\n\
+         [[lights.directional]]\ndirection = [-0.4, -1.0, -0.3]\nintensity = 1.5\n\
+         [[lights.point]]\nposition = {}\ncolor = [1.0, 0.7, 0.4]\nintensity = 3.0\nrange = 8.0\n",
+        at(-1.0, 1.6, 3.0),
+        at(0.0, 0.8, -3.0),
+        at(1.0, 1.7, 2.5),
+        at(0.2, 0.8, -3.0),
+        at(0.0, 2.5, -1.0),
+    );
+    let mut files = crate::files::MemoryFiles::new();
+    files.insert("far/far.obj", obj);
+    files.insert("far/far.mtl", mtl);
+    files.insert("far/checker.png", png);
+    files.insert("far/far.toml", toml);
+    files
+}
+
 fn specular() -> Scene {
     let mut p = Parts::new("specular");
     let g = p.material(mat("ground", [0.08; 3], None));

@@ -106,7 +106,7 @@ pub struct DirDesc {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PointDesc {
-    pub position: [f64; 3],
+    pub position: Spanned<[f64; 3]>,
     #[serde(default = "white")]
     pub color: [f32; 3],
     #[serde(default = "one")]
@@ -184,6 +184,15 @@ impl SceneDesc {
     pub fn parse(text: &str, file: &Path) -> Result<SceneDesc> {
         let desc: SceneDesc = parse_toml(text, file)?;
         desc.check_camera(text, file)?;
+        for (i, p) in desc.lights.iter().flat_map(|l| l.point.iter()).enumerate() {
+            check_finite(*p.position.get_ref()).map_err(|e| {
+                SceneError::syntax(
+                    file,
+                    line_of(text, p.position.span().start),
+                    format!("`lights.point[{i}].position`: {e}"),
+                )
+            })?;
+        }
         if let Some(r) = desc.lights.as_ref().and_then(|l| l.random_points.as_ref())
             && *r.count.get_ref() > MAX_RANDOM_LIGHTS
         {
@@ -396,6 +405,27 @@ mod tests {
             e,
             "s.toml:6: `lights.point[1].position[1]`: -inf is not a finite number"
         );
+    }
+
+    #[test]
+    fn positions_beyond_a_millimetre_of_f64_name_the_key_and_line() {
+        for (text, want) in [
+            (
+                "[[lights.point]]\nposition = [0, 0, 0]\n[[lights.point]]\nposition = [1e13, 0, 0]\n",
+                "s.toml:5: `lights.point[1].position`: the coordinate 1e13 is beyond what f64 holds at 1 mm precision",
+            ),
+            (
+                "[camera]\n[[camera.keys]]\ntime = 0\nposition = [0, 0, -9e12]\ntarget = [0, 0, 0]\n",
+                "s.toml:5: `camera.keys[0].position`: the coordinate -9e12 is beyond",
+            ),
+        ] {
+            let e = parse(&format!("obj = \"a.obj\"\n{text}"))
+                .expect_err("too far")
+                .to_string();
+            assert!(e.starts_with(want), "{e}");
+        }
+        // 10,000 km is well inside.
+        assert!(parse("obj = \"a.obj\"\n[camera]\n[[camera.keys]]\ntime = 0\nposition = [1e7, 0, 1e7]\ntarget = [1e7, 0, 9999990]\n[[lights.point]]\nposition = [1e7, 2, 1e7]\n").is_ok());
     }
 
     #[test]

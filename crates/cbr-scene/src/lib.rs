@@ -23,8 +23,8 @@ pub use error::{Result, SceneError};
 pub use files::{Disk, Files, MemoryFiles};
 pub use obj::{MissingTextures, ObjOptions};
 pub use scene::{
-    AlphaSource, Bounds, DirLight, LoadStats, MAX_RESOLUTION, Material, Motion, Object, PointLight,
-    Scene, Settings, Up, Vertex, check_resolution,
+    AlphaSource, Bounds, DirLight, LoadStats, MAX_COORDINATE, MAX_RESOLUTION, Material, Motion,
+    Object, PointLight, Scene, Settings, Up, Vertex, check_coordinate, check_resolution,
 };
 pub use texture::Texture;
 
@@ -286,7 +286,7 @@ fn apply_lights(scene: &mut Scene, l: &desc::LightsDesc, up_axis: Up) {
         .point
         .iter()
         .map(|p| PointLight {
-            position: up_axis.to_y_up(p.position),
+            position: up_axis.to_y_up(*p.position.get_ref()),
             color: p.color,
             intensity: p.intensity,
             range: p.range.unwrap_or(radius),

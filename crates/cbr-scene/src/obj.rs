@@ -9,7 +9,7 @@ use std::collections::HashMap;
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use crate::error::{Result, SceneError};
 use crate::files::{Disk, Files};
@@ -55,19 +55,34 @@ fn read_text(files: &dyn Files, path: &Path) -> Result<String> {
         .replace('\r', "\n"))
 }
 
-fn parse_finite(tok: Option<&str>, file: &Path, line: usize, what: &str) -> Result<f32> {
+/// A finite number (`T`: f32, or f64 for vertex coordinates), or an error naming `what` and the line.
+fn parse_finite<T: std::str::FromStr + Into<f64> + Copy>(
+    tok: Option<&str>,
+    file: &Path,
+    line: usize,
+    what: &str,
+) -> Result<T> {
     let tok =
         tok.ok_or_else(|| SceneError::syntax(file, line, format!("{what}: missing number")))?;
-    let v: f32 = tok
+    let v: T = tok
         .parse()
         .map_err(|_| SceneError::syntax(file, line, format!("{what}: `{tok}` is not a number")))?;
-    if !v.is_finite() {
+    if !v.into().is_finite() {
         return Err(SceneError::syntax(
             file,
             line,
             format!("{what}: `{tok}` is not a finite number"),
         ));
     }
+    Ok(v)
+}
+
+/// A vertex coordinate, read in double precision as tobj reads it (`use_f64`): finite and within
+/// [`crate::MAX_COORDINATE`], where an f64 still resolves a millimetre.
+fn parse_coordinate(tok: Option<&str>, file: &Path, line: usize, what: &str) -> Result<f64> {
+    let v = parse_finite::<f64>(tok, file, line, what)?;
+    crate::check_coordinate(v)
+        .map_err(|e| SceneError::syntax(file, line, format!("{what}: {e}")))?;
     Ok(v)
 }
 
@@ -100,7 +115,7 @@ pub(crate) fn validate_obj(text: &str, file: &Path) -> Result<(String, ObjCounts
         match toks.next() {
             Some("v") => {
                 for axis in ["x", "y", "z"] {
-                    parse_finite(toks.next(), file, ln, &format!("vertex {axis}"))?;
+                    parse_coordinate(toks.next(), file, ln, &format!("vertex {axis}"))?;
                 }
                 nv += 1;
             }
@@ -110,13 +125,18 @@ pub(crate) fn validate_obj(text: &str, file: &Path) -> Result<(String, ObjCounts
                     if axis == "v" && toks.clone().next().is_none() {
                         break;
                     }
-                    parse_finite(toks.next(), file, ln, &format!("texture coordinate {axis}"))?;
+                    parse_finite::<f32>(
+                        toks.next(),
+                        file,
+                        ln,
+                        &format!("texture coordinate {axis}"),
+                    )?;
                 }
                 nt += 1;
             }
             Some("vn") => {
                 for axis in ["x", "y", "z"] {
-                    parse_finite(toks.next(), file, ln, &format!("normal {axis}"))?;
+                    parse_finite::<f32>(toks.next(), file, ln, &format!("normal {axis}"))?;
                 }
                 nn += 1;
             }
@@ -226,7 +246,7 @@ pub(crate) fn validate_mtl(text: &str, file: &Path) -> Result<String> {
                 continue;
             }
             Some(k @ ("Ns" | "Ni" | "d")) => {
-                parse_finite(toks.next(), file, ln, k)?;
+                parse_finite::<f32>(toks.next(), file, ln, k)?;
             }
             Some("newmtl") if toks.next().is_none() => {
                 return Err(SceneError::syntax(file, ln, "newmtl without a name"));
@@ -315,17 +335,19 @@ impl TextureCache<'_> {
 fn convert_material(m: &tobj::Material, mtl: &Path, cache: &mut TextureCache) -> Result<Material> {
     let dir = mtl.parent().unwrap_or(Path::new("."));
     let mut out = Material::named(&m.name);
+    // tobj reads every number in f64 (`use_f64`, for vertex positions); materials stay f32.
+    let f32x3 = |c: [f64; 3]| c.map(|v| v as f32);
     if let Some(kd) = m.diffuse {
-        out.kd = kd;
+        out.kd = f32x3(kd);
     }
     if let Some(ks) = m.specular {
-        out.ks = ks;
+        out.ks = f32x3(ks);
     }
     if let Some(ns) = m.shininess {
-        out.ns = ns.max(1.0);
+        out.ns = (ns as f32).max(1.0);
     }
     if let Some(ke) = m.emissive {
-        out.ke = ke;
+        out.ke = f32x3(ke);
     }
     if let Some(t) = &m.diffuse_texture {
         let (name, _) = texture_ref(t);
@@ -504,6 +526,34 @@ pub fn load_obj_from(files: &dyn Files, path: &Path, opts: &ObjOptions) -> Resul
     })
 }
 
+/// The largest magnitude of an object's coordinates at which its vertices stay absolute (origin 0)
+/// whatever its size: 2^10 m, where an f32 steps by 2^-13 m (0.12 mm). Beyond it, see [`recentre`].
+pub const RECENTRE_BEYOND_M: f64 = 1024.0;
+
+/// How many times its half-size an object must lie from the origin to be recentred below
+/// [`RECENTRE_BEYOND_M`]: 128, seven bits of its f32 vertices' 24.
+pub const RECENTRE_RATIO: f64 = 128.0;
+
+/// Where an object whose positions span `min`..`max` (f64, world) keeps its local origin: the
+/// centre of its bounds where that makes its f32 vertices meaningfully finer, the world origin
+/// otherwise. Meaningfully: the farthest coordinate is at least [`RECENTRE_RATIO`] times the
+/// object's half-size (it gains at least seven bits), or it is beyond [`RECENTRE_BEYOND_M`] and at
+/// least twice the half-size (it gains at least a bit where an f32 steps by 0.12 mm or more).
+///
+/// Objects near the origin keep origin 0 and the f32 vertices they always had, so every scene
+/// that loaded before keeps its bits (the shared scenes reach 740 m, Panda3D's environment, and at
+/// most 34 times an object's half-size); a mesh exported in world coordinates far away (a
+/// georeferenced city model, CAD or survey data) is stored about its own centre, in f64.
+pub fn recentre(min: DVec3, max: DVec3) -> DVec3 {
+    let far = min.abs().max(max.abs()).max_element();
+    let half = ((max - min) * 0.5).max_element();
+    if far >= RECENTRE_RATIO * half || (far > RECENTRE_BEYOND_M && far >= 2.0 * half) {
+        (min + max) * 0.5
+    } else {
+        DVec3::ZERO
+    }
+}
+
 fn build_object(
     model: &tobj::Model,
     material: u32,
@@ -511,10 +561,23 @@ fn build_object(
     stats: &mut LoadStats,
 ) -> Option<Object> {
     let m = &model.mesh;
-    let pos = |i: u32| -> Vec3 {
-        let i = i as usize * 3;
-        Vec3::from(up.to_y_up([m.positions[i], m.positions[i + 1], m.positions[i + 2]]))
+    // Positions in f64 (world), then in f32 about the object's origin: what is rendered.
+    let world: Vec<DVec3> = m
+        .positions
+        .chunks_exact(3)
+        .map(|p| DVec3::from(up.to_y_up([p[0], p[1], p[2]])))
+        .collect();
+    let (lo, hi) = world.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), &p| (lo.min(p), hi.max(p)),
+    );
+    let origin = if world.is_empty() {
+        DVec3::ZERO
+    } else {
+        recentre(lo, hi)
     };
+    let local: Vec<Vec3> = world.iter().map(|&p| (p - origin).as_vec3()).collect();
+    let pos = |i: u32| -> Vec3 { local[i as usize] };
     let has_normals = !m.normals.is_empty() && m.normal_indices.len() == m.indices.len();
     let has_uvs = !m.texcoords.is_empty() && m.texcoord_indices.len() == m.indices.len();
     // Keep only triangles with three distinct corners.
@@ -575,8 +638,8 @@ fn build_object(
             let idx = *remap.entry((p, n, uv)).or_insert_with(|| {
                 let normal = if has_normals {
                     let j = n as usize * 3;
-                    Vec3::from(up.to_y_up([m.normals[j], m.normals[j + 1], m.normals[j + 2]]))
-                        .normalize_or_zero()
+                    let n = [m.normals[j], m.normals[j + 1], m.normals[j + 2]].map(|v| v as f32);
+                    Vec3::from(up.to_y_up(n)).normalize_or_zero()
                 } else {
                     smooth[p as usize]
                 };
@@ -588,8 +651,8 @@ fn build_object(
                 let uv = if has_uvs {
                     let j = uv as usize * 2;
                     [
-                        m.texcoords[j],
-                        1.0 - m.texcoords.get(j + 1).copied().unwrap_or(0.0),
+                        m.texcoords[j] as f32,
+                        1.0 - m.texcoords.get(j + 1).map_or(0.0, |&v| v as f32),
                     ]
                 } else {
                     [0.0, 0.0]
@@ -610,7 +673,7 @@ fn build_object(
         vertices,
         indices,
         material,
-        origin: [0.0; 3],
+        origin: origin.to_array(),
     })
 }
 
@@ -632,6 +695,93 @@ mod tests {
         assert!(err.starts_with("t.obj:1: vertex z"), "{err}");
         let err = validate_obj("v 0 0\n", &f()).unwrap_err().to_string();
         assert!(err.contains("t.obj:1: vertex z: missing number"), "{err}");
+    }
+
+    #[test]
+    fn coordinates_f64_cannot_hold_to_a_millimetre_name_the_line() {
+        // Read as f64, 1e39 (past f32's range) is finite, and refused as beyond 2^43 m.
+        let err = validate_obj("v 1e39 0 0\n", &f()).unwrap_err().to_string();
+        assert!(
+            err.contains("vertex x: the coordinate 1e39 is beyond"),
+            "{err}"
+        );
+        assert!(validate_obj("v 8796093022207 0 -1e7\n", &f()).is_ok());
+        let err = validate_obj("v 0 0 0\nv 0 -8796093022208 0\n", &f())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("t.obj:2: vertex y: the coordinate -8.796093022208e12 is beyond what f64 holds at 1 mm precision"),
+            "{err}"
+        );
+        let err = validate_obj("v 0 0 1e400\n", &f()).unwrap_err().to_string();
+        assert_eq!(err, "t.obj:1: vertex z: `1e400` is not a finite number");
+    }
+
+    fn load_far(d: f64) -> ObjData {
+        let files = crate::cases::far_obj(d);
+        load_obj_from(&files, Path::new("far/far.obj"), &ObjOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// The same mesh (`cases::far_obj`) written 1 km to 10,000 km from the origin loads about its
+    /// own centre: the f64 origin is the bounds' centre, and every vertex (origin + f32 local) lies
+    /// within 1e-6 m of the origin copy's moved by the distance, with its normal (computed ones
+    /// within 1e-6) and UV. Read in f32, the file's coordinates are up to 0.5 m off at 10,000 km.
+    #[test]
+    fn far_coordinates_in_the_file_are_recentred_in_f64() {
+        let near = load_far(0.0);
+        for o in &near.objects {
+            assert_eq!(o.origin, [0.0; 3], "{}: near the origin, absolute", o.name);
+        }
+        let world = |o: &Object, v: &Vertex| DVec3::from(o.origin) + Vec3::from(v.pos).as_dvec3();
+        for d in [1e3, 1e5, 1e6, 1e7] {
+            let away = load_far(d);
+            assert_eq!(away.objects.len(), near.objects.len());
+            for (a, n) in away.objects.iter().zip(&near.objects) {
+                let b = crate::scene::bounds_of(std::slice::from_ref(n));
+                let want = b.center() + DVec3::new(d, 0.0, d);
+                assert!(
+                    (DVec3::from(a.origin) - want).length() < 1e-9 * d,
+                    "{} at {d:e} m: origin {:?}, bounds centre {want}",
+                    a.name,
+                    a.origin
+                );
+                assert_eq!(a.indices, n.indices);
+                for (va, vn) in a.vertices.iter().zip(&n.vertices) {
+                    let err = (world(a, va) - world(n, vn) - DVec3::new(d, 0.0, d)).length();
+                    assert!(err < 1e-6, "{} at {d:e} m: a vertex {err:e} m off", a.name);
+                    assert!(Vec3::from(va.pos).length() < 5.0, "{}: local", a.name);
+                    assert_eq!(va.uv, vn.uv);
+                    let dn = (Vec3::from(va.normal) - Vec3::from(vn.normal)).length();
+                    assert!(dn < 1e-6, "{}: normal {dn:e} off", a.name);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn recentring_is_kept_for_where_it_gains_precision() {
+        let r = |lo: [f64; 3], hi: [f64; 3]| recentre(DVec3::from(lo), DVec3::from(hi));
+        // Near the origin: absolute, whatever the shape (Sibenik's 20 m, Panda3D's 740 m terrain,
+        // a 7 m rock 245 m out).
+        assert_eq!(r([-20.0, -2.0, -8.0], [20.0, 15.0, 8.0]), DVec3::ZERO);
+        assert_eq!(r([-739.0, -5.0, -600.0], [700.0, 40.0, 650.0]), DVec3::ZERO);
+        assert_eq!(r([231.0, 0.0, 40.0], [245.6, 9.0, 50.0]), DVec3::ZERO);
+        // Far against its size: recentred.
+        assert_eq!(
+            r([997.0, 0.0, 994.0], [1003.0, 2.0, 1000.0]),
+            DVec3::new(1000.0, 1.0, 997.0)
+        );
+        // Beyond 1,024 m and at least twice its half-size: recentred; a terrain about the origin
+        // gains nothing and stays absolute.
+        assert_eq!(
+            r([1500.0, 0.0, 0.0], [2500.0, 10.0, 10.0]),
+            DVec3::new(2000.0, 5.0, 5.0)
+        );
+        assert_eq!(
+            r([-1500.0, 0.0, -1500.0], [1500.0, 10.0, 1500.0]),
+            DVec3::ZERO
+        );
     }
 
     #[test]

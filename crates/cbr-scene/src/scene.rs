@@ -88,7 +88,9 @@ pub struct Object {
     pub material: u32,
     /// Where the object's local coordinates are centred in the world (f64): vertices are stored
     /// in f32 relative to it, so geometry far from the world origin keeps its precision (the
-    /// renderer forms camera-relative transforms in f64). Zero for loaded OBJs.
+    /// renderer forms camera-relative transforms in f64). Loaded OBJs: the centre of the object's
+    /// bounds where that makes its f32 vertices meaningfully finer, zero otherwise
+    /// ([`crate::obj::recentre`]).
     pub origin: [f64; 3],
 }
 
@@ -156,6 +158,26 @@ impl Default for Settings {
             background: [0.0; 3],
             bump: false,
         }
+    }
+}
+
+/// The largest distance from the origin (metres, per coordinate) a scene may place anything at:
+/// 2^43 m, about 8.8e12 m. Below it an f64 resolves 2^-10 m (0.98 mm) or finer, so an object's
+/// f64 `origin`, camera keys and point lights keep millimetre precision; OBJ vertices, camera
+/// keys and point lights beyond it are refused.
+pub const MAX_COORDINATE: f64 = 8_796_093_022_208.0;
+
+/// Why a coordinate cannot be held at millimetre precision: it is not a finite number, or it is
+/// beyond [`MAX_COORDINATE`].
+pub fn check_coordinate(v: f64) -> Result<(), String> {
+    if !v.is_finite() {
+        Err(format!("the coordinate {v} is not a finite number"))
+    } else if v.abs() >= MAX_COORDINATE {
+        Err(format!(
+            "the coordinate {v:e} is beyond what f64 holds at 1 mm precision (|x| < 2^43 m, about 8.8e12 m)"
+        ))
+    } else {
+        Ok(())
     }
 }
 
@@ -278,6 +300,21 @@ mod tests {
     #[test]
     fn vertex_is_eight_floats() {
         assert_eq!(std::mem::size_of::<Vertex>(), 32);
+    }
+
+    #[test]
+    fn coordinates_are_bounded_where_f64_keeps_a_millimetre() {
+        assert_eq!(MAX_COORDINATE, 2f64.powi(43));
+        // The f64 step just below the bound is 2^-10 m, at the bound 2^-9 m.
+        let below = f64::from_bits(MAX_COORDINATE.to_bits() - 1);
+        assert!(MAX_COORDINATE - below <= 1e-3);
+        assert!(f64::from_bits(MAX_COORDINATE.to_bits() + 1) - MAX_COORDINATE > 1e-3);
+        assert!(check_coordinate(-below).is_ok());
+        assert!(check_coordinate(1e7).is_ok());
+        let e = check_coordinate(-MAX_COORDINATE).expect_err("at the bound");
+        assert!(e.contains("1 mm precision"), "{e}");
+        let e = check_coordinate(f64::NAN).expect_err("nan");
+        assert_eq!(e, "the coordinate NaN is not a finite number");
     }
 
     #[test]

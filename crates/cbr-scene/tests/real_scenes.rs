@@ -145,3 +145,27 @@ fn foliage_alpha_masks_and_the_invisible_cylinder() {
     let b = s.bounds();
     assert!(b.max.y - b.min.y < b.max.x - b.min.x);
 }
+
+/// Positions are read in f64 and a far object is recentred about its bounds (obj.rs, `recentre`),
+/// but every real scene lies near the origin: each object keeps origin 0 and the f32 vertices it
+/// always had (`load_time` hashes them: the same bits as the f32 loader, docs/scenes.md), so no
+/// rendered bit of these scenes moves. Fails if the recentring rule starts touching one of them.
+#[test]
+fn real_scenes_near_the_origin_keep_absolute_vertices() {
+    if !shared_present() {
+        return;
+    }
+    for toml in [
+        "bunny.toml",
+        "cornell-box.toml",
+        "foliage.toml",
+        "sibenik.toml",
+        "spider.toml",
+        "spot.toml",
+    ] {
+        let s = load(toml);
+        for o in &s.objects {
+            assert_eq!(o.origin, [0.0; 3], "{toml}: {} recentred", o.name);
+        }
+    }
+}

@@ -69,6 +69,19 @@ fn malformed_obj_inputs_name_the_file_and_line() {
             &["inf.obj:3:", "not a finite number"],
         ),
         (
+            "overflow.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 -1e400\nf 1 2 3\n",
+            &["overflow.obj:3: vertex z:", "not a finite number"],
+        ),
+        (
+            "toofar.obj",
+            "v 0 0 0\nv 9e12 0 0\nv 0 1 0\nf 1 2 3\n",
+            &[
+                "toofar.obj:2: vertex x:",
+                "beyond what f64 holds at 1 mm precision",
+            ],
+        ),
+        (
             "garbage.obj",
             "v 0 0 0\nv 1 zero 0\n",
             &["garbage.obj:2:", "`zero` is not a number"],
