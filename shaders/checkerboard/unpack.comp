@@ -4,7 +4,7 @@
 // include. Missing pixels: colour (0,0,0,0), depth 0 (infinitely far), IDs 0, mask 0.
 #include "../inc/layout_fetch.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 
 layout(set = 0, binding = BINDING_COLOR) uniform CB_SAMPLER color_tex;
 layout(set = 0, binding = BINDING_VELOCITY) uniform CB_SAMPLER velocity_tex;
@@ -18,7 +18,7 @@ struct Pixel {
 };
 layout(std430, set = 0, binding = BINDING_OUT) writeonly buffer Out { Pixel pixels[]; };
 
-layout(push_constant) uniform Push { ivec4 size_parity_side; } pc;  // W, H, parity, tangram L
+PUSH_CONSTANTS  // size_parity_side: W, H, parity, tangram L
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);

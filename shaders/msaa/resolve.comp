@@ -4,13 +4,13 @@
 // space, T(c) = c / (1 + L(c)), inverted after, T^-1(c) = c / (1 - L(c)), with L the Rec. 709
 // luminance; bright samples then no longer dominate edge pixels (Karis 2013). CPU reference:
 // crates/cbr-render/src/techniques/msaa.rs (`resolve_reference`).
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 
 layout(set = 0, binding = BINDING_COLOR) uniform sampler2DMS color;
 layout(set = 0, binding = BINDING_VELOCITY) uniform sampler2DMS velocity;
 layout(set = 0, binding = BINDING_OUT_COLOR, rgba16f) uniform writeonly image2D out_color;
 layout(set = 0, binding = BINDING_OUT_VELOCITY, rg32f) uniform writeonly image2D out_velocity;
-layout(push_constant) uniform Push { ivec4 size_samples; } pc;  // W, H, N, 0
+PUSH_CONSTANTS  // size_samples: W, H, N, 0
 
 float luma(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
 

@@ -3,7 +3,7 @@
 // count) brought to W x H. FILTER 0: bilinear; 1: bicubic (Catmull-Rom, 4x4 taps, negative
 // lobes' undershoot clamped at 0). Depth, velocity and IDs take the nearest low-resolution
 // sample; velocity is rescaled to full-resolution pixels. Taps clamp to the image edge.
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 
 layout(set = 0, binding = BINDING_COLOR) uniform sampler2D low_color;
 layout(set = 0, binding = BINDING_VELOCITY) uniform sampler2D low_velocity;
@@ -14,7 +14,7 @@ layout(set = 0, binding = BINDING_OUT_VELOCITY, rg32f) uniform writeonly image2D
 layout(set = 0, binding = BINDING_OUT_IDS, rg32ui) uniform writeonly uimage2D out_ids;
 layout(set = 0, binding = BINDING_OUT_DEPTH, r32f) uniform writeonly image2D out_depth;
 
-layout(push_constant) uniform Push { ivec4 sizes; } pc;  // W, H, w, h
+PUSH_CONSTANTS  // sizes: W, H, w, h
 
 vec3 texel(ivec2 t) {
     ivec2 lo = pc.sizes.zw;

@@ -429,7 +429,9 @@ pub enum Bound<'a> {
 /// plus what is named here (the technique's targets, a post pass's input).
 #[derive(Clone, Default)]
 pub struct Binds<'a> {
-    list: Vec<(&'static str, Bound<'a>)>,
+    /// Name, what it holds, and whether it was named here (not taken from [`Resources`]): a
+    /// name given here that the pass does not declare is an error (a misspelt binding).
+    list: Vec<(&'static str, Bound<'a>, bool)>,
 }
 
 impl<'a> Binds<'a> {
@@ -442,8 +444,8 @@ impl<'a> Binds<'a> {
         let mut b = Binds::new();
         for (name, r) in &res.items {
             match r {
-                Owned::Image(i) => b.list.push((name, Bound::Image(i))),
-                Owned::Buffer(x) => b.list.push((name, Bound::Buffer(x))),
+                Owned::Image(i) => b.list.push((name, Bound::Image(i), false)),
+                Owned::Buffer(x) => b.list.push((name, Bound::Buffer(x), false)),
                 Owned::History(_) => {}
             }
         }
@@ -480,14 +482,17 @@ impl<'a> Binds<'a> {
     }
 
     fn set(&mut self, name: &'static str, b: Bound<'a>) {
-        match self.list.iter_mut().find(|(n, _)| *n == name) {
-            Some(e) => e.1 = b,
-            None => self.list.push((name, b)),
+        match self.list.iter_mut().find(|(n, ..)| *n == name) {
+            Some(e) => (e.1, e.2) = (b, true),
+            None => self.list.push((name, b, true)),
         }
     }
 
     fn get(&self, name: &str) -> Option<&Bound<'a>> {
-        self.list.iter().find(|(n, _)| *n == name).map(|(_, b)| b)
+        self.list
+            .iter()
+            .find(|(n, ..)| *n == name)
+            .map(|(_, b, _)| b)
     }
 }
 
@@ -505,9 +510,18 @@ impl ComputePass {
         &self.decl.name
     }
 
-    /// Checks that `binds` give every binding of the declaration something of its kind
-    /// (extra names are resources other passes bind, and are ignored).
+    /// Checks that `binds` give every binding of the declaration something of its kind, and
+    /// name nothing the declaration lacks (resources taken by [`Binds::of`] that this pass does
+    /// not bind are other passes' and are ignored).
     pub fn check(&self, binds: &Binds) -> Result<()> {
+        for (name, _, explicit) in &binds.list {
+            if *explicit && !self.decl.bindings.iter().any(|b| b.name == *name) {
+                return Err(declaration(
+                    &self.decl.name,
+                    format!("`{name}` is bound but not declared"),
+                ));
+            }
+        }
         for b in &self.decl.bindings {
             let given = binds.get(b.name).ok_or_else(|| {
                 declaration(&self.decl.name, format!("nothing bound to `{}`", b.name))
@@ -698,11 +712,14 @@ pub enum ResourceKind {
         width: u32,
         height: u32,
         usage: vk::ImageUsageFlags,
+        samples: u32,
     },
-    /// A device-local storage buffer.
+    /// A storage buffer, device-local or (`host`) host-visible: read by the host after the
+    /// frame.
     Buffer {
         bytes: u64,
         usage: vk::BufferUsageFlags,
+        host: bool,
     },
 }
 
@@ -719,6 +736,34 @@ impl ResourceDecl {
                 usage: vk::ImageUsageFlags::STORAGE
                     | vk::ImageUsageFlags::SAMPLED
                     | vk::ImageUsageFlags::TRANSFER_SRC,
+                samples: 1,
+            },
+            history: false,
+        }
+    }
+
+    /// A render target of `samples` samples a raster pass writes and a later pass samples
+    /// (colour, or depth for a depth format: not sampled).
+    pub fn attachment(
+        name: &'static str,
+        format: vk::Format,
+        width: u32,
+        height: u32,
+        samples: u32,
+    ) -> ResourceDecl {
+        let usage = if cbr_gpu::resource::is_depth_format(format) {
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+        } else {
+            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED
+        };
+        ResourceDecl {
+            name,
+            kind: ResourceKind::Image {
+                format,
+                width,
+                height,
+                usage,
+                samples,
             },
             history: false,
         }
@@ -733,6 +778,20 @@ impl ResourceDecl {
                 usage: vk::BufferUsageFlags::STORAGE_BUFFER
                     | vk::BufferUsageFlags::TRANSFER_SRC
                     | vk::BufferUsageFlags::TRANSFER_DST,
+                host: false,
+            },
+            history: false,
+        }
+    }
+
+    /// A host-visible storage buffer of `bytes` the host reads after the frame.
+    pub fn host_buffer(name: &'static str, bytes: u64) -> ResourceDecl {
+        ResourceDecl {
+            name,
+            kind: ResourceKind::Buffer {
+                bytes,
+                usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+                host: true,
             },
             history: false,
         }
@@ -770,9 +829,10 @@ impl ResourceDecl {
                     format,
                     width,
                     height,
+                    samples,
                     ..
-                } => e.image(name, *format, *width, *height),
-                ResourceKind::Buffer { bytes, .. } => e.storage_buffer(name, *bytes, false),
+                } => e.image_array(name, *format, *width, *height, 1, *samples),
+                ResourceKind::Buffer { bytes, host, .. } => e.storage_buffer(name, *bytes, *host),
             }
         }
     }
@@ -814,16 +874,23 @@ impl Resources {
                         width,
                         height,
                         usage,
+                        samples,
                     } => Owned::Image(Image::new(
                         gpu,
-                        &ImageDesc::new_2d(name, *format, *width, *height, *usage),
+                        &ImageDesc {
+                            samples: *samples,
+                            ..ImageDesc::new_2d(name, *format, *width, *height, *usage)
+                        },
                     )?),
-                    ResourceKind::Buffer { bytes, usage } => Owned::Buffer(Buffer::new(
+                    ResourceKind::Buffer { bytes, usage, host } => Owned::Buffer(Buffer::new(
                         gpu,
                         name,
                         *bytes,
                         *usage,
-                        cbr_gpu::Location::GpuOnly,
+                        match host {
+                            true => cbr_gpu::Location::GpuToCpu,
+                            false => cbr_gpu::Location::GpuOnly,
+                        },
                     )?),
                 })
             };

@@ -303,17 +303,11 @@ fn msaa2x_equals_native_where_2x_msaa_exists() {
                 )
                 .expect("msaa2x shaders compile");
         }
-        let mut defines: Vec<(String, String)> = cbr_render::checkerboard::unpack::UNPACK_BINDINGS
-            .iter()
-            .map(cbr_gpu::BindingDesc::define)
-            .collect();
-        defines.push((
-            "LAYOUT".into(),
-            cbr_render::scene_pass::LAYOUT_MSAA2X.to_string(),
-        ));
-        defines.push(("MSAA_LOCATIONS".into(), "1".into()));
+        let mut plan = cbr_render::layouts::LayoutPlan::new(Layout::Msaa2x, 64, 36, 0);
+        plan.sample_locations = Some([[0.25, 0.25], [0.75, 0.75]]);
+        let unpack = cbr_render::checkerboard::unpack::decl(&plan);
         shaders
-            .compile("checkerboard/unpack.comp", &defines)
+            .compile(unpack.shader, &unpack.all_defines())
             .expect("the sample-locations fetch compiles");
         eprintln!(
             "SKIPPED msaa2x --msaa2x-sample-locations on {}: {}",

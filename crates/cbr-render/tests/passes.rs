@@ -5,11 +5,14 @@
 mod common;
 
 use cbr_gpu::{GpuError, Image, ImageDesc, Layout, vk};
+use cbr_render::checkerboard::unpack;
 use cbr_render::layouts::LayoutPlan;
 use cbr_render::pass::{Binding, Binds, ComputeDecl, Use};
 use cbr_render::post::{fxaa, sharpen, taa};
 use cbr_render::resolve::{self, Mapping, ResolveMode, ResolveSettings};
+use cbr_render::techniques::msaa::{self, MsaaConfig};
 use cbr_render::techniques::ssaa;
+use cbr_render::upscale::{self, UpscaleFilter};
 
 /// Every pass declared through crate::pass so far, with every variant its parameters select.
 fn declared() -> Vec<ComputeDecl> {
@@ -36,6 +39,17 @@ fn declared() -> Vec<ComputeDecl> {
         }
     }
     d.push(resolve::copy_floor_decl("resolve.copy_floor"));
+    // The unpack of every portable layout, upscale's two filters, msaa's two resolves.
+    for layout in [Layout::Masked, Layout::Split, Layout::Rotated] {
+        d.push(unpack::decl(&LayoutPlan::new(layout, 64, 36, 1)));
+    }
+    d.extend([UpscaleFilter::Bilinear, UpscaleFilter::Bicubic].map(upscale::decl));
+    for hdr in [false, true] {
+        d.push(msaa::decl(MsaaConfig {
+            hdr,
+            ..msaa::parse(&["4"]).expect("msaa:4")
+        }));
+    }
     d
 }
 
@@ -51,7 +65,7 @@ fn declared_passes_build_without_allocating() {
                 .unwrap_or_else(|e| panic!("{}: {e}", d.name))
         })
         .collect();
-    assert_eq!(built.len(), 29);
+    assert_eq!(built.len(), 36);
     assert_eq!(
         gpu.allocations_made(),
         before,
@@ -96,6 +110,15 @@ fn binds_that_do_not_fit_the_declaration_are_errors() {
     assert!(
         wrong.contains("`out` is a storage image, given a buffer"),
         "{wrong}"
+    );
+    let misspelt = Binds::new()
+        .image("src", &a)
+        .image("out", &b)
+        .image("outt", &b);
+    let misspelt = declaration(pass.check(&misspelt));
+    assert!(
+        misspelt.contains("`outt` is bound but not declared"),
+        "{misspelt}"
     );
     // A declaration naming a binding twice is refused when it is built.
     let twice = ComputeDecl::new("twice", "post/sharpen.comp")

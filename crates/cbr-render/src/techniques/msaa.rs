@@ -8,15 +8,13 @@
 //! multisampled targets hold no IDs, since lavapipe has no multisampled integer attachments.
 //! docs/antialiasing.md.
 
-use cbr_gpu::{
-    Access, BindingDesc, Caps, ComputeDesc, DescriptorKind, DescriptorSet, Image, ImageDesc,
-    PassKind, Pipeline, Readback, Result, Sampler, SamplerDesc, SetLayout, Write, vk,
-};
+use cbr_gpu::{Access, Caps, Image, PassKind, Readback, Result};
 use half::f16;
 
 use super::IdPass;
 use crate::frame::FrameOutput;
 use crate::memory::MemoryEstimate;
+use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, ResourceDecl, Resources, Use};
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, VELOCITY_FORMAT};
 use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, unknown_param};
@@ -80,49 +78,55 @@ fn needs(params: &[&str], caps: &Caps) -> Option<String> {
         .then(|| "the sampleRateShading feature".to_string())
 }
 
-pub const BINDINGS: [BindingDesc; 4] = {
-    use DescriptorKind::{CombinedImageSampler as S, StorageImage as I};
-    [
-        BindingDesc::one("color", 0, S),
-        BindingDesc::one("velocity", 1, S),
-        BindingDesc::one("out_color", 2, I),
-        BindingDesc::one("out_velocity", 3, I),
+crate::push_constants! {
+    struct Push {
+        /// W, H, N, 0.
+        size_samples: [i32; 4],
+    }
+}
+
+/// The resolve of the multisampled colour and velocity (shaders/msaa/resolve.comp).
+pub fn decl(c: MsaaConfig) -> ComputeDecl {
+    ComputeDecl::new("msaa.resolve", "msaa/resolve.comp")
+        .define("HDR_SAFE", u32::from(c.hdr))
+        .bindings(&[
+            Binding::sampled("color"),
+            Binding::sampled("velocity"),
+            Binding::image("out_color", Use::Write),
+            Binding::image("out_velocity", Use::Write),
+        ])
+        .push::<Push>()
+}
+
+/// The multisampled colour, velocity and depth, and the resolved colour and velocity.
+fn resources(c: MsaaConfig, w: u32, h: u32) -> Vec<ResourceDecl> {
+    vec![
+        ResourceDecl::attachment("color", COLOR_FORMAT, w, h, c.samples),
+        ResourceDecl::attachment("velocity", VELOCITY_FORMAT, w, h, c.samples),
+        ResourceDecl::attachment("depth", DEPTH_FORMAT, w, h, c.samples),
+        ResourceDecl::image("out_color", COLOR_FORMAT, w, h),
+        ResourceDecl::image("out_velocity", VELOCITY_FORMAT, w, h),
     ]
-};
+}
 
 pub struct Msaa {
     c: MsaaConfig,
     pass: ScenePass,
     config: RasterConfig,
-    color: Image,
-    velocity: Image,
-    depth: Image,
     ids: IdPass,
-    pipeline: Pipeline,
-    _layout: SetLayout,
-    set: DescriptorSet,
-    _sampler: Sampler,
-    out_color: Image,
-    out_velocity: Image,
+    resolve: ComputePass,
+    res: Resources,
+    size: (u32, u32),
     color_rb: Readback,
     velocity_rb: Readback,
 }
 
 impl Msaa {
-    /// What [`Msaa::new`] allocates: the multisampled colour, velocity and depth, the 1x ID
-    /// pass, the resolved colour and velocity and their readbacks.
+    /// What [`Msaa::new`] allocates: the declared resources, the 1x ID pass, and the readbacks
+    /// of the resolved colour and velocity.
     pub fn estimate(c: MsaaConfig, w: u32, h: u32) -> MemoryEstimate {
-        let mut e = MemoryEstimate::new();
-        for (name, format) in [
-            ("msaa.color", COLOR_FORMAT),
-            ("msaa.velocity", VELOCITY_FORMAT),
-            ("msaa.depth", DEPTH_FORMAT),
-        ] {
-            e.image_array(name, format, w, h, 1, c.samples);
-        }
+        let mut e = crate::pass::estimate(&resources(c, w, h), "msaa");
         IdPass::estimate(&mut e, w, h);
-        e.image("msaa.out_color", COLOR_FORMAT, w, h);
-        e.image("msaa.out_velocity", VELOCITY_FORMAT, w, h);
         e.readback("readback.msaa.color", COLOR_FORMAT, w, h, 1);
         e.readback("readback.msaa.velocity", VELOCITY_FORMAT, w, h, 1);
         e
@@ -144,68 +148,20 @@ impl Msaa {
             &config,
             ctx.counter,
         )?;
-        let ms = |name: &str, format, usage| {
-            let mut d = ImageDesc::new_2d(name, format, w, h, usage);
-            d.samples = c.samples;
-            Image::new(gpu, &d)
-        };
-        let attach = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED;
-        let color = ms("msaa.color", COLOR_FORMAT, attach)?;
-        let velocity = ms("msaa.velocity", VELOCITY_FORMAT, attach)?;
-        let depth = ms(
-            "msaa.depth",
-            DEPTH_FORMAT,
-            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
-        )?;
+        let res = Resources::new(gpu, "msaa", &resources(c, w, h))?;
         let ids = IdPass::new(gpu, ctx.shaders, ctx.scene, w, h, ctx.counter)?;
-        let layout = SetLayout::new(gpu, "msaa.set_layout", &BINDINGS)?;
-        let mut defines: Vec<(String, String)> = BINDINGS.iter().map(BindingDesc::define).collect();
-        defines.push(("HDR_SAFE".into(), u32::from(c.hdr).to_string()));
-        let cs = ctx.shaders.compile("msaa/resolve.comp", &defines)?;
-        let pipeline = Pipeline::compute(
-            gpu,
-            &ComputeDesc {
-                name: "msaa.resolve",
-                shader: &cs,
-                set_layouts: &[&layout],
-                push_constant_bytes: 16,
-            },
-        )?;
-        let sampler = Sampler::new(gpu, "msaa.sampler", SamplerDesc::NEAREST)?;
-        let usage = vk::ImageUsageFlags::STORAGE
-            | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::TRANSFER_SRC;
-        let img =
-            |name: &str, format| Image::new(gpu, &ImageDesc::new_2d(name, format, w, h, usage));
-        let out_color = img("msaa.out_color", COLOR_FORMAT)?;
-        let out_velocity = img("msaa.out_velocity", VELOCITY_FORMAT)?;
-        let set = DescriptorSet::new(
-            gpu,
-            "msaa.set",
-            &layout,
-            &[
-                Write::Sampled(0, vec![(&color, &sampler)]),
-                Write::Sampled(1, vec![(&velocity, &sampler)]),
-                Write::Storage(2, &out_color),
-                Write::Storage(3, &out_velocity),
-            ],
-        )?;
-        let color_rb = Readback::for_image(gpu, "readback.msaa.color", &out_color)?;
-        let velocity_rb = Readback::for_image(gpu, "readback.msaa.velocity", &out_velocity)?;
+        let resolve = decl(c).build(gpu, ctx.shaders)?;
+        let color_rb = Readback::for_image(gpu, "readback.msaa.color", res.image("out_color")?)?;
+        let velocity_rb =
+            Readback::for_image(gpu, "readback.msaa.velocity", res.image("out_velocity")?)?;
         Ok(Msaa {
             c,
             pass,
             config,
-            color,
-            velocity,
-            depth,
             ids,
-            pipeline,
-            _layout: layout,
-            set,
-            _sampler: sampler,
-            out_color,
-            out_velocity,
+            resolve,
+            res,
+            size: (w, h),
             color_rb,
             velocity_rb,
         })
@@ -219,39 +175,30 @@ impl Technique for Msaa {
         let counter = ctx.counter;
         let this = &*self;
         ctx.submit("frame", |cmd, profiler, gs| {
+            let r = &this.res;
             this.ids.record(cmd, profiler, gs, counter);
             this.pass.record(
                 cmd,
                 profiler,
                 gs,
-                &[&this.color, &this.velocity],
-                &this.depth,
+                &[r.image("color")?, r.image("velocity")?],
+                r.image("depth")?,
                 counter,
                 &this.config,
             );
-            cmd.use_image(&this.color, Access::ComputeSampled);
-            cmd.use_image(&this.velocity, Access::ComputeSampled);
-            cmd.use_image(&this.out_color, Access::ComputeStorageWrite);
-            cmd.use_image(&this.out_velocity, Access::ComputeStorageWrite);
-            let scope = profiler.begin(cmd, "msaa.resolve", PassKind::Compute);
-            cmd.bind_pipeline(&this.pipeline);
-            cmd.bind_set(&this.pipeline, 0, &this.set);
-            let push = [
-                this.out_color.width as i32,
-                this.out_color.height as i32,
-                this.c.samples as i32,
-                0,
-            ];
-            cmd.push_constants(&this.pipeline, bytemuck::cast_slice(&push));
-            cmd.dispatch(
-                this.out_color.width.div_ceil(8),
-                this.out_color.height.div_ceil(8),
-                1,
-            );
-            profiler.end(cmd, scope);
+            let push = Push {
+                size_samples: [
+                    this.size.0 as i32,
+                    this.size.1 as i32,
+                    this.c.samples as i32,
+                    0,
+                ],
+            };
+            this.resolve
+                .dispatch_2d(cmd, profiler, &Binds::of(r), &push, this.size)?;
             let scope = profiler.begin(cmd, "readback", PassKind::Transfer);
-            cmd.read_image(&this.out_color, &this.color_rb);
-            cmd.read_image(&this.out_velocity, &this.velocity_rb);
+            cmd.read_image(r.image("out_color")?, &this.color_rb);
+            cmd.read_image(r.image("out_velocity")?, &this.velocity_rb);
             profiler.end(cmd, scope);
             cmd.use_buffer(counter, Access::HostRead);
             Ok(())
@@ -259,13 +206,13 @@ impl Technique for Msaa {
     }
 
     fn color(&self, _frame: u32) -> Option<&Image> {
-        Some(&self.out_color)
+        self.res.image("out_color").ok()
     }
 
     /// Velocity of sample 0 (the resolve's), depth and IDs of the 1x ID pass at the pixel centres.
     fn geometry(&self, _frame: u32) -> Option<Geometry<'_>> {
         Some(Geometry {
-            velocity: &self.out_velocity,
+            velocity: self.res.image("out_velocity").ok()?,
             depth: &self.ids.depth,
             ids: &self.ids.ids,
             packed: false,
@@ -286,7 +233,7 @@ impl Technique for Msaa {
 
     fn target_bytes(&self) -> u64 {
         // Multisampled colour (8) + velocity (8) + depth (4) per sample; the 1x ID pass (8 + 4).
-        let px = u64::from(self.out_color.width) * u64::from(self.out_color.height);
+        let px = u64::from(self.size.0) * u64::from(self.size.1);
         px * (u64::from(self.c.samples) * 20 + 12)
     }
 }

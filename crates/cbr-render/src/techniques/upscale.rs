@@ -1,15 +1,13 @@
 //! The `upscale` baseline (DESIGN.md): render W/sqrt(2) x H/sqrt(2), the checkerboard's pixel
 //! count, then a bilinear or bicubic (Catmull-Rom) upscale to W x H (shaders/upscale/).
 
-use cbr_gpu::{
-    Access, BindingDesc, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Gpu, Image, ImageDesc,
-    PassKind, Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout, Shaders, Write, vk,
-};
+use cbr_gpu::{Access, Cmd, Gpu, Image, Profiler, Result, Shaders, vk};
 
 use super::LayerReadbacks;
 use crate::frame::FrameOutput;
 use crate::gpu_scene::RasterUniforms;
 use crate::memory::MemoryEstimate;
+use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, ResourceDecl, Resources, Use};
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::{COLOR_FORMAT, FrameTargets, ID_FORMAT, VELOCITY_FORMAT};
 use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, unknown_param};
@@ -24,7 +22,7 @@ pub const REGISTRATION: Registration = Registration {
     needs: |_, _| None,
     estimate: |ctx, _| Ok(Upscale::estimate(ctx.width, ctx.height)),
     build: |ctx, p| {
-        let filter = parse(p).map_err(cbr_gpu::GpuError::Other)?;
+        let filter = parse(p).map_err(|e| crate::technique::refused("upscale", p, e))?;
         Ok(Box::new(Upscale::new(ctx, filter)?))
     },
 };
@@ -60,48 +58,51 @@ pub fn low_resolution(width: u32, height: u32) -> (u32, u32) {
     (f(width), f(height))
 }
 
-pub const BINDINGS: [BindingDesc; 8] = {
-    use DescriptorKind::{CombinedImageSampler as S, StorageImage as I};
-    [
-        BindingDesc::one("color", 0, S),
-        BindingDesc::one("velocity", 1, S),
-        BindingDesc::one("ids", 2, S),
-        BindingDesc::one("depth", 3, S),
-        BindingDesc::one("out_color", 4, I),
-        BindingDesc::one("out_velocity", 5, I),
-        BindingDesc::one("out_ids", 6, I),
-        BindingDesc::one("out_depth", 7, I),
-    ]
-};
+crate::push_constants! {
+    struct Push {
+        /// W, H, w, h: the output and the low resolution.
+        sizes: [i32; 4],
+    }
+}
 
-/// Full-resolution outputs of the upscale.
-pub struct Upscaled {
-    pub color: Image,
-    pub velocity: Image,
-    pub ids: Image,
-    pub depth: Image,
+/// The upscale (shaders/upscale/upscale.comp): the low-resolution targets in, the four
+/// full-resolution layers out.
+pub fn decl(filter: UpscaleFilter) -> ComputeDecl {
+    ComputeDecl::new("upscale", "upscale/upscale.comp")
+        .define("FILTER", u32::from(filter == UpscaleFilter::Bicubic))
+        .bindings(&[
+            Binding::sampled("color"),
+            Binding::sampled("velocity"),
+            Binding::sampled("ids"),
+            Binding::sampled("depth"),
+            Binding::image("out_color", Use::Write),
+            Binding::image("out_velocity", Use::Write),
+            Binding::image("out_ids", Use::Write),
+            Binding::image("out_depth", Use::Write),
+        ])
+        .push::<Push>()
+}
+
+/// The four full-resolution outputs (post passes sample the colour and the geometry).
+fn resources(w: u32, h: u32) -> Vec<ResourceDecl> {
+    vec![
+        ResourceDecl::image("out_color", COLOR_FORMAT, w, h),
+        ResourceDecl::image("out_velocity", VELOCITY_FORMAT, w, h),
+        ResourceDecl::image("out_ids", ID_FORMAT, w, h),
+        ResourceDecl::image("out_depth", vk::Format::R32_SFLOAT, w, h),
+    ]
 }
 
 pub struct UpscalePass {
-    pipeline: Pipeline,
-    _layout: SetLayout,
-    set: DescriptorSet,
-    _sampler: Sampler,
-    pub out: Upscaled,
-    sizes: [i32; 4],
+    pass: ComputePass,
+    res: Resources,
+    push: Push,
 }
 
 impl UpscalePass {
     /// What [`UpscalePass::new`] allocates: the four full-resolution outputs.
     pub fn estimate(e: &mut MemoryEstimate, width: u32, height: u32) {
-        for (name, format) in [
-            ("upscale.color", COLOR_FORMAT),
-            ("upscale.velocity", VELOCITY_FORMAT),
-            ("upscale.ids", ID_FORMAT),
-            ("upscale.depth", vk::Format::R32_SFLOAT),
-        ] {
-            e.image(name, format, width, height);
-        }
+        e.append(crate::pass::estimate(&resources(width, height), "upscale"));
     }
 
     pub fn new(
@@ -112,84 +113,40 @@ impl UpscalePass {
         width: u32,
         height: u32,
     ) -> Result<UpscalePass> {
-        let layout = SetLayout::new(gpu, "upscale.set_layout", &BINDINGS)?;
-        let mut defines: Vec<(String, String)> = BINDINGS.iter().map(BindingDesc::define).collect();
-        defines.push((
-            "FILTER".into(),
-            u32::from(filter == UpscaleFilter::Bicubic).to_string(),
-        ));
-        let cs = shaders.compile("upscale/upscale.comp", &defines)?;
-        let pipeline = Pipeline::compute(
-            gpu,
-            &ComputeDesc {
-                name: "upscale",
-                shader: &cs,
-                set_layouts: &[&layout],
-                push_constant_bytes: 16,
-            },
-        )?;
-        let sampler = Sampler::new(gpu, "upscale.sampler", SamplerDesc::NEAREST)?;
-        // SAMPLED: post passes read the upscaled colour.
-        let usage = vk::ImageUsageFlags::STORAGE
-            | vk::ImageUsageFlags::TRANSFER_SRC
-            | vk::ImageUsageFlags::SAMPLED;
-        let img = |name: &str, format| {
-            Image::new(gpu, &ImageDesc::new_2d(name, format, width, height, usage))
-        };
-        let out = Upscaled {
-            color: img("upscale.color", COLOR_FORMAT)?,
-            velocity: img("upscale.velocity", VELOCITY_FORMAT)?,
-            ids: img("upscale.ids", ID_FORMAT)?,
-            depth: img("upscale.depth", vk::Format::R32_SFLOAT)?,
-        };
-        let set = DescriptorSet::new(
-            gpu,
-            "upscale.set",
-            &layout,
-            &[
-                Write::Sampled(0, vec![(&low.color, &sampler)]),
-                Write::Sampled(1, vec![(&low.velocity, &sampler)]),
-                Write::Sampled(2, vec![(&low.ids, &sampler)]),
-                Write::Sampled(3, vec![(&low.depth, &sampler)]),
-                Write::Storage(4, &out.color),
-                Write::Storage(5, &out.velocity),
-                Write::Storage(6, &out.ids),
-                Write::Storage(7, &out.depth),
-            ],
-        )?;
         Ok(UpscalePass {
-            pipeline,
-            _layout: layout,
-            set,
-            _sampler: sampler,
-            out,
-            sizes: [
-                width as i32,
-                height as i32,
-                low.color.width as i32,
-                low.color.height as i32,
-            ],
+            pass: decl(filter).build(gpu, shaders)?,
+            res: Resources::new(gpu, "upscale", &resources(width, height))?,
+            push: Push {
+                sizes: [
+                    width as i32,
+                    height as i32,
+                    low.color.width as i32,
+                    low.color.height as i32,
+                ],
+            },
         })
     }
 
-    pub fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler, low: &FrameTargets) {
-        for img in [&low.color, &low.velocity, &low.ids, &low.depth] {
-            cmd.use_image(img, Access::ComputeSampled);
-        }
-        let o = &self.out;
-        for img in [&o.color, &o.velocity, &o.ids, &o.depth] {
-            cmd.use_image(img, Access::ComputeStorageWrite);
-        }
-        let scope = profiler.begin(cmd, "upscale", PassKind::Compute);
-        cmd.bind_pipeline(&self.pipeline);
-        cmd.bind_set(&self.pipeline, 0, &self.set);
-        cmd.push_constants(&self.pipeline, bytemuck::bytes_of(&self.sizes));
-        cmd.dispatch(
-            (self.sizes[0] as u32).div_ceil(8),
-            (self.sizes[1] as u32).div_ceil(8),
-            1,
-        );
-        profiler.end(cmd, scope);
+    /// Colour, depth, velocity and IDs at full resolution (the common layers' order).
+    pub fn layers(&self) -> Result<[&Image; 4]> {
+        let r = |n| self.res.image(n);
+        Ok([
+            r("out_color")?,
+            r("out_depth")?,
+            r("out_velocity")?,
+            r("out_ids")?,
+        ])
+    }
+
+    pub fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler, low: &FrameTargets) -> Result<()> {
+        let binds = Binds::of(&self.res)
+            .image("color", &low.color)
+            .image("velocity", &low.velocity)
+            .image("ids", &low.ids)
+            .image("depth", &low.depth);
+        let size = (self.push.sizes[0] as u32, self.push.sizes[1] as u32);
+        self.pass
+            .dispatch_2d(cmd, profiler, &binds, &self.push, size)
     }
 }
 
@@ -235,8 +192,7 @@ impl Upscale {
             ctx.width,
             ctx.height,
         )?;
-        let o = &up.out;
-        let readbacks = LayerReadbacks::new(ctx.gpu, [&o.color, &o.depth, &o.velocity, &o.ids])?;
+        let readbacks = LayerReadbacks::new(ctx.gpu, up.layers()?)?;
         Ok(Upscale {
             config,
             pass,
@@ -264,26 +220,24 @@ impl Technique for Upscale {
             let t = &this.targets;
             this.pass
                 .record_targets(cmd, profiler, gs, t, counter, &this.config);
-            this.up.record(cmd, profiler, t);
-            let o = &this.up.out;
-            this.readbacks
-                .record(cmd, profiler, [&o.color, &o.depth, &o.velocity, &o.ids]);
+            this.up.record(cmd, profiler, t)?;
+            this.readbacks.record(cmd, profiler, this.up.layers()?);
             cmd.use_buffer(counter, Access::HostRead);
             Ok(())
         })
     }
 
     fn color(&self, _frame: u32) -> Option<&Image> {
-        Some(&self.up.out.color)
+        self.up.layers().ok().map(|l| l[0])
     }
 
     /// The upscale's full-resolution layers: nearest low-resolution sample, velocity rescaled.
     fn geometry(&self, _frame: u32) -> Option<Geometry<'_>> {
-        let o = &self.up.out;
+        let [_, depth, velocity, ids] = self.up.layers().ok()?;
         Some(Geometry {
-            velocity: &o.velocity,
-            depth: &o.depth,
-            ids: &o.ids,
+            velocity,
+            depth,
+            ids,
             packed: false,
         })
     }

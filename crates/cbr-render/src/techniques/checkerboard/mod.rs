@@ -140,7 +140,7 @@ impl Checkerboard {
             true => Some(IdPass::new(gpu, shaders, ctx.scene, w, h, ctx.counter)?),
             false => None,
         };
-        let unpack = UnpackPass::new(gpu, shaders, &plans[0], &targets)?;
+        let unpack = UnpackPass::new(gpu, shaders, &plans[0])?;
         let resolve = match &config.resolve {
             Some(rs) => {
                 let mut rs = *rs;
@@ -227,7 +227,7 @@ impl Technique for Checkerboard {
                 r.pass.read(cmd, rf.slot, &r.rb, false)?;
             }
             this.unpack
-                .record(cmd, profiler, t, &this.plans[parity as usize]);
+                .record(cmd, profiler, t, &this.plans[parity as usize])?;
             cmd.use_buffer(counter, cbr_gpu::Access::HostRead);
             Ok(())
         })
@@ -250,7 +250,7 @@ impl Technique for Checkerboard {
     fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput> {
         let (parity, reset) = (ctx.frame % 2, ctx.reset);
         let near = ctx.view.camera.near;
-        let px: &[UnpackedPixel] = bytemuck::cast_slice(self.unpack.out.bytes()?);
+        let px: &[UnpackedPixel] = bytemuck::cast_slice(self.unpack.out()?.bytes()?);
         let rz: Vec<f32> = px.iter().map(|p| p.velocity_depth_mask[2]).collect();
         let mut out = FrameOutput::new(
             ctx.view.width,

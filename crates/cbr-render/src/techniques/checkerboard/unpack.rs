@@ -2,23 +2,13 @@
 //! rebuilds the full-resolution checkerboard frame through shaders/inc/layout_fetch.glsl
 //! (`--resolve none`; the resolve of the next issue reads the same include).
 
-use cbr_gpu::{
-    Access, BindingDesc, Buffer, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Gpu, Location,
-    PassKind, Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout, Shaders, Write, vk,
-};
+use cbr_gpu::{Access, Buffer, Cmd, Gpu, Profiler, Result, Shaders};
 
 use crate::layouts::LayoutPlan;
 use crate::memory::MemoryEstimate;
+use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, ResourceDecl, Resources, Use};
 use crate::scene_pass::layout_id;
 use crate::targets::FrameTargets;
-
-pub const UNPACK_BINDINGS: [BindingDesc; 5] = [
-    BindingDesc::one("color", 0, DescriptorKind::CombinedImageSampler),
-    BindingDesc::one("velocity", 1, DescriptorKind::CombinedImageSampler),
-    BindingDesc::one("ids", 2, DescriptorKind::CombinedImageSampler),
-    BindingDesc::one("depth", 3, DescriptorKind::CombinedImageSampler),
-    BindingDesc::one("out", 4, DescriptorKind::StorageBuffer),
-];
 
 /// One unpacked pixel, as `Pixel` in shaders/checkerboard/unpack.comp (std430: 48 bytes).
 #[repr(C)]
@@ -30,83 +20,61 @@ pub struct UnpackedPixel {
     pub ids: [u32; 4],
 }
 
+crate::push_constants! {
+    struct Push {
+        /// W, H, parity, tangram side.
+        size_parity_side: [i32; 4],
+    }
+}
+
+/// The unpack (shaders/checkerboard/unpack.comp) of a layout plan's layout.
+pub fn decl(plan: &LayoutPlan) -> ComputeDecl {
+    ComputeDecl::new("checkerboard.unpack", "checkerboard/unpack.comp")
+        .define("LAYOUT", layout_id(plan.layout))
+        .define("MSAA_LOCATIONS", u32::from(plan.sample_locations.is_some()))
+        .bindings(&[
+            Binding::sampled("color"),
+            Binding::sampled("velocity"),
+            Binding::sampled("ids"),
+            Binding::sampled("depth"),
+            Binding::buffer("out", Use::Write),
+        ])
+        .push::<Push>()
+}
+
+/// One host-visible `UnpackedPixel` per full-resolution pixel, bound as a storage buffer.
+fn resources(plan: &LayoutPlan) -> Vec<ResourceDecl> {
+    let bytes = u64::from(plan.width)
+        * u64::from(plan.height)
+        * std::mem::size_of::<UnpackedPixel>() as u64;
+    vec![ResourceDecl::host_buffer("out", bytes)]
+}
+
 pub struct UnpackPass {
-    pipeline: Pipeline,
-    _layout: SetLayout,
-    set: DescriptorSet,
-    _sampler: Sampler,
-    /// Host-visible result, one `UnpackedPixel` per full-res pixel.
-    pub out: Buffer,
+    pass: ComputePass,
+    res: Resources,
     width: u32,
     height: u32,
 }
 
 impl UnpackPass {
-    /// What [`UnpackPass::new`] allocates: one host-visible `UnpackedPixel` per full-resolution
-    /// pixel, bound as a storage buffer.
+    /// What [`UnpackPass::new`] allocates.
     pub fn estimate(e: &mut MemoryEstimate, plan: &LayoutPlan) {
-        let bytes = u64::from(plan.width)
-            * u64::from(plan.height)
-            * std::mem::size_of::<UnpackedPixel>() as u64;
-        e.storage_buffer("unpack.out", bytes, true);
+        e.append(crate::pass::estimate(&resources(plan), "unpack"));
     }
 
-    pub fn new(
-        gpu: &Gpu,
-        shaders: &Shaders,
-        plan: &LayoutPlan,
-        targets: &FrameTargets,
-    ) -> Result<UnpackPass> {
-        let layout = SetLayout::new(gpu, "unpack.set_layout", &UNPACK_BINDINGS)?;
-        let mut defines: Vec<(String, String)> =
-            UNPACK_BINDINGS.iter().map(BindingDesc::define).collect();
-        defines.push(("LAYOUT".into(), layout_id(plan.layout).to_string()));
-        defines.push((
-            "MSAA_LOCATIONS".into(),
-            u32::from(plan.sample_locations.is_some()).to_string(),
-        ));
-        let cs = shaders.compile("checkerboard/unpack.comp", &defines)?;
-        let pipeline = Pipeline::compute(
-            gpu,
-            &ComputeDesc {
-                name: "checkerboard.unpack",
-                shader: &cs,
-                set_layouts: &[&layout],
-                push_constant_bytes: 16,
-            },
-        )?;
-        let sampler = Sampler::new(gpu, "unpack.sampler", SamplerDesc::NEAREST)?;
-        let bytes = u64::from(plan.width)
-            * u64::from(plan.height)
-            * std::mem::size_of::<UnpackedPixel>() as u64;
-        let out = Buffer::new(
-            gpu,
-            "unpack.out",
-            bytes,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            Location::GpuToCpu,
-        )?;
-        let set = DescriptorSet::new(
-            gpu,
-            "unpack.set",
-            &layout,
-            &[
-                Write::Sampled(0, vec![(&targets.color, &sampler)]),
-                Write::Sampled(1, vec![(&targets.velocity, &sampler)]),
-                Write::Sampled(2, vec![(&targets.ids, &sampler)]),
-                Write::Sampled(3, vec![(&targets.depth, &sampler)]),
-                Write::Buffer(4, &out),
-            ],
-        )?;
+    pub fn new(gpu: &Gpu, shaders: &Shaders, plan: &LayoutPlan) -> Result<UnpackPass> {
         Ok(UnpackPass {
-            pipeline,
-            _layout: layout,
-            set,
-            _sampler: sampler,
-            out,
+            pass: decl(plan).build(gpu, shaders)?,
+            res: Resources::new(gpu, "unpack", &resources(plan))?,
             width: plan.width,
             height: plan.height,
         })
+    }
+
+    /// The host-visible result, one `UnpackedPixel` per full-resolution pixel.
+    pub fn out(&self) -> Result<&Buffer> {
+        self.res.buffer("out")
     }
 
     pub fn record(
@@ -115,28 +83,23 @@ impl UnpackPass {
         profiler: &mut Profiler,
         targets: &FrameTargets,
         plan: &LayoutPlan,
-    ) {
-        for img in [
-            &targets.color,
-            &targets.velocity,
-            &targets.ids,
-            &targets.depth,
-        ] {
-            cmd.use_image(img, Access::ComputeSampled);
-        }
-        cmd.use_buffer(&self.out, Access::ComputeStorageWrite);
-        let scope = profiler.begin(cmd, "checkerboard.unpack", PassKind::Compute);
-        cmd.bind_pipeline(&self.pipeline);
-        cmd.bind_set(&self.pipeline, 0, &self.set);
-        let push = [
-            self.width as i32,
-            self.height as i32,
-            plan.parity as i32,
-            plan.tangram as i32,
-        ];
-        cmd.push_constants(&self.pipeline, bytemuck::bytes_of(&push));
-        cmd.dispatch(self.width.div_ceil(8), self.height.div_ceil(8), 1);
-        profiler.end(cmd, scope);
-        cmd.use_buffer(&self.out, Access::HostRead);
+    ) -> Result<()> {
+        let binds = Binds::of(&self.res)
+            .image("color", &targets.color)
+            .image("velocity", &targets.velocity)
+            .image("ids", &targets.ids)
+            .image("depth", &targets.depth);
+        let push = Push {
+            size_parity_side: [
+                self.width as i32,
+                self.height as i32,
+                plan.parity as i32,
+                plan.tangram as i32,
+            ],
+        };
+        self.pass
+            .dispatch_2d(cmd, profiler, &binds, &push, (self.width, self.height))?;
+        cmd.use_buffer(self.out()?, Access::HostRead);
+        Ok(())
     }
 }
