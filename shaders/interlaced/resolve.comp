@@ -10,25 +10,12 @@
 // Defines: DEBUG (write the debug bits), BINDING_* (crates/cbr-render/src/techniques/interlaced/
 // resolve.rs).
 
-// Push-constant flags.
-#define F_RESET 1u         // no usable history (first frame, camera cut, `without-history`)
-#define F_NO_DEPTH 2u      // ablations
-#define F_NO_IDS 4u
-#define F_NO_CLAMP 8u
-#define F_NO_DIAGONALS 16u
+// Defines from crates/cbr-render/src/techniques/interlaced/resolve.rs (`decl`): the push-constant
+// flags F_RESET (no usable history: first frame, camera cut, `without-history`), F_NO_DEPTH,
+// F_NO_IDS, F_NO_CLAMP, F_NO_DIAGONALS (ablations); the debug bits DBG_* (one R32UI per pixel),
+// the checkerboard resolve's values, so `cbr render` writes the same debug views.
 
-// Debug bits (one R32UI per pixel): the values of the checkerboard resolve's (resolve::DBG_*),
-// so `cbr render` writes the same debug views.
-#define DBG_RENDERED 1u
-#define DBG_MISSING 2u
-#define DBG_REPROJECTED 4u
-#define DBG_REJECT_ID 8u
-#define DBG_REJECT_DEPTH 16u
-#define DBG_CLAMPED 32u
-#define DBG_SPATIAL 64u
-#define DBG_STILL 128u
-
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 
 // This frame's raster (full resolution; only rows of the frame's parity are read).
 layout(set = 0, binding = BINDING_COLOR) uniform sampler2D cur_color;
@@ -49,11 +36,9 @@ layout(set = 0, binding = BINDING_OUT_DEPTH, r32f) uniform writeonly image2D out
 layout(set = 0, binding = BINDING_DEBUG_BITS, r32ui) uniform writeonly uimage2D out_debug;
 #endif
 
-layout(push_constant) uniform Push {
-    ivec4 size_parity;  // W, H, parity (the rendered rows' y mod 2), 0
-    uvec4 flags;        // x: F_* flags
-    vec4 params;        // x: depth tolerance, y: static threshold (px), z: clamp margin, w: 0
-} pc;
+// size_parity: W, H, parity (the rendered rows' y mod 2), 0; flags.x: F_* flags; params: x depth
+// tolerance, y static threshold (px), z clamp margin, w 0.
+PUSH_CONSTANTS
 
 ivec2 size() { return pc.size_parity.xy; }
 bool has(uint f) { return (pc.flags.x & f) != 0u; }

@@ -247,9 +247,8 @@ fn the_resolve_matches_its_cpu_reference_on_a_moving_camera() {
             };
             profiler.begin_frame();
             gpu.submit("test.resolve", |cmd| {
-                pass.record(cmd, &mut profiler, &targets, &frame);
-                pass.read(cmd, &mut profiler, frame.slot, &rb);
-                Ok(())
+                pass.record(cmd, &mut profiler, &targets, &frame)?;
+                pass.read(cmd, &mut profiler, frame.slot, &rb)
             })
             .expect("resolve");
             let g = rb.frame().expect("frame");

@@ -10,6 +10,7 @@ use cbr_render::layouts::LayoutPlan;
 use cbr_render::pass::{Binding, Binds, ComputeDecl, Use};
 use cbr_render::post::{fxaa, sharpen, taa};
 use cbr_render::resolve::{self, Mapping, ResolveMode, ResolveSettings};
+use cbr_render::techniques::interlaced::{self, InterlacedSettings};
 use cbr_render::techniques::msaa::{self, MsaaConfig};
 use cbr_render::techniques::ssaa;
 use cbr_render::upscale::{self, UpscaleFilter};
@@ -44,6 +45,12 @@ fn declared() -> Vec<ComputeDecl> {
         d.push(unpack::decl(&LayoutPlan::new(layout, 64, 36, 1)));
     }
     d.extend([UpscaleFilter::Bilinear, UpscaleFilter::Bicubic].map(upscale::decl));
+    for debug in [false, true] {
+        d.push(interlaced::resolve::decl(&InterlacedSettings {
+            debug,
+            ..InterlacedSettings::default()
+        }));
+    }
     for hdr in [false, true] {
         d.push(msaa::decl(MsaaConfig {
             hdr,
@@ -65,7 +72,7 @@ fn declared_passes_build_without_allocating() {
                 .unwrap_or_else(|e| panic!("{}: {e}", d.name))
         })
         .collect();
-    assert_eq!(built.len(), 36);
+    assert_eq!(built.len(), 38);
     assert_eq!(
         gpu.allocations_made(),
         before,

@@ -152,24 +152,24 @@ impl Technique for Interlaced {
             let t = &this.targets;
             this.pass
                 .record_targets(cmd, profiler, gs, t, counter, &this.config);
-            this.resolve.record(cmd, profiler, t, &frame);
+            this.resolve.record(cmd, profiler, t, &frame)?;
             this.resolve
-                .read(cmd, profiler, frame.slot, &this.readbacks);
+                .read(cmd, profiler, frame.slot, &this.readbacks)?;
             cmd.use_buffer(counter, cbr_gpu::Access::HostRead);
             Ok(())
         })
     }
 
     fn color(&self, frame: u32) -> Option<&Image> {
-        Some(&self.resolve.slots[(frame % 2) as usize].color)
+        self.resolve.layers((frame % 2) as usize).ok().map(|l| l[0])
     }
 
     fn geometry(&self, frame: u32) -> Option<Geometry<'_>> {
-        let s = &self.resolve.slots[(frame % 2) as usize];
+        let [_, depth, velocity, ids] = self.resolve.layers((frame % 2) as usize).ok()?;
         Some(Geometry {
-            velocity: &s.velocity,
-            depth: &s.depth,
-            ids: &s.ids,
+            velocity,
+            depth,
+            ids,
             packed: false,
         })
     }

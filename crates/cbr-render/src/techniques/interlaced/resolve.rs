@@ -4,14 +4,11 @@
 //! geometry, ping-ponged by frame parity: the frame writes one and reads the other as history,
 //! and both serve post passes (`Technique::color`, `Technique::geometry`).
 
-use cbr_gpu::{
-    Access, BindingDesc, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Gpu, GpuError, Image,
-    ImageDesc, PassKind, Pipeline, Profiler, Readback, Result, Sampler, SamplerDesc, SetLayout,
-    Shaders, Write, vk,
-};
+use cbr_gpu::{Cmd, Gpu, GpuError, Image, PassKind, Profiler, Readback, Result, Shaders, vk};
 use half::f16;
 
 use crate::memory::MemoryEstimate;
+use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, ResourceDecl, Resources, Use};
 use crate::targets::{COLOR_FORMAT, FrameTargets, ID_FORMAT, VELOCITY_FORMAT};
 
 /// The resolved reverse-Z depth: a storage image, so R32F rather than a depth format.
@@ -81,68 +78,68 @@ impl InterlacedSettings {
     }
 }
 
-pub const BINDINGS: [BindingDesc; 13] = {
-    use DescriptorKind::{CombinedImageSampler as S, StorageImage as I};
-    [
-        BindingDesc::one("color", 0, S),
-        BindingDesc::one("velocity", 1, S),
-        BindingDesc::one("ids", 2, S),
-        BindingDesc::one("depth", 3, S),
-        BindingDesc::one("hist_color", 4, S),
-        BindingDesc::one("hist_velocity", 5, S),
-        BindingDesc::one("hist_ids", 6, S),
-        BindingDesc::one("hist_depth", 7, S),
-        BindingDesc::one("out_color", 8, I),
-        BindingDesc::one("out_velocity", 9, I),
-        BindingDesc::one("out_ids", 10, I),
-        BindingDesc::one("out_depth", 11, I),
-        BindingDesc::one("debug_bits", 12, I),
+crate::push_constants! {
+    /// The push constants of resolve.comp (48 bytes).
+    pub struct InterlacedPush {
+        /// W, H, parity (the rendered rows' y mod 2), 0.
+        size_parity: [i32; 4],
+        /// x: the F_* flags.
+        flags: [u32; 4],
+        /// x: depth tolerance, y: static threshold (px), z: clamp margin, w: 0.
+        params: [f32; 4],
+    }
+}
+
+/// The resolve (shaders/interlaced/resolve.comp): this frame's raster and the previous
+/// resolved frame in, this frame's resolved colour and geometry out.
+pub fn decl(settings: &InterlacedSettings) -> ComputeDecl {
+    use crate::resolve as r;
+    ComputeDecl::new("interlaced.resolve", "interlaced/resolve.comp")
+        .define("DEBUG", u32::from(settings.debug))
+        .constants(&[
+            ("F_RESET", F_RESET),
+            ("F_NO_DEPTH", F_NO_DEPTH),
+            ("F_NO_IDS", F_NO_IDS),
+            ("F_NO_CLAMP", F_NO_CLAMP),
+            ("F_NO_DIAGONALS", F_NO_DIAGONALS),
+            // The checkerboard resolve's debug bits, so `cbr render` writes the same views.
+            ("DBG_RENDERED", r::DBG_RENDERED),
+            ("DBG_MISSING", r::DBG_MISSING),
+            ("DBG_REPROJECTED", r::DBG_REPROJECTED),
+            ("DBG_REJECT_ID", r::DBG_REJECT_ID),
+            ("DBG_REJECT_DEPTH", r::DBG_REJECT_DEPTH),
+            ("DBG_CLAMPED", r::DBG_CLAMPED),
+            ("DBG_SPATIAL", r::DBG_SPATIAL),
+            ("DBG_STILL", r::DBG_STILL),
+        ])
+        .bindings(&[
+            Binding::sampled("color"),
+            Binding::sampled("velocity"),
+            Binding::sampled("ids"),
+            Binding::sampled("depth"),
+            Binding::sampled("hist_color"),
+            Binding::sampled("hist_velocity"),
+            Binding::sampled("hist_ids"),
+            Binding::sampled("hist_depth"),
+            Binding::image("out_color", Use::Write),
+            Binding::image("out_velocity", Use::Write),
+            Binding::image("out_ids", Use::Write),
+            Binding::image("out_depth", Use::Write),
+            Binding::image("debug_bits", Use::Write),
+        ])
+        .push::<InterlacedPush>()
+}
+
+/// The resolved frame's layers, each a history (this frame's output, the next one's history),
+/// and the debug bits.
+fn resources(w: u32, h: u32) -> Vec<ResourceDecl> {
+    vec![
+        ResourceDecl::image("resolved_color", COLOR_FORMAT, w, h).history(),
+        ResourceDecl::image("resolved_velocity", VELOCITY_FORMAT, w, h).history(),
+        ResourceDecl::image("resolved_ids", ID_FORMAT, w, h).history(),
+        ResourceDecl::image("resolved_depth", RESOLVED_DEPTH_FORMAT, w, h).history(),
+        ResourceDecl::image("debug_bits", vk::Format::R32_UINT, w, h),
     ]
-};
-
-/// The push constants of resolve.comp (48 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct InterlacedPush {
-    pub size_parity: [i32; 4],
-    pub flags: [u32; 4],
-    pub params: [f32; 4],
-}
-
-/// One slot: a resolved frame at full resolution (this frame's output, the next one's history).
-pub struct Resolved {
-    /// RGBA16F, alpha 1.
-    pub color: Image,
-    /// RG32F, pixels, current - previous.
-    pub velocity: Image,
-    /// RG32UI: object, primitive.
-    pub ids: Image,
-    /// R32F reverse-Z.
-    pub depth: Image,
-}
-
-impl Resolved {
-    /// Colour, depth, velocity, IDs: the order of the common layers.
-    pub fn layers(&self) -> [&Image; 4] {
-        [&self.color, &self.depth, &self.velocity, &self.ids]
-    }
-
-    fn new(gpu: &Gpu, k: usize, w: u32, h: u32) -> Result<Resolved> {
-        // SAMPLED: the next frame's history and post passes; TRANSFER_SRC: readbacks.
-        let usage = vk::ImageUsageFlags::STORAGE
-            | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::TRANSFER_SRC;
-        let img = |name: &str, format| {
-            let name = format!("interlaced.resolved[{k}].{name}");
-            Image::new(gpu, &ImageDesc::new_2d(&name, format, w, h, usage))
-        };
-        Ok(Resolved {
-            color: img("color", COLOR_FORMAT)?,
-            velocity: img("velocity", VELOCITY_FORMAT)?,
-            ids: img("ids", ID_FORMAT)?,
-            depth: img("depth", RESOLVED_DEPTH_FORMAT)?,
-        })
-    }
 }
 
 /// What one frame's resolve needs besides the samples.
@@ -157,35 +154,32 @@ pub struct InterlacedFrame {
 }
 
 pub struct InterlacedResolve {
-    pipeline: Pipeline,
-    _layout: SetLayout,
-    sets: [DescriptorSet; 2],
-    _sampler: Sampler,
-    pub slots: [Resolved; 2],
-    pub debug_bits: Image,
+    pass: ComputePass,
+    res: Resources,
     settings: InterlacedSettings,
     width: u32,
     height: u32,
 }
 
+const LAYERS: [&str; 4] = [
+    "resolved_color",
+    "resolved_depth",
+    "resolved_velocity",
+    "resolved_ids",
+];
+
 impl InterlacedResolve {
     /// What [`InterlacedResolve::new`] and [`InterlacedResolve::readbacks`] allocate at
-    /// `w` x `h`: two slots of colour, velocity, IDs and depth, the debug bits, one slot's
-    /// readbacks (and the debug bits' with `debug`).
+    /// `w` x `h`: the declared resources, one slot's readbacks (and the debug bits' with
+    /// `debug`).
     pub fn estimate(e: &mut MemoryEstimate, settings: &InterlacedSettings, w: u32, h: u32) {
-        let layers = [
+        e.append(crate::pass::estimate(&resources(w, h), "interlaced"));
+        for (name, format) in [
             ("color", COLOR_FORMAT),
             ("velocity", VELOCITY_FORMAT),
             ("ids", ID_FORMAT),
             ("depth", RESOLVED_DEPTH_FORMAT),
-        ];
-        for k in 0..2 {
-            for (name, format) in layers {
-                e.image(format!("interlaced.resolved[{k}].{name}"), format, w, h);
-            }
-        }
-        e.image("interlaced.debug_bits", vk::Format::R32_UINT, w, h);
-        for (name, format) in layers {
+        ] {
             e.readback(format!("readback.{name}"), format, w, h, 1);
         }
         if settings.debug {
@@ -206,62 +200,9 @@ impl InterlacedResolve {
                 "the interlaced resolve needs at least 2x2 pixels, not {w}x{h}"
             )));
         }
-        let layout = SetLayout::new(gpu, "interlaced.resolve.set_layout", &BINDINGS)?;
-        let mut defines: Vec<(String, String)> = BINDINGS.iter().map(BindingDesc::define).collect();
-        defines.push(("DEBUG".into(), u32::from(settings.debug).to_string()));
-        let cs = shaders.compile("interlaced/resolve.comp", &defines)?;
-        let pipeline = Pipeline::compute(
-            gpu,
-            &ComputeDesc {
-                name: "interlaced.resolve",
-                shader: &cs,
-                set_layouts: &[&layout],
-                push_constant_bytes: std::mem::size_of::<InterlacedPush>() as u32,
-            },
-        )?;
-        let sampler = Sampler::new(gpu, "interlaced.resolve.sampler", SamplerDesc::NEAREST)?;
-        let slots = [Resolved::new(gpu, 0, w, h)?, Resolved::new(gpu, 1, w, h)?];
-        let debug_bits = Image::new(
-            gpu,
-            &ImageDesc::new_2d(
-                "interlaced.debug_bits",
-                vk::Format::R32_UINT,
-                w,
-                h,
-                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
-            ),
-        )?;
-        let set = |k: usize| -> Result<DescriptorSet> {
-            let (out, prev) = (&slots[k], &slots[1 - k]);
-            DescriptorSet::new(
-                gpu,
-                &format!("interlaced.resolve.set[{k}]"),
-                &layout,
-                &[
-                    Write::Sampled(0, vec![(&targets.color, &sampler)]),
-                    Write::Sampled(1, vec![(&targets.velocity, &sampler)]),
-                    Write::Sampled(2, vec![(&targets.ids, &sampler)]),
-                    Write::Sampled(3, vec![(&targets.depth, &sampler)]),
-                    Write::Sampled(4, vec![(&prev.color, &sampler)]),
-                    Write::Sampled(5, vec![(&prev.velocity, &sampler)]),
-                    Write::Sampled(6, vec![(&prev.ids, &sampler)]),
-                    Write::Sampled(7, vec![(&prev.depth, &sampler)]),
-                    Write::Storage(8, &out.color),
-                    Write::Storage(9, &out.velocity),
-                    Write::Storage(10, &out.ids),
-                    Write::Storage(11, &out.depth),
-                    Write::Storage(12, &debug_bits),
-                ],
-            )
-        };
-        let sets = [set(0)?, set(1)?];
         Ok(InterlacedResolve {
-            pipeline,
-            _layout: layout,
-            sets,
-            _sampler: sampler,
-            slots,
-            debug_bits,
+            pass: decl(settings).build(gpu, shaders)?,
+            res: Resources::new(gpu, "interlaced", &resources(w, h))?,
             settings: *settings,
             width: w,
             height: h,
@@ -272,6 +213,12 @@ impl InterlacedResolve {
         &self.settings
     }
 
+    /// Colour, depth, velocity, IDs of slot `slot`: the order of the common layers.
+    pub fn layers(&self, slot: usize) -> Result<[&Image; 4]> {
+        let l = |n| Ok::<_, GpuError>(self.res.history(n)?.slot(slot));
+        Ok([l(LAYERS[0])?, l(LAYERS[1])?, l(LAYERS[2])?, l(LAYERS[3])?])
+    }
+
     /// Records the resolve of one frame (the raster targets are complete).
     pub fn record(
         &self,
@@ -279,19 +226,23 @@ impl InterlacedResolve {
         profiler: &mut Profiler,
         targets: &FrameTargets,
         frame: &InterlacedFrame,
-    ) {
-        let (out, prev) = (&self.slots[frame.slot], &self.slots[1 - frame.slot]);
+    ) -> Result<()> {
+        let [oc, od, ov, oi] = self.layers(frame.slot)?;
+        let [hc, hd, hv, hi] = self.layers(1 - frame.slot % 2)?;
         let t = targets;
-        for img in [&t.color, &t.velocity, &t.ids, &t.depth] {
-            cmd.use_image(img, Access::ComputeSampled);
-        }
-        for img in prev.layers() {
-            cmd.use_image(img, Access::ComputeSampled);
-        }
-        for img in out.layers() {
-            cmd.use_image(img, Access::ComputeStorageWrite);
-        }
-        cmd.use_image(&self.debug_bits, Access::ComputeStorageWrite);
+        let binds = Binds::of(&self.res)
+            .image("color", &t.color)
+            .image("velocity", &t.velocity)
+            .image("ids", &t.ids)
+            .image("depth", &t.depth)
+            .image("hist_color", hc)
+            .image("hist_velocity", hv)
+            .image("hist_ids", hi)
+            .image("hist_depth", hd)
+            .image("out_color", oc)
+            .image("out_velocity", ov)
+            .image("out_ids", oi)
+            .image("out_depth", od);
         let s = &self.settings;
         let push = InterlacedPush {
             size_parity: [
@@ -303,30 +254,29 @@ impl InterlacedResolve {
             flags: [s.flags(frame.reset), 0, 0, 0],
             params: [s.depth_tolerance, s.static_threshold, s.clamp_margin, 0.0],
         };
-        let scope = profiler.begin(cmd, "interlaced.resolve", PassKind::Compute);
-        cmd.bind_pipeline(&self.pipeline);
-        cmd.bind_set(&self.pipeline, 0, &self.sets[frame.slot]);
-        cmd.push_constants(&self.pipeline, bytemuck::bytes_of(&push));
         // One invocation per vertical pair of pixels (rows 2j, 2j + 1): the shader's main.
-        cmd.dispatch(
+        let groups = [
             self.width.div_ceil(8),
             self.height.div_ceil(2).div_ceil(8),
             1,
-        );
-        profiler.end(cmd, scope);
+        ];
+        self.pass.dispatch(cmd, profiler, &binds, &push, groups)
     }
 
     /// Readbacks sized for one slot (and the debug bits).
     pub fn readbacks(&self, gpu: &Gpu) -> Result<ResolvedReadbacks> {
-        let s = &self.slots[0];
+        let [c, d, v, i] = self.layers(0)?;
         let rb = |name: &str, img: &Image| Readback::for_image(gpu, name, img);
         Ok(ResolvedReadbacks {
-            color: rb("readback.color", &s.color)?,
-            velocity: rb("readback.velocity", &s.velocity)?,
-            ids: rb("readback.ids", &s.ids)?,
-            depth: rb("readback.depth", &s.depth)?,
+            color: rb("readback.color", c)?,
+            velocity: rb("readback.velocity", v)?,
+            ids: rb("readback.ids", i)?,
+            depth: rb("readback.depth", d)?,
             debug: match self.settings.debug {
-                true => Some(rb("readback.interlaced_debug", &self.debug_bits)?),
+                true => Some(rb(
+                    "readback.interlaced_debug",
+                    self.res.image("debug_bits")?,
+                )?),
                 false => None,
             },
         })
@@ -339,17 +289,18 @@ impl InterlacedResolve {
         profiler: &mut Profiler,
         slot: usize,
         rb: &ResolvedReadbacks,
-    ) {
-        let s = &self.slots[slot];
+    ) -> Result<()> {
+        let [c, d, v, i] = self.layers(slot)?;
         let scope = profiler.begin(cmd, "readback", PassKind::Transfer);
-        cmd.read_image(&s.color, &rb.color);
-        cmd.read_image(&s.velocity, &rb.velocity);
-        cmd.read_image(&s.ids, &rb.ids);
-        cmd.read_image(&s.depth, &rb.depth);
-        if let Some(d) = &rb.debug {
-            cmd.read_image(&self.debug_bits, d);
+        cmd.read_image(c, &rb.color);
+        cmd.read_image(v, &rb.velocity);
+        cmd.read_image(i, &rb.ids);
+        cmd.read_image(d, &rb.depth);
+        if let Some(dbg) = &rb.debug {
+            cmd.read_image(self.res.image("debug_bits")?, dbg);
         }
         profiler.end(cmd, scope);
+        Ok(())
     }
 }
 
