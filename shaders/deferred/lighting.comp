@@ -8,7 +8,7 @@
 // estimate instead: shaders/interleaved/filter.glsl; with DIRECT the point lights' too, the pass
 // then shading the directional lights only). NaN/Inf shading is written black and
 // counted, as the forward pass does; background pixels get the background radiance.
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 #include "../inc/scene_types.glsl"
 
 layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
@@ -27,11 +27,9 @@ layout(set = 0, binding = BINDING_ALBEDO) uniform sampler2D g_albedo;
 layout(set = 0, binding = BINDING_IDS) uniform usampler2D g_ids;
 layout(set = 0, binding = BINDING_OUT_COLOR, rgba16f) uniform writeonly image2D out_color;
 
-layout(push_constant) uniform Push {
-    vec4 background;  // rgb: radiance where nothing was drawn
-    uvec4 counts;     // x: extra point lights, y: VPLs, zw: width, height
-    vec4 params;      // x: the VPL clamp c in 1/max(d^2, c) (m^2)
-} pc;
+// background.rgb: radiance where nothing was drawn; counts: x extra point lights, y VPLs, zw
+// width, height; params.x: the VPL clamp c in 1/max(d^2, c) (m^2).
+PUSH_CONSTANTS
 
 #include "../inc/shading.glsl"
 #ifdef INTERLEAVED

@@ -232,7 +232,7 @@ macro_rules! push_constants {
     }) => {
         $(#[$m])*
         #[repr(C)]
-        #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+        #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
         $vis struct $name { $($(#[$fm])* pub $f: $t),* }
 
         impl $crate::pass::PushConstants for $name {

@@ -10,6 +10,7 @@ use cbr_render::layouts::LayoutPlan;
 use cbr_render::pass::{Binding, Binds, ComputeDecl, Use};
 use cbr_render::post::{fxaa, sharpen, taa};
 use cbr_render::resolve::{self, Mapping, ResolveMode, ResolveSettings};
+use cbr_render::techniques::deferred;
 use cbr_render::techniques::interlaced::{self, InterlacedSettings};
 use cbr_render::techniques::msaa::{self, MsaaConfig};
 use cbr_render::techniques::ssaa;
@@ -51,6 +52,7 @@ fn declared() -> Vec<ComputeDecl> {
             ..InterlacedSettings::default()
         }));
     }
+    d.push(deferred::lighting::decl(None));
     for hdr in [false, true] {
         d.push(msaa::decl(MsaaConfig {
             hdr,
@@ -72,7 +74,7 @@ fn declared_passes_build_without_allocating() {
                 .unwrap_or_else(|e| panic!("{}: {e}", d.name))
         })
         .collect();
-    assert_eq!(built.len(), 38);
+    assert_eq!(built.len(), 39);
     assert_eq!(
         gpu.allocations_made(),
         before,

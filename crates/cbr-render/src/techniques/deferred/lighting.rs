@@ -3,43 +3,26 @@
 //! `interleaved` the same pass takes the VPLs' light from the gathered sub-image estimates through
 //! its filter (the INTERLEAVED define, shaders/interleaved/filter.glsl).
 
-use bytemuck::{Pod, Zeroable};
-use cbr_gpu::{
-    Access, BindingDesc, Buffer, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Image, PassKind,
-    Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout, Write,
-};
+use cbr_gpu::{Buffer, Cmd, Image, Profiler, Result};
 
 use super::config::DeferredConfig;
 use super::gbuffer::GBuffer;
 use super::vpl::SunView;
+use crate::gpu_scene::GpuScene;
+use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, Use};
 use crate::technique::{BuildCtx, FrameCtx};
 
-/// The lighting pass's set: the one definition of its bindings.
-pub const BINDINGS: [BindingDesc; 15] = {
-    use DescriptorKind::{
-        CombinedImageSampler as S, StorageBuffer as B, StorageImage as I, UniformBuffer as U,
-    };
-    [
-        BindingDesc::one("frame", 0, U),
-        BindingDesc::one("objects", 1, B),
-        BindingDesc::one("materials", 2, B),
-        BindingDesc::one("lights", 3, B),
-        BindingDesc::one("points", 4, B),
-        BindingDesc::one("vpls", 5, B),
-        BindingDesc::one("counter", 6, B),
-        BindingDesc::one("position", 7, S),
-        BindingDesc::one("normal", 8, S),
-        BindingDesc::one("albedo", 9, S),
-        BindingDesc::one("ids", 10, S),
-        BindingDesc::one("out_color", 11, I),
-        // `interleaved` only: the gathered sub-image estimates of the VPLs' irradiance.
-        BindingDesc::one("irradiance", 12, S),
-        // `interleaved:...:debug` only: the debug bits (shaders/interleaved/filter.glsl).
-        BindingDesc::one("debug_bits", 13, I),
-        // `interleaved:...:direct` only: the point lights' specular estimates.
-        BindingDesc::one("specular", 14, S),
-    ]
-};
+crate::push_constants! {
+    /// Push constants (lighting.comp's).
+    pub struct LightingPush {
+        /// rgb: the background radiance.
+        background: [f32; 4],
+        /// Extra point lights, VPLs, width, height.
+        counts: [u32; 4],
+        /// x: the VPL clamp c of 1/max(d^2, c), in m^2.
+        params: [f32; 4],
+    }
+}
 
 /// The sun's map this frame.
 pub struct SunFrame {
@@ -49,20 +32,9 @@ pub struct SunFrame {
     pub clamp_d2: f32,
 }
 
+/// The defines of `deferred`'s lighting pass (gpu_types' layout test compiles with them).
 pub fn shader_defines() -> Vec<(String, String)> {
-    BINDINGS.iter().map(BindingDesc::define).collect()
-}
-
-/// Push constants (lighting.comp's `Push`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct LightingPush {
-    /// rgb: the background radiance.
-    pub background: [f32; 4],
-    /// Extra point lights, VPLs, width, height.
-    pub counts: [u32; 4],
-    /// x: the VPL clamp c of 1/max(d^2, c), in m^2.
-    pub params: [f32; 4],
+    decl(None).all_defines()
 }
 
 impl LightingPush {
@@ -118,97 +90,71 @@ pub struct LightSources<'a> {
     pub vpls: &'a Buffer,
 }
 
+/// The lighting pass (shaders/deferred/lighting.comp): `deferred`'s, or with `interleaving`
+/// `interleaved`'s variant (the VPLs' light from the sub-image estimates).
+pub fn decl(interleaving: Option<&Interleaving>) -> ComputeDecl {
+    let name = match interleaving {
+        None => "deferred.lighting",
+        Some(_) => "interleaved.lighting",
+    };
+    let mut d = ComputeDecl::new(name, "deferred/lighting.comp")
+        .bindings(&[
+            Binding::uniform("frame"),
+            Binding::buffer("objects", Use::Read),
+            Binding::buffer("materials", Use::Read),
+            Binding::buffer("lights", Use::Read),
+            Binding::buffer("points", Use::Read),
+            Binding::buffer("vpls", Use::Read),
+            Binding::buffer("counter", Use::ReadWrite),
+            Binding::sampled("position"),
+            Binding::sampled("normal"),
+            Binding::sampled("albedo"),
+            Binding::sampled("ids"),
+            Binding::image("out_color", Use::Write),
+        ])
+        .push::<LightingPush>();
+    if let Some(i) = interleaving {
+        d = d
+            .define("INTERLEAVED", 1)
+            .define("TILE_M", i.m)
+            .define("TILE_N", i.n)
+            .define("FILTER", i.filter)
+            .define("SEARCH", i.search)
+            .define("EXACT_EDGES", i.exact_edges)
+            .define("ENOUGH", i.enough)
+            // `{:?}` keeps the decimal point (0.9, 1.0, 1e-5): a GLSL float literal.
+            .define("SAME_NORMAL_COS", format!("{:?}", i.same_normal_cos))
+            .define("PLANE_TOLERANCE", format!("{:?}", i.plane_tolerance))
+            // The gathered sub-image estimates of the VPLs' irradiance, and (`direct`) of the
+            // point lights' specular: without `direct` the binding holds the irradiance, never
+            // read.
+            .bind(Binding::sampled("irradiance"))
+            .bind(Binding::sampled("specular"));
+        if i.debug.is_some() {
+            d = d
+                .define("DEBUG", 1)
+                .bind(Binding::image("debug_bits", Use::Write));
+        }
+        if i.box_rows {
+            d = d.define("BOX_ROWS", 1);
+        }
+        if i.specular.is_some() {
+            d = d.define("DIRECT", 1);
+        }
+    }
+    d
+}
+
 pub struct LightingPass {
-    pipeline: Pipeline,
-    _layout: SetLayout,
-    set: DescriptorSet,
-    _sampler: Sampler,
-    name: &'static str,
+    pass: ComputePass,
 }
 
 impl LightingPass {
-    /// The pass over `g` lighting with `sources`; with `interleaving`, the VPLs' light comes from
-    /// the sub-image estimates instead of every VPL at every pixel.
-    pub fn new(
-        ctx: &BuildCtx,
-        g: &GBuffer,
-        sources: &LightSources,
-        interleaving: Option<&Interleaving>,
-    ) -> Result<LightingPass> {
-        let gpu = ctx.gpu;
-        let name = match interleaving {
-            None => "deferred.lighting",
-            Some(_) => "interleaved.lighting",
-        };
-        let layout = SetLayout::new(gpu, &format!("{name}.set_layout"), &BINDINGS)?;
-        let mut defines = shader_defines();
-        if let Some(i) = interleaving {
-            for (k, v) in [
-                ("INTERLEAVED", 1),
-                ("TILE_M", i.m),
-                ("TILE_N", i.n),
-                ("FILTER", i.filter),
-                ("SEARCH", i.search),
-                ("EXACT_EDGES", i.exact_edges),
-                ("ENOUGH", i.enough),
-            ] {
-                defines.push((k.into(), v.to_string()));
-            }
-            // `{:?}` keeps the decimal point (0.9, 1.0, 1e-5): a GLSL float literal.
-            defines.push(("SAME_NORMAL_COS".into(), format!("{:?}", i.same_normal_cos)));
-            defines.push(("PLANE_TOLERANCE".into(), format!("{:?}", i.plane_tolerance)));
-            if i.debug.is_some() {
-                defines.push(("DEBUG".into(), "1".into()));
-            }
-            if i.box_rows {
-                defines.push(("BOX_ROWS".into(), "1".into()));
-            }
-            if i.specular.is_some() {
-                defines.push(("DIRECT".into(), "1".into()));
-            }
-        }
-        let cs = ctx.shaders.compile("deferred/lighting.comp", &defines)?;
-        let pipeline = Pipeline::compute(
-            gpu,
-            &ComputeDesc {
-                name,
-                shader: &cs,
-                set_layouts: &[&layout],
-                push_constant_bytes: std::mem::size_of::<LightingPush>() as u32,
-            },
-        )?;
-        let sampler = Sampler::new(gpu, &format!("{name}.sampler"), SamplerDesc::NEAREST)?;
-        let scene = ctx.scene;
-        let mut writes = vec![
-            Write::Buffer(0, &scene.frame),
-            Write::Buffer(1, &scene.objects),
-            Write::Buffer(2, &scene.materials),
-            Write::Buffer(3, &scene.lights),
-            Write::Buffer(4, sources.points),
-            Write::Buffer(5, sources.vpls),
-            Write::Buffer(6, ctx.counter),
-            Write::Sampled(7, vec![(&g.position, &sampler)]),
-            Write::Sampled(8, vec![(&g.normal, &sampler)]),
-            Write::Sampled(9, vec![(&g.albedo, &sampler)]),
-            Write::Sampled(10, vec![(&g.ids, &sampler)]),
-            Write::Storage(11, &g.color),
-        ];
-        // Without interleaving the binding is never read, but it holds an image: lavapipe crashes
-        // binding a set with an unwritten sampler.
-        let irradiance = interleaving.map_or(&g.albedo, |i| i.irradiance);
-        writes.push(Write::Sampled(12, vec![(irradiance, &sampler)]));
-        // Likewise the debug bits: the frame (a storage image) where there are none.
-        let debug = interleaving.and_then(|i| i.debug).unwrap_or(&g.color);
-        writes.push(Write::Storage(13, debug));
-        let specular = interleaving.and_then(|i| i.specular).unwrap_or(irradiance);
-        writes.push(Write::Sampled(14, vec![(specular, &sampler)]));
-        let set = DescriptorSet::new(gpu, &format!("{name}.set"), &layout, &writes)?;
+    /// The pass; with `interleaving`, the VPLs' light comes from the sub-image estimates
+    /// instead of every VPL at every pixel.
+    pub fn new(ctx: &BuildCtx, interleaving: Option<&Interleaving>) -> Result<LightingPass> {
         Ok(LightingPass {
-            pipeline,
-            _layout: layout,
-            set,
-            _sampler: sampler,
-            name,
+            pass: decl(interleaving).build(ctx.gpu, ctx.shaders)?,
         })
     }
 
@@ -217,34 +163,35 @@ impl LightingPass {
         &self,
         cmd: &mut Cmd,
         profiler: &mut Profiler,
+        scene: &GpuScene,
         g: &GBuffer,
         sources: &LightSources,
         counter: &Buffer,
         push: &LightingPush,
         interleaving: Option<&Interleaving>,
-    ) {
-        for img in [&g.position, &g.normal, &g.albedo, &g.ids] {
-            cmd.use_image(img, Access::ComputeSampled);
-        }
+    ) -> Result<()> {
+        let mut binds = Binds::new()
+            .buffer("frame", &scene.frame)
+            .buffer("objects", &scene.objects)
+            .buffer("materials", &scene.materials)
+            .buffer("lights", &scene.lights)
+            .buffer("points", sources.points)
+            .buffer("vpls", sources.vpls)
+            .buffer("counter", counter)
+            .image("position", &g.position)
+            .image("normal", &g.normal)
+            .image("albedo", &g.albedo)
+            .image("ids", &g.ids)
+            .image("out_color", &g.color);
         if let Some(i) = interleaving {
-            cmd.use_image(i.irradiance, Access::ComputeSampled);
-            if let Some(s) = i.specular {
-                cmd.use_image(s, Access::ComputeSampled);
-            }
+            binds = binds
+                .image("irradiance", i.irradiance)
+                .image("specular", i.specular.unwrap_or(i.irradiance));
             if let Some(d) = i.debug {
-                cmd.use_image(d, Access::ComputeStorageWrite);
+                binds = binds.image("debug_bits", d);
             }
         }
-        cmd.use_image(&g.color, Access::ComputeStorageWrite);
-        cmd.use_buffer(sources.points, Access::ComputeSampled);
-        cmd.use_buffer(sources.vpls, Access::ComputeSampled);
-        cmd.use_buffer(counter, Access::ComputeStorageReadWrite);
-        let scope = profiler.begin(cmd, self.name, PassKind::Compute);
-        cmd.bind_pipeline(&self.pipeline);
-        cmd.bind_set(&self.pipeline, 0, &self.set);
-        cmd.push_constants(&self.pipeline, bytemuck::bytes_of(push));
         let [_, _, w, h] = push.counts;
-        cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
-        profiler.end(cmd, scope);
+        self.pass.dispatch_2d(cmd, profiler, &binds, push, (w, h))
     }
 }

@@ -75,7 +75,7 @@ impl Deferred {
     pub fn new(ctx: &BuildCtx, config: DeferredConfig) -> Result<Deferred> {
         let lights = ManyLights::new(ctx, &config, "deferred")?;
         let (raster, gbuffer_pass, g) = gbuffer(ctx, "deferred")?;
-        let lighting = LightingPass::new(ctx, &g, &lights.sources(), None)?;
+        let lighting = LightingPass::new(ctx, None)?;
         let readbacks = LayerReadbacks::new(ctx.gpu, g.layers())?;
         Ok(Deferred {
             config,
@@ -179,12 +179,13 @@ impl Technique for Deferred {
             this.lighting.record(
                 cmd,
                 profiler,
+                gs,
                 g,
                 &this.lights.sources(),
                 counter,
                 &push,
                 None,
-            );
+            )?;
             this.readbacks.record(cmd, profiler, g.layers());
             this.lights.record_readback(cmd);
             cmd.use_buffer(counter, Access::HostRead);

@@ -369,7 +369,7 @@ impl Interleaved {
             None
         };
         let interleaving = interleaving(&config, &split, debug.as_ref());
-        let lighting = LightingPass::new(ctx, &g, &sources, Some(&interleaving))?;
+        let lighting = LightingPass::new(ctx, Some(&interleaving))?;
         let readbacks = LayerReadbacks::new(ctx.gpu, g.layers())?;
         Ok(Interleaved {
             config,
@@ -473,12 +473,13 @@ impl Technique for Interleaved {
             this.lighting.record(
                 cmd,
                 profiler,
+                gs,
                 g,
                 &sources,
                 counter,
                 &push,
                 Some(&interleaving),
-            );
+            )?;
             this.readbacks.record(cmd, profiler, g.layers());
             if let Some((image, rb)) = &this.debug {
                 cmd.read_image(image, rb);
