@@ -5,7 +5,7 @@
 // in the RSM / VPLs, so the N VPLs together carry the whole map's flux. Texels where the sun saw
 // nothing, and texels whose flux is not finite (the `nan` scene's NaN albedo), give dead VPLs:
 // zero flux, w = 0.
-layout(local_size_x = 64) in;
+layout(local_size_x = LOCAL_SIZE_X) in;
 #include "../inc/scene_types.glsl"
 
 layout(set = 0, binding = BINDING_RSM_POSITION) uniform sampler2D rsm_position;
@@ -14,10 +14,7 @@ layout(set = 0, binding = BINDING_RSM_FLUX) uniform sampler2D rsm_flux;
 layout(std430, set = 0, binding = BINDING_TEXELS) readonly buffer Texels { uvec2 texels[]; };
 layout(std430, set = 0, binding = BINDING_VPLS) writeonly buffer Vpls { Vpl vpls[]; };
 
-layout(push_constant) uniform Push {
-    uint count;
-    float share;
-} pc;
+PUSH_CONSTANTS  // count; share: texels per VPL
 
 void main() {
     uint i = gl_GlobalInvocationID.x;

@@ -53,6 +53,7 @@ fn declared() -> Vec<ComputeDecl> {
         }));
     }
     d.push(deferred::lighting::decl(None));
+    d.push(deferred::rsm::vpl_decl());
     for hdr in [false, true] {
         d.push(msaa::decl(MsaaConfig {
             hdr,
@@ -74,7 +75,7 @@ fn declared_passes_build_without_allocating() {
                 .unwrap_or_else(|e| panic!("{}: {e}", d.name))
         })
         .collect();
-    assert_eq!(built.len(), 39);
+    assert_eq!(built.len(), 40);
     assert_eq!(
         gpu.allocations_made(),
         before,

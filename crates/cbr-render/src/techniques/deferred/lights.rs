@@ -59,7 +59,7 @@ impl ManyLights {
         )?;
         let (rsm, vpl_pass, vpl_readback) = if config.vpls > 0 {
             let rsm = RsmPass::new(gpu, ctx.shaders, ctx.scene, ctx.counter, config.rsm)?;
-            let vp = VplPass::new(gpu, ctx.shaders, &rsm, &vpls, config.vpls)?;
+            let vp = VplPass::new(gpu, ctx.shaders, &rsm, config.vpls)?;
             let rb = Buffer::new(
                 gpu,
                 "readback.vpls",
@@ -143,11 +143,12 @@ impl ManyLights {
         profiler: &mut Profiler,
         scene: &GpuScene,
         sun: Option<&SunFrame>,
-    ) {
+    ) -> Result<()> {
         if let (Some(rsm), Some(vp), Some(sun)) = (&self.rsm, &self.vpl_pass, sun) {
             rsm.record(cmd, profiler, scene, sun.view.as_ref());
-            vp.record(cmd, profiler, rsm, &self.vpls);
+            vp.record(cmd, profiler, rsm, &self.vpls)?;
         }
+        Ok(())
     }
 
     /// The VPLs' copy for the host, with VPLs (after the passes that read them).

@@ -175,7 +175,7 @@ impl Technique for Deferred {
                 counter,
                 &this.raster,
             );
-            this.lights.record(cmd, profiler, gs, sun.as_ref());
+            this.lights.record(cmd, profiler, gs, sun.as_ref())?;
             this.lighting.record(
                 cmd,
                 profiler,

@@ -4,13 +4,13 @@
 
 use bytemuck::{Pod, Zeroable};
 use cbr_gpu::{
-    Access, Attachment, BindingDesc, Buffer, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Gpu,
-    GraphicsDesc, Image, ImageDesc, Location, PassKind, Pipeline, Profiler, Result, Sampler,
-    SamplerDesc, SetLayout, Shaders, Write, vk,
+    Attachment, Buffer, Cmd, DescriptorSet, Gpu, GraphicsDesc, Image, ImageDesc, Location,
+    PassKind, Pipeline, Profiler, Result, SetLayout, Shaders, vk,
 };
 
 use super::vpl::SunView;
 use crate::gpu_scene::GpuScene;
+use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, Use};
 use crate::scene_pass::{self, LAYOUT_NATIVE, MATERIAL_BINDINGS};
 use crate::targets::{DEPTH_FORMAT, GBUFFER_FORMAT};
 
@@ -179,24 +179,31 @@ impl RsmPass {
     }
 }
 
-/// The VPL generation pass's set: the one definition of its bindings.
-pub const VPL_BINDINGS: [BindingDesc; 5] = {
-    use DescriptorKind::{CombinedImageSampler as S, StorageBuffer as B};
-    [
-        BindingDesc::one("rsm_position", 0, S),
-        BindingDesc::one("rsm_normal", 1, S),
-        BindingDesc::one("rsm_flux", 2, S),
-        BindingDesc::one("texels", 3, B),
-        BindingDesc::one("vpls", 4, B),
-    ]
-};
+crate::push_constants! {
+    struct VplPush {
+        count: u32,
+        /// Texels per VPL: each VPL carries that many texels' flux.
+        share: f32,
+    }
+}
+
+/// The VPL generation pass (shaders/deferred/vpl.comp).
+pub fn vpl_decl() -> ComputeDecl {
+    ComputeDecl::new("deferred.vpls", "deferred/vpl.comp")
+        .bindings(&[
+            Binding::sampled("rsm_position"),
+            Binding::sampled("rsm_normal"),
+            Binding::sampled("rsm_flux"),
+            Binding::buffer("texels", Use::Read),
+            Binding::buffer("vpls", Use::Write),
+        ])
+        .push::<VplPush>()
+        .group(64, 1)
+}
 
 /// VPLs from the map: VPL i is texel `texels[i]` with `texels / count` times its flux.
 pub struct VplPass {
-    pipeline: Pipeline,
-    _layout: SetLayout,
-    set: DescriptorSet,
-    _sampler: Sampler,
+    pass: ComputePass,
     /// The pattern's texels (host-written once per scene seed).
     pub texels: Buffer,
     pub count: u32,
@@ -204,27 +211,8 @@ pub struct VplPass {
 }
 
 impl VplPass {
-    /// VPLs into `vpls` (at least `count` x 48 bytes), from `rsm`.
-    pub fn new(
-        gpu: &Gpu,
-        shaders: &Shaders,
-        rsm: &RsmPass,
-        vpls: &Buffer,
-        count: u32,
-    ) -> Result<VplPass> {
-        let layout = SetLayout::new(gpu, "deferred.vpls.set_layout", &VPL_BINDINGS)?;
-        let defines: Vec<(String, String)> = VPL_BINDINGS.iter().map(BindingDesc::define).collect();
-        let cs = shaders.compile("deferred/vpl.comp", &defines)?;
-        let pipeline = Pipeline::compute(
-            gpu,
-            &ComputeDesc {
-                name: "deferred.vpls",
-                shader: &cs,
-                set_layouts: &[&layout],
-                push_constant_bytes: 8,
-            },
-        )?;
-        let sampler = Sampler::new(gpu, "deferred.vpls.sampler", SamplerDesc::NEAREST)?;
+    /// VPLs (at least `count` x 48 bytes) from `rsm`.
+    pub fn new(gpu: &Gpu, shaders: &Shaders, rsm: &RsmPass, count: u32) -> Result<VplPass> {
         let n = u64::from(count.max(1));
         let texels = Buffer::new(
             gpu,
@@ -233,25 +221,9 @@ impl VplPass {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             Location::CpuToGpu,
         )?;
-        let t = &rsm.targets;
-        let set = DescriptorSet::new(
-            gpu,
-            "deferred.vpls.set",
-            &layout,
-            &[
-                Write::Sampled(0, vec![(&t.position, &sampler)]),
-                Write::Sampled(1, vec![(&t.normal, &sampler)]),
-                Write::Sampled(2, vec![(&t.flux, &sampler)]),
-                Write::Buffer(3, &texels),
-                Write::Buffer(4, vpls),
-            ],
-        )?;
         let texel_count = f64::from(rsm.side) * f64::from(rsm.side);
         Ok(VplPass {
-            pipeline,
-            _layout: layout,
-            set,
-            _sampler: sampler,
+            pass: vpl_decl().build(gpu, shaders)?,
             texels,
             count,
             share: (texel_count / f64::from(count.max(1))) as f32,
@@ -263,19 +235,25 @@ impl VplPass {
         self.texels.write(0, bytemuck::cast_slice(texels))
     }
 
-    pub fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler, rsm: &RsmPass, vpls: &Buffer) {
+    pub fn record(
+        &self,
+        cmd: &mut Cmd,
+        profiler: &mut Profiler,
+        rsm: &RsmPass,
+        vpls: &Buffer,
+    ) -> Result<()> {
         let t = &rsm.targets;
-        for img in [&t.position, &t.normal, &t.flux] {
-            cmd.use_image(img, Access::ComputeSampled);
-        }
-        cmd.use_buffer(&self.texels, Access::ComputeSampled);
-        cmd.use_buffer(vpls, Access::ComputeStorageWrite);
-        let scope = profiler.begin(cmd, "deferred.vpls", PassKind::Compute);
-        cmd.bind_pipeline(&self.pipeline);
-        cmd.bind_set(&self.pipeline, 0, &self.set);
-        let push: [u32; 2] = [self.count, self.share.to_bits()];
-        cmd.push_constants(&self.pipeline, bytemuck::bytes_of(&push));
-        cmd.dispatch(self.count.div_ceil(64), 1, 1);
-        profiler.end(cmd, scope);
+        let binds = Binds::new()
+            .image("rsm_position", &t.position)
+            .image("rsm_normal", &t.normal)
+            .image("rsm_flux", &t.flux)
+            .buffer("texels", &self.texels)
+            .buffer("vpls", vpls);
+        let push = VplPush {
+            count: self.count,
+            share: self.share,
+        };
+        let groups = [self.count.div_ceil(64), 1, 1];
+        self.pass.dispatch(cmd, profiler, &binds, &push, groups)
     }
 }

@@ -458,7 +458,7 @@ impl Technique for Interleaved {
                 counter,
                 &this.raster,
             );
-            this.lights.record(cmd, profiler, gs, sun.as_ref());
+            this.lights.record(cmd, profiler, gs, sun.as_ref())?;
             let sources = this.lights.sources();
             this.split.record(
                 cmd,
