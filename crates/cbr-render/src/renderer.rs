@@ -269,7 +269,10 @@ impl Renderer {
         let spec = &settings.spec;
         let reg = registration(spec)?;
         let params = spec.technique.params();
-        (reg.check)(&params).map_err(|e| GpuError::Other(format!("technique `{spec}`: {e}")))?;
+        (reg.check)(&params).map_err(|message| GpuError::Config {
+            spec: spec.to_string(),
+            message,
+        })?;
         if let Some(feature) = (reg.needs)(&params, gpu.caps()) {
             return Err(GpuError::Unsupported {
                 device: gpu.info().name.clone(),

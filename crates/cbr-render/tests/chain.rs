@@ -460,6 +460,16 @@ fn post_passes_chain_and_match_their_cpu_reference() {
         .to_string();
     assert!(err.contains("(`+taa`, `+taa`)"), "{err}");
     assert!(!err.contains("`native` jitters"), "{err}");
+    // A configuration a technique refuses is an error of its own kind, naming the spec.
+    let bad = RenderSettings::new(w, h, Spec::of("ssaa:0"));
+    match Renderer::new(&gpu, &shaders, &s, bad) {
+        Err(cbr_gpu::GpuError::Config { spec, message }) => {
+            assert_eq!(spec, "ssaa:0");
+            assert!(message.contains("ssaa N `0`"), "{message}");
+        }
+        Err(e) => panic!("expected a configuration error, got {e}"),
+        Ok(_) => panic!("ssaa:0 accepted"),
+    }
     assert!(Spec::parse("native+blur").is_err());
     assert_clean(&gpu);
 }

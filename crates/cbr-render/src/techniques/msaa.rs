@@ -29,7 +29,7 @@ pub const REGISTRATION: Registration = Registration {
     needs,
     estimate: |ctx, p| Ok(Msaa::estimate(parse(p)?, ctx.width, ctx.height)),
     build: |ctx, p| {
-        let c = parse(p).map_err(cbr_gpu::GpuError::Other)?;
+        let c = parse(p).map_err(|e| crate::technique::refused("msaa", p, e))?;
         Ok(Box::new(Msaa::new(ctx, c)?))
     },
 };

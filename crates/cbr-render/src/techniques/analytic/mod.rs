@@ -65,7 +65,7 @@ pub const REGISTRATION: Registration = Registration {
         ))
     },
     build: |ctx, p| {
-        let c = parse(p).map_err(GpuError::Other)?;
+        let c = parse(p).map_err(|e| crate::technique::refused("analytic", p, e))?;
         Ok(Box::new(Analytic::new(ctx, c)?))
     },
 };

@@ -56,7 +56,8 @@ pub const REGISTRATION: Registration = Registration {
         ))
     },
     build: |ctx, p| {
-        let c = CheckerboardConfig::parse(p).map_err(cbr_gpu::GpuError::Other)?;
+        let c = CheckerboardConfig::parse(p)
+            .map_err(|e| crate::technique::refused("checkerboard", p, e))?;
         Ok(Box::new(Checkerboard::new(ctx, c)?))
     },
 };

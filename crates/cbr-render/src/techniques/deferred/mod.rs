@@ -18,7 +18,7 @@ pub mod lights;
 pub mod rsm;
 pub mod vpl;
 
-use cbr_gpu::{Access, GpuError, Image, Result};
+use cbr_gpu::{Access, Image, Result};
 
 use super::LayerReadbacks;
 use crate::frame::FrameOutput;
@@ -43,7 +43,7 @@ pub const REGISTRATION: Registration = Registration {
     needs: |_, _| None,
     estimate: |ctx, p| Ok(Deferred::estimate(&parse(p)?, ctx.width, ctx.height)),
     build: |ctx, p| {
-        let c = parse(p).map_err(GpuError::Other)?;
+        let c = parse(p).map_err(|e| crate::technique::refused("deferred", p, e))?;
         Ok(Box::new(Deferred::new(ctx, c)?))
     },
 };

@@ -29,7 +29,7 @@ pub const REGISTRATION: Registration = Registration {
     needs: |_, _| None,
     estimate: |ctx, p| Ok(Interlaced::estimate(&parse(p)?, ctx.width, ctx.height)),
     build: |ctx, p| {
-        let s = parse(p).map_err(cbr_gpu::GpuError::Other)?;
+        let s = parse(p).map_err(|e| crate::technique::refused("interlaced", p, e))?;
         Ok(Box::new(Interlaced::new(ctx, s)?))
     },
 };

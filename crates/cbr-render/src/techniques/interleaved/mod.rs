@@ -17,7 +17,7 @@
 
 pub mod split;
 
-use cbr_gpu::{Access, GpuError, Image, ImageDesc, Readback, Result, vk};
+use cbr_gpu::{Access, Image, ImageDesc, Readback, Result, vk};
 
 use super::LayerReadbacks;
 use super::deferred::lighting::{Interleaving, LightingPass, LightingPush};
@@ -44,7 +44,7 @@ pub const REGISTRATION: Registration = Registration {
     needs: |_, _| None,
     estimate: |ctx, p| Ok(Interleaved::estimate(&parse(p)?, ctx.width, ctx.height)),
     build: |ctx, p| {
-        let c = parse(p).map_err(GpuError::Other)?;
+        let c = parse(p).map_err(|e| crate::technique::refused("interleaved", p, e))?;
         Ok(Box::new(Interleaved::new(ctx, c)?))
     },
 };
