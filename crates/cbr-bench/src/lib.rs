@@ -503,6 +503,8 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
         (v["key"] == *key).then_some(v)
     };
     let mut rows_resumed = 0u32;
+    // The reference's measured frames that came from the cache (in rows resumed or not).
+    let mut ref_measured_cached = 0u32;
     for (gi, g) in plan.iter().enumerate() {
         let my_rows: Vec<(usize, usize)> = units
             .iter()
@@ -539,6 +541,7 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
             }
         };
         let (rm, ref_frames) = measure(&gpu, &scene, &ref_config, (warmup, frames), role, &bar)?;
+        ref_measured_cached += rm.cached_frames;
         if let Some(s) = &rm.id_stand_in
             && s.mismatched_pixels > 0
         {
@@ -677,7 +680,11 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
             "estimated_cost_s": loads,
             "fixed_crops": !fixed_crops.is_empty(),
             "cache": cache,
-            "reference_frames": {"rendered": ref_frames_rendered, "read_from_cache": ref_frames_cached},
+            "reference_frames": {
+                "rendered": ref_frames_rendered,
+                "read_from_cache": ref_frames_cached,
+                "measured_from_cache": ref_measured_cached,
+            },
             "rows_resumed": rows_resumed,
             "host": cbr_metrics::io::hostname(),
         });

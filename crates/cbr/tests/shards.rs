@@ -7,14 +7,8 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
-fn cbr(args: &[&str], env: &[(&str, &str)]) -> Output {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_cbr"));
-    c.args(args);
-    for (k, v) in env {
-        c.env(k, v);
-    }
-    c.output().expect("run cbr")
-}
+mod common;
+use common::cbr;
 
 fn ok(o: &Output) {
     assert!(
@@ -152,8 +146,8 @@ fn shards_merge_into_the_unsharded_rows_and_bad_ones_are_named() {
     ));
     let text = std::fs::read_to_string(&html).unwrap();
     for r in m["rows"].as_array().unwrap() {
-        let name = format!("{}", r["config"].as_str().unwrap());
-        assert!(text.contains(&name), "the report names {name}");
+        let name = r["config"].as_str().unwrap();
+        assert!(text.contains(name), "the report names {name}");
     }
     let scenes: Vec<&str> = m["scenes"]
         .as_array()
@@ -206,6 +200,13 @@ fn shards_merge_into_the_unsharded_rows_and_bad_ones_are_named() {
         );
         refused(&o, &[says]);
     }
+    // cbr slurm: no shards, no scenes.
+    let o = cbr(&["slurm", s(&sw), "--shards", "0", "-o", s(&bad)], &[]);
+    refused(&o, &["--shards must be at least 1"]);
+    let bare = d.path().join("bare.toml");
+    std::fs::write(&bare, "techniques = [\"native\"]\n").unwrap();
+    let o = cbr(&["slurm", s(&bare), "--shards", "2", "-o", s(&bad)], &[]);
+    refused(&o, &["bare.toml", "`scenes`"]);
     std::fs::write(&sw, "scenes = [\"builtin:demo\", \"nowhere.toml\"]\n").unwrap();
     let o = cbr(&["bench", "--sweep", s(&sw), "-o", s(&bad)], &[]);
     refused(&o, &["sweep.toml:1", "scenes[1]", "nowhere.toml"]);
@@ -474,6 +475,9 @@ fn a_slurm_array_gives_the_unsharded_rows() {
         slurm_s / whole_s,
         hi / lo
     );
+    if study.is_some() {
+        eprintln!("kept for a look: {}", d.keep().display());
+    }
     let pids: Vec<i32> = slurm.pids.iter().filter_map(|p| pid_of(p)).collect();
     assert_eq!(pids.len(), 3, "three daemons started");
     drop(slurm);
