@@ -497,6 +497,40 @@ mod tests {
         }
     }
 
+    /// A claim left by a process that is gone (this host, no such pid) is not waited for; one
+    /// from another host is waited for up to the bound; storing the entry ends a live wait.
+    #[test]
+    fn stale_claims_end_at_once_and_live_ones_at_the_bound() {
+        let dir = tempfile::tempdir().unwrap();
+        let entry = dir.path().join("k.cbrf");
+        let claim = claim_path(&entry);
+        let host = cbr_metrics::io::hostname();
+        std::fs::write(&claim, format!("{host} 4000000 0\n")).unwrap();
+        let t = Instant::now();
+        assert!(fetch(&entry, Duration::from_secs(30)).is_none());
+        assert!(
+            t.elapsed() < Duration::from_secs(5),
+            "no wait for a dead process"
+        );
+        std::fs::write(&claim, "elsewhere 1 0\n").unwrap();
+        let t = Instant::now();
+        assert!(fetch(&entry, Duration::from_millis(600)).is_none());
+        assert!(
+            t.elapsed() >= Duration::from_millis(600),
+            "waited for the bound"
+        );
+        // Another process stores the entry while this one waits.
+        let (e, f) = (entry.clone(), frame_of(3));
+        let writer = std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(300));
+            put(&e, &f);
+        });
+        let got = fetch(&entry, Duration::from_secs(30)).expect("the stored frame");
+        writer.join().unwrap();
+        assert!(same(&got, &frame_of(3)));
+        assert!(!claim.exists(), "storing removed the claim");
+    }
+
     #[test]
     fn frames_round_trip_and_corruption_is_detected() {
         let mut o = FrameOutput::new(

@@ -121,6 +121,29 @@ fn shards_merge_into_the_unsharded_rows_and_bad_ones_are_named() {
         let j = bench_json(&shard(k));
         owners.push(j["shard"]["reference_frames"]["rendered"].as_u64().unwrap());
     }
+    // A shard whose bench.json is missing (killed before the end) run again: its rows come
+    // from rows/, its reference frames from the cache; nothing is measured again.
+    let before = bench_json(&shard(1));
+    std::fs::remove_file(shard(1).join("bench.json")).unwrap();
+    let again = [
+        "bench",
+        "--sweep",
+        s(&sw),
+        "--cache-dir",
+        s(&cache4),
+        "--shard",
+        "1/4",
+    ];
+    ok(&cbr(&[&again[..], &["-o", s(&shard(1))]].concat(), &[]));
+    let after = bench_json(&shard(1));
+    let rows = after["rows"].as_array().unwrap().len();
+    assert!(rows > 0);
+    assert_eq!(after["shard"]["rows_resumed"], rows);
+    assert_eq!(after["shard"]["reference_frames"]["rendered"], 0);
+    assert_eq!(
+        after["rows"], before["rows"],
+        "the same rows, timings included"
+    );
     // 2 scenes x 2 measured frames of ssaa:2: each rendered once, by one shard or another.
     assert_eq!(owners.iter().sum::<u64>(), 4, "{owners:?}");
     let merged = d.path().join("merged");
