@@ -50,6 +50,8 @@ fn array_script(a: &SlurmArgs, exe: &Path, sweep: &Path, out: &Path, cache: &Pat
     s += &format!("#SBATCH --array=0-{}\n", a.shards - 1);
     s += &format!("#SBATCH --output={}/logs/shard-%a.out\n", out.display());
     s += &format!("#SBATCH --time={}\n", a.time);
+    // One task per array element (--gpus-per-task counts per task).
+    s += "#SBATCH --ntasks=1\n";
     if let Some(p) = &a.partition {
         s += &format!("#SBATCH --partition={p}\n");
     }
