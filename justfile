@@ -180,3 +180,10 @@ fuzz SECONDS="60":
             -max_total_time={{SECONDS}} -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 || exit 1; \
         echo "[fuzz] $t: corpus $(ls corpus/$t | wc -l) files"; \
     done
+
+# docs/cluster.md's measurement: the sweep of scripts/cluster-study.toml (2 scenes x 6
+# configurations against ssaa:8) unsharded, then as a 4-task Slurm array with its merge and
+# report on a one-node Slurm the test starts on this machine (as root, slurm-wlm and munge
+# installed); prints both wall times and the shards' estimated costs.
+cluster-study:
+    CBR_SLURM_STUDY=$(realpath scripts/cluster-study.toml) cargo test -p cbr --test shards a_slurm_array -- --nocapture

@@ -10,6 +10,9 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SweepFile {
+    /// Scenes the run measures one after the other (paths relative to the sweep file; a scene
+    /// named on the command line replaces them).
+    pub scenes: Option<Vec<String>>,
     pub techniques: Option<Vec<String>>,
     pub resolutions: Option<Vec<String>>,
     pub mappings: Option<Vec<String>>,

@@ -116,7 +116,13 @@ fn placement_json(p: Placement, frame_ms: Option<f64>) -> Value {
 /// resolution, when that resolution's rows hold a ladder (two or more `ssaa:N` rows with errors,
 /// the reference excluded: it has none).
 pub fn annotate(rows: &mut [Value]) {
-    let key = |r: &Value| (r["width"].as_u64(), r["height"].as_u64());
+    let key = |r: &Value| {
+        (
+            r["scene"].as_str().map(str::to_string),
+            r["width"].as_u64(),
+            r["height"].as_u64(),
+        )
+    };
     let metrics = [("flip_edge", "flip_edge_mean"), ("flip", "flip_mean")];
     let groups: Vec<_> = {
         let mut g = Vec::new();

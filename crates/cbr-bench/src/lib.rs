@@ -11,15 +11,18 @@
 #![cfg_attr(not(test), deny(clippy::unwrap_used))]
 
 pub mod analytic_attribution;
+pub mod assemble;
 pub mod attribution;
 pub mod config;
 pub mod equal_error;
 pub mod measure;
+pub mod merge;
 pub mod output;
+pub mod shard;
 pub mod stats;
 pub mod temporal;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
@@ -29,21 +32,23 @@ use cbr_metrics::io::write_bytes;
 use cbr_render::{Mapping, Renderer, Spec};
 use cbr_scene::{LoadOptions, check_resolution};
 use indicatif::{ProgressBar, ProgressStyle};
-use serde_json::json;
+use serde_json::{Value, json};
 
 pub use config::{Config, SweepFile, checkerboard, expand, parse_resolution, parse_spec};
 pub use measure::{RefFrame, edge_mask, masked_mean};
 pub use output::{CSV_COLUMNS, pareto_front, worst_windows};
 pub use temporal::{DEFAULT_DISOCCLUSION_FRAMES, disocclusion_mask};
 
-use measure::{NOT_TECHNIQUE, Role, mean, measure};
-use output::{csv, finite_or_null, git_commit, save_snapshot, summary_json};
-use stats::summarize;
+use measure::{NOT_TECHNIQUE, Role, measure};
+use output::{csv, git_commit, save_snapshot};
+pub use shard::Shard;
+use shard::{Unit, Work};
 
 /// Everything a bench run takes (the binary fills it from its arguments).
 #[derive(Clone, Debug, Default)]
 pub struct BenchOptions {
-    /// Scene: a .toml description, an .obj file, or builtin:demo.
+    /// Scene: a .toml description, an .obj file, or builtin:demo; empty: the sweep file's
+    /// `scenes`.
     pub scene: String,
     /// Configurations, comma-separated technique specs (`cbr info` lists the registered ones):
     /// native, ssaa:N, msaa:N[:sample][:hdr], upscale:bilinear|bicubic,
@@ -90,6 +95,11 @@ pub struct BenchOptions {
     pub device: Option<String>,
     /// Validation layers on (slower; messages counted in bench.json).
     pub validation: bool,
+    /// `--shard K/N`: render shard K of the run split N ways (crate::shard); `None`: the whole
+    /// run, as `0/1` but without the shard's plan in bench.json.
+    pub shard: Option<Shard>,
+    /// The frame cache's folder (`--cache-dir`; default crate cbr_render::cache::default_dir).
+    pub cache_dir: Option<PathBuf>,
     pub out: PathBuf,
 }
 
@@ -131,20 +141,110 @@ pub fn sample_progress(label: String) -> impl FnMut(u32, u32) + 'static {
     }
 }
 
+/// Reads a sweep file (unknown keys and wrong types refused with the key's path).
+pub fn read_sweep(p: &Path) -> Result<SweepFile> {
+    let text =
+        std::fs::read_to_string(p).with_context(|| format!("cannot read {}", p.display()))?;
+    let de =
+        toml::Deserializer::parse(&text).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
+    serde_path_to_error::deserialize(de)
+        .map_err(|e| anyhow::anyhow!("{}: {}: {}", p.display(), e.path(), e.inner()))
+}
+
+/// The scenes of a run: the one named on the command line, else the sweep file's `scenes`
+/// (paths relative to the sweep file's folder; `builtin:NAME` as it is).
+pub fn scene_sources(
+    scene: &str,
+    sweep: &SweepFile,
+    sweep_path: Option<&Path>,
+) -> Result<Vec<String>> {
+    if !scene.is_empty() {
+        return Ok(vec![scene.to_string()]);
+    }
+    let Some(list) = sweep.scenes.as_ref().filter(|l| !l.is_empty()) else {
+        bail!("no scene: name one, or list them as `scenes = [...]` in the sweep file");
+    };
+    let base = sweep_path.and_then(Path::parent).unwrap_or(Path::new(""));
+    Ok(list
+        .iter()
+        .map(|s| {
+            if s.starts_with("builtin:") || Path::new(s).is_absolute() {
+                s.clone()
+            } else {
+                base.join(s).to_string_lossy().into_owned()
+            }
+        })
+        .collect())
+}
+
+/// One scene at one resolution: its reference and the configurations measured against it.
+struct Group {
+    scene: usize,
+    size: (u32, u32),
+    reference: Config,
+    configs: Vec<Config>,
+}
+
+/// The units of a run in order (per group: the reference's frames when a sharded run shares
+/// them through the cache, then the rows) with their estimated costs.
+fn units(groups: &[Group], (warmup, frames): (u32, u32), share_reference: bool) -> Vec<Unit> {
+    let mut out = Vec::new();
+    for (g, grp) in groups.iter().enumerate() {
+        let r = &grp.reference.settings;
+        let cacheable_ref = shard::samples_per_frame(r) > 1.0;
+        if share_reference {
+            for f in warmup..warmup + frames {
+                out.push(Unit {
+                    group: g,
+                    work: Work::RefFrame(f),
+                    cost: shard::render_cost(r, 1),
+                });
+            }
+        }
+        let ref_rendered = match (share_reference, cacheable_ref) {
+            (true, _) => 0,
+            (false, true) => frames,
+            (false, false) => warmup + frames,
+        };
+        // Its set-up is the group's (shard::GROUP_S).
+        out.push(Unit {
+            group: g,
+            work: Work::Row(0),
+            cost: shard::render_cost(r, ref_rendered),
+        });
+        for (i, c) in grp.configs.iter().enumerate() {
+            out.push(Unit {
+                group: g,
+                work: Work::Row(i + 1),
+                cost: shard::row_cost(&c.settings, warmup + frames, frames),
+            });
+        }
+    }
+    out
+}
+
 pub fn run(a: &BenchOptions) -> Result<BenchResult> {
     let started = Instant::now();
     let sweep: SweepFile = match &a.sweep {
-        Some(p) => {
-            let text = std::fs::read_to_string(p)
-                .with_context(|| format!("cannot read {}", p.display()))?;
-            let de = toml::Deserializer::parse(&text)
-                .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
-            serde_path_to_error::deserialize(de)
-                .map_err(|e| anyhow::anyhow!("{}: {}: {}", p.display(), e.path(), e.inner()))?
-        }
+        Some(p) => read_sweep(p)?,
         None => SweepFile::default(),
     };
-    let mut scene = cbr_scene::load(&a.scene, &LoadOptions::default())?;
+    let sources = scene_sources(&a.scene, &sweep, a.sweep.as_deref())?;
+    let mut scenes = Vec::new();
+    for src in &sources {
+        let s = cbr_scene::load(src, &LoadOptions::default())
+            .with_context(|| format!("scene {src}"))?;
+        if let Some(o) = scenes.iter().find(|o: &&cbr_scene::Scene| o.name == s.name) {
+            bail!(
+                "scenes: two scenes are named `{}` ({} and {})",
+                s.name,
+                o.source,
+                s.source
+            );
+        }
+        scenes.push(s);
+    }
+    let several_scenes = scenes.len() > 1;
     let techniques = if a.techniques != ["native"] || sweep.techniques.is_none() {
         a.techniques.clone()
     } else {
@@ -157,18 +257,10 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
             cli.clone()
         }
     };
-    let mut resolutions: Vec<(u32, u32)> = pick(&a.resolutions, &sweep.resolutions)
+    let named_resolutions: Vec<(u32, u32)> = pick(&a.resolutions, &sweep.resolutions)
         .iter()
         .map(|s| parse_resolution(s))
         .collect::<Result<_>>()?;
-    if resolutions.is_empty() {
-        let (w, h) = (
-            a.width.unwrap_or(scene.settings.width),
-            a.height.unwrap_or(scene.settings.height),
-        );
-        check_resolution(w, h).map_err(anyhow::Error::msg)?;
-        resolutions.push((w, h));
-    }
     let mappings: Vec<Mapping> = pick(&a.mappings, &sweep.mappings)
         .iter()
         .map(|m| match m.as_str() {
@@ -227,65 +319,219 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
             "--timing-only measures no error, so it takes no reference: drop --reference {reference} (native is timed as a row)"
         );
     }
-    let mut plan = Vec::new();
-    for &(w, h) in &resolutions {
-        let mut configs: Vec<Config> = expand(&techniques, w, h, &mappings, &groups, &lod_biases)?
-            .into_iter()
-            .filter(|c| c.name != reference)
-            .collect();
-        // Native is always measured: as the reference, or against it.
-        if reference != "native" && !configs.iter().any(|c| c.name == "native") {
-            configs.insert(
-                0,
-                expand(&["native".into()], w, h, &[], &[], &[])?.remove(0),
+    let mut plan: Vec<Group> = Vec::new();
+    for (si, scene) in scenes.iter().enumerate() {
+        let resolutions = if named_resolutions.is_empty() {
+            let (w, h) = (
+                a.width.unwrap_or(scene.settings.width),
+                a.height.unwrap_or(scene.settings.height),
             );
+            check_resolution(w, h).map_err(anyhow::Error::msg)?;
+            vec![(w, h)]
+        } else {
+            named_resolutions.clone()
+        };
+        for (w, h) in resolutions {
+            let mut configs: Vec<Config> =
+                expand(&techniques, w, h, &mappings, &groups, &lod_biases)?
+                    .into_iter()
+                    .filter(|c| c.name != reference)
+                    .collect();
+            // Native is always measured: as the reference, or against it.
+            if reference != "native" && !configs.iter().any(|c| c.name == "native") {
+                configs.insert(
+                    0,
+                    expand(&["native".into()], w, h, &[], &[], &[])?.remove(0),
+                );
+            }
+            let reference =
+                expand(std::slice::from_ref(&reference), w, h, &[], &[], &[])?.remove(0);
+            plan.push(Group {
+                scene: si,
+                size: (w, h),
+                reference,
+                configs,
+            });
         }
-        plan.push(((w, h), configs));
     }
+    for g in &plan {
+        let (w, h) = g.size;
+        if let Some(c) = fixed_crops
+            .iter()
+            .find(|c| c[0] + c[2] > w as usize || c[1] + c[3] > h as usize)
+        {
+            bail!("--crop {c:?} does not fit in {w}x{h}");
+        }
+    }
+    let shard = a.shard.unwrap_or(Shard::WHOLE);
+    // Timing only: nothing is read from or written to the frame cache (a cached frame is not
+    // timed, and no frame is kept).
+    let cache = (!a.no_cache && !a.timing_only).then(|| {
+        a.cache_dir
+            .clone()
+            .unwrap_or_else(cbr_render::cache::default_dir)
+    });
+    let share_reference = shard.count > 1 && cache.is_some() && reference != "native";
+    let units = units(&plan, (warmup, frames), share_reference);
+    let (owner, loads) = shard::assign(
+        &units.iter().map(|u| (u.group, u.cost)).collect::<Vec<_>>(),
+        shard.count,
+    );
+    let mine = |i: usize| owner[i] == shard.index;
+    let plan_json: Vec<_> = units
+        .iter()
+        .zip(&owner)
+        .map(|(u, o)| {
+            let g = &plan[u.group];
+            let (kind, config) = match u.work {
+                Work::RefFrame(f) => (format!("reference frame {f}"), &g.reference.name),
+                Work::Row(0) => ("row".to_string(), &g.reference.name),
+                Work::Row(i) => ("row".to_string(), &g.configs[i - 1].name),
+            };
+            json!({
+                "scene": scenes[g.scene].name,
+                "width": g.size.0,
+                "height": g.size.1,
+                "config": config,
+                "work": kind,
+                "cost_s": u.cost,
+                "shard": o,
+            })
+        })
+        .collect();
     let gpu = Gpu::new(&GpuOptions {
         device: a.device.clone(),
         validation: a.validation,
     })?;
-    // Every configuration, the reference's included, is refused now if it cannot run here (an
+    // Every configuration, the references included, is refused now if it cannot run here (an
     // unknown spec, a missing device feature, memory the device cannot hold), before anything
-    // is rendered or written.
-    for ((w, h), configs) in &plan {
-        let r = expand(std::slice::from_ref(&reference), *w, *h, &[], &[], &[])?.remove(0);
-        for c in std::iter::once(&r).chain(configs) {
+    // is rendered or written. Every shard checks the whole run, so all refuse the same.
+    for g in &plan {
+        let mut scene = scenes[g.scene].clone();
+        (scene.settings.width, scene.settings.height) = g.size;
+        for c in std::iter::once(&g.reference).chain(&g.configs) {
             Renderer::check(&gpu, &scene, &c.settings)?;
         }
     }
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("cannot create the output folder {}", a.out.display()))?;
-    let total_frames: u64 = plan
-        .iter()
-        .map(|(_, c)| (c.len() as u64 + 1) * u64::from(warmup + frames))
-        .sum();
-    let bar = ProgressBar::new(total_frames).with_style(
+    let info = gpu.info().clone();
+    let bar = ProgressBar::new(0).with_style(
         ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} frames {elapsed} {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    bar.set_prefix(format!("bench {}", scene.name));
-    let info = gpu.info().clone();
+    bar.set_prefix(format!(
+        "bench {}",
+        scenes
+            .iter()
+            .map(|s| s.name.as_str())
+            .collect::<Vec<_>>()
+            .join(",")
+    ));
+    if let Some(dir) = &cache
+        && reference != "native"
+    {
+        eprintln!(
+            "reference frame cache: {} (--no-cache renders afresh)",
+            dir.display()
+        );
+    }
+    // Sharded: this shard's frames of the references first, into the shared cache.
+    let mut ref_frames_rendered = 0u32;
+    let mut ref_frames_cached = 0u32;
+    for (gi, g) in plan.iter().enumerate() {
+        let todo: Vec<u32> = units
+            .iter()
+            .enumerate()
+            .filter(|(i, u)| u.group == gi && mine(*i))
+            .filter_map(|(_, u)| match u.work {
+                Work::RefFrame(f) => Some(f),
+                Work::Row(_) => None,
+            })
+            .collect();
+        if todo.is_empty() {
+            continue;
+        }
+        let mut scene = scenes[g.scene].clone();
+        (scene.settings.width, scene.settings.height) = g.size;
+        let mut settings = g.reference.settings.clone();
+        settings.cache = cache.clone();
+        let shaders = cbr_render::shader_library();
+        let mut r = Renderer::new(&gpu, &shaders, &scene, settings)?;
+        if r.cache_dir().is_none() {
+            eprintln!(
+                "shard {shard}: {reference} is not cached, so every shard renders the frames it needs itself"
+            );
+            continue;
+        }
+        r.set_progress(sample_progress(format!("reference {reference}")));
+        for f in todo {
+            let out = r.render(&scene, f)?;
+            if out.timings.is_empty() {
+                ref_frames_cached += 1;
+            } else {
+                ref_frames_rendered += 1;
+            }
+        }
+    }
+    let total_frames: u64 = units
+        .iter()
+        .enumerate()
+        .filter(|(i, u)| mine(*i) && matches!(u.work, Work::Row(_)))
+        .map(|_| u64::from(warmup + frames))
+        .sum();
+    bar.set_length(total_frames);
     let mut rows = Vec::new();
     let mut id_sources = Vec::new();
-    for ((w, h), configs) in &plan {
-        scene.settings.width = *w;
-        scene.settings.height = *h;
-        let mut ref_config =
-            expand(std::slice::from_ref(&reference), *w, *h, &[], &[], &[])?.remove(0);
-        // Timing only: nothing is read from or written to the frame cache (a cached frame is not
-        // timed, and no frame is kept).
-        let cache = (!a.no_cache && !a.timing_only).then(cbr_render::cache::default_dir);
-        ref_config.settings.cache = cache.clone();
-        if let Some(dir) = &ref_config.settings.cache
-            && reference != "native"
-        {
-            eprintln!(
-                "reference frame cache: {} (--no-cache renders afresh)",
-                dir.display()
-            );
+    // Sharded: each finished row is also kept in rows/ with the plan it belongs to, so that a
+    // rerun of a killed shard measures only the rows it had not finished.
+    let resume = a.shard.map(|_| {
+        let key = json!({
+            "plan": plan_json,
+            "protocol": [warmup, frames, k],
+            "reference": reference,
+            "timing_only": a.timing_only,
+            "commit": git_commit(),
+            "device": [&info.name, &info.driver_info],
+        });
+        (a.out.join("rows"), key)
+    });
+    let finished = |unit: usize| -> Option<Value> {
+        let (dir, key) = resume.as_ref()?;
+        let text = std::fs::read_to_string(dir.join(format!("{unit}.json"))).ok()?;
+        let v: Value = serde_json::from_str(&text).ok()?;
+        (v["key"] == *key).then_some(v)
+    };
+    let mut rows_resumed = 0u32;
+    // The reference's measured frames that came from the cache (in rows resumed or not).
+    let mut ref_measured_cached = 0u32;
+    for (gi, g) in plan.iter().enumerate() {
+        let my_rows: Vec<(usize, usize)> = units
+            .iter()
+            .enumerate()
+            .filter(|(i, u)| u.group == gi && mine(*i))
+            .filter_map(|(i, u)| match u.work {
+                Work::Row(r) => Some((i, r)),
+                Work::RefFrame(_) => None,
+            })
+            .collect();
+        let kept: Vec<Option<Value>> = my_rows.iter().map(|(i, _)| finished(*i)).collect();
+        if kept.iter().all(Option::is_some) {
+            // Nothing left to measure here (or nothing of this shard's).
+            for v in kept.into_iter().flatten() {
+                rows.push(v["row"].clone());
+                if !v["id_source"].is_null() && !id_sources.contains(&v["id_source"]) {
+                    id_sources.push(v["id_source"].clone());
+                }
+                rows_resumed += 1;
+            }
+            continue;
         }
+        let mut scene = scenes[g.scene].clone();
+        let (w, h) = g.size;
+        (scene.settings.width, scene.settings.height) = g.size;
+        let mut ref_config = g.reference.clone();
+        ref_config.settings.cache = cache.clone();
         bar.set_message(format!("reference {reference} {w}x{h}"));
         let role = if a.timing_only {
             Role::Timing
@@ -295,6 +541,7 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
             }
         };
         let (rm, ref_frames) = measure(&gpu, &scene, &ref_config, (warmup, frames), role, &bar)?;
+        ref_measured_cached += rm.cached_frames;
         if let Some(s) = &rm.id_stand_in
             && s.mismatched_pixels > 0
         {
@@ -303,8 +550,9 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
                 s.mismatched_pixels, s.pixels, s.native_frames[1]
             );
         }
-        if !a.timing_only {
-            id_sources.push(json!({
+        let id_source = (!a.timing_only).then(|| {
+            json!({
+                "scene": scene.name,
                 "width": w,
                 "height": h,
                 "source": match &rm.id_stand_in {
@@ -312,168 +560,97 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
                     None => "reference",
                 },
                 "native": rm.id_stand_in,
-            }));
-        }
-        let mut all = vec![(ref_config, rm)];
-        for c in configs {
-            bar.set_message(format!("{} {w}x{h}", c.name));
-            // Cacheable techniques (ssaa) among the rows share the reference's cache, unless
-            // their time is wanted (--time-cached-rows).
-            let mut c = c.clone();
-            c.settings.cache = if a.time_cached_rows || a.timing_only {
-                None
-            } else {
-                cache.clone()
-            };
-            let role = if a.timing_only {
-                Role::Timing
-            } else {
-                Role::Against {
-                    name: &reference,
-                    frames: &ref_frames,
-                }
-            };
-            let (m, _) = measure(&gpu, &scene, &c, (warmup, frames), role, &bar)?;
-            all.push((c, m));
+            })
+        });
+        if let Some(s) = &id_source {
+            id_sources.push(s.clone());
         }
         let display = DisplayTransform {
             exposure_stops: scene.settings.exposure,
         };
-        let maps: Vec<&cbr_metrics::planes::Plane> = all
-            .iter()
-            .filter_map(|(_, m)| m.snapshot.as_ref().and_then(|s| s.flip_map.as_ref()))
-            .collect();
-        let crops = if fixed_crops.is_empty() {
-            worst_windows(&maps, 3)
-        } else {
-            let fits = |c: &[usize; 4]| c[0] + c[2] <= *w as usize && c[1] + c[3] <= *h as usize;
-            if let Some(c) = fixed_crops.iter().find(|c| !fits(c)) {
-                bail!("--crop {c:?} does not fit in {w}x{h}");
-            }
-            fixed_crops.clone()
+        let ctx = assemble::RowCtx {
+            scene: &scene.name,
+            size: g.size,
+            device: &info,
+            warmup,
+            frames,
+            disocclusion_frames: k,
+            reference: &reference,
+            timing_only: a.timing_only,
+            fixed_crops: (!fixed_crops.is_empty()).then_some(fixed_crops.as_slice()),
         };
-        for (c, m) in all {
+        let sub = assemble::sub_folder(&scene.name, g.size, several_scenes);
+        let mut rm = Some(rm);
+        for ((unit, r), kept) in my_rows.iter().zip(kept) {
+            if let Some(v) = kept {
+                rows.push(v["row"].clone());
+                rows_resumed += 1;
+                continue;
+            }
+            let (c, m) = if *r == 0 {
+                let Some(m) = rm.take() else { continue };
+                (ref_config.clone(), m)
+            } else {
+                let c = &g.configs[r - 1];
+                bar.set_message(format!("{} {w}x{h}", c.name));
+                // Cacheable techniques (ssaa) among the rows share the reference's cache,
+                // unless their time is wanted (--time-cached-rows).
+                let mut c = c.clone();
+                c.settings.cache = if a.time_cached_rows || a.timing_only {
+                    None
+                } else {
+                    cache.clone()
+                };
+                let role = if a.timing_only {
+                    Role::Timing
+                } else {
+                    Role::Against {
+                        name: &reference,
+                        frames: &ref_frames,
+                    }
+                };
+                let (m, _) = measure(&gpu, &scene, &c, (warmup, frames), role, &bar)?;
+                (c, m)
+            };
             let images = match &m.snapshot {
-                Some(snap) => save_snapshot(&a.out, (*w, *h), &c.name, snap, &display)?,
+                Some(snap) => save_snapshot(&a.out, &sub, &c.name, snap, &display)?,
                 None => json!(null),
             };
-            let s = &c.settings;
-            let cb = checkerboard(s);
-            let resolve = cb.and_then(|c| c.resolve);
-            let resolve = resolve.as_ref();
-            let passes: serde_json::Map<String, serde_json::Value> = m
-                .passes
-                .iter()
-                .map(|(k, v)| (k.clone(), summary_json(summarize(v))))
-                .collect();
-            let fragments: serde_json::Map<String, serde_json::Value> = m
-                .fragments
-                .iter()
-                .map(|(k, v)| (k.clone(), json!(crate::stats::percentile(v, 50.0))))
-                .collect();
-            let is_reference = c.name == reference;
-            let opt = |v: Option<f64>| v.map(finite_or_null).unwrap_or(json!(null));
-            rows.push(json!({
-                "scene": scene.name,
-                "config": c.name,
-                "technique": s.spec.technique.name,
-                "spec": s.spec,
-                "resolve": resolve.map(|r| r.mode.name()),
-                "mapping": resolve.map(|r| if r.mapping == Mapping::Pixel { "pixel" } else { "quad" }),
-                "group": resolve.map(|r| r.group),
-                "fp16": resolve.map(|r| r.fp16),
-                "id_prepass": cb.is_some_and(|c| c.prepass),
-                "lod_bias": m.lod_bias,
-                "width": w,
-                "height": h,
-                "device": info.name,
-                "driver": info.driver_info,
-                "warmup": warmup,
-                "frames": frames,
-                "disocclusion_frames": k,
-                "frame_ms": summary_json(summarize(&m.frame_ms)),
-                "cached_frames": m.cached_frames,
-                "setup_s": m.setup_s,
-                "frames_wall_s": m.frames_wall_s,
-                "passes": passes,
-                "fragment_invocations_median": fragments,
-                "images": images,
-                "crops": crops,
-                "copy_floor_ms": summary_json(summarize(m.passes.get("resolve.copy_floor").map(Vec::as_slice).unwrap_or(&[]))),
-                "reference": reference,
-                "error": if is_reference || a.timing_only { json!(null) } else { json!({
-                    "psnr_mean": opt(mean(&m.psnr)),
-                    "ssim_mean": opt(mean(&m.ssim)),
-                    "flip_mean": opt(mean(&m.flip)),
-                    "flip_median_mean": opt(mean(&m.flip_median)),
-                    "flip_edge_mean": opt(mean(&m.flip_edge)),
-                    "flip_interior_mean": opt(mean(&m.flip_interior)),
-                    "flip_disocc_mean": opt(mean(&m.flip_disocc)),
-                    "disocc_fraction_mean": opt(mean(&m.disocc_fraction)),
-                    "relmse_mean": opt(mean(&m.relmse)),
-                    "flicker_mean": opt(mean(&m.flicker)),
-                    "change_mean": opt(mean(&m.change)),
-                    "ref_change_mean": opt(mean(&m.ref_change)),
-                    "attribution": m.attribution.as_ref().map(|a| a.to_json()),
-                    "analytic_attribution": m.analytic_attribution.as_ref().map(|a| a.to_json()),
-                    "per_frame": m.errors,
-                })},
-            }));
+            let scores = m
+                .snapshot
+                .as_ref()
+                .and_then(|s| s.flip_map.as_ref())
+                .map(output::window_scores);
+            let row = assemble::row(&c, &m, images, scores, &ctx);
+            if let Some((dir, key)) = &resume {
+                std::fs::create_dir_all(dir)?;
+                let v = json!({"key": key, "row": row, "id_source": id_source});
+                write_bytes(&dir.join(format!("{unit}.json")), v.to_string().as_bytes())?;
+            }
+            rows.push(row);
         }
     }
     bar.finish_and_clear();
-    let reference_images: serde_json::Map<String, serde_json::Value> = rows
-        .iter()
-        .filter(|r| r["config"] == reference.as_str())
-        .map(|r| {
-            (
-                format!("{}x{}", r["width"], r["height"]),
-                r["images"].clone(),
-            )
-        })
-        .collect();
-    // The Pareto front per scene and resolution: frame time median against FLIP mean.
-    let key = |r: &serde_json::Value| (r["width"].as_u64(), r["height"].as_u64());
-    let mut on_front = vec![false; rows.len()];
-    let mut groups_seen: Vec<(Option<u64>, Option<u64>)> = Vec::new();
-    for r in &rows {
-        if !groups_seen.contains(&key(r)) {
-            groups_seen.push(key(r));
-        }
-    }
-    for g in groups_seen {
-        let idx: Vec<usize> = (0..rows.len())
-            .filter(|&i| key(&rows[i]) == g && rows[i]["config"] != reference.as_str())
-            .collect();
-        let pts: Vec<(f64, f64)> = idx
-            .iter()
-            .map(|&i| {
-                (
-                    rows[i]["frame_ms"]["median"].as_f64().unwrap_or(f64::NAN),
-                    rows[i]["error"]["flip_mean"].as_f64().unwrap_or(f64::NAN),
-                )
-            })
-            .collect();
-        for k in pareto_front(&pts) {
-            on_front[idx[k]] = true;
-        }
-    }
-    for (r, f) in rows.iter_mut().zip(&on_front) {
-        r["pareto"] = json!(f);
-    }
-    // Each row's error placed on the run's own supersampling ladder (its ssaa:N rows), if any.
-    equal_error::annotate(&mut rows);
+    let reference_images = assemble::finish(
+        &mut rows,
+        &reference,
+        !fixed_crops.is_empty(),
+        a.shard.is_some(),
+        several_scenes,
+    );
     let messages = gpu.validation().messages();
     // The protocol's error entries, or what a timing-only run says instead.
     let measured = |text: &str| if a.timing_only { NOT_MEASURED } else { text }.to_string();
-    let bench = json!({
+    let scene_json = |s: &cbr_scene::Scene| json!({"name": s.name, "source": s.source, "triangles": s.triangle_count()});
+    let mut bench = json!({
         "schema": "cbr.bench/1",
         "cbr_version": env!("CARGO_PKG_VERSION"),
         "git_commit": git_commit(),
         "created_unix_s": std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs()).unwrap_or(0),
         "command": std::env::args().collect::<Vec<_>>(),
         "device": info,
-        "scene": {"name": scene.name, "source": scene.source, "triangles": scene.triangle_count()},
+        "scene": scene_json(&scenes[0]),
+        "scenes": scenes.iter().map(scene_json).collect::<Vec<_>>(),
         "protocol": {
             "warmup_frames": warmup,
             "measured_frames": frames,
@@ -486,7 +663,7 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
             "disocclusion_pixels": measured(&format!("FLIP mean over the pixels whose reference object ID differs from their ID in any of the k = {k} frames before (frames before frame 0 do not exist); frames whose mask is empty are left out of the mean")),
             "disocclusion_ids": id_sources,
             "temporal": measured("over consecutive measured frames, display values: flicker = mean |e_t - e_(t-1)| with e = test - reference (cbr compare's flicker), change = mean |x_t - x_(t-1)| of the test, ref_change = the same of the reference"),
-            "display": DisplayTransform { exposure_stops: scene.settings.exposure }.describe(),
+            "display": DisplayTransform { exposure_stops: scenes[0].settings.exposure }.describe(),
             "metrics": measured("PSNR and SSIM on display values, LDR-FLIP (67.02 ppd), relMSE on linear HDR (eps 0.01)"),
         },
         "reference": reference,
@@ -495,15 +672,36 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
         "validation": {"enabled": a.validation, "messages": messages.len()},
         "wall_s": started.elapsed().as_secs_f64(),
     });
+    if a.shard.is_some() {
+        bench["shard"] = json!({
+            "index": shard.index,
+            "count": shard.count,
+            "units": plan_json,
+            "estimated_cost_s": loads,
+            "fixed_crops": !fixed_crops.is_empty(),
+            "cache": cache,
+            "reference_frames": {
+                "rendered": ref_frames_rendered,
+                "read_from_cache": ref_frames_cached,
+                "measured_from_cache": ref_measured_cached,
+            },
+            "rows_resumed": rows_resumed,
+            "host": cbr_metrics::io::hostname(),
+        });
+    }
     write_bytes(
         &a.out.join("bench.json"),
         serde_json::to_string_pretty(&bench)?.as_bytes(),
     )?;
     write_bytes(&a.out.join("bench.csv"), csv(&bench).as_bytes())?;
     Ok(BenchResult {
-        configurations: plan.first().map(|p| p.1.len() + 1).unwrap_or(0),
-        resolutions: plan.len(),
-        scene: scene.name.clone(),
+        configurations: plan.first().map(|g| g.configs.len() + 1).unwrap_or(0),
+        resolutions: plan.len() / scenes.len().max(1),
+        scene: scenes
+            .iter()
+            .map(|s| s.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", "),
         bench_json: a.out.join("bench.json"),
     })
 }

@@ -8,7 +8,7 @@ use serde_json::json;
 use crate::measure::Snapshot;
 use crate::stats::Summary;
 
-fn slug(name: &str) -> String {
+pub fn slug(name: &str) -> String {
     name.chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || c == '-' || c == '.' {
@@ -22,20 +22,20 @@ fn slug(name: &str) -> String {
 
 /// Writes the last measured frame of a configuration for the report: the display PNG, the FLIP
 /// map as a magma PNG (same size; the report draws the colour bar) and the EXR with all layers.
-/// Returns the paths relative to the bench folder.
+/// `sub`: the folder below images/ and frames/ (crate::assemble::sub_folder). Returns the paths
+/// relative to the bench folder.
 pub fn save_snapshot(
     dir: &std::path::Path,
-    res: (u32, u32),
+    sub: &str,
     name: &str,
     snap: &Snapshot,
     display: &DisplayTransform,
 ) -> Result<serde_json::Value> {
-    let sub = format!("{}x{}", res.0, res.1);
     let base = slug(name);
     let img = format!("images/{sub}/{base}.png");
     let exr = format!("frames/{sub}/{base}.exr");
-    std::fs::create_dir_all(dir.join("images").join(&sub))?;
-    std::fs::create_dir_all(dir.join("frames").join(&sub))?;
+    std::fs::create_dir_all(dir.join("images").join(sub))?;
+    std::fs::create_dir_all(dir.join("frames").join(sub))?;
     let o = &snap.out;
     cbr_metrics::io::write_png_rgba8(
         &dir.join(&img),
@@ -80,37 +80,63 @@ pub fn save_snapshot(
     Ok(json!({"frame": o.index, "image": img, "flip": flip, "exr": exr}))
 }
 
-/// Up to `count` non-overlapping square windows (side ~ 1/6 of the short side) with the highest
-/// mean of the given FLIP maps: where the techniques err most. [x, y, w, h] each.
-pub fn worst_windows(maps: &[&cbr_metrics::planes::Plane], count: usize) -> Vec<[usize; 4]> {
-    let Some(first) = maps.first() else {
-        return Vec::new();
-    };
-    let (w, h) = (first.width, first.height);
+/// The candidate windows of a `w`x`h` frame, in scan order: (x, y, side).
+fn windows(w: usize, h: usize) -> Vec<(usize, usize, usize)> {
     let side = (w.min(h) / 6).max(8).min(w).min(h);
     let stride = (side / 2).max(1);
-    let mut scored = Vec::new();
+    let mut out = Vec::new();
     let mut y = 0;
     while y + side <= h {
         let mut x = 0;
         while x + side <= w {
-            let mut sum = 0.0f64;
-            for m in maps {
-                for yy in y..y + side {
-                    sum += m.data[yy * w + x..yy * w + x + side]
-                        .iter()
-                        .map(|&v| f64::from(v))
-                        .sum::<f64>();
-                }
-            }
-            scored.push((sum, x, y));
+            out.push((x, y, side));
             x += stride;
         }
         y += stride;
     }
+    out
+}
+
+/// One FLIP map's sum over each candidate window (in [`windows`] order): what [`pick_windows`]
+/// adds up over a group's maps. A shard keeps these per row, so that merged shards choose the
+/// unsharded run's windows.
+pub fn window_scores(m: &cbr_metrics::planes::Plane) -> Vec<f64> {
+    let w = m.width;
+    windows(m.width, m.height)
+        .into_iter()
+        .map(|(x, y, side)| {
+            let mut sum = 0.0f64;
+            for yy in y..y + side {
+                sum += m.data[yy * w + x..yy * w + x + side]
+                    .iter()
+                    .map(|&v| f64::from(v))
+                    .sum::<f64>();
+            }
+            sum
+        })
+        .collect()
+}
+
+/// Up to `count` non-overlapping windows of a `w`x`h` frame with the highest summed scores
+/// (`scores`: one [`window_scores`] per map, added in order). [x, y, w, h] each.
+pub fn pick_windows(w: usize, h: usize, scores: &[Vec<f64>], count: usize) -> Vec<[usize; 4]> {
+    let Some(first) = scores.first() else {
+        return Vec::new();
+    };
+    let mut total = first.clone();
+    for s in &scores[1..] {
+        for (t, v) in total.iter_mut().zip(s) {
+            *t += v;
+        }
+    }
+    let mut scored: Vec<(f64, usize, usize, usize)> = windows(w, h)
+        .into_iter()
+        .zip(total)
+        .map(|((x, y, side), s)| (s, x, y, side))
+        .collect();
     scored.sort_by(|a, b| b.0.total_cmp(&a.0));
     let mut picked: Vec<[usize; 4]> = Vec::new();
-    for (_, x, y) in scored {
+    for (_, x, y, side) in scored {
         let overlaps = picked
             .iter()
             .any(|p| x < p[0] + p[2] && p[0] < x + side && y < p[1] + p[3] && p[1] < y + side);
@@ -122,6 +148,16 @@ pub fn worst_windows(maps: &[&cbr_metrics::planes::Plane], count: usize) -> Vec<
         }
     }
     picked
+}
+
+/// Up to `count` non-overlapping square windows (side ~ 1/6 of the short side) with the highest
+/// mean of the given FLIP maps: where the techniques err most. [x, y, w, h] each.
+pub fn worst_windows(maps: &[&cbr_metrics::planes::Plane], count: usize) -> Vec<[usize; 4]> {
+    let Some(first) = maps.first() else {
+        return Vec::new();
+    };
+    let scores: Vec<Vec<f64>> = maps.iter().map(|m| window_scores(m)).collect();
+    pick_windows(first.width, first.height, &scores, count)
 }
 
 pub fn finite_or_null(x: f64) -> serde_json::Value {

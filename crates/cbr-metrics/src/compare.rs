@@ -237,25 +237,21 @@ pub fn compare_images(
     let ok = |i: usize| valid.as_ref().is_none_or(|v| v[i]);
 
     // Pointwise sums in one pass: display squared error, linear squared and relative error.
-    let (sd, sl, srel, count) = (0..n)
-        .into_par_iter()
-        .filter(|&i| ok(i))
-        .map(|i| {
-            let (a, b) = (rd(r.pixel(i)), td(t.pixel(i)));
-            let (la, lb) = (rl(r.pixel(i)), tl(t.pixel(i)));
-            let mut acc = (0.0f64, 0.0f64, 0.0f64, 3usize);
-            for c in 0..3 {
-                acc.0 += f64::from(b[c] - a[c]).powi(2);
-                let d2 = f64::from(lb[c] - la[c]).powi(2);
-                acc.1 += d2;
-                acc.2 += d2 / (f64::from(la[c]).powi(2) + f64::from(o.relmse_eps));
-            }
-            acc
-        })
-        .reduce(
-            || (0.0, 0.0, 0.0, 0),
-            |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2, a.3 + b.3),
-        );
+    // Added in fixed chunks, in order: the same sums whatever the threads (deterministic).
+    let (sd, sl, srel, count) = ordered_sum(n, (0.0f64, 0.0f64, 0.0f64, 0usize), |acc, i| {
+        if !ok(i) {
+            return;
+        }
+        let (a, b) = (rd(r.pixel(i)), td(t.pixel(i)));
+        let (la, lb) = (rl(r.pixel(i)), tl(t.pixel(i)));
+        for c in 0..3 {
+            acc.0 += f64::from(b[c] - a[c]).powi(2);
+            let d2 = f64::from(lb[c] - la[c]).powi(2);
+            acc.1 += d2;
+            acc.2 += d2 / (f64::from(la[c]).powi(2) + f64::from(o.relmse_eps));
+        }
+        acc.3 += 3;
+    });
     let mean = |s: f64| (count > 0).then(|| s / count as f64);
     let psnr = wants(Metric::Psnr)
         .then(|| {
@@ -384,14 +380,36 @@ pub fn mean_abs_change(now: &Rgb, before: &Rgb) -> Result<f64, MetricsError> {
         )));
     }
     let n = now.width * now.height;
-    let sum: f64 = (0..n)
-        .into_par_iter()
-        .map(|i| {
-            let (a, b) = (now.pixel(i), before.pixel(i));
-            f64::from((a[0] - b[0]).abs() + (a[1] - b[1]).abs() + (a[2] - b[2]).abs())
-        })
-        .sum();
+    let (sum, ..) = ordered_sum(n, (0.0f64, 0.0, 0.0, 0), |acc, i| {
+        let (a, b) = (now.pixel(i), before.pixel(i));
+        acc.0 += f64::from((a[0] - b[0]).abs() + (a[1] - b[1]).abs() + (a[2] - b[2]).abs());
+    });
     Ok(sum / (3 * n) as f64)
+}
+
+/// Sums over pixels 0..n: `add` accumulates one pixel into a chunk's sums; chunks of a fixed
+/// size run in parallel and are added in order, so the result does not depend on how rayon
+/// splits the work (a parallel `sum`/`reduce` of floats does: its last bits change from run to
+/// run, and bench rows would not be bit for bit the same).
+fn ordered_sum(
+    n: usize,
+    zero: (f64, f64, f64, usize),
+    add: impl Fn(&mut (f64, f64, f64, usize), usize) + Sync,
+) -> (f64, f64, f64, usize) {
+    const CHUNK: usize = 4096;
+    let parts: Vec<(f64, f64, f64, usize)> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut acc = zero;
+            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                add(&mut acc, i);
+            }
+            acc
+        })
+        .collect();
+    parts
+        .into_iter()
+        .fold(zero, |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2, a.3 + b.3))
 }
 
 /// One frame of a sequence comparison.
@@ -517,6 +535,32 @@ pub fn compare_sequences(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 56 (merged shards equal the unsharded run bit for bit): the pixel sums are the
+    /// same bits whatever the number of threads.
+    #[test]
+    fn pixel_sums_do_not_depend_on_the_threads() {
+        let sum = || {
+            ordered_sum(300_000, (0.0, 0.0, 0.0, 0), |acc, i| {
+                acc.0 += (i as f64 * 0.37).sin() * 1e6 + 1e-3;
+                acc.3 += 1;
+            })
+        };
+        let with = |threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(sum)
+        };
+        let one = with(1);
+        assert_eq!(one.3, 300_000);
+        for t in [2, 3, 8] {
+            for _ in 0..4 {
+                assert_eq!(with(t).0.to_bits(), one.0.to_bits(), "{t} threads");
+            }
+        }
+    }
     use crate::planes::Rgb;
 
     fn img(w: usize, h: usize, f: impl Fn(usize) -> f32, enc: Encoding) -> InputImage {

@@ -26,7 +26,36 @@ pub fn stop_writes() {
     std::mem::forget(guard);
 }
 
-/// Runs `write` on a temporary path beside `path`, then renames it into place. After
+/// This machine's host name (`/proc/sys/kernel/hostname`, else `$HOSTNAME`, else `host`): what
+/// tells writers on different machines sharing one folder apart.
+pub fn hostname() -> String {
+    std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .ok()
+        .or_else(|| std::env::var("HOSTNAME").ok())
+        .map(|h| h.trim().to_string())
+        .filter(|h| !h.is_empty())
+        .unwrap_or_else(|| "host".into())
+}
+
+/// A name no other write in flight has, on any machine writing to the same folder: host, process,
+/// and a number that only grows within the process (threads included).
+pub fn unique_suffix() -> String {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let host: String = hostname()
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    format!("{host}-{}-{n}", std::process::id())
+}
+
+/// Runs `write` on a temporary path beside `path` (a name unique to this write: [`unique_suffix`]), then renames it into place. After
 /// [`stop_writes`] it waits forever (the process is exiting).
 pub fn write_atomic(
     path: &Path,
@@ -37,7 +66,7 @@ pub fn write_atomic(
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
+    let tmp = path.with_file_name(format!(".{name}.tmp-{}", unique_suffix()));
     let err = |msg: String| IoError::Write {
         path: path.to_path_buf(),
         msg,

@@ -6,9 +6,20 @@
 //! branches the defines exclude keep the key), the device and
 //! its driver, and the cache format. An entry is one file `<blake3 key>.cbrf`: a header, the
 //! layers, and a blake3 checksum of both; an entry that fails the checksum or does not parse is
-//! reported and recomputed. Writes go to a temporary name and are renamed.
+//! reported and recomputed.
+//!
+//! Many processes on many machines may share one cache folder (a sharded bench on a cluster,
+//! docs/cluster.md). An entry is written under a temporary name unique to the writer (host,
+//! process, sequence) and renamed into place, so a reader sees a whole entry or none, and two
+//! writers of one key leave one whole entry (the last rename). A process that misses an entry
+//! claims it first (`<key>.cbrf.claim`, created exclusively, holding host, process and time)
+//! and renders it; a process that misses an entry another live process has claimed waits for
+//! it, polling, at most [`wait_bound`] (`CBR_CACHE_WAIT_S`, default 1800 s), then renders it
+//! itself. A claim whose process is gone (same host, no such process) is stale: the frame is
+//! rendered at once. Storing an entry removes its claim.
 
 use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
 
 use cbr_gpu::{Gpu, GpuError, Result, Shaders};
 use cbr_scene::Scene;
@@ -134,41 +145,135 @@ impl FrameCache {
         self.dir.join(format!("{}.cbrf", key.0))
     }
 
-    /// The cached frame, or `None` when absent or corrupt (then reported and recomputed).
+    /// The cached frame; `None` when it is absent or corrupt (reported), and then this process
+    /// has claimed it (or another's claim went stale or past [`wait_bound`]): render it and
+    /// [`FrameCache::store`] it. Waits while another live process holds its claim.
     pub fn load(&self, key: &FrameKey, frame: u32, time: f64) -> Option<FrameOutput> {
         let path = self.path(key);
-        let bytes = std::fs::read(&path).ok()?;
-        match decode(&bytes) {
-            Ok(mut out) => {
-                out.index = frame;
-                out.time = time;
-                out.cached = Some(path);
-                Some(out)
-            }
-            Err(why) => {
-                tracing::warn!(
-                    "cache entry {} is corrupt ({why}): recomputing",
-                    path.display()
-                );
-                eprintln!(
-                    "warning: cache entry {} is corrupt ({why}): recomputing",
-                    path.display()
-                );
-                None
-            }
-        }
+        let mut out = fetch(&path, wait_bound())?;
+        out.index = frame;
+        out.time = time;
+        out.cached = Some(path);
+        Some(out)
     }
 
-    /// Stores a frame; returns its path (a failed write is reported, not fatal). The write is
-    /// cbr's atomic one (temporary name, rename), which an interrupt lets finish.
+    /// Stores a frame; returns its path (a failed write is reported, not fatal), and releases
+    /// the frame's claim.
     pub fn store(&self, key: &FrameKey, out: &FrameOutput) -> Option<PathBuf> {
-        let path = self.path(key);
-        match cbr_metrics::io::write_bytes(&path, &encode(out)) {
-            Ok(()) => Some(path),
-            Err(e) => {
-                tracing::warn!("cannot write cache entry: {e}");
-                None
+        put(&self.path(key), out)
+    }
+}
+
+/// How long a reader waits for a frame another live process has claimed before rendering it
+/// itself: `CBR_CACHE_WAIT_S` seconds, default 1800 (an `ssaa:16` frame of Sibenik at 1280x720
+/// takes about 300 s on lavapipe).
+pub fn wait_bound() -> Duration {
+    let s = std::env::var("CBR_CACHE_WAIT_S")
+        .ok()
+        .and_then(|v| v.trim().parse::<u64>().ok())
+        .unwrap_or(1800);
+    Duration::from_secs(s)
+}
+
+fn claim_path(entry: &Path) -> PathBuf {
+    let mut p = entry.as_os_str().to_owned();
+    p.push(".claim");
+    PathBuf::from(p)
+}
+
+/// Whether a claim is no reason to wait: it names this host and either this process (a claim it
+/// left itself) or a process that does not exist here (its holder died). Another host's claim is
+/// always waited for (until [`wait_bound`]).
+fn claim_is_stale(text: &str) -> bool {
+    let mut parts = text.split_whitespace();
+    let (Some(host), Some(pid)) = (parts.next(), parts.next()) else {
+        // Being written right now (created, not yet filled): live.
+        return false;
+    };
+    host == cbr_metrics::io::hostname()
+        && pid.parse::<u32>().is_ok_and(|pid| {
+            pid == std::process::id() || !Path::new(&format!("/proc/{pid}")).exists()
+        })
+}
+
+/// The entry at `path`, or `None` when the caller is to render it (absent or corrupt and now
+/// claimed by the caller; or its claim stale, or held longer than `wait`).
+pub fn fetch(path: &Path, wait: Duration) -> Option<FrameOutput> {
+    let started = Instant::now();
+    let claim = claim_path(path);
+    let mut poll = Duration::from_millis(20);
+    loop {
+        if let Ok(bytes) = std::fs::read(path) {
+            match decode(&bytes) {
+                Ok(out) => return Some(out),
+                Err(why) => {
+                    tracing::warn!("cache entry {} is corrupt ({why})", path.display());
+                    eprintln!(
+                        "warning: cache entry {} is corrupt ({why}): recomputing",
+                        path.display()
+                    );
+                    return None;
+                }
             }
+        }
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&claim)
+        {
+            Ok(mut f) => {
+                use std::io::Write;
+                let now = std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .map(|d| d.as_secs())
+                    .unwrap_or(0);
+                let host = cbr_metrics::io::hostname();
+                let _ = writeln!(f, "{host} {} {now}", std::process::id());
+                // The entry may have landed between the read and the claim.
+                if let Some(out) = std::fs::read(path).ok().and_then(|b| decode(&b).ok()) {
+                    let _ = std::fs::remove_file(&claim);
+                    return Some(out);
+                }
+                return None;
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                let holder = std::fs::read_to_string(&claim).unwrap_or_default();
+                if claim_is_stale(&holder) {
+                    eprintln!(
+                        "cache: the claim on {} is stale ({}): rendering it here",
+                        path.display(),
+                        holder.trim()
+                    );
+                    return None;
+                }
+                if started.elapsed() >= wait {
+                    eprintln!(
+                        "cache: waited {:.0} s for {} (claimed by {}): rendering it here",
+                        wait.as_secs_f64(),
+                        path.display(),
+                        holder.trim()
+                    );
+                    return None;
+                }
+                std::thread::sleep(poll);
+                poll = (poll * 2).min(Duration::from_millis(500));
+            }
+            // A folder this process cannot create files in: render without claiming.
+            Err(_) => return None,
+        }
+    }
+}
+
+/// Writes an entry under a unique temporary name, renames it into place, and removes its claim.
+/// The write is cbr's atomic one, which an interrupt lets finish.
+pub fn put(path: &Path, out: &FrameOutput) -> Option<PathBuf> {
+    let written = cbr_metrics::io::write_bytes(path, &encode(out));
+    let _ = std::fs::remove_file(claim_path(path));
+    match written {
+        Ok(()) => Some(path.to_path_buf()),
+        Err(e) => {
+            tracing::warn!("cannot write cache entry: {e}");
+            None
         }
     }
 }
@@ -247,6 +352,185 @@ fn decode(b: &[u8]) -> std::result::Result<FrameOutput, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A frame that depends on nothing but `k` (what a lone run of key `k` would store).
+    fn frame_of(k: u32) -> FrameOutput {
+        let (w, h) = (64u32, 36u32);
+        let n = (w * h) as usize;
+        let v = |i: usize, c: u32| ((i as u32).wrapping_mul(2654435761) ^ (k * 97 + c)) % 4093;
+        FrameOutput::new(
+            w,
+            h,
+            (0..4 * n)
+                .map(|i| f16::from_f32(v(i, 1) as f32 / 64.0))
+                .collect(),
+            (0..n).map(|i| v(i, 2) as f32).collect(),
+            (0..n)
+                .map(|i| [v(i, 3) as f32, -(v(i, 4) as f32)])
+                .collect(),
+            (0..n).map(|i| [k, v(i, 5)]).collect(),
+        )
+    }
+
+    fn same(a: &FrameOutput, b: &FrameOutput) -> bool {
+        (
+            a.width,
+            a.height,
+            &a.color,
+            &a.depth,
+            &a.velocity,
+            &a.ids,
+            &a.coverage,
+        ) == (
+            b.width,
+            b.height,
+            &b.color,
+            &b.depth,
+            &b.velocity,
+            &b.ids,
+            &b.coverage,
+        )
+    }
+
+    const CHILD: &str = "CBR_CACHE_TEST_CHILD";
+    const KEYS: u32 = 40;
+    const WRITES: u32 = 125;
+
+    /// One of the 8 processes of `many_processes_share_one_cache`: in `raw/`, 125 writes of
+    /// overlapping keys, each followed by a read of another key; in `claimed/`, the same keys
+    /// through the claims (fetch, render on a miss, store). Prints what it saw.
+    fn child(dir: &Path, me: u32) {
+        let (mut corrupt, mut wrong, mut renders, mut hits) = (0, 0, 0, 0);
+        let key = |i: u32| (me * 7 + i * 3) % KEYS;
+        let entry = |sub: &str, k: u32| dir.join(sub).join(format!("{k:04}.cbrf"));
+        for i in 0..WRITES {
+            put(&entry("raw", key(i)), &frame_of(key(i)));
+            let k = key(i + 11);
+            if let Ok(b) = std::fs::read(entry("raw", k)) {
+                match decode(&b) {
+                    Ok(f) if same(&f, &frame_of(k)) => {}
+                    Ok(_) => wrong += 1,
+                    Err(_) => corrupt += 1,
+                }
+            }
+        }
+        for i in 0..WRITES {
+            let k = key(i);
+            match fetch(&entry("claimed", k), Duration::from_secs(60)) {
+                Some(f) if same(&f, &frame_of(k)) => hits += 1,
+                Some(_) => wrong += 1,
+                None => {
+                    // "Rendering" takes a while, so that others find the claim.
+                    std::thread::sleep(Duration::from_millis(5));
+                    put(&entry("claimed", k), &frame_of(k));
+                    renders += 1;
+                }
+            }
+        }
+        println!("RESULT {corrupt} {wrong} {renders} {hits}");
+    }
+
+    /// Issue 56: 8 processes writing and reading overlapping keys of one folder at once: no
+    /// read finds a partial or corrupt entry, every entry left is the lone run's frame, no
+    /// temporary file or claim is left, and with the claims every key is rendered exactly once.
+    #[test]
+    fn many_processes_share_one_cache() {
+        if let Some(dir) = std::env::var_os(CHILD) {
+            let me = std::env::var("CBR_CACHE_TEST_INDEX")
+                .unwrap()
+                .parse()
+                .unwrap();
+            child(Path::new(&dir), me);
+            return;
+        }
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir_all(dir.path().join("raw")).unwrap();
+        std::fs::create_dir_all(dir.path().join("claimed")).unwrap();
+        let exe = std::env::current_exe().unwrap();
+        let children: Vec<_> = (0..8)
+            .map(|i| {
+                std::process::Command::new(&exe)
+                    .args(["--exact", "cache::tests::many_processes_share_one_cache"])
+                    .args(["--nocapture", "--test-threads", "1"])
+                    .env(CHILD, dir.path())
+                    .env("CBR_CACHE_TEST_INDEX", i.to_string())
+                    .stdout(std::process::Stdio::piped())
+                    .spawn()
+                    .unwrap()
+            })
+            .collect();
+        let mut total = [0u32; 4];
+        for c in children {
+            let out = c.wait_with_output().unwrap();
+            assert!(out.status.success());
+            let text = String::from_utf8_lossy(&out.stdout);
+            // libtest prints the test's name on the same line.
+            let line = text.split("RESULT ").nth(1).and_then(|t| t.lines().next());
+            let line = line.expect("the child's counts");
+            for (t, v) in total.iter_mut().zip(line.split_whitespace()) {
+                *t += v.parse::<u32>().unwrap();
+            }
+        }
+        let [corrupt, wrong, renders, hits] = total;
+        eprintln!(
+            "8 processes, {} raw writes: {corrupt} corrupt and {wrong} wrong reads; claimed: {renders} renders, {hits} hits",
+            8 * WRITES
+        );
+        assert_eq!((corrupt, wrong), (0, 0));
+        // Every key of the claimed folder was rendered once, then read.
+        assert_eq!(renders, KEYS);
+        assert_eq!(hits, 8 * WRITES - KEYS);
+        for sub in ["raw", "claimed"] {
+            let mut n = 0;
+            for e in std::fs::read_dir(dir.path().join(sub)).unwrap() {
+                let p = e.unwrap().path();
+                let name = p.file_name().unwrap().to_string_lossy().into_owned();
+                let k: u32 = name
+                    .strip_suffix(".cbrf")
+                    .unwrap_or_else(|| panic!("{sub}/{name} left behind"))
+                    .parse()
+                    .unwrap();
+                let f = decode(&std::fs::read(&p).unwrap()).expect("a whole entry");
+                assert!(same(&f, &frame_of(k)), "{sub}/{name}");
+                n += 1;
+            }
+            assert_eq!(n, KEYS, "{sub}");
+        }
+    }
+
+    /// A claim left by a process that is gone (this host, no such pid) is not waited for; one
+    /// from another host is waited for up to the bound; storing the entry ends a live wait.
+    #[test]
+    fn stale_claims_end_at_once_and_live_ones_at_the_bound() {
+        let dir = tempfile::tempdir().unwrap();
+        let entry = dir.path().join("k.cbrf");
+        let claim = claim_path(&entry);
+        let host = cbr_metrics::io::hostname();
+        std::fs::write(&claim, format!("{host} 4000000 0\n")).unwrap();
+        let t = Instant::now();
+        assert!(fetch(&entry, Duration::from_secs(30)).is_none());
+        assert!(
+            t.elapsed() < Duration::from_secs(5),
+            "no wait for a dead process"
+        );
+        std::fs::write(&claim, "elsewhere 1 0\n").unwrap();
+        let t = Instant::now();
+        assert!(fetch(&entry, Duration::from_millis(600)).is_none());
+        assert!(
+            t.elapsed() >= Duration::from_millis(600),
+            "waited for the bound"
+        );
+        // Another process stores the entry while this one waits.
+        let (e, f) = (entry.clone(), frame_of(3));
+        let writer = std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(300));
+            put(&e, &f);
+        });
+        let got = fetch(&entry, Duration::from_secs(30)).expect("the stored frame");
+        writer.join().unwrap();
+        assert!(same(&got, &frame_of(3)));
+        assert!(!claim.exists(), "storing removed the claim");
+    }
 
     #[test]
     fn frames_round_trip_and_corruption_is_detected() {

@@ -63,8 +63,12 @@ impl BenchDir {
     /// The reference's own snapshot at `w`x`h` (`reference_images`, path relative to the
     /// folder), with key `image` or `exr`. Older files have none: the native row's images are the
     /// reference.
-    pub(crate) fn reference_file(&self, w: u64, h: u64, key: &str) -> Option<&str> {
-        self.json["reference_images"][format!("{w}x{h}")][key].as_str()
+    /// Runs of several scenes key it `SCENE/WxH`.
+    pub(crate) fn reference_file(&self, scene: &str, w: u64, h: u64, key: &str) -> Option<&str> {
+        let refs = &self.json["reference_images"];
+        refs[format!("{scene}/{w}x{h}")][key]
+            .as_str()
+            .or_else(|| refs[format!("{w}x{h}")][key].as_str())
     }
 
     /// Rows grouped by (scene, width, height), in order of appearance.

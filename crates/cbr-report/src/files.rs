@@ -98,8 +98,8 @@ pub(crate) fn raw_files(ctx: &Ctx, html: &mut String, b: &BenchDir, g: &Group) {
         ctx.link(&b.dir, "bench.json"),
         ctx.link(&b.dir, "bench.csv")
     );
-    let (_, w, h) = g.key;
-    if let Some(exr) = b.reference_file(w, h, "exr") {
+    let (scene, w, h) = (&g.key.0, g.key.1, g.key.2);
+    if let Some(exr) = b.reference_file(scene, w, h, "exr") {
         let _ = write!(
             html,
             "<li><a href=\"{}\">{} (reference)</a> (EXR, all layers)</li>",

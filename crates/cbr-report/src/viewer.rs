@@ -34,13 +34,13 @@ pub(crate) fn panels(
     b: &BenchDir,
     g: &Group,
 ) -> Result<Option<Panels>> {
-    let (_, w, h) = g.key;
+    let (scene, w, h) = (&g.key.0, g.key.1, g.key.2);
     let reference_name = format!("{} (reference)", g.reference);
     let mut panels: Vec<(String, String)> = Vec::new(); // (name, image id)
     let mut techs: Vec<(String, String)> = Vec::new();
     let mut reference: Option<String> = None;
     let mut frame = None;
-    if let Some(img) = b.reference_file(w, h, "image") {
+    if let Some(img) = b.reference_file(scene, w, h, "image") {
         let id = ctx.image(bench, &b.dir, img)?;
         reference = Some(id.clone());
         panels.push((reference_name.clone(), id));

@@ -3,15 +3,17 @@
 use std::path::PathBuf;
 
 use anyhow::{Result, anyhow, bail};
-use cbr_bench::{BenchOptions, SweepFile, parse_resolution};
+use cbr_bench::{BenchOptions, Shard, SweepFile, parse_resolution};
 use cbr_render::Spec;
 use cbr_scene::desc::{line_of, parse_toml};
 use toml::Spanned;
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
-    /// Scene: a .toml description, an .obj file, or builtin:NAME (`cbr info` lists them).
-    scene: String,
+    /// Scene: a .toml description, an .obj file, or builtin:NAME (`cbr info` lists them);
+    /// without one, the sweep file's `scenes`.
+    #[arg(required_unless_present_any = ["sweep", "merge"])]
+    scene: Option<String>,
     /// Configurations, comma-separated technique specs (`cbr info` lists the registered ones):
     /// native, ssaa:N, msaa:N[:sample][:hdr], upscale:bilinear|bicubic,
     /// checkerboard:LAYOUT[:MODE][:pixel|quad][:8|16][:fp16][:prepass][:locations] (MODE: ours,
@@ -75,15 +77,27 @@ pub struct BenchArgs {
     /// Validation layers on (slower; messages counted in bench.json).
     #[arg(long)]
     validation: bool,
+    /// Render only shard K of the run split N ways (K from 0 to N-1): reference frames, then
+    /// configurations x resolutions x scenes, balanced by estimated cost; bench.json holds the
+    /// whole plan. Merge the N folders with --merge (docs/cluster.md).
+    #[arg(long, value_name = "K/N")]
+    shard: Option<String>,
+    /// The frame cache's folder, shared by the shards of a run [default: $CBR_CACHE_DIR, else
+    /// $XDG_CACHE_HOME/cbr, else ~/.cache/cbr].
+    #[arg(long, value_name = "DIR")]
+    cache_dir: Option<PathBuf>,
+    /// Merge these shard folders into -o (bench.json, bench.csv, the images) instead of running.
+    #[arg(long, value_name = "DIR", num_args = 1.., conflicts_with_all = ["scene", "sweep", "shard"])]
+    merge: Vec<PathBuf>,
     #[arg(short, long, default_value = "out/bench")]
     out: PathBuf,
 }
 
 /// The sweep file.
 impl BenchArgs {
-    fn options(&self) -> BenchOptions {
-        BenchOptions {
-            scene: self.scene.clone(),
+    fn options(&self) -> Result<BenchOptions> {
+        Ok(BenchOptions {
+            scene: self.scene.clone().unwrap_or_default(),
             techniques: self.techniques.clone(),
             width: self.width,
             height: self.height,
@@ -102,8 +116,10 @@ impl BenchArgs {
             disocclusion_frames: self.disocclusion_frames,
             device: self.device.clone(),
             validation: self.validation,
+            shard: self.shard.as_deref().map(Shard::parse).transpose()?,
+            cache_dir: self.cache_dir.clone(),
             out: self.out.clone(),
-        }
+        })
     }
 }
 
@@ -111,6 +127,7 @@ impl BenchArgs {
 /// lines (unknown keys and wrong types are found by reading it as a `cbr_bench::SweepFile`).
 #[derive(serde::Deserialize)]
 struct SweepValues {
+    scenes: Option<Vec<Spanned<String>>>,
     techniques: Option<Vec<Spanned<String>>>,
     resolutions: Option<Vec<Spanned<String>>>,
     mappings: Option<Vec<Spanned<String>>>,
@@ -142,10 +159,18 @@ fn check(a: &BenchArgs) -> Result<()> {
     if a.frames == Some(0) {
         bail!("--frames must be at least 1");
     }
+    if let Some(s) = &a.shard {
+        Shard::parse(s)?;
+    }
     check_crops(a)?;
-    let Some(path) = &a.sweep else {
-        return Ok(());
-    };
+    match &a.sweep {
+        Some(path) => check_sweep(path),
+        None => Ok(()),
+    }
+}
+
+/// A sweep file's values, each refused with the file, line and key.
+pub fn check_sweep(path: &std::path::Path) -> Result<()> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| anyhow!("{}: cannot read the sweep file: {e}", path.display()))?;
     parse_toml::<SweepFile>(&text, path)?;
@@ -157,6 +182,14 @@ fn check(a: &BenchArgs) -> Result<()> {
             line_of(&text, span.start)
         )
     };
+    for (i, sc) in v.scenes.iter().flatten().enumerate() {
+        let name = sc.get_ref();
+        let file = path.parent().unwrap_or(std::path::Path::new("")).join(name);
+        if !name.starts_with("builtin:") && !file.is_file() {
+            let msg = format!("no scene file {}", file.display());
+            return Err(at(sc.span(), &format!("scenes[{i}]"), msg));
+        }
+    }
     for (i, t) in v.techniques.iter().flatten().enumerate() {
         Spec::parse(t.get_ref()).map_err(|e| at(t.span(), &format!("techniques[{i}]"), e))?;
     }
@@ -220,10 +253,22 @@ fn check_crops(a: &BenchArgs) -> Result<()> {
 }
 
 pub fn run(a: &BenchArgs) -> Result<()> {
+    if !a.merge.is_empty() {
+        let m = cbr_bench::merge::merge(&a.merge)?;
+        cbr_bench::merge::write(&m, &a.out)?;
+        println!(
+            "{} shard folder(s), {} row(s): {}",
+            a.merge.len(),
+            m.json["rows"].as_array().map_or(0, Vec::len),
+            a.out.join("bench.json").display()
+        );
+        return Ok(());
+    }
     check(a)?;
+    let options = a.options()?;
     // A failed bench leaves no output folder it made (snapshots of a run without bench.json).
     let made = !a.out.exists();
-    let r = cbr_bench::run(&a.options()).inspect_err(|_| {
+    let r = cbr_bench::run(&options).inspect_err(|_| {
         if made && a.out.is_dir() {
             let _ = std::fs::remove_dir_all(&a.out);
         }

@@ -8,6 +8,7 @@ mod info;
 mod montage;
 mod render;
 mod report;
+mod slurm;
 
 use std::process::ExitCode;
 
@@ -47,6 +48,9 @@ enum Command {
     Bench(bench::BenchArgs),
     /// One self-contained HTML report from `cbr bench` folders.
     Report(report::ReportArgs),
+    /// A sweep as a Slurm job array of `cbr bench --shard K/N` tasks sharing one frame cache,
+    /// and a job that merges them into one bench.json and report.html (docs/cluster.md).
+    Slurm(slurm::SlurmArgs),
     /// Side-by-side strips of images (optionally one cropped window, enlarged) as one PNG.
     Montage(montage::MontageArgs),
 }
@@ -112,6 +116,7 @@ fn main() -> ExitCode {
         Command::Bench(a) => bench::run(&a),
         Command::Report(a) => report::run(&a),
         Command::Montage(a) => montage::run(&a),
+        Command::Slurm(a) => slurm::run(&a),
         Command::Compare(a) => {
             return match compare::run(&a) {
                 Ok(true) => ExitCode::SUCCESS,

@@ -7,7 +7,8 @@ use anyhow::{Context, Result, bail};
 
 #[derive(clap::Args)]
 pub struct ReportArgs {
-    /// `cbr bench` output folders (each with bench.json).
+    /// `cbr bench` output folders (each with bench.json); the shard folders of one run
+    /// (`--shard K/N`, all N of them) are merged first.
     dirs: Vec<PathBuf>,
     /// The HTML file to write.
     #[arg(short, long, default_value = "out/report.html")]
@@ -42,11 +43,29 @@ pub fn run(a: &ReportArgs) -> Result<()> {
     if a.dirs.is_empty() {
         bail!("name at least one `cbr bench` output folder");
     }
-    let benches = a
+    let mut benches = a
         .dirs
         .iter()
         .map(|d| cbr_report::BenchDir::load(d))
         .collect::<Result<Vec<_>, _>>()?;
+    // Shard folders of one run (`cbr bench --shard K/N`) are merged into one, in the place of
+    // the first; each row's images stay in its shard's folder.
+    let shards: Vec<PathBuf> = benches
+        .iter()
+        .filter(|b| cbr_bench::merge::is_shard(&b.json))
+        .map(|b| std::path::absolute(&b.dir).unwrap_or_else(|_| b.dir.clone()))
+        .collect();
+    if !shards.is_empty() {
+        let merged = cbr_bench::merge::merge(&shards)?;
+        let first = benches
+            .iter()
+            .position(|b| cbr_bench::merge::is_shard(&b.json))
+            .unwrap_or(0);
+        benches.retain(|b| !cbr_bench::merge::is_shard(&b.json));
+        let json = cbr_bench::merge::with_shard_paths(&merged);
+        let dir = shards[0].clone();
+        benches.insert(first.min(benches.len()), cbr_report::BenchDir { dir, json });
+    }
     if let Some(parent) = a.out.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent)
             .with_context(|| format!("cannot create the folder of {}", a.out.display()))?;
