@@ -141,6 +141,30 @@ pub struct EstimateCtx<'a> {
 /// or the technique's own refusal of the size.
 pub type Estimate = fn(&EstimateCtx, &[&str]) -> std::result::Result<MemoryEstimate, String>;
 
+/// What a compile-only build gets (crate::pass): the output size, the device's capabilities,
+/// and the flags `BuildCtx` carries that change which passes are built.
+#[derive(Clone, Copy)]
+pub struct PassCtx<'a> {
+    pub caps: &'a Caps,
+    pub width: u32,
+    pub height: u32,
+    pub instrument: bool,
+    pub geometry: bool,
+}
+
+/// The compute passes a technique (or post pass) builds for its parameters, each declared once
+/// (the same `decl` functions its constructor builds from), and whether its frame geometry is
+/// packed (the checkerboard resolve's: `+taa` compiles its PACKED variant).
+#[derive(Default)]
+pub struct PassList {
+    pub compute: Vec<crate::pass::ComputeDecl>,
+    pub packed_geometry: bool,
+}
+
+/// A technique's compile-only list; `Err`: the parameters are refused, or its passes are not all
+/// declared yet (named in the message).
+pub type Passes = fn(&PassCtx, &[&str]) -> std::result::Result<PassList, String>;
+
 /// One registered technique.
 pub struct Registration {
     pub name: &'static str,
@@ -156,6 +180,8 @@ pub struct Registration {
     /// The GPU memory `build` allocates (targets, per-pixel buffers, readbacks), written beside
     /// the constructor; the renderer refuses what cannot fit before anything is allocated.
     pub estimate: Estimate,
+    /// Its compute passes, for compiling without building (`cbr_render::registry::passes`).
+    pub passes: Passes,
     pub build: Build,
 }
 

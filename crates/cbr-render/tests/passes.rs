@@ -140,3 +140,77 @@ fn binds_that_do_not_fit_the_declaration_are_errors() {
     ));
     common::assert_clean(&gpu);
 }
+
+/// The compile-only list of a spec (`registry::passes`) is exactly the compute shaders, with
+/// their defines, that building the spec's renderer compiles: rendering and the compile-only
+/// build use one list. Techniques whose passes are not all declared yet say so.
+#[test]
+fn the_compile_only_list_is_what_rendering_builds() {
+    let gpu = common::gpu();
+    let shaders = cbr_render::shader_library();
+    let scene = common::demo(64, 36);
+    let specs = [
+        "native",
+        "ssaa:2",
+        "msaa:4",
+        "msaa:4:hdr",
+        "checkerboard:rotated:ours",
+        "checkerboard:split:pq4k:prepass",
+        "checkerboard:masked:none",
+        "checkerboard:rotated:ours:pixel:16+taa",
+        "upscale:bicubic+fxaa",
+        "interlaced:debug",
+        "deferred",
+        "deferred:vpls=64",
+        "native+taa:inside+sharpen",
+    ];
+    for text in specs {
+        let settings = cbr_render::RenderSettings::parse(64, 36, text).expect("spec");
+        let ctx = cbr_render::technique::PassCtx {
+            caps: gpu.caps(),
+            width: 64,
+            height: 36,
+            instrument: false,
+            geometry: false,
+        };
+        let mut listed: Vec<(String, Vec<(String, String)>)> =
+            cbr_render::registry::passes(&settings.spec, &ctx)
+                .unwrap_or_else(|e| panic!("{text}: {e}"))
+                .iter()
+                .map(|d| {
+                    let mut defines = d.all_defines();
+                    defines.sort();
+                    (d.shader.to_string(), defines)
+                })
+                .collect();
+        listed.sort();
+        listed.dedup();
+        let mark = shaders.request_mark();
+        drop(
+            cbr_render::Renderer::new(&gpu, &shaders, &scene, settings)
+                .unwrap_or_else(|e| panic!("{text}: {e}")),
+        );
+        let built: Vec<_> = shaders
+            .requests_since(mark)
+            .into_iter()
+            .filter(|(path, _)| path.ends_with(".comp"))
+            .collect();
+        assert_eq!(
+            listed, built,
+            "`{text}`: the compile-only list and the build differ"
+        );
+    }
+    for text in ["analytic", "interleaved:4x4"] {
+        let spec = cbr_render::Spec::parse(text).expect("spec");
+        let ctx = cbr_render::technique::PassCtx {
+            caps: gpu.caps(),
+            width: 64,
+            height: 36,
+            instrument: false,
+            geometry: false,
+        };
+        let err = cbr_render::registry::passes(&spec, &ctx).expect_err("not declared yet");
+        assert!(err.contains("not declared yet"), "{err}");
+    }
+    common::assert_clean(&gpu);
+}

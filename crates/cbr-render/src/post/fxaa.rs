@@ -23,6 +23,10 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
     check: |p| FxaaConfig::parse(p).map(|_| ()),
     geometry: false,
     estimate: |ctx, _| crate::pass::estimate(&resources(ctx.width, ctx.height), "fxaa"),
+    passes: |p, _| {
+        FxaaConfig::parse(p)?;
+        Ok(decls().to_vec())
+    },
     build: |ctx, p| {
         let c = FxaaConfig::parse(p).map_err(|e| super::refused("fxaa", p, e))?;
         Ok(Box::new(Fxaa::new(ctx, c)?))

@@ -84,5 +84,7 @@ pub struct PostRegistration {
     pub geometry: bool,
     /// The GPU memory `build` allocates (crate::memory), written beside the constructor.
     pub estimate: fn(&EstimateCtx, &[&str]) -> MemoryEstimate,
+    /// Its compute passes for the parameters, given whether the technique's geometry is packed.
+    pub passes: fn(&[&str], bool) -> std::result::Result<Vec<crate::pass::ComputeDecl>, String>,
     pub build: PostBuild,
 }

@@ -16,6 +16,10 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
     check: |p| parse(p).map(|_| ()),
     geometry: false,
     estimate: |ctx, _| crate::pass::estimate(&resources(ctx.width, ctx.height), "sharpen"),
+    passes: |p, _| {
+        parse(p)?;
+        Ok(vec![decl()])
+    },
     build: |ctx, p| {
         let amount = parse(p).map_err(|e| super::refused("sharpen", p, e))?;
         Ok(Box::new(Sharpen::new(ctx, amount)?))

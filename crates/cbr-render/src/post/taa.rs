@@ -40,6 +40,7 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
     check: |p| TaaConfig::parse(p).map(|_| ()),
     geometry: true,
     estimate: |ctx, _| crate::pass::estimate(&resources(ctx.width, ctx.height), "taa"),
+    passes: |p, packed| Ok(vec![decl(TaaConfig::parse(p)?.inside, packed)]),
     build: |ctx, p| {
         let c = TaaConfig::parse(p).map_err(|e| super::refused("taa", p, e))?;
         Ok(Box::new(Taa::new(ctx, c)?))

@@ -28,6 +28,12 @@ pub const REGISTRATION: Registration = Registration {
     check: |p| parse(p).map(|_| ()),
     needs,
     estimate: |ctx, p| Ok(Msaa::estimate(parse(p)?, ctx.width, ctx.height)),
+    passes: |_, p| {
+        Ok(crate::technique::PassList {
+            compute: vec![decl(parse(p)?)],
+            packed_geometry: false,
+        })
+    },
     build: |ctx, p| {
         let c = parse(p).map_err(|e| crate::technique::refused("msaa", p, e))?;
         Ok(Box::new(Msaa::new(ctx, c)?))

@@ -18,6 +18,7 @@ pub const REGISTRATION: Registration = Registration {
     check: |p| no_params("native", p),
     needs: |_, _| None,
     estimate: |ctx, _| Ok(Native::estimate(ctx.width, ctx.height)),
+    passes: |_, _| Ok(crate::technique::PassList::default()),
     build: |ctx, _| Ok(Box::new(Native::new(ctx)?)),
 };
 

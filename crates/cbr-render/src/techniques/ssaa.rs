@@ -29,6 +29,13 @@ pub const REGISTRATION: Registration = Registration {
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
     estimate: |ctx, _| Ok(Ssaa::estimate(ctx.width, ctx.height)),
+    passes: |_, p| {
+        parse(p)?;
+        Ok(crate::technique::PassList {
+            compute: vec![decl()],
+            packed_geometry: false,
+        })
+    },
     build: |ctx, p| {
         let c = parse(p).map_err(|e| crate::technique::refused("ssaa", p, e))?;
         Ok(Box::new(Ssaa::new(ctx, c)?))

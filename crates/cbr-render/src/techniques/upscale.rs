@@ -21,6 +21,12 @@ pub const REGISTRATION: Registration = Registration {
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
     estimate: |ctx, _| Ok(Upscale::estimate(ctx.width, ctx.height)),
+    passes: |_, p| {
+        Ok(crate::technique::PassList {
+            compute: vec![decl(parse(p)?)],
+            packed_geometry: false,
+        })
+    },
     build: |ctx, p| {
         let filter = parse(p).map_err(|e| crate::technique::refused("upscale", p, e))?;
         Ok(Box::new(Upscale::new(ctx, filter)?))

@@ -64,6 +64,10 @@ pub const REGISTRATION: Registration = Registration {
             ctx.caps.max_storage_buffer_range,
         ))
     },
+    passes: |_, p| {
+        parse(p)?;
+        Err("analytic's passes are not declared yet (crate::pass; issue 53 continues)".into())
+    },
     build: |ctx, p| {
         let c = parse(p).map_err(|e| crate::technique::refused("analytic", p, e))?;
         Ok(Box::new(Analytic::new(ctx, c)?))

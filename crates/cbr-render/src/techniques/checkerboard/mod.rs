@@ -55,6 +55,7 @@ pub const REGISTRATION: Registration = Registration {
             ctx.instrument,
         ))
     },
+    passes: passes,
     build: |ctx, p| {
         let c = CheckerboardConfig::parse(p)
             .map_err(|e| crate::technique::refused("checkerboard", p, e))?;
@@ -76,6 +77,35 @@ pub struct Checkerboard {
     unpack: UnpackPass,
     resolve: Option<Resolve>,
     prepass: Option<IdPass>,
+}
+
+/// The compute passes [`Checkerboard::new`] builds: the unpack, and with a resolve the resolve
+/// (its copy floor with `instrument`, its velocity output with `geometry`).
+fn passes(
+    ctx: &crate::technique::PassCtx,
+    p: &[&str],
+) -> std::result::Result<crate::technique::PassList, String> {
+    let config = CheckerboardConfig::parse(p)?;
+    let mut plan = LayoutPlan::new(config.layout, ctx.width, ctx.height, 0);
+    if config.locations {
+        plan = plan.with_sample_locations();
+    }
+    let mut compute = vec![unpack::decl(&plan)];
+    if let Some(rs) = &config.resolve {
+        let rs = ResolveSettings {
+            bandwidth_floor: ctx.instrument,
+            velocity: ctx.geometry,
+            ..*rs
+        };
+        compute.push(crate::resolve::decl(&rs, &plan, config.prepass));
+        if ctx.instrument {
+            compute.push(crate::resolve::copy_floor_decl("resolve.copy_floor"));
+        }
+    }
+    Ok(crate::technique::PassList {
+        compute,
+        packed_geometry: config.resolve.is_some(),
+    })
 }
 
 impl Checkerboard {

@@ -42,6 +42,17 @@ pub const REGISTRATION: Registration = Registration {
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
     estimate: |ctx, p| Ok(Deferred::estimate(&parse(p)?, ctx.width, ctx.height)),
+    passes: |_, p| {
+        let c = parse(p)?;
+        let mut compute = vec![lighting::decl(None)];
+        if c.vpls > 0 {
+            compute.push(rsm::vpl_decl());
+        }
+        Ok(crate::technique::PassList {
+            compute,
+            packed_geometry: false,
+        })
+    },
     build: |ctx, p| {
         let c = parse(p).map_err(|e| crate::technique::refused("deferred", p, e))?;
         Ok(Box::new(Deferred::new(ctx, c)?))

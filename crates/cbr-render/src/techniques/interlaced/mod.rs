@@ -28,6 +28,12 @@ pub const REGISTRATION: Registration = Registration {
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
     estimate: |ctx, p| Ok(Interlaced::estimate(&parse(p)?, ctx.width, ctx.height)),
+    passes: |_, p| {
+        Ok(crate::technique::PassList {
+            compute: vec![resolve::decl(&parse(p)?)],
+            packed_geometry: false,
+        })
+    },
     build: |ctx, p| {
         let s = parse(p).map_err(|e| crate::technique::refused("interlaced", p, e))?;
         Ok(Box::new(Interlaced::new(ctx, s)?))
