@@ -55,7 +55,7 @@ pub const REGISTRATION: Registration = Registration {
             ctx.instrument,
         ))
     },
-    passes: passes,
+    passes,
     build: |ctx, p| {
         let c = CheckerboardConfig::parse(p)
             .map_err(|e| crate::technique::refused("checkerboard", p, e))?;
