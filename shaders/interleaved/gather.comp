@@ -7,7 +7,7 @@
 // same way differs from the G-buffer (position and normal, bit for bit: gather(split(x)) == x at
 // every pixel), + 2 with SEED where the pixel is an edge by the seed's test (seed_edges.glsl), which
 // the seed's blur then reads once per tap.
-layout(local_size_x = 64, local_size_y = 1) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 #include "../inc/scene_types.glsl"
 #include "interleave.glsl"
 #ifdef SEED

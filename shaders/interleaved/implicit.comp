@@ -4,7 +4,7 @@
 // own position (x mod M, y mod N) straight from the G-buffer: the estimates the split, shade and
 // gather passes produce, without moving the G-buffer into sub-images (neighbouring pixels of a
 // group read different subsets). With DIRECT, the point-light subset too (shade.comp).
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 #include "../inc/scene_types.glsl"
 #include "interleave.glsl"
 #include "../inc/shading.glsl"

@@ -3,29 +3,50 @@
 // (i, j) holds the pixels (x, y) with x mod M = i, y mod N = j, so neighbouring texels of a
 // sub-image are M (N) pixels apart on screen (Segovia et al. 2006's "split" of the G-buffer).
 // The mosaic (M Ws x N Hs texels) is stored row by row in storage buffers of vec4, one per
-// quantity (split.rs, `Storage`).
+// quantity (split.rs, `Storage`). Each pass binds only what it uses (split.rs: its declaration),
+// so each binding is declared where its BINDING_* define exists.
+#ifdef BINDING_POSITION
 layout(set = 0, binding = BINDING_POSITION) uniform sampler2D g_position;
+#endif
+#ifdef BINDING_NORMAL
 layout(set = 0, binding = BINDING_NORMAL) uniform sampler2D g_normal;
+#endif
+#ifdef BINDING_VPLS
 layout(std430, set = 0, binding = BINDING_VPLS) readonly buffer Vpls { Vpl vpls[]; };
+#endif
+#ifdef BINDING_SPLIT_POSITION
 layout(std430, set = 0, binding = BINDING_SPLIT_POSITION) buffer SplitPosition { vec4 s_position[]; };
+#endif
+#ifdef BINDING_SPLIT_NORMAL
 layout(std430, set = 0, binding = BINDING_SPLIT_NORMAL) buffer SplitNormal { vec4 s_normal[]; };
+#endif
+#ifdef BINDING_SPLIT_IRRADIANCE
 layout(std430, set = 0, binding = BINDING_SPLIT_IRRADIANCE) buffer SplitIrradiance { vec4 s_irradiance[]; };
+#endif
 // `direct`: the scene's lights (directional first, then its point lights) and the extra point
 // lights (`points=N`), whose point lights the sub-images shade in subsets too; the specular
 // estimates beside the diffuse ones (the split mosaic's and the gathered).
+#ifdef BINDING_LIGHTS
 layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
+#endif
+#ifdef BINDING_POINTS
 layout(std430, set = 0, binding = BINDING_POINTS) readonly buffer Points { LightData points[]; };
+#endif
+#ifdef BINDING_SPLIT_SPECULAR
 layout(std430, set = 0, binding = BINDING_SPLIT_SPECULAR) buffer SplitSpecular { vec4 s_specular[]; };
+#endif
 // The full-resolution estimates: an image, as the lighting pass's filter reads them at
 // data-dependent pixels, which llvmpipe's texel fetches gather faster than buffer loads.
+#ifdef BINDING_IRRADIANCE
 layout(set = 0, binding = BINDING_IRRADIANCE, rgba32f) uniform image2D irradiance;
+#endif
+#ifdef BINDING_SPECULAR
 layout(set = 0, binding = BINDING_SPECULAR, rgba32f) uniform image2D specular;
+#endif
 
-layout(push_constant) uniform Push {
-    ivec4 size;    // W, H, Ws, Hs
-    uvec4 counts;  // x: VPLs; `direct`: y directional lights, z the scene's point lights, w extra ones
-    vec4 params;   // x: the VPL clamp c (m^2)
-} pc;
+// size: W, H, Ws, Hs; counts.x: VPLs (`direct`: y directional lights, z the scene's point
+// lights, w extra ones); params.x: the VPL clamp c (m^2).
+PUSH_CONSTANTS
 
 // The word of split texel s in the mosaic's buffers.
 uint word_of(ivec2 s) {

@@ -8,15 +8,23 @@
 // direction (P = M, then N), sigma P / 2, weights renormalised over the taps used. The alpha
 // channel carries the gather's flags of the pixel through both directions: the round trip (1)
 // and the seed's edge test (2), computed once per pixel by the gather (or implicit) pass.
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 #include "../inc/scene_types.glsl"
 #include "interleave.glsl"
 
+#ifdef BINDING_SEED_TMP
 layout(set = 0, binding = BINDING_SEED_TMP, rgba32f) uniform image2D seed_tmp;
+#endif
+#ifdef BINDING_SEED_OUT
 layout(set = 0, binding = BINDING_SEED_OUT, rgba32f) uniform image2D seed_out;
+#endif
 // DIRECT: the specular estimates, blurred with the same taps and weights.
+#ifdef BINDING_SEED_TMP_SPECULAR
 layout(set = 0, binding = BINDING_SEED_TMP_SPECULAR, rgba32f) uniform image2D seed_tmp_spec;
+#endif
+#ifdef BINDING_SEED_OUT_SPECULAR
 layout(set = 0, binding = BINDING_SEED_OUT_SPECULAR, rgba32f) uniform image2D seed_out_spec;
+#endif
 
 
 #ifdef HORIZONTAL
@@ -24,15 +32,19 @@ layout(set = 0, binding = BINDING_SEED_OUT_SPECULAR, rgba32f) uniform image2D se
 #define STEP ivec2(1, 0)
 vec4 load(ivec2 q) { return imageLoad(irradiance, q); }
 void store(ivec2 q, vec4 v) { imageStore(seed_tmp, q, v); }
+#ifdef DIRECT
 vec3 load_spec(ivec2 q) { return imageLoad(specular, q).rgb; }
 void store_spec(ivec2 q, vec3 v) { imageStore(seed_tmp_spec, q, vec4(v, 0.0)); }
+#endif
 #else
 #define PERIOD TILE_N
 #define STEP ivec2(0, 1)
 vec4 load(ivec2 q) { return imageLoad(seed_tmp, q); }
 void store(ivec2 q, vec4 v) { imageStore(seed_out, q, v); }
+#ifdef DIRECT
 vec3 load_spec(ivec2 q) { return imageLoad(seed_tmp_spec, q).rgb; }
 void store_spec(ivec2 q, vec3 v) { imageStore(seed_out_spec, q, vec4(v, 0.0)); }
+#endif
 #endif
 
 bool edge(vec4 v) { return (int(v.a) & 2) != 0; }

@@ -5,7 +5,7 @@
 // lighting pass filters; with DIRECT also point-light subset k, its diffuse term into the same
 // estimate and its specular term into s_specular (the split normal's w is the specular exponent,
 // written by the G-buffer pass). Texels without a surface (background, past the edge) get 0.
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 #include "../inc/scene_types.glsl"
 #include "interleave.glsl"
 #include "../inc/shading.glsl"

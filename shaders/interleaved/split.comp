@@ -6,7 +6,7 @@
 // sub-image row per step, and no lane divides by the sub-image's size (constant divisors only: a
 // per-lane integer division is a scalar loop on a CPU device). Texels of pixels past the screen's
 // edge hold nothing (w = 0).
-layout(local_size_x = 64, local_size_y = 1) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 #include "../inc/scene_types.glsl"
 #include "interleave.glsl"
 

@@ -481,6 +481,19 @@ impl<'a> Binds<'a> {
         self.image(read, h.read(frame)).image(write, h.write(frame))
     }
 
+    /// The entries `pass` declares: one list of a frame's resources serves several passes,
+    /// each binding (and barriering) its own.
+    pub fn only(&self, pass: &ComputePass) -> Binds<'a> {
+        Binds {
+            list: self
+                .list
+                .iter()
+                .filter(|(n, ..)| pass.decl.bindings.iter().any(|b| b.name == *n))
+                .cloned()
+                .collect(),
+        }
+    }
+
     fn set(&mut self, name: &'static str, b: Bound<'a>) {
         match self.list.iter_mut().find(|(n, ..)| *n == name) {
             Some(e) => (e.1, e.2) = (b, true),

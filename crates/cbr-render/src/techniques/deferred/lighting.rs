@@ -54,9 +54,10 @@ impl LightingPush {
     }
 }
 
-/// `interleaved`'s VPL light: the M x N sub-images' estimates gathered back to full resolution,
-/// and the filter that combines them (shaders/interleaved/filter.glsl).
-pub struct Interleaving<'a> {
+/// `interleaved`'s variant of the pass: the filter that combines the M x N sub-images'
+/// estimates (shaders/interleaved/filter.glsl) and what it reads.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InterleavedLighting {
     pub m: u32,
     pub n: u32,
     /// The SEARCH define (`ours` only): 1 looks one period beyond the window.
@@ -75,6 +76,15 @@ pub struct Interleaving<'a> {
     /// The BOX_ROWS define (`box` with the split passes): `irradiance` (and `specular`) hold
     /// each pixel's window row summed by the gather, not its own estimate.
     pub box_rows: bool,
+    /// `direct`: the point lights' specular estimates are filtered too (the DIRECT define).
+    pub direct: bool,
+    /// `debug`: the pass writes its debug bits (the DEBUG define).
+    pub debug: bool,
+}
+
+/// `interleaved`'s VPL light: the M x N sub-images' estimates gathered back to full resolution.
+pub struct Interleaving<'a> {
+    pub variant: InterleavedLighting,
     pub irradiance: &'a Image,
     /// `direct`: the point lights' specular estimates (the DIRECT define).
     pub specular: Option<&'a Image>,
@@ -92,7 +102,7 @@ pub struct LightSources<'a> {
 
 /// The lighting pass (shaders/deferred/lighting.comp): `deferred`'s, or with `interleaving`
 /// `interleaved`'s variant (the VPLs' light from the sub-image estimates).
-pub fn decl(interleaving: Option<&Interleaving>) -> ComputeDecl {
+pub fn decl(interleaving: Option<&InterleavedLighting>) -> ComputeDecl {
     let name = match interleaving {
         None => "deferred.lighting",
         Some(_) => "interleaved.lighting",
@@ -130,7 +140,7 @@ pub fn decl(interleaving: Option<&Interleaving>) -> ComputeDecl {
             // read.
             .bind(Binding::sampled("irradiance"))
             .bind(Binding::sampled("specular"));
-        if i.debug.is_some() {
+        if i.debug {
             d = d
                 .define("DEBUG", 1)
                 .bind(Binding::image("debug_bits", Use::Write));
@@ -138,7 +148,7 @@ pub fn decl(interleaving: Option<&Interleaving>) -> ComputeDecl {
         if i.box_rows {
             d = d.define("BOX_ROWS", 1);
         }
-        if i.specular.is_some() {
+        if i.direct {
             d = d.define("DIRECT", 1);
         }
     }
@@ -152,7 +162,7 @@ pub struct LightingPass {
 impl LightingPass {
     /// The pass; with `interleaving`, the VPLs' light comes from the sub-image estimates
     /// instead of every VPL at every pixel.
-    pub fn new(ctx: &BuildCtx, interleaving: Option<&Interleaving>) -> Result<LightingPass> {
+    pub fn new(ctx: &BuildCtx, interleaving: Option<&InterleavedLighting>) -> Result<LightingPass> {
         Ok(LightingPass {
             pass: decl(interleaving).build(ctx.gpu, ctx.shaders)?,
         })

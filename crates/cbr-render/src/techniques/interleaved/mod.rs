@@ -20,7 +20,7 @@ pub mod split;
 use cbr_gpu::{Access, Image, ImageDesc, Readback, Result, vk};
 
 use super::LayerReadbacks;
-use super::deferred::lighting::{Interleaving, LightingPass, LightingPush};
+use super::deferred::lighting::{InterleavedLighting, Interleaving, LightingPass, LightingPush};
 use super::deferred::lights::ManyLights;
 use super::deferred::{self, DeferredConfig, GBuffer};
 use crate::frame::{FrameOutput, InterleavedLayers};
@@ -44,11 +44,20 @@ pub const REGISTRATION: Registration = Registration {
     needs: |_, _| None,
     estimate: |ctx, p| Ok(Interleaved::estimate(&parse(p)?, ctx.width, ctx.height)),
     passes: |_, p| {
-        parse(p)?;
-        Err(
-            "interleaved's split passes are not declared yet (crate::pass; issue 53 continues)"
-                .into(),
-        )
+        let c = parse(p)?;
+        let mut compute = Vec::new();
+        if c.lights.vpls > 0 {
+            compute.push(super::deferred::rsm::vpl_decl());
+        }
+        compute.extend(split::decls(&c));
+        if c.floor {
+            compute.push(crate::resolve::copy_floor_decl("interleaved.copy_floor"));
+        }
+        compute.push(super::deferred::lighting::decl(Some(&lighting_variant(&c))));
+        Ok(crate::technique::PassList {
+            compute,
+            packed_geometry: false,
+        })
     },
     build: |ctx, p| {
         let c = parse(p).map_err(|e| crate::technique::refused("interleaved", p, e))?;
@@ -358,8 +367,7 @@ impl Interleaved {
     pub fn new(ctx: &BuildCtx, config: InterleavedConfig) -> Result<Interleaved> {
         let lights = ManyLights::new(ctx, &config.lights, "interleaved")?;
         let (raster, gbuffer_pass, g) = deferred::gbuffer(ctx, "interleaved")?;
-        let sources = lights.sources();
-        let split = SplitPasses::new(ctx, &g, &sources, &config)?;
+        let split = SplitPasses::new(ctx, &config)?;
         let debug = if config.debug {
             let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
             let d = ImageDesc::new_2d(
@@ -375,8 +383,7 @@ impl Interleaved {
         } else {
             None
         };
-        let interleaving = interleaving(&config, &split, debug.as_ref());
-        let lighting = LightingPass::new(ctx, Some(&interleaving))?;
+        let lighting = LightingPass::new(ctx, Some(&lighting_variant(&config)))?;
         let readbacks = LayerReadbacks::new(ctx.gpu, g.layers())?;
         Ok(Interleaved {
             config,
@@ -418,12 +425,9 @@ impl Interleaved {
 }
 
 /// The lighting pass's view of `config`'s filter over `split`'s estimates.
-fn interleaving<'a>(
-    config: &InterleavedConfig,
-    split: &'a SplitPasses,
-    debug: Option<&'a (Image, Readback)>,
-) -> Interleaving<'a> {
-    Interleaving {
+/// The lighting pass's variant for `config`.
+pub fn lighting_variant(config: &InterleavedConfig) -> InterleavedLighting {
+    InterleavedLighting {
         m: config.m,
         n: config.n,
         search: config.search,
@@ -433,6 +437,18 @@ fn interleaving<'a>(
         plane_tolerance: config.plane_tolerance,
         filter: config.filter as u32,
         box_rows: config.box_rows(),
+        direct: config.direct,
+        debug: config.debug,
+    }
+}
+
+fn interleaving<'a>(
+    config: &InterleavedConfig,
+    split: &'a SplitPasses,
+    debug: Option<&'a (Image, Readback)>,
+) -> Interleaving<'a> {
+    Interleaving {
+        variant: lighting_variant(config),
         irradiance: split.output(),
         specular: split.specular_output(),
         debug: debug.map(|d| &d.0),
@@ -470,6 +486,7 @@ impl Technique for Interleaved {
             this.split.record(
                 cmd,
                 profiler,
+                gs,
                 g,
                 &sources,
                 this.config.lights.vpls,

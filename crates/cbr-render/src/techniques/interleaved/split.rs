@@ -6,57 +6,175 @@
 //! `floor` a copy kernel moving the split and gather passes' bytes (`interleaved.copy_floor`).
 //! One set layout and one set serve every pipeline.
 
-use bytemuck::{Pod, Zeroable};
-use cbr_gpu::{
-    Access, BindingDesc, Buffer, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Image, ImageDesc,
-    Location, PassKind, Pipeline, Profiler, Readback, Result, Sampler, SamplerDesc, SetLayout,
-    Write, vk,
-};
+use cbr_gpu::{Buffer, Cmd, Image, ImageDesc, Location, Profiler, Readback, Result, vk};
 
 use super::{Filter, InterleavedConfig};
+use crate::gpu_scene::GpuScene;
 use crate::memory::MemoryEstimate;
+use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, Use};
 use crate::resolve::CopyFloor;
 use crate::targets::GBUFFER_FORMAT;
 use crate::technique::BuildCtx;
 use crate::techniques::deferred::GBuffer;
 use crate::techniques::deferred::lighting::LightSources;
 
-/// The passes' set: the one definition of its bindings.
-pub const BINDINGS: [BindingDesc; 15] = {
-    use DescriptorKind::{CombinedImageSampler as S, StorageBuffer as B, StorageImage as I};
-    [
-        BindingDesc::one("position", 0, S),
-        BindingDesc::one("normal", 1, S),
-        BindingDesc::one("vpls", 2, B),
-        BindingDesc::one("split_position", 3, B),
-        BindingDesc::one("split_normal", 4, B),
-        BindingDesc::one("split_irradiance", 5, B),
-        BindingDesc::one("irradiance", 6, I),
-        // `seed` only: the horizontal blur's output and the vertical's.
-        BindingDesc::one("seed_tmp", 7, I),
-        BindingDesc::one("seed_out", 8, I),
-        // `direct` only: the scene's lights and the extra point lights, the specular estimates
-        // (the mosaic's, the gathered ones, the seed's blur's two).
-        BindingDesc::one("lights", 9, B),
-        BindingDesc::one("points", 10, B),
-        BindingDesc::one("split_specular", 11, B),
-        BindingDesc::one("specular", 12, I),
-        BindingDesc::one("seed_tmp_specular", 13, I),
-        BindingDesc::one("seed_out_specular", 14, I),
-    ]
-};
+crate::push_constants! {
+    /// Push constants (interleave.glsl's).
+    pub struct SplitPush {
+        /// W, H, Ws, Hs.
+        size: [i32; 4],
+        /// x: VPLs; with `direct`: y the scene's directional lights, z its point lights, w the
+        /// extra point lights (`points=N`).
+        counts: [u32; 4],
+        /// x: the VPL clamp c (m^2).
+        params: [f32; 4],
+    }
+}
 
-/// Push constants (interleave.glsl's `Push`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct SplitPush {
-    /// W, H, Ws, Hs.
-    pub size: [i32; 4],
-    /// x: VPLs; with `direct`: y the scene's directional lights, z its point lights, w the
-    /// extra point lights (`points=N`).
-    pub counts: [u32; 4],
-    /// x: the VPL clamp c (m^2).
-    pub params: [f32; 4],
+/// What every pass of the split shares: the tile, `direct`, the push constants.
+fn base(name: &str, shader: &'static str, c: &InterleavedConfig) -> ComputeDecl {
+    let mut d = ComputeDecl::new(name, shader)
+        .define("TILE_M", c.m)
+        .define("TILE_N", c.n)
+        .push::<SplitPush>();
+    if c.direct {
+        d = d.define("DIRECT", 1);
+    }
+    d
+}
+
+/// The G-buffer surface the split, the implicit pass and the seed's edge test read.
+const SURFACE: [Binding; 2] = [Binding::sampled("position"), Binding::sampled("normal")];
+
+/// Split: the G-buffer into the sub-images (shaders/interleaved/split.comp), one invocation per
+/// M pixels of a row.
+pub fn split_decl(c: &InterleavedConfig) -> ComputeDecl {
+    base("interleaved.split", "interleaved/split.comp", c)
+        .bindings(&SURFACE)
+        .bind(Binding::buffer("split_position", Use::Write))
+        .bind(Binding::buffer("split_normal", Use::Write))
+        .group(64, 1)
+}
+
+/// Shade: sub-image k with VPL subset k (and with `direct` point-light subset k).
+pub fn shade_decl(c: &InterleavedConfig) -> ComputeDecl {
+    let mut d = base("interleaved.shade", "interleaved/shade.comp", c).bindings(&[
+        Binding::buffer("vpls", Use::Read),
+        // shading.glsl's light term reads the scene's lights.
+        Binding::buffer("lights", Use::Read),
+        Binding::buffer("split_position", Use::ReadWrite),
+        Binding::buffer("split_normal", Use::ReadWrite),
+        Binding::buffer("split_irradiance", Use::Write),
+    ]);
+    if c.direct {
+        d = d.bindings(&[
+            Binding::buffer("points", Use::Read),
+            Binding::buffer("split_specular", Use::Write),
+        ]);
+    }
+    d
+}
+
+/// The gather's (or the implicit pass's) flags: DEBUG the round trip, SEED the seed's edges.
+fn flags(mut d: ComputeDecl, c: &InterleavedConfig) -> ComputeDecl {
+    if c.debug {
+        d = d.define("DEBUG", 1);
+    }
+    if c.filter == Filter::Seed {
+        d = d.define("SEED", 1);
+    }
+    d
+}
+
+/// Gather: the sub-images back to pixels (`box`: each pixel's window row summed, BOX_ROWS).
+pub fn gather_decl(c: &InterleavedConfig) -> ComputeDecl {
+    let mut d = flags(base("interleaved.gather", "interleaved/gather.comp", c), c).bindings(&[
+        Binding::buffer("split_irradiance", Use::ReadWrite),
+        Binding::image("irradiance", Use::Write),
+    ]);
+    if c.box_rows() {
+        d = d.define("BOX_ROWS", 1);
+    }
+    if c.direct {
+        d = d.bindings(&[
+            Binding::buffer("split_specular", Use::ReadWrite),
+            Binding::image("specular", Use::Write),
+        ]);
+    }
+    if c.debug || c.filter == Filter::Seed {
+        d = d.bindings(&SURFACE);
+    }
+    if c.debug {
+        d = d.bindings(&[
+            Binding::buffer("split_position", Use::ReadWrite),
+            Binding::buffer("split_normal", Use::ReadWrite),
+        ]);
+    }
+    d.group(64, 1)
+}
+
+/// `implicit`: every pixel shades its own subset at full resolution, no split.
+pub fn implicit_decl(c: &InterleavedConfig) -> ComputeDecl {
+    let mut d = flags(
+        base("interleaved.implicit", "interleaved/implicit.comp", c),
+        c,
+    )
+    .bindings(&SURFACE)
+    .bind(Binding::buffer("vpls", Use::Read))
+    .bind(Binding::buffer("lights", Use::Read))
+    .bind(Binding::image("irradiance", Use::Write));
+    if c.direct {
+        d = d.bindings(&[
+            Binding::buffer("points", Use::Read),
+            Binding::image("specular", Use::Write),
+        ]);
+    }
+    d
+}
+
+/// `seed`: the seed's blur, one direction per pass (shaders/interleaved/seed_blur.comp).
+pub fn seed_decl(c: &InterleavedConfig, horizontal: bool) -> ComputeDecl {
+    let (name, from, to, from_s, to_s) = match horizontal {
+        true => (
+            "interleaved.seed_blur_h",
+            "irradiance",
+            "seed_tmp",
+            "specular",
+            "seed_tmp_specular",
+        ),
+        false => (
+            "interleaved.seed_blur_v",
+            "seed_tmp",
+            "seed_out",
+            "seed_tmp_specular",
+            "seed_out_specular",
+        ),
+    };
+    let mut d = base(name, "interleaved/seed_blur.comp", c)
+        .bind(Binding::image(from, Use::ReadWrite))
+        .bind(Binding::image(to, Use::Write));
+    if horizontal {
+        d = d.define("HORIZONTAL", 1);
+    }
+    if c.direct {
+        d = d
+            .bind(Binding::image(from_s, Use::ReadWrite))
+            .bind(Binding::image(to_s, Use::Write));
+    }
+    d
+}
+
+/// Every pass the configuration builds, in recording order (the compile-only list).
+pub fn decls(c: &InterleavedConfig) -> Vec<ComputeDecl> {
+    let mut d = match c.implicit {
+        true => vec![implicit_decl(c)],
+        false => vec![split_decl(c), shade_decl(c), gather_decl(c)],
+    };
+    if c.filter == Filter::Seed {
+        d.push(seed_decl(c, true));
+        d.push(seed_decl(c, false));
+    }
+    d
 }
 
 /// The sub-images' side for a W x H frame split M x N: ceil(W/M) x ceil(H/N).
@@ -111,13 +229,10 @@ impl Estimate {
 }
 
 pub struct SplitPasses {
-    split: Option<(Pipeline, Pipeline, Pipeline)>,
-    implicit: Option<Pipeline>,
-    seed: Option<(Pipeline, Pipeline)>,
+    split: Option<(ComputePass, ComputePass, ComputePass)>,
+    implicit: Option<ComputePass>,
+    seed: Option<(ComputePass, ComputePass)>,
     floor: Option<CopyFloor>,
-    _layout: SetLayout,
-    set: DescriptorSet,
-    _sampler: Sampler,
     storage: Storage,
     /// `debug`: the split mosaic of the estimates, read back each frame.
     pub mosaic: Option<Readback>,
@@ -159,62 +274,24 @@ impl SplitPasses {
         }
     }
 
-    pub fn new(
-        ctx: &BuildCtx,
-        g: &GBuffer,
-        sources: &LightSources,
-        config: &InterleavedConfig,
-    ) -> Result<SplitPasses> {
-        let vpls = sources.vpls;
+    pub fn new(ctx: &BuildCtx, config: &InterleavedConfig) -> Result<SplitPasses> {
         let gpu = ctx.gpu;
         let (m, n) = (config.m, config.n);
-        let layout = SetLayout::new(gpu, "interleaved.set_layout", &BINDINGS)?;
-        let mut defines: Vec<(String, String)> = BINDINGS.iter().map(BindingDesc::define).collect();
-        defines.push(("TILE_M".into(), m.to_string()));
-        defines.push(("TILE_N".into(), n.to_string()));
-        if config.direct {
-            defines.push(("DIRECT".into(), "1".into()));
-        }
-        let pipeline = |name: &str, file: &str, extra: &[&str]| {
-            let mut d = defines.clone();
-            d.extend(extra.iter().map(|k| (k.to_string(), "1".to_string())));
-            let cs = ctx.shaders.compile(file, &d)?;
-            Pipeline::compute(
-                gpu,
-                &ComputeDesc {
-                    name,
-                    shader: &cs,
-                    set_layouts: &[&layout],
-                    push_constant_bytes: std::mem::size_of::<SplitPush>() as u32,
-                },
-            )
-        };
-        // The gather (or implicit) pass's flags: DEBUG the round trip, SEED the seed's edges.
-        let mut flags = Vec::new();
-        if config.debug {
-            flags.push("DEBUG");
-        }
-        if config.filter == Filter::Seed {
-            flags.push("SEED");
-        }
+        let build = |d: ComputeDecl| d.build(gpu, ctx.shaders);
         let (split, implicit) = if config.implicit {
-            let p = pipeline("interleaved.implicit", "interleaved/implicit.comp", &flags)?;
-            (None, Some(p))
+            (None, Some(build(implicit_decl(config))?))
         } else {
-            let split = pipeline("interleaved.split", "interleaved/split.comp", &[])?;
-            let shade = pipeline("interleaved.shade", "interleaved/shade.comp", &[])?;
-            // `box`: the gather sums each pixel's window row (the lighting pass's BOX_ROWS).
-            if config.box_rows() {
-                flags.push("BOX_ROWS");
-            }
-            let gather = pipeline("interleaved.gather", "interleaved/gather.comp", &flags)?;
-            (Some((split, shade, gather)), None)
+            let passes = (
+                build(split_decl(config))?,
+                build(shade_decl(config))?,
+                build(gather_decl(config))?,
+            );
+            (Some(passes), None)
         };
         let seed = if config.filter == Filter::Seed {
-            let file = "interleaved/seed_blur.comp";
             Some((
-                pipeline("interleaved.seed_blur_h", file, &["HORIZONTAL"])?,
-                pipeline("interleaved.seed_blur_v", file, &[])?,
+                build(seed_decl(config, true))?,
+                build(seed_decl(config, false))?,
             ))
         } else {
             None
@@ -286,51 +363,11 @@ impl SplitPasses {
         } else {
             None
         };
-        let sampler = Sampler::new(gpu, "interleaved.sampler", SamplerDesc::NEAREST)?;
-        // Bindings a mode does not use still hold a resource (lavapipe crashes binding a set
-        // with an unwritten descriptor): images the gathered estimates, which every mode has;
-        // buffers the VPLs (`implicit`'s mosaic, never accessed).
-        fn or_else<'a, T>(r: Option<&'a T>, fallback: &'a T) -> &'a T {
-            r.unwrap_or(fallback)
-        }
-        let pick = |i| or_else(i, &irradiance.gathered);
-        // An estimate's seed blur image i (0 horizontal, 1 vertical), or the fallback.
-        fn seed_of<'a>(e: Option<&'a Estimate>, i: usize, fallback: &'a Image) -> &'a Image {
-            e.and_then(|e| e.seed.as_ref())
-                .map_or(fallback, |(h, v)| if i == 0 { h } else { v })
-        }
-        let specular_ref = specular.as_ref();
-        let pick_buffer = |b| or_else(b, vpls);
-        let set = DescriptorSet::new(
-            gpu,
-            "interleaved.set",
-            &layout,
-            &[
-                Write::Sampled(0, vec![(&g.position, &sampler)]),
-                Write::Sampled(1, vec![(&g.normal, &sampler)]),
-                Write::Buffer(2, vpls),
-                Write::Buffer(3, pick_buffer(split_position.as_ref())),
-                Write::Buffer(4, pick_buffer(split_normal.as_ref())),
-                Write::Buffer(5, pick_buffer(irradiance.split.as_ref())),
-                Write::Storage(6, &irradiance.gathered),
-                Write::Storage(7, seed_of(Some(&irradiance), 0, &irradiance.gathered)),
-                Write::Storage(8, seed_of(Some(&irradiance), 1, &irradiance.gathered)),
-                Write::Buffer(9, &ctx.scene.lights),
-                Write::Buffer(10, sources.points),
-                Write::Buffer(11, pick_buffer(specular_ref.and_then(|s| s.split.as_ref()))),
-                Write::Storage(12, pick(specular_ref.map(|s| &s.gathered))),
-                Write::Storage(13, seed_of(specular_ref, 0, &irradiance.gathered)),
-                Write::Storage(14, seed_of(specular_ref, 1, &irradiance.gathered)),
-            ],
-        )?;
         Ok(SplitPasses {
             split,
             implicit,
             seed,
             floor,
-            _layout: layout,
-            set,
-            _sampler: sampler,
             storage: Storage {
                 split_position,
                 split_normal,
@@ -391,6 +428,7 @@ impl SplitPasses {
         &self,
         cmd: &mut Cmd,
         profiler: &mut Profiler,
+        scene: &GpuScene,
         g: &GBuffer,
         sources: &LightSources,
         count: u32,
@@ -420,70 +458,53 @@ impl SplitPasses {
             1,
         );
         let im = &self.storage;
-        cmd.use_image(&g.position, Access::ComputeSampled);
-        cmd.use_image(&g.normal, Access::ComputeSampled);
-        cmd.use_buffer(vpls, Access::ComputeSampled);
-        if im.specular.is_some() {
-            cmd.use_buffer(sources.points, Access::ComputeSampled);
+        // Every resource by its binding name; each pass binds (and barriers) the ones it
+        // declares.
+        let mut binds = Binds::new()
+            .image("position", &g.position)
+            .image("normal", &g.normal)
+            .buffer("vpls", vpls)
+            .buffer("lights", &scene.lights)
+            .buffer("points", sources.points)
+            .image("irradiance", &im.irradiance.gathered);
+        for (name, b) in [
+            ("split_position", im.split_position.as_ref()),
+            ("split_normal", im.split_normal.as_ref()),
+            ("split_irradiance", im.irradiance.split.as_ref()),
+            (
+                "split_specular",
+                im.specular.as_ref().and_then(|e| e.split.as_ref()),
+            ),
+        ] {
+            if let Some(b) = b {
+                binds = binds.buffer(name, b);
+            }
         }
+        if let Some(e) = &im.specular {
+            binds = binds.image("specular", &e.gathered);
+            if let Some((tmp, out)) = &e.seed {
+                binds = binds
+                    .image("seed_tmp_specular", tmp)
+                    .image("seed_out_specular", out);
+            }
+        }
+        if let Some((tmp, out)) = &im.irradiance.seed {
+            binds = binds.image("seed_tmp", tmp).image("seed_out", out);
+        }
+        let [gx, gy, gz] = [full.0, full.1, full.2];
         if let Some(implicit) = &self.implicit {
-            for e in self.estimates() {
-                cmd.use_image(&e.gathered, Access::ComputeStorageWrite);
-            }
-            self.dispatch(cmd, profiler, implicit, "interleaved.implicit", &push, full);
+            implicit.dispatch(cmd, profiler, &binds.only(implicit), &push, [gx, gy, gz])?;
         }
-        if let (Some((split, shade, gather)), Some(sp), Some(sn)) =
-            (&self.split, &im.split_position, &im.split_normal)
-        {
-            // Split: G-buffer -> sub-images.
-            cmd.use_buffer(sp, Access::ComputeStorageWrite);
-            cmd.use_buffer(sn, Access::ComputeStorageWrite);
-            self.dispatch(
-                cmd,
-                profiler,
-                split,
-                "interleaved.split",
-                &push,
-                (rows.0, sh, 1),
-            );
-            // Shade: sub-image k with subset k.
-            cmd.use_buffer(sp, Access::ComputeStorageReadWrite);
-            cmd.use_buffer(sn, Access::ComputeStorageReadWrite);
-            for b in self.estimates().filter_map(|e| e.split.as_ref()) {
-                cmd.use_buffer(b, Access::ComputeStorageWrite);
-            }
-            self.dispatch(
-                cmd,
-                profiler,
-                shade,
-                "interleaved.shade",
-                &push,
-                shade_groups,
-            );
-            // Gather: sub-images -> pixels.
-            for e in self.estimates() {
-                if let Some(b) = &e.split {
-                    cmd.use_buffer(b, Access::ComputeStorageReadWrite);
-                }
-                cmd.use_image(&e.gathered, Access::ComputeStorageWrite);
-            }
-            self.dispatch(cmd, profiler, gather, "interleaved.gather", &push, rows);
+        if let Some((split, shade, gather)) = &self.split {
+            split.dispatch(cmd, profiler, &binds.only(split), &push, [rows.0, sh, 1])?;
+            let groups = [shade_groups.0, shade_groups.1, shade_groups.2];
+            shade.dispatch(cmd, profiler, &binds.only(shade), &push, groups)?;
+            let groups = [rows.0, rows.1, rows.2];
+            gather.dispatch(cmd, profiler, &binds.only(gather), &push, groups)?;
         }
         if let Some((h, v)) = &self.seed {
-            let blurs = || {
-                self.estimates()
-                    .filter_map(|e| Some((&e.gathered, e.seed.as_ref()?)))
-            };
-            for (gathered, (tmp, _)) in blurs() {
-                cmd.use_image(gathered, Access::ComputeStorageReadWrite);
-                cmd.use_image(tmp, Access::ComputeStorageWrite);
-            }
-            self.dispatch(cmd, profiler, h, "interleaved.seed_blur_h", &push, full);
-            for (_, (tmp, out)) in blurs() {
-                cmd.use_image(tmp, Access::ComputeStorageReadWrite);
-                cmd.use_image(out, Access::ComputeStorageWrite);
-            }
-            self.dispatch(cmd, profiler, v, "interleaved.seed_blur_v", &push, full);
+            h.dispatch(cmd, profiler, &binds.only(h), &push, [gx, gy, gz])?;
+            v.dispatch(cmd, profiler, &binds.only(v), &push, [gx, gy, gz])?;
         }
         if let Some(floor) = &self.floor {
             floor.record(cmd, profiler)?;
@@ -496,22 +517,5 @@ impl SplitPasses {
         if let (Some(rb), Some(si)) = (&self.mosaic, &self.storage.irradiance.split) {
             cmd.read_buffer(si, rb);
         }
-    }
-
-    fn dispatch(
-        &self,
-        cmd: &mut Cmd,
-        profiler: &mut Profiler,
-        pipeline: &Pipeline,
-        name: &str,
-        push: &SplitPush,
-        (x, y, z): (u32, u32, u32),
-    ) {
-        let scope = profiler.begin(cmd, name, PassKind::Compute);
-        cmd.bind_pipeline(pipeline);
-        cmd.bind_set(pipeline, 0, &self.set);
-        cmd.push_constants(pipeline, bytemuck::bytes_of(push));
-        cmd.dispatch(x, y, z);
-        profiler.end(cmd, scope);
     }
 }
