@@ -1,13 +1,12 @@
 //! Ctrl-C during `cbr render` and `cbr bench` leaves only complete, readable files and no
 //! temporary ones, and exits with 130 and a message; the same render twice gives the same bytes.
 
+mod common;
+use common::s;
+
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf8")
-}
 
 /// Every file under `dir` (recursively), relative.
 fn files(dir: &Path) -> Vec<std::path::PathBuf> {

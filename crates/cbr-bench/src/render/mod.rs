@@ -29,7 +29,7 @@ pub use flags::{Shorthand, finite_f32};
 pub const TECHNIQUE_HELP: &str = "Technique spec: native, ssaa:N, msaa:N, \
     checkerboard[:LAYOUT[:MODE...]], upscale[:FILTER], interlaced[:OPTION...], then post passes \
     (+sharpen); `cbr info` lists them all. The flags below are shorthand that edits the spec; \
-    run.json records the result.";
+    run.json records the result";
 
 /// Everything a render run takes (the binary fills it from its arguments).
 #[derive(Clone, Debug, Default)]
