@@ -146,25 +146,12 @@ fn the_same_render_twice_gives_the_same_bytes() {
     let d = tempfile::tempdir().expect("tempdir");
     let out = d.path().join("out");
     let render = || {
-        let o = Command::new(env!("CARGO_BIN_EXE_cbr"))
-            .args([
-                "render",
-                "builtin:demo",
-                "-o",
-                s(&out),
-                "--width",
-                "64",
-                "--height",
-                "36",
-                "--frames",
-                "2",
-                "--technique",
-                "checkerboard:rotated:ours",
-                "--resolve-debug",
-            ])
-            .output()
-            .expect("run cbr");
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let args = [
+            "--technique",
+            "checkerboard:rotated:ours",
+            "--resolve-debug",
+        ];
+        common::render_demo(&out, (64, 36), 2, &args).expect("render");
     };
     render();
     let first = d.path().join("first");
