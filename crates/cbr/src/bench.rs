@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Result, anyhow, bail};
-use cbr_bench::{BenchOptions, Shard, SweepFile, parse_resolution};
+use cbr_bench::{BenchOptions, Shard, SweepFile, help, parse_resolution};
 use cbr_render::Spec;
 use cbr_scene::desc::{line_of, parse_toml};
 use toml::Spanned;
@@ -14,12 +14,7 @@ pub struct BenchArgs {
     /// without one, the sweep file's `scenes`.
     #[arg(required_unless_present_any = ["sweep", "merge"])]
     scene: Option<String>,
-    /// Configurations, comma-separated technique specs (`cbr info` lists the registered ones):
-    /// native, ssaa:N, msaa:N[:sample][:hdr], upscale:bilinear|bicubic,
-    /// checkerboard:LAYOUT[:MODE][:pixel|quad][:8|16][:fp16][:prepass][:locations] (MODE: ours,
-    /// pq4k, intel, spatial, temporal; default ours, quad, 8), each with post passes (+sharpen).
-    /// The reference and native are always run.
-    #[arg(long, value_delimiter = ',', default_value = "native")]
+    #[arg(long, value_delimiter = ',', default_value = "native", help = help::TECHNIQUES)]
     techniques: Vec<String>,
     #[arg(long)]
     width: Option<u32>,
@@ -34,14 +29,11 @@ pub struct BenchArgs {
     /// Sweep: resolutions WxH (replace --width/--height).
     #[arg(long, value_delimiter = ',')]
     resolutions: Vec<String>,
-    /// Sweep: resolve mappings for every checkerboard configuration that does not name one.
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', help = help::MAPPINGS)]
     mappings: Vec<String>,
-    /// Sweep: resolve group sizes for every checkerboard configuration that does not name one.
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', help = help::GROUPS)]
     groups: Vec<u32>,
-    /// Sweep: texture LOD biases for checkerboard configurations (default: each layout's own).
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_parser = crate::finite_f32)]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_parser = crate::finite_f32, help = help::LOD_BIASES)]
     lod_biases: Vec<f32>,
     /// A TOML file with any of: techniques, resolutions, mappings, groups, lod_biases, warmup,
     /// frames (command-line values win).
@@ -51,17 +43,12 @@ pub struct BenchArgs {
     /// with the highest FLIP.
     #[arg(long = "crop", value_name = "X,Y,W,H")]
     crops: Vec<String>,
-    /// The reference every error is measured against: `native` (reconstruction error) or a
-    /// supersampled ground truth such as `ssaa:16` (then native gets an error row too). Its frames
-    /// are cached on disk (see --no-cache).
-    #[arg(long, default_value = "native")]
+    #[arg(long, default_value = "native", help = help::REFERENCE)]
     reference: String,
     /// Render cacheable references afresh instead of reading the frame cache.
     #[arg(long)]
     no_cache: bool,
-    /// Render and time cacheable techniques among the rows (ssaa:N) instead of reading their
-    /// frames from the cache; the reference still comes from the cache.
-    #[arg(long)]
+    #[arg(long, help = help::TIME_CACHED_ROWS)]
     time_cached_rows: bool,
     /// Time the passes only: no error, no frames kept, no images (GPU studies at 4K, where the
     /// per-frame metrics would take most of the run). Takes no --reference; native is a row.

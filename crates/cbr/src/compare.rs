@@ -1,6 +1,8 @@
 //! `cbr compare`: the image-diff harness (pbrt's `imgtool diff` contract): metrics, error maps,
 //! thresholds; exit 0 when every threshold holds, 1 when one fails, 2 on errors.
 
+mod print;
+
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
@@ -117,7 +119,7 @@ pub fn run(a: &CompareArgs) -> Result<bool> {
         }
         let seq = compare_sequences(&a.reference, &a.test, load, &o, a.warmup)?;
         if !a.json {
-            print_sequence(&seq, &o);
+            print::sequence(&seq, &o);
         }
         let values: Vec<(Metric, f64)> = o
             .metrics
@@ -132,7 +134,7 @@ pub fn run(a: &CompareArgs) -> Result<bool> {
         let res = compare_images(&r, &t, &o)?;
         write_maps(a, &res)?;
         if !a.json {
-            print_pair(&res, &o);
+            print::pair(&res, &o);
         }
         let values: Vec<(Metric, f64)> = o
             .metrics
@@ -201,131 +203,4 @@ fn write_maps(a: &CompareArgs, res: &PairResult) -> Result<()> {
         )?;
     }
     Ok(())
-}
-
-fn fmt(v: f64) -> String {
-    if v.is_infinite() {
-        "inf".into()
-    } else if v != 0.0 && v.abs() < 1e-3 {
-        format!("{v:.4e}")
-    } else {
-        format!("{v:.6}")
-    }
-}
-
-fn print_pair(r: &PairResult, o: &CompareOptions) {
-    let src = |s: &cbr_metrics::compare::Source| {
-        if s.layer.is_empty() {
-            format!("{} ({:?})", s.path.display(), s.encoding)
-        } else {
-            format!(
-                "{} (layer {} [{}], {:?})",
-                s.path.display(),
-                s.layer,
-                s.channels.join(","),
-                s.encoding
-            )
-        }
-    };
-    println!(
-        "reference {}\ntest      {}",
-        src(&r.reference),
-        src(&r.test)
-    );
-    println!(
-        "{}x{}, non-finite pixels: reference {}, test {} ({} excluded)",
-        r.width, r.height, r.reference.nonfinite_pixels, r.test.nonfinite_pixels, r.excluded_pixels
-    );
-    if let Some(p) = r.psnr {
-        println!(
-            "  PSNR      {} dB          (display values, peak 1)",
-            fmt(p.0)
-        );
-    }
-    if let Some(s) = r.ssim {
-        println!(
-            "  SSIM      {}            (display, per RGB channel, averaged)",
-            fmt(s)
-        );
-    }
-    if let Some(f) = &r.flip {
-        println!(
-            "  FLIP      mean {}  weighted median {}  quartiles {} / {}  min {}  max {}  ({:.2} ppd)",
-            fmt(f.mean),
-            fmt(f.weighted_median),
-            fmt(f.weighted_q1),
-            fmt(f.weighted_q3),
-            fmt(f.min),
-            fmt(f.max),
-            o.ppd
-        );
-    }
-    if let Some(h) = &r.hdrflip {
-        println!(
-            "  HDR-FLIP  mean {}  weighted median {}  max {}  (exposures {:.3} .. {:.3}, {} steps)",
-            fmt(h.pooled.mean),
-            fmt(h.pooled.weighted_median),
-            fmt(h.pooled.max),
-            h.exposures.start,
-            h.exposures.stop,
-            h.exposures.count
-        );
-    }
-    if let Some(m) = r.mse {
-        println!("  MSE       {}            (linear)", fmt(m));
-    }
-    if let Some(m) = r.relmse {
-        println!(
-            "  relMSE    {}            (linear, eps {})",
-            fmt(m),
-            o.relmse_eps
-        );
-    }
-    println!("display transform: {}", o.display.describe());
-}
-
-fn print_sequence(s: &cbr_metrics::SequenceResult, o: &CompareOptions) {
-    let names: Vec<&str> = o.metrics.iter().map(|m| m.name()).collect();
-    println!(
-        "{:<20} {}  flicker",
-        "frame",
-        names.iter().map(|n| format!("{n:>12}")).collect::<String>()
-    );
-    for f in &s.frames {
-        let vals: String = o
-            .metrics
-            .iter()
-            .map(|m| {
-                format!(
-                    "{:>12}",
-                    f.result.value(*m).map(fmt).unwrap_or_else(|| "-".into())
-                )
-            })
-            .collect();
-        let fl = f.flicker.map(fmt).unwrap_or_else(|| "-".into());
-        println!(
-            "{:<20} {vals}  {fl}{}",
-            f.frame,
-            if f.warmup { "  (warm-up)" } else { "" }
-        );
-    }
-    let means: String = o
-        .metrics
-        .iter()
-        .map(|m| {
-            format!(
-                "{:>12}",
-                s.mean
-                    .get(m.name())
-                    .map(|d| fmt(d.0))
-                    .unwrap_or_else(|| "-".into())
-            )
-        })
-        .collect();
-    println!(
-        "{:<20} {means}  {}",
-        format!("mean (after {})", s.warmup),
-        s.flicker.map(fmt).unwrap_or_else(|| "-".into())
-    );
-    println!("display transform: {}", o.display.describe());
 }

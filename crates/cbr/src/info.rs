@@ -1,7 +1,7 @@
 //! `cbr info`: devices, driver, the limits that matter here, and the runnable layouts.
 
 use anyhow::Result;
-use cbr_gpu::{Gpu, GpuOptions, Layout};
+use cbr_gpu::{Gpu, GpuOptions};
 
 #[derive(clap::Args)]
 pub struct InfoArgs {
@@ -20,16 +20,7 @@ pub fn run(a: &InfoArgs) -> Result<()> {
         validation: false,
     })?;
     let caps = gpu.caps();
-    let layouts: Vec<serde_json::Value> = Layout::ALL
-        .iter()
-        .map(|&l| {
-            serde_json::json!({
-                "layout": l.name(),
-                "supported": caps.layout_unsupported(l).is_none(),
-                "missing": caps.layout_unsupported(l),
-            })
-        })
-        .collect();
+    let layouts = cbr_bench::render::device::layouts_json(caps);
     if a.json {
         let devices: Vec<serde_json::Value> = report
             .candidates
@@ -125,23 +116,8 @@ pub fn run(a: &InfoArgs) -> Result<()> {
     for p in cbr_render::registry::POST_PASSES {
         println!("  +{:43} {}", p.grammar, p.about);
     }
-    println!("\ncheckerboard layouts:");
-    for l in Layout::ALL {
-        match caps.layout_unsupported(l) {
-            None => println!("  {:8} yes", l.name()),
-            Some(why) => println!("  {:8} no: needs {why}", l.name()),
-        }
-    }
-    match caps.sample_locations_unsupported() {
-        None => println!("  msaa2x --msaa2x-sample-locations yes"),
-        Some(why) => println!("  msaa2x --msaa2x-sample-locations no: needs {why}"),
-    }
-    if caps.layout_unsupported(Layout::Msaa2x).is_some() {
-        let portable: Vec<&str> = caps.supported_layouts().iter().map(|l| l.name()).collect();
-        println!(
-            "  (msaa2x needs 2x MSAA; on this device use the portable layouts: {})",
-            portable.join(", ")
-        );
+    for line in cbr_bench::render::device::layouts_text(caps) {
+        println!("{line}");
     }
     println!("\nbuilt-in scenes (builtin:NAME; docs/hard-cases.md runs every technique on each):");
     println!(

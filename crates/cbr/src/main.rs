@@ -1,4 +1,4 @@
-//! `cbr`: render OBJ scenes with checkerboard techniques, compare, benchmark, report.
+//! `cbr`: render OBJ scenes with the registered techniques, compare, benchmark, report.
 #![forbid(unsafe_code)]
 #![cfg_attr(not(test), deny(clippy::unwrap_used))]
 
@@ -37,13 +37,13 @@ struct Cli {
 enum Command {
     /// Render a scene (TOML, OBJ, or builtin:NAME, listed by `cbr info`) to EXR + PNG per frame and run.json.
     Render(render::RenderArgs),
-    /// List Vulkan devices, the chosen one's limits, and which checkerboard layouts it can run.
+    /// List Vulkan devices, the chosen one's limits, and which techniques and layouts it can run.
     Info(info::InfoArgs),
     /// Compare two images or two folders of frames: PSNR, SSIM, FLIP, HDR-FLIP, MSE, relMSE.
     /// Exit 0 when every --fail-above holds, 1 when one fails, 2 on errors.
     Compare(compare::CompareArgs),
     /// Benchmark configurations over the scene's camera path against a reference (`native`, or
-    /// `--reference ssaa:N`): GPU time per pass (median, p5, p95), pipeline statistics,
+    /// a supersampled `--reference`): GPU time per pass (median, p5, p95), pipeline statistics,
     /// copy-kernel floor, per-frame error; bench.json + bench.csv.
     Bench(bench::BenchArgs),
     /// One self-contained HTML report from `cbr bench` folders.
@@ -55,14 +55,7 @@ enum Command {
     Montage(montage::MontageArgs),
 }
 
-/// A command-line number that must be finite (`nan` and `inf` parse as f32).
-pub fn finite_f32(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(v) if v.is_finite() => Ok(v),
-        Ok(_) => Err("not a finite number".into()),
-        Err(e) => Err(e.to_string()),
-    }
-}
+pub use cbr_bench::render::finite_f32;
 
 /// Exit status of a run stopped by Ctrl-C (SIGINT) or SIGTERM: 128 + SIGINT, as shells report.
 const INTERRUPTED: i32 = 130;

@@ -4,19 +4,11 @@
 //! the estimate and the device's limit before anything is allocated. More cases: cli.rs,
 //! compare_cli.rs.
 
+mod common;
+use common::{cbr, s};
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn cbr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cbr"))
-        .args(args)
-        .output()
-        .expect("run cbr")
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf8")
-}
+use std::process::Output;
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);
@@ -87,7 +79,7 @@ fn render_refuses_bad_options_and_degenerate_cameras() {
         if !extra.contains(&"--width") {
             args.extend_from_slice(&["--width", "16", "--height", "16", "--frames", "1"]);
         }
-        cbr(&args)
+        cbr(&args, &[])
     };
     c.fails(&o(&["--width", "abc"]), 1, &["'abc'", "--width"]);
     c.fails(
@@ -138,7 +130,7 @@ fn render_refuses_bad_options_and_degenerate_cameras() {
     ];
     for (name, text, expect) in cases {
         let p = write(d.path(), name, text);
-        c.fails(&cbr(&["render", s(&p), "-o", s(&out)]), 1, expect);
+        c.fails(&cbr(&["render", s(&p), "-o", s(&out)], &[]), 1, expect);
         c.check(!out.exists(), &format!("{name}: nothing written"));
         let _ = std::fs::remove_dir_all(&out);
     }
@@ -153,7 +145,7 @@ fn render_refuses_bad_options_and_degenerate_cameras() {
     ] {
         write(d.path(), "m.mtl", &format!("newmtl m\nmap_Kd {tex}\n"));
         let p = write(d.path(), "m.obj", &format!("mtllib m.mtl\nusemtl m\n{TRI}"));
-        let o = cbr(&["render", s(&p), "-o", s(&out)]);
+        let o = cbr(&["render", s(&p), "-o", s(&out)], &[]);
         c.fails(&o, 1, &[expect]);
         let err = String::from_utf8_lossy(&o.stderr);
         c.check(
@@ -167,18 +159,21 @@ fn render_refuses_bad_options_and_degenerate_cameras() {
     // An output path that is a file.
     let file = write(d.path(), "afile", "x");
     c.fails(
-        &cbr(&[
-            "render",
-            "builtin:demo",
-            "-o",
-            s(&file),
-            "--width",
-            "8",
-            "--height",
-            "8",
-            "--frames",
-            "1",
-        ]),
+        &cbr(
+            &[
+                "render",
+                "builtin:demo",
+                "-o",
+                s(&file),
+                "--width",
+                "8",
+                "--height",
+                "8",
+                "--frames",
+                "1",
+            ],
+            &[],
+        ),
         1,
         &["afile"],
     );
@@ -192,7 +187,7 @@ fn bench_refuses_bad_options_and_sweep_files_naming_the_line() {
     let bench = |extra: &[&str]| {
         let mut args = vec!["bench", "builtin:demo", "-o", s(&out)];
         args.extend_from_slice(extra);
-        cbr(&args)
+        cbr(&args, &[])
     };
     let cases: &[(&[&str], &[&str])] = &[
         (&["--techniques", "native,bogus"], &["--techniques `bogus`"]),
@@ -278,7 +273,10 @@ fn bench_refuses_bad_options_and_sweep_files_naming_the_line() {
     for (name, text, expect) in sweeps {
         let p = write(d.path(), name, text);
         c.fails(
-            &cbr(&["bench", "builtin:demo", "-o", s(&out), "--sweep", s(&p)]),
+            &cbr(
+                &["bench", "builtin:demo", "-o", s(&out), "--sweep", s(&p)],
+                &[],
+            ),
             1,
             expect,
         );
@@ -328,20 +326,23 @@ fn render_and_bench_refuse_what_cannot_fit_before_allocating() {
     let Some(n) = refused("ssaa:16", &[16384, 24576, 32768], false) else {
         return skip("`ssaa:16`");
     };
-    let o = cbr(&[
-        "render",
-        "builtin:demo",
-        "--width",
-        &n,
-        "--height",
-        &n,
-        "--frames",
-        "1",
-        "--technique",
-        "ssaa:16",
-        "-o",
-        s(&out),
-    ]);
+    let o = cbr(
+        &[
+            "render",
+            "builtin:demo",
+            "--width",
+            &n,
+            "--height",
+            &n,
+            "--frames",
+            "1",
+            "--technique",
+            "ssaa:16",
+            "-o",
+            s(&out),
+        ],
+        &[],
+    );
     c.fails(
         &o,
         1,
@@ -360,7 +361,7 @@ fn render_and_bench_refuse_what_cannot_fit_before_allocating() {
         let mut args = vec!["bench", "builtin:demo", "--warmup", "0", "--frames", "1"];
         args.extend_from_slice(extra);
         args.extend_from_slice(&["-o", s(&out)]);
-        cbr(&args)
+        cbr(&args, &[])
     };
     match refused("native", &[16384, 24576, 32768], false) {
         Some(n) => {
@@ -423,9 +424,12 @@ fn report_info_and_compare_refuse_bad_input() {
     let mut c = Cases::default();
     let d = tempfile::tempdir().expect("tempdir");
     let html = d.path().join("r.html");
-    c.fails(&cbr(&["report", "-o", s(&html)]), 1, &["at least one"]);
+    c.fails(&cbr(&["report", "-o", s(&html)], &[]), 1, &["at least one"]);
     c.fails(
-        &cbr(&["report", s(&d.path().join("absent")), "-o", s(&html)]),
+        &cbr(
+            &["report", s(&d.path().join("absent")), "-o", s(&html)],
+            &[],
+        ),
         1,
         &["absent", "bench.json", "cannot read"],
     );
@@ -437,7 +441,7 @@ fn report_info_and_compare_refuse_bad_input() {
         "{\n  \"schema\": \"cbr.bench/1\",\n  \"rows\": [\n}\n",
     );
     c.fails(
-        &cbr(&["report", s(&b), "-o", s(&html)]),
+        &cbr(&["report", s(&b), "-o", s(&html)], &[]),
         1,
         &["bench.json", "line 4"],
     );
@@ -447,19 +451,19 @@ fn report_info_and_compare_refuse_bad_input() {
         "{\"schema\": \"cbr.bench/9\", \"rows\": []}",
     );
     c.fails(
-        &cbr(&["report", s(&b), "-o", s(&html)]),
+        &cbr(&["report", s(&b), "-o", s(&html)], &[]),
         1,
         &["bench.json", "cbr.bench/9"],
     );
-    c.fails(&cbr(&["report", "--bogus"]), 1, &["--bogus"]);
+    c.fails(&cbr(&["report", "--bogus"], &[]), 1, &["--bogus"]);
     c.check(!html.exists(), "no report written");
 
     c.fails(
-        &cbr(&["info", "--device", "no-such-device"]),
+        &cbr(&["info", "--device", "no-such-device"], &[]),
         1,
         &["no-such-device"],
     );
-    c.fails(&cbr(&["info", "--jsn"]), 1, &["--jsn"]);
+    c.fails(&cbr(&["info", "--jsn"], &[]), 1, &["--jsn"]);
 
     // compare: 2 is its error status (1 means a threshold failed).
     let img = d.path().join("a.png");
@@ -470,7 +474,7 @@ fn report_info_and_compare_refuse_bad_input() {
     let cmp = |extra: &[&str]| {
         let mut args = vec!["compare", s(&img), s(&img), "--heatmap", s(&heat)];
         args.extend_from_slice(extra);
-        cbr(&args)
+        cbr(&args, &[])
     };
     c.fails(
         &cmp(&["--exposure", "nan"]),
@@ -484,7 +488,7 @@ fn report_info_and_compare_refuse_bad_input() {
     );
     c.fails(&cmp(&["--warmup", "x"]), 2, &["'x'", "--warmup"]);
     c.fails(
-        &cbr(&["compare", s(&img), s(d.path())]),
+        &cbr(&["compare", s(&img), s(d.path())], &[]),
         2,
         &["not one of each"],
     );

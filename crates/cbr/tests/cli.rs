@@ -2,14 +2,10 @@
 //! file and line or the feature, exit status 1, no panic, no output written).
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
 mod common;
-use common::cbr;
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use common::{cbr, stderr};
 
 /// Runs `cbr render` on `scene` into a fresh folder and asserts a clean failure whose message
 /// contains every string in `expect`.
@@ -390,18 +386,11 @@ fn demo_renders_readable_outputs_with_zero_validation_messages() {
 fn resolve_and_upscale_write_their_layers_and_debug_views() {
     let d = tempfile::tempdir().expect("tempdir");
     let out = d.path().join("cb");
-    let o = cbr(
+    let run = common::render_demo(
+        &out,
+        (64, 36),
+        2,
         &[
-            "render",
-            "builtin:demo",
-            "-o",
-            out.to_str().expect("utf8"),
-            "--width",
-            "64",
-            "--height",
-            "36",
-            "--frames",
-            "2",
             "--validation",
             "--technique",
             "checkerboard",
@@ -417,12 +406,8 @@ fn resolve_and_upscale_write_their_layers_and_debug_views() {
             "--resolve-without",
             "clamp,prepass",
         ],
-        &[],
-    );
-    assert!(o.status.success(), "{}", stderr(&o));
-    let run: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json"))
-            .expect("json");
+    )
+    .expect("render");
     assert_eq!(run["validation"]["messages"], 0, "{}", run["validation"]);
     // The shorthand flags become one spec, recorded whole (more cases: shorthand_flags_edit_the_spec).
     assert_eq!(
@@ -1003,26 +988,7 @@ fn shorthand_flags_edit_the_spec_and_contradictions_are_refused() {
         let out = d
             .path()
             .join(format!("o{}", args.join("_").replace([':', '+', '-'], "")));
-        let mut all = vec![
-            "render",
-            "builtin:demo",
-            "--width",
-            "32",
-            "--height",
-            "18",
-            "--frames",
-            "1",
-            "-o",
-            out.to_str().expect("utf8"),
-        ];
-        all.extend_from_slice(args);
-        let o = cbr(&all, &[]);
-        if !o.status.success() {
-            return Err(stderr(&o));
-        }
-        let run: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json"))
-                .expect("json");
+        let run = common::render_demo(&out, (32, 18), 1, args)?;
         Ok(run["settings"]["technique"]
             .as_str()
             .unwrap_or("")
@@ -1107,28 +1073,13 @@ fn shorthand_flags_edit_the_spec_and_contradictions_are_refused() {
 fn interlaced_writes_its_mask_and_debug_views() {
     let d = tempfile::tempdir().expect("tempdir");
     let out = d.path().join("il");
-    let o = cbr(
-        &[
-            "render",
-            "builtin:demo",
-            "-o",
-            out.to_str().expect("utf8"),
-            "--width",
-            "64",
-            "--height",
-            "36",
-            "--frames",
-            "3",
-            "--validation",
-            "--technique",
-            "interlaced:debug",
-        ],
-        &[],
-    );
-    assert!(o.status.success(), "{}", stderr(&o));
-    let run: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json"))
-            .expect("json");
+    let run = common::render_demo(
+        &out,
+        (64, 36),
+        3,
+        &["--validation", "--technique", "interlaced:debug"],
+    )
+    .expect("render");
     assert_eq!(run["validation"]["messages"], 0, "{}", run["validation"]);
     assert_eq!(run["settings"]["technique"], "interlaced:debug");
     for (f, parity, reset) in [(0, 0, true), (1, 1, false), (2, 0, false)] {
@@ -1183,27 +1134,8 @@ fn render_demo_frame(
 ) -> (tempfile::TempDir, std::path::PathBuf, serde_json::Value) {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("out");
-    let (w, h) = (w.to_string(), h.to_string());
-    let o = cbr(
-        &[
-            "render",
-            "builtin:demo",
-            "--technique",
-            technique,
-            "--width",
-            &w,
-            "--height",
-            &h,
-            "--frames",
-            "1",
-            "-o",
-            out.to_str().expect("utf8"),
-        ],
-        &[],
-    );
-    assert!(o.status.success(), "{technique}: {}", stderr(&o));
-    let run = serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json"))
-        .expect("json");
+    let run = common::render_demo(&out, (w, h), 1, &["--technique", technique])
+        .unwrap_or_else(|e| panic!("{technique}: {e}"));
     (dir, out, run)
 }
 

@@ -1,15 +1,11 @@
 //! `cbr compare` end to end: exit status 0 (thresholds hold), 1 (one fails), 2 (errors); JSON;
 //! error maps; sequences.
 
-use std::path::Path;
-use std::process::{Command, Output};
+mod common;
+use common::{cbr, s};
 
-fn cbr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cbr"))
-        .args(args)
-        .output()
-        .expect("run cbr")
-}
+use std::path::Path;
+use std::process::Output;
 
 fn png(path: &Path, w: u32, h: u32, f: impl Fn(u32, u32) -> [u8; 3]) {
     let mut img = image::RgbImage::new(w, h);
@@ -37,10 +33,6 @@ fn fails(o: &Output, message: &str) {
     assert!(err.contains(message), "expected `{message}` in: {err}");
 }
 
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf8")
-}
-
 #[test]
 fn pairs_thresholds_json_and_maps() {
     let d = tempfile::tempdir().expect("tempdir");
@@ -59,15 +51,18 @@ fn pairs_thresholds_json_and_maps() {
     });
     png(&c, 40, 32, |_, _| [0, 0, 0]);
 
-    let o = cbr(&[
-        "compare",
-        s(&a),
-        s(&a),
-        "--fail-above",
-        "flip=0",
-        "--fail-above",
-        "psnr=100",
-    ]);
+    let o = cbr(
+        &[
+            "compare",
+            s(&a),
+            s(&a),
+            "--fail-above",
+            "flip=0",
+            "--fail-above",
+            "psnr=100",
+        ],
+        &[],
+    );
     assert_eq!(
         o.status.code(),
         Some(0),
@@ -77,16 +72,19 @@ fn pairs_thresholds_json_and_maps() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("PSNR      inf dB"));
 
     let heat = d.path().join("heat.png");
-    let o = cbr(&[
-        "compare",
-        s(&a),
-        s(&b),
-        "--json",
-        "--heatmap",
-        s(&heat),
-        "--fail-above",
-        "flip=0.0001",
-    ]);
+    let o = cbr(
+        &[
+            "compare",
+            s(&a),
+            s(&b),
+            "--json",
+            "--heatmap",
+            s(&heat),
+            "--fail-above",
+            "flip=0.0001",
+        ],
+        &[],
+    );
     let j = json(&o, 1);
     let mean = j["flip"]["mean"].as_f64().expect("flip mean");
     assert!(mean > 0.0 && mean < 1.0, "{j}");
@@ -100,13 +98,16 @@ fn pairs_thresholds_json_and_maps() {
     let (w, h) = image::image_dimensions(&heat).expect("heatmap written");
     assert_eq!((w, h), (48 + 4 + 24, 32), "map plus the colour bar");
 
-    let o = cbr(&["compare", s(&a), s(&c)]);
+    let o = cbr(&["compare", s(&a), s(&c)], &[]);
     fails(&o, "size mismatch");
-    let o = cbr(&["compare", s(&a), s(&d.path().join("missing.png"))]);
+    let o = cbr(&["compare", s(&a), s(&d.path().join("missing.png"))], &[]);
     fails(&o, "missing.png: no such file");
-    let o = cbr(&["compare", s(&a), s(&b), "--fail-above", "sharpness=3"]);
+    let o = cbr(
+        &["compare", s(&a), s(&b), "--fail-above", "sharpness=3"],
+        &[],
+    );
     fails(&o, "unknown metric `sharpness`");
-    let o = cbr(&["compare", s(&a), s(&b), "--crop", "40,0,20,10"]);
+    let o = cbr(&["compare", s(&a), s(&b), "--crop", "40,0,20,10"], &[]);
     fails(&o, "does not fit");
 }
 
@@ -116,32 +117,21 @@ fn exr_layers_and_sequences() {
     let (r, t) = (d.path().join("ref"), d.path().join("test"));
     // Two short renders of the demo: the reference, and the same frames at another LOD bias.
     for (dir, bias) in [(&r, "0"), (&t, "2")] {
-        let o = cbr(&[
-            "render",
-            "builtin:demo",
-            "-o",
-            s(dir),
-            "--width",
-            "64",
-            "--height",
-            "36",
-            "--frames",
-            "3",
-            "--lod-bias",
-            bias,
-        ]);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        common::render_demo(dir, (64, 36), 3, &["--lod-bias", bias]).expect("render");
     }
-    let o = cbr(&[
-        "compare",
-        s(&r.join("frame_0001.exr")),
-        s(&r.join("frame_0001.exr")),
-        "--layer",
-        "depth",
-        "--metrics",
-        "mse",
-        "--json",
-    ]);
+    let o = cbr(
+        &[
+            "compare",
+            s(&r.join("frame_0001.exr")),
+            s(&r.join("frame_0001.exr")),
+            "--layer",
+            "depth",
+            "--metrics",
+            "mse",
+            "--json",
+        ],
+        &[],
+    );
     let j = json(&o, 0);
     assert_eq!(j["reference"]["layer"], "depth");
     assert_eq!(j["reference"]["channels"][0], "Z");
@@ -151,25 +141,31 @@ fn exr_layers_and_sequences() {
     );
     assert_eq!(j["mse"], 0.0);
     assert_eq!(j["excluded_pixels"], j["reference"]["nonfinite_pixels"]);
-    let o = cbr(&[
-        "compare",
-        s(&r.join("frame_0001.exr")),
-        s(&t.join("frame_0001.exr")),
-        "--layer",
-        "nope",
-    ]);
+    let o = cbr(
+        &[
+            "compare",
+            s(&r.join("frame_0001.exr")),
+            s(&t.join("frame_0001.exr")),
+            "--layer",
+            "nope",
+        ],
+        &[],
+    );
     fails(&o, "no layer `nope`");
 
-    let o = cbr(&[
-        "compare",
-        s(&r),
-        s(&t),
-        "--warmup",
-        "1",
-        "--metrics",
-        "psnr,flip",
-        "--json",
-    ]);
+    let o = cbr(
+        &[
+            "compare",
+            s(&r),
+            s(&t),
+            "--warmup",
+            "1",
+            "--metrics",
+            "psnr,flip",
+            "--json",
+        ],
+        &[],
+    );
     let j = json(&o, 0);
     assert_eq!(j["frames"].as_array().map(Vec::len), Some(3));
     assert_eq!(j["frames"][0]["warmup"], true);
@@ -181,6 +177,6 @@ fn exr_layers_and_sequences() {
         j["flicker"].as_f64().is_some(),
         "flicker from the measured frames"
     );
-    let o = cbr(&["compare", s(&r), s(&t), "--warmup", "3"]);
+    let o = cbr(&["compare", s(&r), s(&t), "--warmup", "3"], &[]);
     fails(&o, "--warmup 3 skips all 3 frames");
 }

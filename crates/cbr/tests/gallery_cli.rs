@@ -3,27 +3,14 @@
 //! and `cbr montage` (the gallery's strips) places, crops and enlarges exactly, and refuses bad
 //! input without writing anything.
 
+mod common;
+use common::{cbr, s, stderr};
+
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn cbr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cbr"))
-        .args(args)
-        .output()
-        .expect("run cbr")
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf8")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 #[test]
 fn info_lists_every_built_in_scene() {
-    let o = cbr(&["info"]);
+    let o = cbr(&["info"], &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8_lossy(&o.stdout);
     for name in cbr_scene::BUILTINS {
@@ -32,7 +19,7 @@ fn info_lists_every_built_in_scene() {
             "`cbr info` does not list builtin:{name}"
         );
     }
-    let o = cbr(&["info", "--json"]);
+    let o = cbr(&["info", "--json"], &[]);
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
     let listed: Vec<&str> = v["scenes"]
         .as_array()
@@ -53,7 +40,7 @@ fn bad_builtin_names_are_one_clear_error() {
         ("builtin:far:1e12", "at most 1e9"),
         ("builtin:wires:2", "no built-in scene `wires:2`"),
     ] {
-        let o = cbr(&["render", scene, "--frames", "1", "-o", s(&out)]);
+        let o = cbr(&["render", scene, "--frames", "1", "-o", s(&out)], &[]);
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(1), "{scene}: {err}");
         assert!(
@@ -69,18 +56,21 @@ fn bad_builtin_names_are_one_clear_error() {
 fn nan_case_counts_and_warns_per_frame() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("nan");
-    let o = cbr(&[
-        "render",
-        "builtin:nan",
-        "--width",
-        "64",
-        "--height",
-        "36",
-        "--frames",
-        "2",
-        "-o",
-        s(&out),
-    ]);
+    let o = cbr(
+        &[
+            "render",
+            "builtin:nan",
+            "--width",
+            "64",
+            "--height",
+            "36",
+            "--frames",
+            "2",
+            "-o",
+            s(&out),
+        ],
+        &[],
+    );
     let err = stderr(&o);
     assert!(o.status.success(), "{err}");
     assert!(
@@ -109,23 +99,26 @@ fn montage_places_crops_and_enlarges_exactly() {
     png(&a, 8, 6, |x, y| [x as u8, y as u8, 1, 255]);
     png(&b, 8, 6, |x, y| [x as u8, y as u8, 2, 255]);
     let strip = dir.path().join("strip.png");
-    let o = cbr(&[
-        "montage",
-        s(&a),
-        s(&b),
-        "-",
-        s(&a),
-        "--columns",
-        "2",
-        "--crop",
-        "2,1,4,3",
-        "--scale",
-        "2",
-        "--gap",
-        "1",
-        "-o",
-        s(&strip),
-    ]);
+    let o = cbr(
+        &[
+            "montage",
+            s(&a),
+            s(&b),
+            "-",
+            s(&a),
+            "--columns",
+            "2",
+            "--crop",
+            "2,1,4,3",
+            "--scale",
+            "2",
+            "--gap",
+            "1",
+            "-o",
+            s(&strip),
+        ],
+        &[],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let img = image::open(&strip).unwrap().to_rgba8();
     // Two columns of 8x6 tiles (4x3 crops enlarged twice), two rows, 1 px gaps.
@@ -162,7 +155,7 @@ fn montage_refuses_bad_input_and_writes_nothing() {
         let mut full = vec!["montage"];
         full.extend(&args);
         full.extend(["-o", s(&strip)]);
-        let o = cbr(&full);
+        let o = cbr(&full, &[]);
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
         assert!(

@@ -5,8 +5,9 @@
 //! The goldens are lavapipe's bits: on another driver (a GPU) every configuration still renders
 //! with zero validation messages and the comparison is skipped with a message.
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use exr::prelude::*;
 
@@ -61,22 +62,10 @@ fn layers(path: &Path) -> Vec<(String, String, Vec<u32>)> {
 
 /// Renders into `out` with the validation layers on; returns the device's driver name.
 fn render(args: &[String], out: &Path) -> std::result::Result<String, String> {
-    let o = Command::new(env!("CARGO_BIN_EXE_cbr"))
-        .args(["render", "builtin:demo", "--width", "96", "--height", "54"])
-        .args(["--frames", "3", "--validation", "-o"])
-        .arg(out)
-        .args(args)
-        .output()
-        .expect("run cbr");
-    if !o.status.success() {
-        return Err(format!(
-            "cbr render {args:?}: {}",
-            String::from_utf8_lossy(&o.stderr).trim()
-        ));
-    }
-    let run: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("run.json")).expect("run.json"))
-            .expect("json");
+    let mut all = vec!["--validation"];
+    all.extend(args.iter().map(String::as_str));
+    let run = common::render_demo(out, (96, 54), 3, &all)
+        .map_err(|e| format!("cbr render {args:?}: {}", e.trim()))?;
     if run["validation"]["messages"] != 0 {
         return Err(format!("{args:?}: validation {}", run["validation"]));
     }

@@ -1,13 +1,12 @@
 //! Ctrl-C during `cbr render` and `cbr bench` leaves only complete, readable files and no
 //! temporary ones, and exits with 130 and a message; the same render twice gives the same bytes.
 
+mod common;
+use common::s;
+
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf8")
-}
 
 /// Every file under `dir` (recursively), relative.
 fn files(dir: &Path) -> Vec<std::path::PathBuf> {
@@ -147,25 +146,12 @@ fn the_same_render_twice_gives_the_same_bytes() {
     let d = tempfile::tempdir().expect("tempdir");
     let out = d.path().join("out");
     let render = || {
-        let o = Command::new(env!("CARGO_BIN_EXE_cbr"))
-            .args([
-                "render",
-                "builtin:demo",
-                "-o",
-                s(&out),
-                "--width",
-                "64",
-                "--height",
-                "36",
-                "--frames",
-                "2",
-                "--technique",
-                "checkerboard:rotated:ours",
-                "--resolve-debug",
-            ])
-            .output()
-            .expect("run cbr");
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let args = [
+            "--technique",
+            "checkerboard:rotated:ours",
+            "--resolve-debug",
+        ];
+        common::render_demo(&out, (64, 36), 2, &args).expect("render");
     };
     render();
     let first = d.path().join("first");

@@ -50,6 +50,36 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
 /// The parts `without-X` switches off.
 pub const ABLATIONS: [&str; 6] = ["dilation", "clip", "ids", "depth", "catmull", "speed"];
 
+/// `cbr render --taa-without X,...`: adds `without-X` (X one of [`ABLATIONS`]) to the spec's
+/// `+taa`; a spec without `+taa`, or a result `+taa` refuses, is a
+/// [`cbr_gpu::GpuError::Config`] naming the spec.
+pub fn apply_shorthand(
+    spec: &mut crate::spec::Spec,
+    without: &[&str],
+) -> std::result::Result<(), cbr_gpu::GpuError> {
+    if without.is_empty() {
+        return Ok(());
+    }
+    let text = spec.to_string();
+    let refuse = |message: String| cbr_gpu::GpuError::Config {
+        spec: text.clone(),
+        message,
+    };
+    let taa = spec
+        .post
+        .iter_mut()
+        .find(|p| p.name == "taa")
+        .ok_or_else(|| refuse(format!("--taa-without needs `+taa` in the spec `{text}`")))?;
+    for a in without {
+        let p = format!("without-{a}");
+        if !taa.params.contains(&p) {
+            taa.params.push(p);
+        }
+    }
+    TaaConfig::parse(&taa.params()).map_err(|e| refuse(format!("--taa-without: {e}")))?;
+    Ok(())
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TaaConfig {
     /// Playdead's INSIDE TAA instead of ours.

@@ -70,6 +70,28 @@ pub fn parse(params: &[&str]) -> std::result::Result<MsaaConfig, String> {
     Ok(c)
 }
 
+/// `cbr render --sample-shading`: `msaa:N` becomes `msaa:N:sample`; the flag on another
+/// technique is a [`cbr_gpu::GpuError::Config`] naming the spec.
+pub fn apply_shorthand(
+    spec: &mut crate::spec::Spec,
+    sample_shading: bool,
+) -> std::result::Result<(), cbr_gpu::GpuError> {
+    if !sample_shading {
+        return Ok(());
+    }
+    let name = &spec.technique.name;
+    if name != "msaa" {
+        return Err(cbr_gpu::GpuError::Config {
+            spec: spec.to_string(),
+            message: format!("--sample-shading applies to the msaa technique, not `{name}`"),
+        });
+    }
+    if !spec.has("sample") {
+        spec.technique.params.push("sample".into());
+    }
+    Ok(())
+}
+
 fn needs(params: &[&str], caps: &Caps) -> Option<String> {
     let c = parse(params).ok()?;
     if !caps.sample_counts.contains(&c.samples) {

@@ -58,6 +58,38 @@ impl UpscaleFilter {
     }
 }
 
+/// `cbr render --filter`: the filter of an `upscale` spec (which always names one afterwards,
+/// bilinear by default); a filter contradicting the spec's, or the flag on another technique, is
+/// a [`cbr_gpu::GpuError::Config`] naming the spec.
+pub fn apply_shorthand(
+    spec: &mut crate::spec::Spec,
+    filter: Option<UpscaleFilter>,
+) -> std::result::Result<(), cbr_gpu::GpuError> {
+    let refuse = |message: String| cbr_gpu::GpuError::Config {
+        spec: spec.to_string(),
+        message,
+    };
+    let name = &spec.technique.name;
+    if name != "upscale" {
+        return match filter {
+            Some(_) => Err(refuse(format!(
+                "--filter applies to the upscale technique, not `{name}`"
+            ))),
+            None => Ok(()),
+        };
+    }
+    if let Some(f) = filter.map(UpscaleFilter::name) {
+        match spec.technique.params.first() {
+            Some(p) if p != f => return Err(refuse(format!("--filter {f} contradicts `{p}`"))),
+            _ => spec.technique.params = vec![f.to_string()],
+        }
+    }
+    if spec.technique.params.is_empty() {
+        spec.technique.params = vec![UpscaleFilter::Bilinear.name().into()];
+    }
+    Ok(())
+}
+
 /// The low resolution for a W x H output: W/sqrt(2) x H/sqrt(2), rounded, at least 1.
 pub fn low_resolution(width: u32, height: u32) -> (u32, u32) {
     let f = |v: u32| ((f64::from(v) / std::f64::consts::SQRT_2).round() as u32).max(1);

@@ -3,9 +3,10 @@
 //! `[:locations][:gradients][:tol=T][:without-velocity|depth|ids|clamp|prepass]`.
 //! Every `cbr render` flag of the technique is one of these, so run.json's spec says it all.
 
-use cbr_gpu::Layout;
+use cbr_gpu::{GpuError, Layout};
 
 use crate::resolve::{Mapping, ResolveMode, ResolveSettings};
+use crate::spec::Spec;
 use crate::technique::unknown_param;
 
 /// How texture LOD follows the sample spacing of a layout.
@@ -210,6 +211,128 @@ impl CheckerboardConfig {
             } else {
                 0.0
             }
+    }
+}
+
+/// The checkerboard technique's `cbr render` shorthand flags (`--layout`, `--resolve`,
+/// `--resolve-mapping`, ...), each an edit of the spec's parameters; run.json records the result.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CheckerboardShorthand {
+    pub layout: Option<Layout>,
+    /// `Some(None)`: `--resolve none`, the raw checkerboard frame.
+    pub resolve: Option<Option<ResolveMode>>,
+    pub mapping: Option<Mapping>,
+    pub group: Option<u32>,
+    pub fp16: bool,
+    pub f32_history: bool,
+    pub debug: bool,
+    /// `--resolve-without`: inputs of `ours` switched off (velocity, depth, ids, clamp, prepass).
+    pub without: Vec<String>,
+    pub depth_tolerance: Option<f32>,
+    pub prepass: bool,
+    pub locations: bool,
+    pub lod_mode: Option<LodMode>,
+}
+
+impl CheckerboardShorthand {
+    /// The flags given, by their command-line names.
+    pub fn given(&self) -> Vec<&'static str> {
+        [
+            ("--layout", self.layout.is_some()),
+            ("--resolve", self.resolve.is_some()),
+            ("--resolve-mapping", self.mapping.is_some()),
+            ("--resolve-group", self.group.is_some()),
+            ("--resolve-fp16", self.fp16),
+            ("--resolve-f32-history", self.f32_history),
+            ("--resolve-debug", self.debug),
+            ("--resolve-without", !self.without.is_empty()),
+            ("--depth-tolerance", self.depth_tolerance.is_some()),
+            ("--id-prepass", self.prepass),
+            ("--msaa2x-sample-locations", self.locations),
+            ("--lod-mode", self.lod_mode.is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(flag, set)| set.then_some(flag))
+        .collect()
+    }
+
+    /// Edits a `checkerboard` spec's parameters into their canonical form with the flags applied.
+    /// A flag that contradicts a parameter the spec names, or any flag on another technique, is a
+    /// [`GpuError::Config`] naming the spec.
+    pub fn apply(&self, spec: &mut Spec) -> Result<(), GpuError> {
+        let text = spec.to_string();
+        let refuse = |message: String| GpuError::Config {
+            spec: text.clone(),
+            message,
+        };
+        let name = &spec.technique.name;
+        if name != "checkerboard" {
+            return match self.given().first() {
+                Some(flag) => Err(refuse(format!(
+                    "{flag} applies to the checkerboard technique, not `{name}`"
+                ))),
+                None => Ok(()),
+            };
+        }
+        let params = spec.technique.params();
+        let mut c = CheckerboardConfig::parse(&params).map_err(refuse)?;
+        if let Some(layout) = self.layout {
+            if !params.is_empty() && c.layout != layout {
+                return Err(refuse(format!(
+                    "--layout {} contradicts the spec's layout `{}`",
+                    layout.name(),
+                    c.layout.name()
+                )));
+            }
+            if c.layout != layout {
+                c.lod_mode = LodMode::default_for(layout);
+            }
+            c.layout = layout;
+        }
+        if let Some(mode) = self.resolve {
+            if params.len() > 1 && c.resolve.map(|r| r.mode) != mode {
+                return Err(refuse(
+                    "--resolve contradicts the spec's resolve mode".to_string(),
+                ));
+            }
+            c.resolve = mode.map(|mode| ResolveSettings {
+                mode,
+                ..c.resolve.unwrap_or_default()
+            });
+        }
+        if let Some(r) = c.resolve.as_mut() {
+            r.mapping = self.mapping.unwrap_or(r.mapping);
+            r.group = self.group.unwrap_or(r.group);
+            r.fp16 |= self.fp16;
+            r.f32_history |= self.f32_history;
+            r.debug |= self.debug;
+            r.depth_tolerance = self.depth_tolerance.unwrap_or(r.depth_tolerance);
+            let a = &mut r.ablation;
+            for w in &self.without {
+                match w.as_str() {
+                    "velocity" => a.velocity = false,
+                    "depth" => a.depth = false,
+                    "ids" => a.ids = false,
+                    "clamp" => a.clamp = false,
+                    "prepass" => a.prepass = false,
+                    _ => {
+                        return Err(refuse(format!(
+                            "--resolve-without {w} (velocity, depth, ids, clamp or prepass)"
+                        )));
+                    }
+                }
+            }
+            r.validate().map_err(refuse)?;
+        }
+        c.prepass |= self.prepass;
+        c.locations |= self.locations;
+        c.lod_mode = self.lod_mode.unwrap_or(c.lod_mode);
+        // The edited configuration must still read back (e.g. locations on msaa2x only).
+        let edited = c.params();
+        CheckerboardConfig::parse(&edited.iter().map(String::as_str).collect::<Vec<_>>())
+            .map_err(refuse)?;
+        spec.technique.params = edited;
+        Ok(())
     }
 }
 
