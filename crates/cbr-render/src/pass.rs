@@ -740,16 +740,27 @@ impl ResourceDecl {
     /// A `width` x `height` image of `format` (STORAGE, SAMPLED and TRANSFER_SRC: written by a
     /// pass, read by the next or a post pass, read back).
     pub fn image(name: &'static str, format: vk::Format, width: u32, height: u32) -> ResourceDecl {
+        let usage = vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::TRANSFER_SRC;
+        ResourceDecl::image_of(name, format, (width, height), usage, 1)
+    }
+
+    fn image_of(
+        name: &'static str,
+        format: vk::Format,
+        (width, height): (u32, u32),
+        usage: vk::ImageUsageFlags,
+        samples: u32,
+    ) -> ResourceDecl {
         ResourceDecl {
             name,
             kind: ResourceKind::Image {
                 format,
                 width,
                 height,
-                usage: vk::ImageUsageFlags::STORAGE
-                    | vk::ImageUsageFlags::SAMPLED
-                    | vk::ImageUsageFlags::TRANSFER_SRC,
-                samples: 1,
+                usage,
+                samples,
             },
             history: false,
         }
@@ -769,17 +780,7 @@ impl ResourceDecl {
         } else {
             vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED
         };
-        ResourceDecl {
-            name,
-            kind: ResourceKind::Image {
-                format,
-                width,
-                height,
-                usage,
-                samples,
-            },
-            history: false,
-        }
+        ResourceDecl::image_of(name, format, (width, height), usage, samples)
     }
 
     /// A storage buffer of `bytes`.

@@ -34,6 +34,16 @@ impl FrameTargets {
         }
     }
 
+    /// `binds` with the four targets under the names the passes that read a raster use
+    /// (`color`, `velocity`, `ids`, `depth`: crate::pass).
+    pub fn bind<'a>(&'a self, binds: crate::pass::Binds<'a>) -> crate::pass::Binds<'a> {
+        binds
+            .image("color", &self.color)
+            .image("velocity", &self.velocity)
+            .image("ids", &self.ids)
+            .image("depth", &self.depth)
+    }
+
     /// The colour attachments in the scene pipeline's order.
     pub fn colors(&self) -> [&Image; 3] {
         [&self.color, &self.velocity, &self.ids]

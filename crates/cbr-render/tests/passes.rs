@@ -149,6 +149,13 @@ fn the_compile_only_list_is_what_rendering_builds() {
     let gpu = common::gpu();
     let shaders = cbr_render::shader_library();
     let scene = common::demo(64, 36);
+    let ctx = cbr_render::technique::PassCtx {
+        caps: gpu.caps(),
+        width: 64,
+        height: 36,
+        instrument: false,
+        geometry: false,
+    };
     let specs = [
         "native",
         "ssaa:2",
@@ -171,13 +178,6 @@ fn the_compile_only_list_is_what_rendering_builds() {
     ];
     for text in specs {
         let settings = cbr_render::RenderSettings::parse(64, 36, text).expect("spec");
-        let ctx = cbr_render::technique::PassCtx {
-            caps: gpu.caps(),
-            width: 64,
-            height: 36,
-            instrument: false,
-            geometry: false,
-        };
         let mut listed: Vec<(String, Vec<(String, String)>)> =
             cbr_render::registry::passes(&settings.spec, &ctx)
                 .unwrap_or_else(|e| panic!("{text}: {e}"))
@@ -207,13 +207,6 @@ fn the_compile_only_list_is_what_rendering_builds() {
     }
     // `analytic` says its passes are not declared yet.
     let spec = cbr_render::Spec::parse("analytic").expect("spec");
-    let ctx = cbr_render::technique::PassCtx {
-        caps: gpu.caps(),
-        width: 64,
-        height: 36,
-        instrument: false,
-        geometry: false,
-    };
     let err = cbr_render::registry::passes(&spec, &ctx).expect_err("not declared yet");
     assert!(err.contains("not declared yet"), "{err}");
     common::assert_clean(&gpu);

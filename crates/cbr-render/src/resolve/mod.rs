@@ -484,11 +484,8 @@ impl ResolvePass {
         );
         // Without a prepass its bindings hold the previous history, never read.
         let (pre_ids, pre_depth) = prepass.unwrap_or((prev_geom, prev_color));
-        let binds = Binds::of(&self.res)
-            .image("color", &targets.color)
-            .image("velocity", &targets.velocity)
-            .image("ids", &targets.ids)
-            .image("depth", &targets.depth)
+        let binds = targets
+            .bind(Binds::of(&self.res))
             .image("hist_color", prev_color)
             .image("hist_geom", prev_geom)
             .image("pre_depth", pre_depth)

@@ -177,11 +177,7 @@ impl UpscalePass {
     }
 
     pub fn record(&self, cmd: &mut Cmd, profiler: &mut Profiler, low: &FrameTargets) -> Result<()> {
-        let binds = Binds::of(&self.res)
-            .image("color", &low.color)
-            .image("velocity", &low.velocity)
-            .image("ids", &low.ids)
-            .image("depth", &low.depth);
+        let binds = low.bind(Binds::of(&self.res));
         let size = (self.push.sizes[0] as u32, self.push.sizes[1] as u32);
         self.pass
             .dispatch_2d(cmd, profiler, &binds, &self.push, size)

@@ -84,11 +84,7 @@ impl UnpackPass {
         targets: &FrameTargets,
         plan: &LayoutPlan,
     ) -> Result<()> {
-        let binds = Binds::of(&self.res)
-            .image("color", &targets.color)
-            .image("velocity", &targets.velocity)
-            .image("ids", &targets.ids)
-            .image("depth", &targets.depth);
+        let binds = targets.bind(Binds::of(&self.res));
         let push = Push {
             size_parity_side: [
                 self.width as i32,

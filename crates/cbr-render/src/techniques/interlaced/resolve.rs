@@ -229,12 +229,8 @@ impl InterlacedResolve {
     ) -> Result<()> {
         let [oc, od, ov, oi] = self.layers(frame.slot)?;
         let [hc, hd, hv, hi] = self.layers(1 - frame.slot % 2)?;
-        let t = targets;
-        let binds = Binds::of(&self.res)
-            .image("color", &t.color)
-            .image("velocity", &t.velocity)
-            .image("ids", &t.ids)
-            .image("depth", &t.depth)
+        let binds = targets
+            .bind(Binds::of(&self.res))
             .image("hist_color", hc)
             .image("hist_velocity", hv)
             .image("hist_ids", hi)
