@@ -202,6 +202,9 @@ pub struct PushField {
     pub name: &'static str,
     /// Array length (0: not an array).
     pub len: usize,
+    /// Byte offset in the Rust struct (the GLSL block's, std430, when the layout is right:
+    /// tests compare them with the SPIR-V's Offset decorations).
+    pub offset: usize,
 }
 
 /// A push-constant struct declared with [`push_constants!`]: its bytes and its GLSL block.
@@ -237,7 +240,7 @@ macro_rules! push_constants {
 
         impl $crate::pass::PushConstants for $name {
             const FIELDS: &'static [$crate::pass::PushField] = &[$(
-                $crate::push_constants!(@field $f : $t $(as $array)?)
+                $crate::push_constants!(@field $name, $f : $t $(as $array)?)
             ),*];
         }
 
@@ -249,18 +252,20 @@ macro_rules! push_constants {
             );)*
         };
     };
-    (@field $f:ident : $t:ty) => {
+    (@field $name:ident, $f:ident : $t:ty) => {
         $crate::pass::PushField {
             glsl_type: <$t as $crate::pass::GlslType>::NAME,
             name: stringify!($f),
             len: 0,
+            offset: ::std::mem::offset_of!($name, $f),
         }
     };
-    (@field $f:ident : $t:ty as array) => {
+    (@field $name:ident, $f:ident : $t:ty as array) => {
         $crate::pass::PushField {
             glsl_type: <$t as $crate::pass::GlslArray>::ELEM,
             name: stringify!($f),
             len: <$t as $crate::pass::GlslArray>::LEN,
+            offset: ::std::mem::offset_of!($name, $f),
         }
     };
     (@align $t:ty) => { <$t as $crate::pass::GlslType>::ALIGN };
@@ -276,8 +281,9 @@ pub struct ComputeDecl {
     pub shader: &'static str,
     pub defines: Vec<(String, String)>,
     pub bindings: Vec<Binding>,
-    /// The push-constant block's bytes and GLSL (`PUSH_CONSTANTS`).
+    /// The push-constant block's bytes and GLSL (`PUSH_CONSTANTS`), and its members.
     pub push: Option<(u32, String)>,
+    pub push_fields: &'static [PushField],
     /// Local size x, y (`LOCAL_SIZE_X`, `LOCAL_SIZE_Y`).
     pub group: [u32; 2],
 }
@@ -290,6 +296,7 @@ impl ComputeDecl {
             defines: Vec::new(),
             bindings: Vec::new(),
             push: None,
+            push_fields: &[],
             group: [8, 8],
         }
     }
@@ -320,6 +327,7 @@ impl ComputeDecl {
 
     pub fn push<P: PushConstants>(mut self) -> ComputeDecl {
         self.push = Some((std::mem::size_of::<P>() as u32, P::glsl()));
+        self.push_fields = P::FIELDS;
         self
     }
 
@@ -1013,6 +1021,49 @@ mod tests {
             .bind(Binding::sampled("src"))
             .bind(Binding::sampled("src"));
         assert!(dup.check().is_err());
+    }
+
+    /// Every declared pass's push-constant block: the offsets glslang gives its members (the
+    /// SPIR-V's Offset decorations of the `Push` block) are the Rust struct's.
+    #[test]
+    fn push_constant_offsets_are_the_shaders() {
+        use crate::layouts::LayoutPlan;
+        use crate::resolve::{self, ResolveSettings};
+        use crate::techniques::{checkerboard::unpack, deferred, interleaved, msaa, ssaa, upscale};
+        let shaders = crate::shader_library();
+        let plan = LayoutPlan::new(cbr_gpu::Layout::Rotated, 64, 36, 0);
+        let interleaved = interleaved::parse(&["4x4", "direct"]).expect("interleaved");
+        let mut decls = vec![
+            crate::post::sharpen::decl(),
+            crate::post::taa::decl(false, false),
+            ssaa::decl(),
+            resolve::decl(&ResolveSettings::default(), &plan, false),
+            resolve::copy_floor_decl("copy"),
+            unpack::decl(&plan),
+            upscale::decl(upscale::UpscaleFilter::Bicubic),
+            msaa::decl(msaa::parse(&["4"]).expect("msaa")),
+            crate::techniques::interlaced::resolve::decl(&Default::default()),
+            deferred::lighting::decl(None),
+            deferred::rsm::vpl_decl(),
+        ];
+        decls.extend(crate::post::fxaa::decls());
+        decls.extend(interleaved::split::decls(&interleaved));
+        for d in decls.iter().filter(|d| d.push.is_some()) {
+            let words = shaders
+                .compile(d.shader, &d.all_defines())
+                .unwrap_or_else(|e| panic!("{}: {e}", d.name));
+            let offsets = crate::gpu_types::tests::member_offsets(&words);
+            for (i, f) in d.push_fields.iter().enumerate() {
+                let glsl = offsets.get(&("Push".to_string(), i as u32)).copied();
+                assert_eq!(
+                    glsl,
+                    Some(f.offset as u32),
+                    "{}: push constant `{}`",
+                    d.name,
+                    f.name
+                );
+            }
+        }
     }
 
     #[test]
