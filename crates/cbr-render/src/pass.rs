@@ -68,11 +68,8 @@ impl Filter {
 /// What one binding holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BindKind {
-    /// `count` combined image samplers (an array where count > 1).
-    Sampled {
-        filter: Filter,
-        count: u32,
-    },
+    /// A combined image sampler read through `Filter`.
+    Sampled(Filter),
     StorageImage(Use),
     StorageBuffer(Use),
     Uniform,
@@ -81,7 +78,7 @@ pub enum BindKind {
 impl BindKind {
     fn descriptor(self) -> (DescriptorKind, u32) {
         match self {
-            BindKind::Sampled { count, .. } => (DescriptorKind::CombinedImageSampler, count),
+            BindKind::Sampled(_) => (DescriptorKind::CombinedImageSampler, 1),
             BindKind::StorageImage(_) => (DescriptorKind::StorageImage, 1),
             BindKind::StorageBuffer(_) => (DescriptorKind::StorageBuffer, 1),
             BindKind::Uniform => (DescriptorKind::UniformBuffer, 1),
@@ -90,7 +87,7 @@ impl BindKind {
 
     fn what(self) -> &'static str {
         match self {
-            BindKind::Sampled { .. } => "sampled image",
+            BindKind::Sampled(_) => "sampled image",
             BindKind::StorageImage(_) => "storage image",
             BindKind::StorageBuffer(_) | BindKind::Uniform => "buffer",
         }
@@ -99,7 +96,7 @@ impl BindKind {
     /// The access a compute dispatch makes.
     fn compute_access(self) -> Access {
         match self {
-            BindKind::Sampled { .. } => Access::ComputeSampled,
+            BindKind::Sampled(_) => Access::ComputeSampled,
             BindKind::StorageImage(u) | BindKind::StorageBuffer(u) => match u {
                 Use::Read => Access::ComputeStorageRead,
                 Use::Write => Access::ComputeStorageWrite,
@@ -124,13 +121,7 @@ impl Binding {
     pub const fn sampled_with(name: &'static str, filter: Filter) -> Binding {
         Binding {
             name,
-            kind: BindKind::Sampled { filter, count: 1 },
-        }
-    }
-    pub const fn sampled_array(name: &'static str, filter: Filter, count: u32) -> Binding {
-        Binding {
-            name,
-            kind: BindKind::Sampled { filter, count },
+            kind: BindKind::Sampled(filter),
         }
     }
     pub const fn image(name: &'static str, u: Use) -> Binding {
@@ -398,7 +389,7 @@ impl ComputeDecl {
         )?;
         let mut samplers = BTreeMap::new();
         for b in &self.bindings {
-            if let BindKind::Sampled { filter, .. } = b.kind
+            if let BindKind::Sampled(filter) = b.kind
                 && !samplers.contains_key(&(filter as u8))
             {
                 let s = Sampler::new(
@@ -428,7 +419,6 @@ fn declaration(pass: &str, message: String) -> GpuError {
 /// What one binding holds this frame.
 #[derive(Clone)]
 pub enum Bound<'a> {
-    Images(Vec<&'a Image>),
     Image(&'a Image),
     Buffer(&'a Buffer),
 }
@@ -463,12 +453,6 @@ impl<'a> Binds<'a> {
     /// Binds `name` (a sampled or storage image binding).
     pub fn image(mut self, name: &'static str, image: &'a Image) -> Binds<'a> {
         self.set(name, Bound::Image(image));
-        self
-    }
-
-    /// Binds an array of sampled images.
-    pub fn images(mut self, name: &'static str, images: Vec<&'a Image>) -> Binds<'a> {
-        self.set(name, Bound::Images(images));
         self
     }
 
@@ -547,19 +531,20 @@ impl ComputePass {
             let given = binds.get(b.name).ok_or_else(|| {
                 declaration(&self.decl.name, format!("nothing bound to `{}`", b.name))
             })?;
-            let ok = match (b.kind, given) {
-                (BindKind::Sampled { count, .. }, Bound::Images(v)) => {
-                    !v.is_empty() && v.len() as u32 <= count
-                }
-                (BindKind::Sampled { .. } | BindKind::StorageImage(_), Bound::Image(_)) => true,
-                (BindKind::StorageBuffer(_) | BindKind::Uniform, Bound::Buffer(_)) => true,
-                _ => false,
-            };
+            let ok = matches!(
+                (b.kind, given),
+                (
+                    BindKind::Sampled(_) | BindKind::StorageImage(_),
+                    Bound::Image(_)
+                ) | (
+                    BindKind::StorageBuffer(_) | BindKind::Uniform,
+                    Bound::Buffer(_)
+                )
+            );
             if !ok {
                 let got = match given {
-                    Bound::Images(v) => format!("{} images", v.len()),
-                    Bound::Image(_) => "an image".into(),
-                    Bound::Buffer(_) => "a buffer".into(),
+                    Bound::Image(_) => "an image",
+                    Bound::Buffer(_) => "a buffer",
                 };
                 return Err(declaration(
                     &self.decl.name,
@@ -594,16 +579,15 @@ impl ComputePass {
         profiler: &mut Profiler,
         binds: &Binds,
         push: &P,
-        (width, height): (u32, u32),
+        size: (u32, u32),
     ) -> Result<()> {
+        self.dispatch(cmd, profiler, binds, push, self.groups_2d(size))
+    }
+
+    /// The work groups covering a `width` x `height` image, one invocation per pixel.
+    pub fn groups_2d(&self, (width, height): (u32, u32)) -> [u32; 3] {
         let g = self.decl.group;
-        self.dispatch(
-            cmd,
-            profiler,
-            binds,
-            push,
-            [width.div_ceil(g[0]), height.div_ceil(g[1]), 1],
-        )
+        [width.div_ceil(g[0]), height.div_ceil(g[1]), 1]
     }
 
     /// The barriers `binds` need before a dispatch (for passes that time several dispatches
@@ -614,7 +598,6 @@ impl ComputePass {
             let access = b.kind.compute_access();
             match binds.get(b.name) {
                 Some(Bound::Image(i)) => cmd.use_image(i, access),
-                Some(Bound::Images(v)) => v.iter().for_each(|i| cmd.use_image(i, access)),
                 Some(Bound::Buffer(x)) => cmd.use_buffer(x, access),
                 None => {}
             }
@@ -651,21 +634,19 @@ impl ComputePass {
         Ok(())
     }
 
+    /// The dispatch's descriptor set (the binds were checked by [`ComputePass::prepare`];
+    /// anything else is still an error here or in `DescriptorSet::update`).
     fn set(&self, gpu: &Gpu, binds: &Binds) -> Result<DescriptorSet> {
-        self.check(binds)?;
         let mut writes = Vec::with_capacity(self.decl.bindings.len());
         for (i, b) in self.decl.bindings.iter().enumerate() {
             let n = i as u32;
             let sampler = match b.kind {
-                BindKind::Sampled { filter, .. } => self.samplers.get(&(filter as u8)),
+                BindKind::Sampled(filter) => self.samplers.get(&(filter as u8)),
                 _ => None,
             };
             match (binds.get(b.name), sampler) {
                 (Some(Bound::Image(img)), Some(s)) => {
                     writes.push(Write::Sampled(n, vec![(*img, s)]));
-                }
-                (Some(Bound::Images(v)), Some(s)) => {
-                    writes.push(Write::Sampled(n, v.iter().map(|i| (*i, s)).collect()));
                 }
                 (Some(Bound::Image(img)), None) => writes.push(Write::Storage(n, img)),
                 (Some(Bound::Buffer(x)), _) => writes.push(Write::Buffer(n, x)),

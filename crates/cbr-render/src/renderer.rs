@@ -9,7 +9,7 @@ use cbr_scene::Scene;
 use half::f16;
 
 use crate::cache::FrameCache;
-pub use crate::frame::{AnalyticLayers, Coverage, FrameOutput, InterleavedLayers, ResolveOutput};
+use crate::frame::FrameOutput;
 use crate::gpu_scene::{FrameView, GpuScene, RasterUniforms};
 use crate::gpu_types::{FLAG_COUNT_SHADED, FLAG_DEBUG_LOD};
 use crate::memory::MemoryEstimate;

@@ -248,8 +248,7 @@ impl Technique for Ssaa {
             let binds = self.binds();
             self.accumulate.prepare(cmd, &binds)?;
             let scope = profiler.begin(cmd, "ssaa.resolve", PassKind::Compute);
-            let [x, y] = self.accumulate.decl.group;
-            let groups = [self.size.0.div_ceil(x), self.size.1.div_ceil(y), 1];
+            let groups = self.accumulate.groups_2d(self.size);
             let r = self.accumulate.dispatch_untimed(cmd, &binds, &push, groups);
             profiler.end(cmd, scope);
             r?;
