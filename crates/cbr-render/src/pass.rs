@@ -30,6 +30,9 @@ use cbr_gpu::{
 
 use crate::memory::MemoryEstimate;
 
+mod graphics;
+pub use graphics::{GraphicsDecl, GraphicsPass, RasterState};
+
 /// How a shader uses a storage binding (the barrier before the dispatch follows from it).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Use {
@@ -46,6 +49,9 @@ pub enum Filter {
     Linear,
     /// Bilinear in texel units (Vulkan's unnormalizedCoordinates): the resolve's history reads.
     LinearTexels,
+    /// The sampler comes with the image ([`Binds::sampled`]): the scene's textures, mipmapped
+    /// and anisotropic, sampled through the scene's own sampler.
+    Given,
 }
 
 impl Filter {
@@ -61,6 +67,7 @@ impl Filter {
                 unnormalized: true,
                 ..SamplerDesc::NEAREST
             },
+            Filter::Given => unreachable!("a given sampler is not made by the pass"),
         }
     }
 }
@@ -105,6 +112,234 @@ impl BindKind {
             BindKind::Uniform => Access::ComputeStorageRead,
         }
     }
+
+    /// The access a draw makes (storage images are not declared for graphics passes: refused
+    /// when the pass is built).
+    fn graphics_access(self) -> Access {
+        match self {
+            BindKind::Sampled(_) => Access::FragmentSampled,
+            BindKind::StorageBuffer(Use::Read) | BindKind::Uniform => Access::GraphicsRead,
+            BindKind::StorageBuffer(_) | BindKind::StorageImage(_) => Access::FragmentStorageWrite,
+        }
+    }
+}
+
+/// A descriptor set several passes share and that is made once, not per dispatch: the scene's
+/// buffers, one material's textures. Its bindings are declared once like a pass's own (numbered
+/// by position, `BINDING_<NAME>`), and a pass that uses it says at which set index
+/// ([`SetRef::Shared`]; the shader reads the index as `SET_<NAME>`). Its resources are
+/// barriered by their owner (the scene's buffers are written by the host before the frame).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SetDecl {
+    pub name: &'static str,
+    pub bindings: &'static [Binding],
+}
+
+impl SetDecl {
+    pub fn binding_descs(&self) -> Vec<BindingDesc> {
+        binding_descs(self.bindings)
+    }
+
+    /// One set of this declaration, its bindings from `binds` (checked by name and kind; a
+    /// sampled binding must come with its sampler: [`Filter::Given`]).
+    pub fn make(
+        &self,
+        gpu: &Gpu,
+        owner: &str,
+        layout: &SetLayout,
+        binds: &Binds,
+    ) -> Result<DescriptorSet> {
+        let name = format!("{owner}.{}", self.name);
+        check_binds(&name, self.bindings, binds)?;
+        make_set(gpu, &name, layout, self.bindings, binds, &BTreeMap::new())
+    }
+}
+
+/// One set of a pass's pipeline layout: the pass's own bindings (bound from [`Binds`] at each
+/// dispatch or draw pass; `SET_PASS` in the shader) or a shared set.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SetRef {
+    Own,
+    Shared(SetDecl),
+}
+
+/// The set layout's bindings of `bindings`: numbered by position.
+fn binding_descs(bindings: &[Binding]) -> Vec<BindingDesc> {
+    bindings
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let (kind, count) = b.kind.descriptor();
+            BindingDesc {
+                name: b.name,
+                binding: i as u32,
+                kind,
+                count,
+            }
+        })
+        .collect()
+}
+
+/// The bindings of set `r` (the pass's own: `own`).
+fn set_bindings<'a>(r: &SetRef, own: &'a [Binding]) -> &'a [Binding] {
+    match r {
+        SetRef::Own => own,
+        SetRef::Shared(s) => s.bindings,
+    }
+}
+
+/// `SET_<NAME>` (`SET_PASS` for the own set) and `BINDING_<NAME>` of every set.
+fn set_defines(sets: &[SetRef], own: &[Binding]) -> Vec<(String, String)> {
+    let mut d = Vec::new();
+    for (i, r) in sets.iter().enumerate() {
+        let name = match r {
+            SetRef::Own => "PASS".to_string(),
+            SetRef::Shared(s) => s.name.to_uppercase(),
+        };
+        d.push((format!("SET_{name}"), i.to_string()));
+        d.extend(
+            binding_descs(set_bindings(r, own))
+                .iter()
+                .map(BindingDesc::define),
+        );
+    }
+    d
+}
+
+/// A declaration's own checks: binding names unique across its sets (they share the shader's
+/// `BINDING_<NAME>` namespace), the own set listed at most once.
+fn check_sets(pass: &str, sets: &[SetRef], own: &[Binding]) -> Result<()> {
+    if sets.iter().filter(|r| **r == SetRef::Own).count() > 1 {
+        return Err(declaration(pass, "its own set twice".into()));
+    }
+    let all: Vec<&Binding> = sets.iter().flat_map(|r| set_bindings(r, own)).collect();
+    for (i, b) in all.iter().enumerate() {
+        if all[..i].iter().any(|o| o.name == b.name) {
+            return Err(declaration(pass, format!("binding `{}` twice", b.name)));
+        }
+    }
+    if !own.is_empty() && !sets.contains(&SetRef::Own) {
+        return Err(declaration(
+            pass,
+            "bindings of its own but no set for them".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// The set layouts of `sets`, in set order.
+fn set_layouts(gpu: &Gpu, pass: &str, sets: &[SetRef], own: &[Binding]) -> Result<Vec<SetLayout>> {
+    sets.iter()
+        .map(|r| {
+            let name = match r {
+                SetRef::Own => format!("{pass}.set_layout"),
+                SetRef::Shared(s) => format!("{pass}.{}_layout", s.name),
+            };
+            SetLayout::new(gpu, &name, &binding_descs(set_bindings(r, own)))
+        })
+        .collect()
+}
+
+/// One sampler per filter the sampled bindings name (given samplers come with their images).
+fn samplers(gpu: &Gpu, pass: &str, bindings: &[Binding]) -> Result<BTreeMap<u8, Sampler>> {
+    let mut samplers = BTreeMap::new();
+    for b in bindings {
+        if let BindKind::Sampled(filter) = b.kind
+            && filter != Filter::Given
+            && !samplers.contains_key(&(filter as u8))
+        {
+            let s = Sampler::new(
+                gpu,
+                &format!("{pass}.{filter:?}").to_lowercase(),
+                filter.desc(),
+            )?;
+            samplers.insert(filter as u8, s);
+        }
+    }
+    Ok(samplers)
+}
+
+/// Checks that `binds` give every one of `bindings` something of its kind, and name nothing
+/// `bindings` lack (resources taken by [`Binds::of`] that are not bound here are other passes'
+/// and are ignored).
+fn check_binds(pass: &str, bindings: &[Binding], binds: &Binds) -> Result<()> {
+    for (name, _, explicit) in &binds.list {
+        if *explicit && !bindings.iter().any(|b| b.name == *name) {
+            return Err(declaration(
+                pass,
+                format!("`{name}` is bound but not declared"),
+            ));
+        }
+    }
+    for b in bindings {
+        let given = binds
+            .get(b.name)
+            .ok_or_else(|| declaration(pass, format!("nothing bound to `{}`", b.name)))?;
+        let ok = matches!(
+            (b.kind, given),
+            (BindKind::Sampled(Filter::Given), Bound::Sampled(..))
+                | (BindKind::StorageImage(_), Bound::Image(_))
+                | (
+                    BindKind::StorageBuffer(_) | BindKind::Uniform,
+                    Bound::Buffer(_)
+                )
+        ) || matches!(
+            (b.kind, given),
+            (BindKind::Sampled(f), Bound::Image(_)) if f != Filter::Given
+        );
+        if !ok {
+            let got = match given {
+                Bound::Image(_) => "an image",
+                Bound::Sampled(..) => "an image with its sampler",
+                Bound::Buffer(_) => "a buffer",
+                Bound::Set(_) => "a set",
+            };
+            let what = match b.kind {
+                BindKind::Sampled(Filter::Given) => "sampled image with a given sampler",
+                k => k.what(),
+            };
+            return Err(declaration(
+                pass,
+                format!("`{}` is a {what}, given {got}", b.name),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The descriptor set of `bindings` from `binds` (checked by [`check_binds`]; anything else is
+/// still an error here or in `DescriptorSet::update`).
+fn make_set(
+    gpu: &Gpu,
+    name: &str,
+    layout: &SetLayout,
+    bindings: &[Binding],
+    binds: &Binds,
+    samplers: &BTreeMap<u8, Sampler>,
+) -> Result<DescriptorSet> {
+    let mut writes = Vec::with_capacity(bindings.len());
+    for (i, b) in bindings.iter().enumerate() {
+        let n = i as u32;
+        let sampler = match b.kind {
+            BindKind::Sampled(filter) => samplers.get(&(filter as u8)),
+            _ => None,
+        };
+        match (binds.get(b.name), sampler) {
+            (Some(Bound::Sampled(img, s)), _) => writes.push(Write::Sampled(n, vec![(*img, *s)])),
+            (Some(Bound::Image(img)), Some(s)) => {
+                writes.push(Write::Sampled(n, vec![(*img, s)]));
+            }
+            (Some(Bound::Image(img)), None) => writes.push(Write::Storage(n, img)),
+            (Some(Bound::Buffer(x)), _) => writes.push(Write::Buffer(n, x)),
+            _ => {
+                return Err(declaration(
+                    name,
+                    format!("`{}` cannot be bound as given", b.name),
+                ));
+            }
+        }
+    }
+    DescriptorSet::new(gpu, &format!("{name}.set"), layout, &writes)
 }
 
 /// One binding of a pass: its name (the shader's `BINDING_<NAME>`) and what it holds.
@@ -271,7 +506,11 @@ pub struct ComputeDecl {
     /// Path under `shaders/`.
     pub shader: &'static str,
     pub defines: Vec<(String, String)>,
+    /// The pass's own set: bound from [`Binds`] at each dispatch.
     pub bindings: Vec<Binding>,
+    /// The pipeline layout's sets: the own set first, then the shared ones
+    /// ([`ComputeDecl::shared`]).
+    pub sets: Vec<SetRef>,
     /// The push-constant block's bytes and GLSL (`PUSH_CONSTANTS`), and its members.
     pub push: Option<(u32, String)>,
     pub push_fields: &'static [PushField],
@@ -286,10 +525,17 @@ impl ComputeDecl {
             shader,
             defines: Vec::new(),
             bindings: Vec::new(),
+            sets: vec![SetRef::Own],
             push: None,
             push_fields: &[],
             group: [8, 8],
         }
+    }
+
+    /// A shared set at the next set index (bound with [`Binds::set`]).
+    pub fn shared(mut self, set: SetDecl) -> ComputeDecl {
+        self.sets.push(SetRef::Shared(set));
+        self
     }
 
     pub fn define(mut self, name: &str, value: impl ToString) -> ComputeDecl {
@@ -327,27 +573,15 @@ impl ComputeDecl {
         self
     }
 
-    /// The set layout's bindings: numbered by position.
+    /// The own set layout's bindings: numbered by position.
     pub fn binding_descs(&self) -> Vec<BindingDesc> {
-        self.bindings
-            .iter()
-            .enumerate()
-            .map(|(i, b)| {
-                let (kind, count) = b.kind.descriptor();
-                BindingDesc {
-                    name: b.name,
-                    binding: i as u32,
-                    kind,
-                    count,
-                }
-            })
-            .collect()
+        binding_descs(&self.bindings)
     }
 
     /// Every define the shader is compiled with.
     pub fn all_defines(&self) -> Vec<(String, String)> {
         let mut d = self.defines.clone();
-        d.extend(self.binding_descs().iter().map(BindingDesc::define));
+        d.extend(set_defines(&self.sets, &self.bindings));
         if let Some((_, glsl)) = &self.push {
             d.push(("PUSH_CONSTANTS".into(), glsl.clone()));
         }
@@ -356,53 +590,32 @@ impl ComputeDecl {
         d
     }
 
-    /// Checks the declaration itself: unique binding names.
+    /// Checks the declaration itself: unique binding names, the own set first.
     fn check(&self) -> Result<()> {
-        for (i, b) in self.bindings.iter().enumerate() {
-            if self.bindings[..i].iter().any(|o| o.name == b.name) {
-                return Err(declaration(
-                    &self.name,
-                    format!("binding `{}` twice", b.name),
-                ));
-            }
+        if self.sets.first() != Some(&SetRef::Own) {
+            return Err(declaration(&self.name, "its own set is not set 0".into()));
         }
-        Ok(())
+        check_sets(&self.name, &self.sets, &self.bindings)
     }
 
-    /// The compile-only build: set layout, samplers and pipeline; no image, no memory.
+    /// The compile-only build: set layouts, samplers and pipeline; no image, no memory.
     pub fn build(&self, gpu: &Gpu, shaders: &Shaders) -> Result<ComputePass> {
         self.check()?;
-        let layout = SetLayout::new(
-            gpu,
-            &format!("{}.set_layout", self.name),
-            &self.binding_descs(),
-        )?;
+        let layouts = set_layouts(gpu, &self.name, &self.sets, &self.bindings)?;
         let cs = shaders.compile(self.shader, &self.all_defines())?;
         let pipeline = Pipeline::compute(
             gpu,
             &ComputeDesc {
                 name: &self.name,
                 shader: &cs,
-                set_layouts: &[&layout],
+                set_layouts: &layouts.iter().collect::<Vec<_>>(),
                 push_constant_bytes: self.push.as_ref().map_or(0, |p| p.0),
             },
         )?;
-        let mut samplers = BTreeMap::new();
-        for b in &self.bindings {
-            if let BindKind::Sampled(filter) = b.kind
-                && !samplers.contains_key(&(filter as u8))
-            {
-                let s = Sampler::new(
-                    gpu,
-                    &format!("{}.{filter:?}", self.name).to_lowercase(),
-                    filter.desc(),
-                )?;
-                samplers.insert(filter as u8, s);
-            }
-        }
+        let samplers = samplers(gpu, &self.name, &self.bindings)?;
         Ok(ComputePass {
             decl: self.clone(),
-            layout,
+            layouts,
             pipeline,
             samplers,
         })
@@ -420,7 +633,11 @@ fn declaration(pass: &str, message: String) -> GpuError {
 #[derive(Clone)]
 pub enum Bound<'a> {
     Image(&'a Image),
+    /// A sampled image with its own sampler ([`Filter::Given`]).
+    Sampled(&'a Image, &'a Sampler),
     Buffer(&'a Buffer),
+    /// A shared set, by its [`SetDecl::name`].
+    Set(&'a DescriptorSet),
 }
 
 /// The resources of one dispatch, by binding name: what [`Resources`] hold of the same names,
@@ -461,6 +678,23 @@ impl<'a> Binds<'a> {
         self
     }
 
+    /// Binds `name` (a sampled binding of [`Filter::Given`]) to `image` read through `sampler`.
+    pub fn sampled(
+        mut self,
+        name: &'static str,
+        image: &'a Image,
+        sampler: &'a Sampler,
+    ) -> Binds<'a> {
+        self.set(name, Bound::Sampled(image, sampler));
+        self
+    }
+
+    /// Binds the shared set `set` (made by [`SetDecl::make`]) under its declaration's name.
+    pub fn shared(mut self, decl: &SetDecl, set: &'a DescriptorSet) -> Binds<'a> {
+        self.set(decl.name, Bound::Set(set));
+        self
+    }
+
     /// A history's slots for `frame`: the one read (written last frame) at `read`, the one
     /// written this frame at `write`.
     pub fn history(
@@ -480,9 +714,52 @@ impl<'a> Binds<'a> {
             list: self
                 .list
                 .iter()
-                .filter(|(n, ..)| pass.decl.bindings.iter().any(|b| b.name == *n))
+                .filter(|(n, ..)| {
+                    pass.decl.bindings.iter().any(|b| b.name == *n)
+                        || pass.decl.sets.iter().any(|r| shared_named(r, n))
+                })
                 .cloned()
                 .collect(),
+        }
+    }
+
+    /// The entries named in `bindings`.
+    fn own_only(&self, bindings: &[Binding]) -> Binds<'a> {
+        Binds {
+            list: self
+                .list
+                .iter()
+                .filter(|(n, ..)| bindings.iter().any(|b| b.name == *n))
+                .cloned()
+                .collect(),
+        }
+    }
+
+    /// The names given here (not taken from [`Resources`]).
+    fn explicit(&self) -> impl Iterator<Item = &'static str> + '_ {
+        self.list.iter().filter(|e| e.2).map(|e| e.0)
+    }
+
+    /// The entries that are not shared sets (what a pass's own set is checked against).
+    fn without_sets(&self) -> Binds<'a> {
+        Binds {
+            list: self
+                .list
+                .iter()
+                .filter(|(_, b, _)| !matches!(b, Bound::Set(_)))
+                .cloned()
+                .collect(),
+        }
+    }
+
+    /// The shared set `decl` bound under its name.
+    fn shared_set(&self, pass: &str, decl: &SetDecl) -> Result<&'a DescriptorSet> {
+        match self.get(decl.name) {
+            Some(Bound::Set(s)) => Ok(*s),
+            _ => Err(declaration(
+                pass,
+                format!("no `{}` set bound (Binds::shared)", decl.name),
+            )),
         }
     }
 
@@ -505,7 +782,7 @@ impl<'a> Binds<'a> {
 /// through.
 pub struct ComputePass {
     pub decl: ComputeDecl,
-    layout: SetLayout,
+    layouts: Vec<SetLayout>,
     pipeline: Pipeline,
     samplers: BTreeMap<u8, Sampler>,
 }
@@ -515,40 +792,21 @@ impl ComputePass {
         &self.decl.name
     }
 
-    /// Checks that `binds` give every binding of the declaration something of its kind, and
-    /// name nothing the declaration lacks (resources taken by [`Binds::of`] that this pass does
-    /// not bind are other passes' and are ignored).
+    /// Checks that `binds` give every binding of the declaration something of its kind, name
+    /// nothing the declaration lacks (resources taken by [`Binds::of`] that this pass does not
+    /// bind are other passes' and are ignored), and give every shared set.
     pub fn check(&self, binds: &Binds) -> Result<()> {
-        for (name, _, explicit) in &binds.list {
-            if *explicit && !self.decl.bindings.iter().any(|b| b.name == *name) {
-                return Err(declaration(
-                    &self.decl.name,
-                    format!("`{name}` is bound but not declared"),
-                ));
+        check_binds(&self.decl.name, &self.decl.bindings, &binds.without_sets())?;
+        for r in &self.decl.sets {
+            if let SetRef::Shared(s) = r {
+                binds.shared_set(&self.decl.name, s)?;
             }
         }
-        for b in &self.decl.bindings {
-            let given = binds.get(b.name).ok_or_else(|| {
-                declaration(&self.decl.name, format!("nothing bound to `{}`", b.name))
-            })?;
-            let ok = matches!(
-                (b.kind, given),
-                (
-                    BindKind::Sampled(_) | BindKind::StorageImage(_),
-                    Bound::Image(_)
-                ) | (
-                    BindKind::StorageBuffer(_) | BindKind::Uniform,
-                    Bound::Buffer(_)
-                )
-            );
-            if !ok {
-                let got = match given {
-                    Bound::Image(_) => "an image",
-                    Bound::Buffer(_) => "a buffer",
-                };
+        for (name, b, _) in &binds.list {
+            if matches!(b, Bound::Set(_)) && !self.decl.sets.iter().any(|r| shared_named(r, name)) {
                 return Err(declaration(
                     &self.decl.name,
-                    format!("`{}` is a {}, given {got}", b.name, b.kind.what()),
+                    format!("set `{name}` is bound but not declared"),
                 ));
             }
         }
@@ -597,9 +855,9 @@ impl ComputePass {
         for b in &self.decl.bindings {
             let access = b.kind.compute_access();
             match binds.get(b.name) {
-                Some(Bound::Image(i)) => cmd.use_image(i, access),
+                Some(Bound::Image(i) | Bound::Sampled(i, _)) => cmd.use_image(i, access),
                 Some(Bound::Buffer(x)) => cmd.use_buffer(x, access),
-                None => {}
+                Some(Bound::Set(_)) | None => {}
             }
         }
         Ok(())
@@ -623,9 +881,25 @@ impl ComputePass {
                 ),
             ));
         }
-        let set = self.set(cmd.gpu(), binds)?;
+        let set = make_set(
+            cmd.gpu(),
+            &self.decl.name,
+            &self.layouts[0],
+            &self.decl.bindings,
+            &binds.without_sets(),
+            &self.samplers,
+        )?;
         cmd.bind_pipeline(&self.pipeline);
         cmd.bind_set(&self.pipeline, 0, &set);
+        for (i, r) in self.decl.sets.iter().enumerate() {
+            if let SetRef::Shared(s) = r {
+                cmd.bind_set(
+                    &self.pipeline,
+                    i as u32,
+                    binds.shared_set(&self.decl.name, s)?,
+                );
+            }
+        }
         if want > 0 {
             cmd.push_constants(&self.pipeline, bytemuck::bytes_of(push));
         }
@@ -633,38 +907,11 @@ impl ComputePass {
         cmd.keep(set);
         Ok(())
     }
+}
 
-    /// The dispatch's descriptor set (the binds were checked by [`ComputePass::prepare`];
-    /// anything else is still an error here or in `DescriptorSet::update`).
-    fn set(&self, gpu: &Gpu, binds: &Binds) -> Result<DescriptorSet> {
-        let mut writes = Vec::with_capacity(self.decl.bindings.len());
-        for (i, b) in self.decl.bindings.iter().enumerate() {
-            let n = i as u32;
-            let sampler = match b.kind {
-                BindKind::Sampled(filter) => self.samplers.get(&(filter as u8)),
-                _ => None,
-            };
-            match (binds.get(b.name), sampler) {
-                (Some(Bound::Image(img)), Some(s)) => {
-                    writes.push(Write::Sampled(n, vec![(*img, s)]));
-                }
-                (Some(Bound::Image(img)), None) => writes.push(Write::Storage(n, img)),
-                (Some(Bound::Buffer(x)), _) => writes.push(Write::Buffer(n, x)),
-                _ => {
-                    return Err(declaration(
-                        &self.decl.name,
-                        format!("`{}` cannot be bound as given", b.name),
-                    ));
-                }
-            }
-        }
-        DescriptorSet::new(
-            gpu,
-            &format!("{}.set", self.decl.name),
-            &self.layout,
-            &writes,
-        )
-    }
+/// Whether `r` is the shared set named `name`.
+fn shared_named(r: &SetRef, name: &str) -> bool {
+    matches!(r, SetRef::Shared(s) if s.name == name)
 }
 
 /// A ping-pong pair: frame f writes slot f % 2 and reads the other (written by frame f - 1).

@@ -18,6 +18,7 @@ use half::f16;
 use crate::frame::FrameOutput;
 use crate::gpu_scene::GpuScene;
 use crate::memory::MemoryEstimate;
+use crate::pass::Binds;
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, FrameTargets, ID_FORMAT, VELOCITY_FORMAT};
 
@@ -76,18 +77,15 @@ impl IdPass {
         profiler: &mut Profiler,
         scene: &GpuScene,
         counter: &Buffer,
-    ) {
-        self.pass.record(
-            cmd,
-            profiler,
-            scene,
-            &[&self.ids],
-            &self.depth,
-            counter,
-            &self.config,
-        );
+    ) -> Result<()> {
+        let targets = Binds::new()
+            .image("ids", &self.ids)
+            .image("depth", &self.depth);
+        self.pass
+            .record(cmd, profiler, scene, &targets, counter, &self.config)?;
         cmd.read_image(&self.ids, &self.ids_rb);
         cmd.read_image(&self.depth, &self.depth_rb);
+        Ok(())
     }
 
     /// View depths (+inf where empty) and IDs.

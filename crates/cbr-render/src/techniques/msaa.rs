@@ -204,16 +204,13 @@ impl Technique for Msaa {
         let this = &*self;
         ctx.submit("frame", |cmd, profiler, gs| {
             let r = &this.res;
-            this.ids.record(cmd, profiler, gs, counter);
-            this.pass.record(
-                cmd,
-                profiler,
-                gs,
-                &[r.image("color")?, r.image("velocity")?],
-                r.image("depth")?,
-                counter,
-                &this.config,
-            );
+            this.ids.record(cmd, profiler, gs, counter)?;
+            let targets = Binds::new()
+                .image("color", r.image("color")?)
+                .image("velocity", r.image("velocity")?)
+                .image("depth", r.image("depth")?);
+            this.pass
+                .record(cmd, profiler, gs, &targets, counter, &this.config)?;
             let push = Push {
                 size_samples: [
                     this.size.0 as i32,

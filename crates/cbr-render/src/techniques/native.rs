@@ -72,7 +72,7 @@ impl Technique for Native {
             ctx.counter,
         );
         ctx.submit("frame", |cmd, profiler, scene| {
-            pass.record_targets(cmd, profiler, scene, targets, counter, config);
+            pass.record_targets(cmd, profiler, scene, targets, counter, config)?;
             rb.record(cmd, profiler, targets.layers());
             cmd.use_buffer(counter, cbr_gpu::Access::HostRead);
             Ok(())

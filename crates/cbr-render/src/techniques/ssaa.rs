@@ -212,7 +212,7 @@ impl Ssaa {
         ctx.submit("ssaa.sample", |cmd, profiler, gs| {
             let t = &self.targets;
             self.pass
-                .record_targets(cmd, profiler, gs, t, counter, &self.config);
+                .record_targets(cmd, profiler, gs, t, counter, &self.config)?;
             if centre {
                 self.centre.record(cmd, profiler, t.layers());
             }

@@ -253,7 +253,7 @@ impl Technique for Upscale {
         ctx.submit("frame", |cmd, profiler, gs| {
             let t = &this.targets;
             this.pass
-                .record_targets(cmd, profiler, gs, t, counter, &this.config);
+                .record_targets(cmd, profiler, gs, t, counter, &this.config)?;
             this.up.record(cmd, profiler, t)?;
             this.readbacks.record(cmd, profiler, this.up.layers()?);
             cmd.use_buffer(counter, Access::HostRead);

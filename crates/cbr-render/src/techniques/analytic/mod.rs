@@ -34,7 +34,7 @@ use half::f16;
 use super::linear_depths;
 use crate::frame::{AnalyticLayers, Coverage, FrameOutput};
 use crate::memory::MemoryEstimate;
-use crate::scene_pass::{self, BINDINGS as SCENE_BINDINGS, MATERIAL_BINDINGS};
+use crate::scene_pass::{self, MATERIAL_SET, SCENE_SET};
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, FrameTargets, ID_FORMAT, VELOCITY_FORMAT};
 use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, unknown_param};
 
@@ -641,8 +641,13 @@ impl Analytic {
                 ctx.scene.material_textures.len()
             )));
         }
-        let scene_layout = SetLayout::new(gpu, "analytic.scene_layout", &SCENE_BINDINGS)?;
-        let material_layout = SetLayout::new(gpu, "analytic.material_layout", &MATERIAL_BINDINGS)?;
+        let scene_layout =
+            SetLayout::new(gpu, "analytic.scene_layout", &SCENE_SET.binding_descs())?;
+        let material_layout = SetLayout::new(
+            gpu,
+            "analytic.material_layout",
+            &MATERIAL_SET.binding_descs(),
+        )?;
         let raster_layout = SetLayout::new(gpu, "analytic.raster_layout", &RASTER_BINDINGS)?;
         let resolve_layout = SetLayout::new(gpu, "analytic.resolve_layout", &RESOLVE_BINDINGS)?;
         let tail_layout = SetLayout::new(gpu, "analytic.tail_layout", &TAIL_BINDINGS)?;
@@ -864,8 +869,12 @@ impl Analytic {
             depth,
         };
 
-        let scene_set =
-            scene_pass::scene_set(gpu, "analytic", &scene_layout, ctx.scene, ctx.counter)?;
+        let scene_set = SCENE_SET.make(
+            gpu,
+            "analytic",
+            &scene_layout,
+            &scene_pass::scene_binds(ctx.scene, ctx.counter),
+        )?;
         // The mask slot holds the coverage textures: the alpha test and the albedo of the
         // passing part in one lookup (raster.frag).
         let material_sets = scene_pass::material_sets(
@@ -1302,7 +1311,7 @@ impl Analytic {
         cmd.set_viewport(0.0, 0.0, t.depth.width as f32, t.depth.height as f32);
         cmd.bind_set(r.pipelines.first(), 0, &self.scene_set);
         cmd.bind_set(r.pipelines.first(), 2, &self.raster_set);
-        scene_pass::draw_scene(cmd, scene, &self.material_sets, 1, |m| r.pipelines.of(m));
+        scene_pass::draw_scene(cmd, scene, &self.material_sets, 1, 1, |m| r.pipelines.of(m));
         cmd.end_rendering();
         profiler.end(cmd, scope);
     }

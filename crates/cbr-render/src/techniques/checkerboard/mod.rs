@@ -246,12 +246,12 @@ impl Technique for Checkerboard {
             if let Some(p) = &this.prepass {
                 // Native resolution: the frame constants' raster fields describe the checkerboard
                 // pass; the ID-only native variant ignores them (no jitter, tangram or layers).
-                p.record(cmd, profiler, gs, counter);
+                p.record(cmd, profiler, gs, counter)?;
             }
             let t = &this.targets;
             let config = &this.configs[parity as usize];
             this.pass
-                .record_targets(cmd, profiler, gs, t, counter, config);
+                .record_targets(cmd, profiler, gs, t, counter, config)?;
             if let Some(r) = &this.resolve {
                 let pre = this.prepass.as_ref().map(|p| (&p.ids, &p.depth));
                 r.pass.record(cmd, profiler, t, pre, &rf)?;

@@ -44,15 +44,15 @@ impl GBuffer {
         })
     }
 
-    /// The G-buffer pass's colour attachments, in the pipeline's order.
-    pub fn attachments(&self) -> [&Image; 5] {
-        [
-            &self.position,
-            &self.normal,
-            &self.albedo,
-            &self.velocity,
-            &self.ids,
-        ]
+    /// The G-buffer pass's attachments under the scene pass's names.
+    pub fn bind(&self) -> crate::pass::Binds<'_> {
+        crate::pass::Binds::new()
+            .image("position", &self.position)
+            .image("normal", &self.normal)
+            .image("albedo", &self.albedo)
+            .image("velocity", &self.velocity)
+            .image("ids", &self.ids)
+            .image("depth", &self.depth)
     }
 
     /// Velocity, depth and IDs for temporal post passes.

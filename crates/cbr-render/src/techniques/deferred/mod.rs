@@ -128,11 +128,10 @@ pub fn estimate_gbuffer_and_lights(
     let vpl_bytes = u64::from(config.vpls.max(1)) * std::mem::size_of::<Vpl>() as u64;
     e.storage_buffer(format!("{prefix}.vpls"), vpl_bytes, false);
     if config.vpls > 0 {
-        let side = config.rsm;
-        for name in ["position", "normal", "flux"] {
-            e.image(format!("deferred.rsm.{name}"), GBUFFER_FORMAT, side, side);
-        }
-        e.image("deferred.rsm.depth", DEPTH_FORMAT, side, side);
+        e.append(crate::pass::estimate(
+            &rsm::resources(config.rsm),
+            "deferred.rsm",
+        ));
         e.storage_buffer("deferred.vpl_texels", u64::from(config.vpls) * 8, true);
         e.buffer("readback.vpls", vpl_bytes, true);
     }
@@ -177,15 +176,8 @@ impl Technique for Deferred {
         let this = &*self;
         ctx.submit("frame", |cmd, profiler, gs| {
             let g = &this.g;
-            this.gbuffer_pass.record(
-                cmd,
-                profiler,
-                gs,
-                &g.attachments(),
-                &g.depth,
-                counter,
-                &this.raster,
-            );
+            this.gbuffer_pass
+                .record(cmd, profiler, gs, &g.bind(), counter, &this.raster)?;
             this.lights.record(cmd, profiler, gs, sun.as_ref())?;
             this.lighting.record(
                 cmd,

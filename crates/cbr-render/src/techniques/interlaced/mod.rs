@@ -157,7 +157,7 @@ impl Technique for Interlaced {
         ctx.submit("frame", |cmd, profiler, gs| {
             let t = &this.targets;
             this.pass
-                .record_targets(cmd, profiler, gs, t, counter, &this.config);
+                .record_targets(cmd, profiler, gs, t, counter, &this.config)?;
             this.resolve.record(cmd, profiler, t, &frame)?;
             this.resolve
                 .read(cmd, profiler, frame.slot, &this.readbacks)?;

@@ -472,15 +472,8 @@ impl Technique for Interleaved {
         let this = &*self;
         ctx.submit("frame", |cmd, profiler, gs| {
             let g = &this.g;
-            this.gbuffer_pass.record(
-                cmd,
-                profiler,
-                gs,
-                &g.attachments(),
-                &g.depth,
-                counter,
-                &this.raster,
-            );
+            this.gbuffer_pass
+                .record(cmd, profiler, gs, &g.bind(), counter, &this.raster)?;
             this.lights.record(cmd, profiler, gs, sun.as_ref())?;
             let sources = this.lights.sources();
             this.split.record(
