@@ -1276,18 +1276,35 @@ mod tests {
         ];
         decls.extend(crate::post::fxaa::decls());
         decls.extend(interleaved::split::decls(&interleaved));
-        for d in decls.iter().filter(|d| d.push.is_some()) {
+        let mut stages: Vec<(String, &str, Vec<(String, String)>, &[PushField])> = decls
+            .iter()
+            .filter(|d| d.push.is_some())
+            .map(|d| (d.name.clone(), d.shader, d.all_defines(), d.push_fields))
+            .collect();
+        // The raster passes' blocks, in every stage that declares them.
+        let rasters = crate::scene_pass::decls(
+            "scene",
+            &crate::scene_pass::RasterConfig::native(64, 36),
+            &[],
+        )
+        .expect("scene pass");
+        for d in rasters.iter().chain([&deferred::rsm::decl()]) {
+            for (shader, defines) in d.stages() {
+                stages.push((d.name.clone(), shader, defines, d.push_fields));
+            }
+        }
+        assert!(stages.len() > 20);
+        for (name, shader, defines, fields) in stages {
             let words = shaders
-                .compile(d.shader, &d.all_defines())
-                .unwrap_or_else(|e| panic!("{}: {e}", d.name));
+                .compile(shader, &defines)
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
             let offsets = crate::gpu_types::tests::member_offsets(&words);
-            for (i, f) in d.push_fields.iter().enumerate() {
+            for (i, f) in fields.iter().enumerate() {
                 let glsl = offsets.get(&("Push".to_string(), i as u32)).copied();
                 assert_eq!(
                     glsl,
                     Some(f.offset as u32),
-                    "{}: push constant `{}`",
-                    d.name,
+                    "{name}: push constant `{}`",
                     f.name
                 );
             }

@@ -265,6 +265,15 @@ fn variant_decls(name: &str, config: &RasterConfig, f: u32) -> Result<VariantDec
     })
 }
 
+/// [`decls`] for the compile-only list (its errors as text).
+pub fn listed(
+    name: &str,
+    config: &RasterConfig,
+    features: &[u32],
+) -> std::result::Result<Vec<GraphicsDecl>, String> {
+    decls(name, config, features).map_err(|e| e.to_string())
+}
+
 /// Every pipeline a scene pass builds for `config` and a scene whose materials have `features`
 /// (one MAT_FEATURES combination each): the compile-only list's raster entries.
 pub fn decls(name: &str, config: &RasterConfig, features: &[u32]) -> Result<Vec<GraphicsDecl>> {

@@ -34,6 +34,27 @@ pub struct IdPass {
 }
 
 impl IdPass {
+    const NAME: &str = "id_prepass.raster";
+
+    /// Native's raster, depth and IDs only.
+    fn raster(w: u32, h: u32) -> RasterConfig {
+        RasterConfig {
+            id_only: true,
+            ..RasterConfig::native(w, h)
+        }
+    }
+
+    /// Its raster pipelines, for the compile-only list.
+    pub fn decls(
+        ctx: &crate::technique::PassCtx,
+    ) -> std::result::Result<Vec<crate::pass::GraphicsDecl>, String> {
+        crate::scene_pass::listed(
+            Self::NAME,
+            &Self::raster(ctx.width, ctx.height),
+            ctx.materials,
+        )
+    }
+
     pub fn new(
         gpu: &Gpu,
         shaders: &Shaders,
@@ -42,11 +63,8 @@ impl IdPass {
         h: u32,
         counter: &Buffer,
     ) -> Result<IdPass> {
-        let config = RasterConfig {
-            id_only: true,
-            ..RasterConfig::native(w, h)
-        };
-        let pass = ScenePass::new(gpu, shaders, scene, "id_prepass.raster", &config, counter)?;
+        let config = Self::raster(w, h);
+        let pass = ScenePass::new(gpu, shaders, scene, Self::NAME, &config, counter)?;
         // Only the ID and depth targets are kept; colour and velocity are dropped unused.
         let FrameTargets { ids, depth, .. } = FrameTargets::new(gpu, "id_prepass", w, h)?;
         let ids_rb = Readback::for_image(gpu, "readback.prepass_ids", &ids)?;

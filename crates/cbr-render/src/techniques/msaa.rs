@@ -28,9 +28,17 @@ pub const REGISTRATION: Registration = Registration {
     check: |p| parse(p).map(|_| ()),
     needs,
     estimate: |ctx, p| Ok(Msaa::estimate(parse(p)?, ctx.width, ctx.height)),
-    passes: |_, p| {
+    passes: |ctx, p| {
+        let c = parse(p)?;
+        let mut graphics = crate::scene_pass::listed(
+            "msaa.raster",
+            &raster(c, ctx.width, ctx.height),
+            ctx.materials,
+        )?;
+        graphics.extend(IdPass::decls(ctx)?);
         Ok(crate::technique::PassList {
-            compute: vec![decl(parse(p)?)],
+            compute: vec![decl(c)],
+            graphics,
             packed_geometry: false,
         })
     },
@@ -39,6 +47,17 @@ pub const REGISTRATION: Registration = Registration {
         Ok(Box::new(Msaa::new(ctx, c)?))
     },
 };
+
+/// The multisampled raster: colour and velocity (no IDs: devices without multisampled integer
+/// attachments), per sample with `sample`.
+fn raster(c: MsaaConfig, w: u32, h: u32) -> RasterConfig {
+    RasterConfig {
+        samples: c.samples,
+        write_ids: false,
+        sample_shading: c.sample_shading,
+        ..RasterConfig::native(w, h)
+    }
+}
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MsaaConfig {
@@ -162,12 +181,7 @@ impl Msaa {
 
     pub fn new(ctx: &BuildCtx, c: MsaaConfig) -> Result<Msaa> {
         let (gpu, w, h) = (ctx.gpu, ctx.width, ctx.height);
-        let config = RasterConfig {
-            samples: c.samples,
-            write_ids: false,
-            sample_shading: c.sample_shading,
-            ..RasterConfig::native(w, h)
-        };
+        let config = raster(c, w, h);
         let pass = ScenePass::new(
             gpu,
             ctx.shaders,

@@ -29,10 +29,15 @@ pub const REGISTRATION: Registration = Registration {
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
     estimate: |ctx, _| Ok(Ssaa::estimate(ctx.width, ctx.height)),
-    passes: |_, p| {
+    passes: |ctx, p| {
         parse(p)?;
         Ok(crate::technique::PassList {
             compute: vec![decl()],
+            graphics: crate::scene_pass::listed(
+                "ssaa.raster",
+                &RasterConfig::native(ctx.width, ctx.height),
+                ctx.materials,
+            )?,
             packed_geometry: false,
         })
     },

@@ -42,7 +42,7 @@ pub const REGISTRATION: Registration = Registration {
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
     estimate: |ctx, p| Ok(Deferred::estimate(&parse(p)?, ctx.width, ctx.height)),
-    passes: |_, p| {
+    passes: |ctx, p| {
         let c = parse(p)?;
         let mut compute = vec![lighting::decl(None)];
         if c.vpls > 0 {
@@ -50,6 +50,7 @@ pub const REGISTRATION: Registration = Registration {
         }
         Ok(crate::technique::PassList {
             compute,
+            graphics: raster_decls(ctx, "deferred", c.vpls)?,
             packed_geometry: false,
         })
     },
@@ -148,13 +149,37 @@ pub fn output(
     Ok(out)
 }
 
-pub fn gbuffer(ctx: &BuildCtx, name: &str) -> Result<(RasterConfig, ScenePass, GBuffer)> {
-    let (w, h) = (ctx.width, ctx.height);
-    let raster = RasterConfig {
+/// The G-buffer raster: native's with the surface written instead of its shading, after a depth
+/// pre-pass.
+fn gbuffer_raster(w: u32, h: u32) -> RasterConfig {
+    RasterConfig {
         gbuffer: true,
         depth_prepass: true,
         ..RasterConfig::native(w, h)
-    };
+    }
+}
+
+/// The raster pipelines of `deferred` and `interleaved` (named `name`) with `vpls` VPLs: the
+/// G-buffer pass's and, with VPLs, the sun's map's (the compile-only list).
+pub fn raster_decls(
+    ctx: &crate::technique::PassCtx,
+    name: &str,
+    vpls: u32,
+) -> std::result::Result<Vec<crate::pass::GraphicsDecl>, String> {
+    let mut d = crate::scene_pass::listed(
+        &format!("{name}.gbuffer"),
+        &gbuffer_raster(ctx.width, ctx.height),
+        ctx.materials,
+    )?;
+    if vpls > 0 {
+        d.push(rsm::decl());
+    }
+    Ok(d)
+}
+
+pub fn gbuffer(ctx: &BuildCtx, name: &str) -> Result<(RasterConfig, ScenePass, GBuffer)> {
+    let (w, h) = (ctx.width, ctx.height);
+    let raster = gbuffer_raster(w, h);
     let pass = ScenePass::new(
         ctx.gpu,
         ctx.shaders,

@@ -43,7 +43,7 @@ pub const REGISTRATION: Registration = Registration {
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
     estimate: |ctx, p| Ok(Interleaved::estimate(&parse(p)?, ctx.width, ctx.height)),
-    passes: |_, p| {
+    passes: |ctx, p| {
         let c = parse(p)?;
         let mut compute = Vec::new();
         if c.lights.vpls > 0 {
@@ -56,6 +56,7 @@ pub const REGISTRATION: Registration = Registration {
         compute.push(super::deferred::lighting::decl(Some(&lighting_variant(&c))));
         Ok(crate::technique::PassList {
             compute,
+            graphics: super::deferred::raster_decls(ctx, "interleaved", c.lights.vpls)?,
             packed_geometry: false,
         })
     },
