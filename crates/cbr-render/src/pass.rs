@@ -24,8 +24,8 @@ use std::collections::BTreeMap;
 
 use cbr_gpu::{
     Access, BindingDesc, Buffer, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Gpu, GpuError,
-    Image, ImageDesc, PassKind, Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout,
-    Shaders, Write, vk,
+    Image, ImageDesc, PassKind, Pipeline, Profiler, Readback, Result, Sampler, SamplerDesc,
+    SetLayout, Shaders, Write, vk,
 };
 
 use crate::memory::MemoryEstimate;
@@ -661,7 +661,7 @@ impl<'a> Binds<'a> {
             match r {
                 Owned::Image(i) => b.list.push((name, Bound::Image(i), false)),
                 Owned::Buffer(x) => b.list.push((name, Bound::Buffer(x), false)),
-                Owned::History(_) => {}
+                Owned::History(_) | Owned::Readback(_) => {}
             }
         }
         b
@@ -962,6 +962,17 @@ pub enum ResourceKind {
         height: u32,
         usage: vk::ImageUsageFlags,
         samples: u32,
+        /// Array layers (the split layout's two).
+        layers: u32,
+        flags: vk::ImageCreateFlags,
+    },
+    /// A host-visible buffer an image of `format`, `width` x `height` x `layers` is copied into
+    /// after the frame (`Readback`).
+    Readback {
+        format: vk::Format,
+        width: u32,
+        height: u32,
+        layers: u32,
     },
     /// A storage buffer, device-local or (`host`) host-visible: read by the host after the
     /// frame.
@@ -997,9 +1008,117 @@ impl ResourceDecl {
                 height,
                 usage,
                 samples,
+                layers: 1,
+                flags: vk::ImageCreateFlags::empty(),
             },
             history: false,
         }
+    }
+
+    /// The readback of a `width` x `height` image of `format` (one layer: see
+    /// [`ResourceDecl::layers`]).
+    pub fn readback(
+        name: &'static str,
+        format: vk::Format,
+        width: u32,
+        height: u32,
+    ) -> ResourceDecl {
+        ResourceDecl {
+            name,
+            kind: ResourceKind::Readback {
+                format,
+                width,
+                height,
+                layers: 1,
+            },
+            history: false,
+        }
+    }
+
+    /// With `n` array layers (an image, or the readback of one).
+    pub fn layers(mut self, n: u32) -> ResourceDecl {
+        match &mut self.kind {
+            ResourceKind::Image { layers, .. } | ResourceKind::Readback { layers, .. } => {
+                *layers = n
+            }
+            ResourceKind::Buffer { .. } => {}
+        }
+        self
+    }
+
+    /// An image with creation flags (a depth target compatible with custom sample locations).
+    pub fn flags(mut self, more: vk::ImageCreateFlags) -> ResourceDecl {
+        if let ResourceKind::Image { flags, .. } = &mut self.kind {
+            *flags |= more;
+        }
+        self
+    }
+
+    /// Allocates this image as `<owner>.<name>` (for structs that keep their images in fields,
+    /// like the frame targets: the declaration is still the one description).
+    pub fn make_image(&self, gpu: &Gpu, owner: &str) -> Result<Image> {
+        match self.make(gpu, &self.slot_names(owner)[0])? {
+            Owned::Image(i) => Ok(i),
+            _ => Err(declaration(
+                owner,
+                format!("`{}` is not an image", self.name),
+            )),
+        }
+    }
+
+    /// Allocates this readback as `<owner>.<name>`.
+    pub fn make_readback(&self, gpu: &Gpu, owner: &str) -> Result<Readback> {
+        match self.make(gpu, &self.slot_names(owner)[0])? {
+            Owned::Readback(r) => Ok(r),
+            _ => Err(declaration(
+                owner,
+                format!("`{}` is not a readback", self.name),
+            )),
+        }
+    }
+
+    fn make(&self, gpu: &Gpu, name: &str) -> Result<Owned> {
+        Ok(match &self.kind {
+            ResourceKind::Image {
+                format,
+                width,
+                height,
+                usage,
+                samples,
+                layers,
+                flags,
+            } => Owned::Image(Image::new(
+                gpu,
+                &ImageDesc {
+                    samples: *samples,
+                    layers: *layers,
+                    flags: *flags,
+                    ..ImageDesc::new_2d(name, *format, *width, *height, *usage)
+                },
+            )?),
+            ResourceKind::Buffer { bytes, usage, host } => Owned::Buffer(Buffer::new(
+                gpu,
+                name,
+                *bytes,
+                *usage,
+                match host {
+                    true => cbr_gpu::Location::GpuToCpu,
+                    false => cbr_gpu::Location::GpuOnly,
+                },
+            )?),
+            ResourceKind::Readback {
+                format,
+                width,
+                height,
+                layers,
+            } => Owned::Readback(Readback::for_buffer(
+                gpu,
+                name,
+                readback_bytes(*format, *width, *height, *layers),
+                *width,
+                *height,
+            )?),
+        })
     }
 
     /// A render target of `samples` samples a raster pass writes and a later pass samples
@@ -1080,9 +1199,16 @@ impl ResourceDecl {
                     width,
                     height,
                     samples,
+                    layers,
                     ..
-                } => e.image_array(name, *format, *width, *height, 1, *samples),
+                } => e.image_array(name, *format, *width, *height, *layers, *samples),
                 ResourceKind::Buffer { bytes, host, .. } => e.storage_buffer(name, *bytes, *host),
+                ResourceKind::Readback {
+                    format,
+                    width,
+                    height,
+                    layers,
+                } => e.readback(name, *format, *width, *height, *layers),
             }
         }
     }
@@ -1100,7 +1226,13 @@ pub fn estimate(decls: &[ResourceDecl], owner: &str) -> MemoryEstimate {
 enum Owned {
     Image(Image),
     Buffer(Buffer),
+    Readback(Readback),
     History(History<Image>),
+}
+
+/// Bytes of the readback of a `width` x `height` x `layers` image of `format`.
+fn readback_bytes(format: vk::Format, width: u32, height: u32, layers: u32) -> u64 {
+    u64::from(width) * u64::from(height) * u64::from(layers) * crate::memory::texel_bytes(format)
 }
 
 /// The resources of one owner, allocated from their declarations, found by name.
@@ -1117,33 +1249,7 @@ impl Resources {
                 return Err(declaration(owner, format!("resource `{}` twice", d.name)));
             }
             let names = d.slot_names(owner);
-            let make = |name: &str| -> Result<Owned> {
-                Ok(match &d.kind {
-                    ResourceKind::Image {
-                        format,
-                        width,
-                        height,
-                        usage,
-                        samples,
-                    } => Owned::Image(Image::new(
-                        gpu,
-                        &ImageDesc {
-                            samples: *samples,
-                            ..ImageDesc::new_2d(name, *format, *width, *height, *usage)
-                        },
-                    )?),
-                    ResourceKind::Buffer { bytes, usage, host } => Owned::Buffer(Buffer::new(
-                        gpu,
-                        name,
-                        *bytes,
-                        *usage,
-                        match host {
-                            true => cbr_gpu::Location::GpuToCpu,
-                            false => cbr_gpu::Location::GpuOnly,
-                        },
-                    )?),
-                })
-            };
+            let make = |name: &str| d.make(gpu, name);
             let owned = if d.history {
                 let image = |o: Owned| match o {
                     Owned::Image(i) => Ok(i),
@@ -1170,6 +1276,16 @@ impl Resources {
             .find(|(n, _)| *n == name)
             .map(|(_, o)| o)
             .ok_or_else(|| declaration(&self.owner, format!("no resource `{name}`")))
+    }
+
+    pub fn readback(&self, name: &str) -> Result<&Readback> {
+        match self.find(name)? {
+            Owned::Readback(r) => Ok(r),
+            _ => Err(declaration(
+                &self.owner,
+                format!("`{name}` is not a readback"),
+            )),
+        }
     }
 
     pub fn image(&self, name: &str) -> Result<&Image> {
@@ -1276,7 +1392,9 @@ mod tests {
         ];
         decls.extend(crate::post::fxaa::decls());
         decls.extend(interleaved::split::decls(&interleaved));
-        let mut stages: Vec<(String, &str, Vec<(String, String)>, &[PushField])> = decls
+        /// A pass's name, one of its shaders with its defines, and its push-constant members.
+        type Stage<'a> = (String, &'a str, Vec<(String, String)>, &'a [PushField]);
+        let mut stages: Vec<Stage> = decls
             .iter()
             .filter(|d| d.push.is_some())
             .map(|d| (d.name.clone(), d.shader, d.all_defines(), d.push_fields))
@@ -1293,7 +1411,13 @@ mod tests {
                 stages.push((d.name.clone(), shader, defines, d.push_fields));
             }
         }
-        assert!(stages.len() > 20);
+        for raster in [
+            "scene/forward.vert",
+            "scene/forward.frag",
+            "deferred/rsm.vert",
+        ] {
+            assert!(stages.iter().any(|s| s.1 == raster), "{raster} not checked");
+        }
         for (name, shader, defines, fields) in stages {
             let words = shaders
                 .compile(shader, &defines)

@@ -48,6 +48,14 @@ pub const REGISTRATION: Registration = Registration {
     },
 };
 
+/// The readbacks of the resolved colour and velocity.
+fn readbacks(w: u32, h: u32) -> [ResourceDecl; 2] {
+    [
+        ResourceDecl::readback("msaa.color", COLOR_FORMAT, w, h),
+        ResourceDecl::readback("msaa.velocity", VELOCITY_FORMAT, w, h),
+    ]
+}
+
 /// The multisampled raster: colour and velocity (no IDs: devices without multisampled integer
 /// attachments), per sample with `sample`.
 fn raster(c: MsaaConfig, w: u32, h: u32) -> RasterConfig {
@@ -174,8 +182,7 @@ impl Msaa {
     pub fn estimate(c: MsaaConfig, w: u32, h: u32) -> MemoryEstimate {
         let mut e = crate::pass::estimate(&resources(c, w, h), "msaa");
         IdPass::estimate(&mut e, w, h);
-        e.readback("readback.msaa.color", COLOR_FORMAT, w, h, 1);
-        e.readback("readback.msaa.velocity", VELOCITY_FORMAT, w, h, 1);
+        e.append(crate::pass::estimate(&readbacks(w, h), "readback"));
         e
     }
 
@@ -193,9 +200,8 @@ impl Msaa {
         let res = Resources::new(gpu, "msaa", &resources(c, w, h))?;
         let ids = IdPass::new(gpu, ctx.shaders, ctx.scene, w, h, ctx.counter)?;
         let resolve = decl(c).build(gpu, ctx.shaders)?;
-        let color_rb = Readback::for_image(gpu, "readback.msaa.color", res.image("out_color")?)?;
-        let velocity_rb =
-            Readback::for_image(gpu, "readback.msaa.velocity", res.image("out_velocity")?)?;
+        let [color_rb, velocity_rb] = readbacks(w, h).map(|r| r.make_readback(gpu, "readback"));
+        let (color_rb, velocity_rb) = (color_rb?, velocity_rb?);
         Ok(Msaa {
             c,
             pass,

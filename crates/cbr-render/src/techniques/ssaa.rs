@@ -49,6 +49,14 @@ pub const REGISTRATION: Registration = Registration {
 
 pub const MAX_N: u32 = 32;
 
+/// The readbacks of the frame (`out`) and its coverage (`aux`).
+fn readbacks(w: u32, h: u32) -> [ResourceDecl; 2] {
+    [
+        ResourceDecl::readback("ssaa.out", COLOR_FORMAT, w, h),
+        ResourceDecl::readback("ssaa.aux", vk::Format::R32G32_UINT, w, h),
+    ]
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SsaaConfig {
     pub n: u32,
@@ -143,8 +151,7 @@ impl Ssaa {
         FrameTargets::estimate(&mut e, "ssaa", w, h, 1, 1);
         e.append(crate::pass::estimate(&resources(w, h), "ssaa"));
         LayerReadbacks::estimate(&mut e, w, h);
-        e.readback("readback.ssaa.out", COLOR_FORMAT, w, h, 1);
-        e.readback("readback.ssaa.aux", vk::Format::R32G32_UINT, w, h, 1);
+        e.append(crate::pass::estimate(&readbacks(w, h), "readback"));
         e
     }
 
@@ -163,8 +170,8 @@ impl Ssaa {
         let accumulate = decl().build(gpu, ctx.shaders)?;
         let res = Resources::new(gpu, "ssaa", &resources(w, h))?;
         let centre = LayerReadbacks::new(gpu, targets.layers())?;
-        let out_rb = Readback::for_image(gpu, "readback.ssaa.out", res.image("out")?)?;
-        let aux_rb = Readback::for_image(gpu, "readback.ssaa.aux", res.image("aux")?)?;
+        let [out_rb, aux_rb] = readbacks(w, h).map(|r| r.make_readback(gpu, "readback"));
+        let (out_rb, aux_rb) = (out_rb?, aux_rb?);
         Ok(Ssaa {
             c,
             pass,

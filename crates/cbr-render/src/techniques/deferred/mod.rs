@@ -25,7 +25,6 @@ use crate::frame::FrameOutput;
 use crate::gpu_types::{LightData, Vpl};
 use crate::memory::MemoryEstimate;
 use crate::scene_pass::{RasterConfig, ScenePass};
-use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, GBUFFER_FORMAT, ID_FORMAT, VELOCITY_FORMAT};
 use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique};
 pub use config::*;
 pub use gbuffer::GBuffer;
@@ -113,13 +112,7 @@ pub fn estimate_gbuffer_and_lights(
     w: u32,
     h: u32,
 ) {
-    for name in ["position", "normal", "albedo"] {
-        e.image(format!("{prefix}.{name}"), GBUFFER_FORMAT, w, h);
-    }
-    e.image(format!("{prefix}.velocity"), VELOCITY_FORMAT, w, h);
-    e.image(format!("{prefix}.ids"), ID_FORMAT, w, h);
-    e.image(format!("{prefix}.depth"), DEPTH_FORMAT, w, h);
-    e.image(format!("{prefix}.color"), COLOR_FORMAT, w, h);
+    e.append(crate::pass::estimate(&GBuffer::decls(w, h), prefix));
     let light = std::mem::size_of::<LightData>() as u64;
     e.storage_buffer(
         format!("{prefix}.points"),
@@ -235,6 +228,6 @@ impl Technique for Deferred {
 
     fn target_bytes(&self) -> u64 {
         let (w, h) = self.size;
-        u64::from(w) * u64::from(h) * GBuffer::BYTES_PER_PIXEL + self.lights.bytes()
+        GBuffer::bytes(w, h) + self.lights.bytes()
     }
 }

@@ -525,9 +525,7 @@ impl Technique for Interleaved {
 
     fn target_bytes(&self) -> u64 {
         let (w, h) = self.size;
-        u64::from(w) * u64::from(h) * GBuffer::BYTES_PER_PIXEL
-            + self.lights.bytes()
-            + self.split.bytes()
+        GBuffer::bytes(w, h) + self.lights.bytes() + self.split.bytes()
     }
 }
 
