@@ -954,6 +954,16 @@ pub struct ResourceDecl {
     pub history: bool,
 }
 
+/// Where a declared buffer lives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Memory {
+    Device,
+    /// Host-visible, written by the host before the frame (lights, patterns).
+    Upload,
+    /// Host-visible, read by the host after the frame.
+    Host,
+}
+
 #[derive(Clone, Debug)]
 pub enum ResourceKind {
     Image {
@@ -974,12 +984,11 @@ pub enum ResourceKind {
         height: u32,
         layers: u32,
     },
-    /// A storage buffer, device-local or (`host`) host-visible: read by the host after the
-    /// frame.
+    /// A buffer in `memory`.
     Buffer {
         bytes: u64,
         usage: vk::BufferUsageFlags,
-        host: bool,
+        memory: Memory,
     },
 }
 
@@ -1096,14 +1105,19 @@ impl ResourceDecl {
                     ..ImageDesc::new_2d(name, *format, *width, *height, *usage)
                 },
             )?),
-            ResourceKind::Buffer { bytes, usage, host } => Owned::Buffer(Buffer::new(
+            ResourceKind::Buffer {
+                bytes,
+                usage,
+                memory,
+            } => Owned::Buffer(Buffer::new(
                 gpu,
                 name,
                 *bytes,
                 *usage,
-                match host {
-                    true => cbr_gpu::Location::GpuToCpu,
-                    false => cbr_gpu::Location::GpuOnly,
+                match memory {
+                    Memory::Device => cbr_gpu::Location::GpuOnly,
+                    Memory::Upload => cbr_gpu::Location::CpuToGpu,
+                    Memory::Host => cbr_gpu::Location::GpuToCpu,
                 },
             )?),
             ResourceKind::Readback {
@@ -1147,7 +1161,7 @@ impl ResourceDecl {
                 usage: vk::BufferUsageFlags::STORAGE_BUFFER
                     | vk::BufferUsageFlags::TRANSFER_SRC
                     | vk::BufferUsageFlags::TRANSFER_DST,
-                host: false,
+                memory: Memory::Device,
             },
             history: false,
         }
@@ -1155,15 +1169,69 @@ impl ResourceDecl {
 
     /// A host-visible storage buffer of `bytes` the host reads after the frame.
     pub fn host_buffer(name: &'static str, bytes: u64) -> ResourceDecl {
+        ResourceDecl::buffer_in(
+            name,
+            bytes,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            Memory::Host,
+        )
+    }
+
+    /// A host-visible storage buffer of `bytes` the host writes before the frame.
+    pub fn upload_buffer(name: &'static str, bytes: u64) -> ResourceDecl {
+        ResourceDecl::buffer_in(
+            name,
+            bytes,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            Memory::Upload,
+        )
+    }
+
+    /// A host-visible buffer of `bytes` a buffer is copied into after the frame.
+    pub fn readback_buffer(name: &'static str, bytes: u64) -> ResourceDecl {
+        ResourceDecl::buffer_in(
+            name,
+            bytes,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            Memory::Host,
+        )
+    }
+
+    /// A buffer of `bytes` with `usage` in `memory`.
+    pub fn buffer_in(
+        name: &'static str,
+        bytes: u64,
+        usage: vk::BufferUsageFlags,
+        memory: Memory,
+    ) -> ResourceDecl {
         ResourceDecl {
             name,
             kind: ResourceKind::Buffer {
                 bytes,
-                usage: vk::BufferUsageFlags::STORAGE_BUFFER,
-                host: true,
+                usage,
+                memory,
             },
             history: false,
         }
+    }
+
+    /// Allocates this buffer as `<owner>.<name>`.
+    pub fn make_buffer(&self, gpu: &Gpu, owner: &str) -> Result<Buffer> {
+        match self.make(gpu, &self.slot_names(owner)[0])? {
+            Owned::Buffer(b) => Ok(b),
+            _ => Err(declaration(
+                owner,
+                format!("`{}` is not a buffer", self.name),
+            )),
+        }
+    }
+
+    /// A buffer with more usages (one copied from: TRANSFER_SRC).
+    pub fn buffer_usage(mut self, more: vk::BufferUsageFlags) -> ResourceDecl {
+        if let ResourceKind::Buffer { usage, .. } = &mut self.kind {
+            *usage |= more;
+        }
+        self
     }
 
     /// With more usages (an image another pass fills by a copy: TRANSFER_DST).
@@ -1202,7 +1270,18 @@ impl ResourceDecl {
                     layers,
                     ..
                 } => e.image_array(name, *format, *width, *height, *layers, *samples),
-                ResourceKind::Buffer { bytes, host, .. } => e.storage_buffer(name, *bytes, *host),
+                ResourceKind::Buffer {
+                    bytes,
+                    usage,
+                    memory,
+                } => {
+                    let host = *memory != Memory::Device;
+                    if usage.contains(vk::BufferUsageFlags::STORAGE_BUFFER) {
+                        e.storage_buffer(name, *bytes, host)
+                    } else {
+                        e.buffer(name, *bytes, host)
+                    }
+                }
                 ResourceKind::Readback {
                     format,
                     width,

@@ -3,8 +3,8 @@
 //! back, collects timings and decides history resets. It knows no technique by name: they come
 //! from the registries (crate::technique, crate::post) through the spec.
 
-use cbr_gpu::{Buffer, Gpu, GpuError, Location, PassKind, Profiler, Readback, Result};
-use cbr_gpu::{Caps, Shaders, vk};
+use cbr_gpu::{Buffer, Gpu, GpuError, PassKind, Profiler, Readback, Result};
+use cbr_gpu::{Caps, Shaders};
 use cbr_scene::Scene;
 use half::f16;
 
@@ -78,6 +78,17 @@ fn registration(spec: &Spec) -> Result<&'static Registration> {
     })
 }
 
+/// The shaded-fragment and non-finite-fragment counters the scene shaders add to (two words,
+/// read by the host after each frame).
+fn counter_decl() -> crate::pass::ResourceDecl {
+    crate::pass::ResourceDecl::host_buffer("fragment_counters", 8)
+}
+
+/// The readback of the post chain's last output.
+fn post_readback(w: u32, h: u32) -> crate::pass::ResourceDecl {
+    crate::pass::ResourceDecl::readback("post", crate::targets::COLOR_FORMAT, w, h)
+}
+
 pub struct Renderer {
     gpu: Gpu,
     scene: GpuScene,
@@ -110,13 +121,7 @@ impl Renderer {
         let reg = registration(spec)?;
         let params = spec.technique.params();
         let gpu_scene = GpuScene::new(gpu, scene)?;
-        let counter = Buffer::new(
-            gpu,
-            "fragment_counters",
-            8,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            Location::GpuToCpu,
-        )?;
+        let counter = counter_decl().make_buffer(gpu, "renderer")?;
         let (w, h) = (settings.width, settings.height);
         let mut post_regs = Vec::new();
         for part in &spec.post {
@@ -198,7 +203,7 @@ impl Renderer {
         }
         drop(geometries);
         let post_rb = match post.last() {
-            Some(p) => Some(Readback::for_image(gpu, "readback.post", p.output(0)?)?),
+            Some(_) => Some(post_readback(w, h).make_readback(gpu, "readback")?),
             None => None,
         };
         let cache = match (&settings.cache, technique.cacheable()) {
@@ -252,10 +257,10 @@ impl Renderer {
                 .ok_or_else(|| format!("no post pass `+{}`", part.name))?;
             e.append((pr.estimate)(&ctx, &part.params()));
         }
-        e.storage_buffer("fragment_counters", 8, true);
+        e.append(crate::pass::estimate(&[counter_decl()], "renderer"));
         if !spec.post.is_empty() {
             let (w, h) = (settings.width, settings.height);
-            e.readback("readback.post", crate::targets::COLOR_FORMAT, w, h, 1);
+            e.append(crate::pass::estimate(&[post_readback(w, h)], "readback"));
         }
         e.append(GpuScene::estimate(scene));
         Ok(e)

@@ -2,7 +2,7 @@
 //! `points=N` random point lights, and with `vpls=N` the sun's reflective shadow map, the VPL pass
 //! and the VPL buffer, prepared on the host and recorded each frame.
 
-use cbr_gpu::{Access, Buffer, Cmd, GpuError, Location, Profiler, Result, vk};
+use cbr_gpu::{Access, Buffer, Cmd, GpuError, Profiler, Result, vk};
 use cbr_scene::PointLight;
 use glam::DVec3;
 
@@ -12,7 +12,32 @@ use super::rsm::{RsmPass, VplPass};
 use super::vpl::{self, SunView};
 use crate::gpu_scene::GpuScene;
 use crate::gpu_types::{LightData, Vpl};
+use crate::pass::{Memory, ResourceDecl};
 use crate::technique::{BuildCtx, FrameCtx};
+
+/// The light buffers (under the technique's name): the `points=N` lights, written by the host
+/// each frame, and the VPLs (device-local; one unread VPL when there are none).
+pub fn resources(config: &DeferredConfig) -> [ResourceDecl; 2] {
+    let light = std::mem::size_of::<LightData>() as u64;
+    [
+        ResourceDecl::upload_buffer("points", u64::from(config.points.max(1)) * light),
+        ResourceDecl::buffer_in(
+            "vpls",
+            vpl_bytes(config),
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
+            Memory::Device,
+        ),
+    ]
+}
+
+fn vpl_bytes(config: &DeferredConfig) -> u64 {
+    u64::from(config.vpls.max(1)) * std::mem::size_of::<Vpl>() as u64
+}
+
+/// With VPLs: their readback (`readback.vpls`).
+pub fn vpl_readback(config: &DeferredConfig) -> ResourceDecl {
+    ResourceDecl::readback_buffer("vpls", vpl_bytes(config))
+}
 
 pub struct ManyLights {
     config: DeferredConfig,
@@ -42,31 +67,12 @@ impl ManyLights {
             )));
         }
         let gpu = ctx.gpu;
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let points = Buffer::new(
-            gpu,
-            &format!("{name}.points"),
-            u64::from(config.points.max(1)) * std::mem::size_of::<LightData>() as u64,
-            storage,
-            Location::CpuToGpu,
-        )?;
-        let vpls = Buffer::new(
-            gpu,
-            &format!("{name}.vpls"),
-            u64::from(config.vpls.max(1)) * std::mem::size_of::<Vpl>() as u64,
-            storage | vk::BufferUsageFlags::TRANSFER_SRC,
-            Location::GpuOnly,
-        )?;
+        let [points, vpls] = resources(config);
+        let (points, vpls) = (points.make_buffer(gpu, name)?, vpls.make_buffer(gpu, name)?);
         let (rsm, vpl_pass, vpl_readback) = if config.vpls > 0 {
             let rsm = RsmPass::new(gpu, ctx.shaders, ctx.scene, ctx.counter, config.rsm)?;
             let vp = VplPass::new(gpu, ctx.shaders, &rsm, config.vpls)?;
-            let rb = Buffer::new(
-                gpu,
-                "readback.vpls",
-                vpls.size(),
-                vk::BufferUsageFlags::TRANSFER_DST,
-                Location::GpuToCpu,
-            )?;
+            let rb = vpl_readback(config).make_buffer(gpu, "readback")?;
             (Some(rsm), Some(vp), Some(rb))
         } else {
             (None, None, None)

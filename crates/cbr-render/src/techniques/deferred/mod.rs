@@ -22,7 +22,6 @@ use cbr_gpu::{Access, Image, Result};
 
 use super::LayerReadbacks;
 use crate::frame::FrameOutput;
-use crate::gpu_types::{LightData, Vpl};
 use crate::memory::MemoryEstimate;
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique};
@@ -112,22 +111,13 @@ pub fn estimate_gbuffer_and_lights(
     w: u32,
     h: u32,
 ) {
-    e.append(crate::pass::estimate(&GBuffer::decls(w, h), prefix));
-    let light = std::mem::size_of::<LightData>() as u64;
-    e.storage_buffer(
-        format!("{prefix}.points"),
-        u64::from(config.points.max(1)) * light,
-        true,
-    );
-    let vpl_bytes = u64::from(config.vpls.max(1)) * std::mem::size_of::<Vpl>() as u64;
-    e.storage_buffer(format!("{prefix}.vpls"), vpl_bytes, false);
+    use crate::pass::estimate;
+    e.append(estimate(&GBuffer::decls(w, h), prefix));
+    e.append(estimate(&lights::resources(config), prefix));
     if config.vpls > 0 {
-        e.append(crate::pass::estimate(
-            &rsm::resources(config.rsm),
-            "deferred.rsm",
-        ));
-        e.storage_buffer("deferred.vpl_texels", u64::from(config.vpls) * 8, true);
-        e.buffer("readback.vpls", vpl_bytes, true);
+        e.append(estimate(&rsm::resources(config.rsm), "deferred.rsm"));
+        e.append(estimate(&[rsm::texels(config.vpls)], "deferred"));
+        e.append(estimate(&[lights::vpl_readback(config)], "readback"));
     }
 }
 

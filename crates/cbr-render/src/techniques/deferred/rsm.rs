@@ -3,7 +3,7 @@
 //! that turns the pattern's texels into virtual point lights (shaders/deferred/vpl.comp).
 
 use cbr_gpu::{
-    Attachment, Buffer, Cmd, DescriptorSet, Gpu, Location, PassKind, Profiler, Result, Shaders, vk,
+    Attachment, Buffer, Cmd, DescriptorSet, Gpu, PassKind, Profiler, Result, Shaders, vk,
 };
 
 use super::vpl::SunView;
@@ -174,6 +174,11 @@ crate::push_constants! {
     }
 }
 
+/// The VPL pattern (`deferred.vpl_texels`): one RSM texel per VPL, written by the host.
+pub fn texels(count: u32) -> ResourceDecl {
+    ResourceDecl::upload_buffer("vpl_texels", u64::from(count.max(1)) * 8)
+}
+
 /// The VPL generation pass (shaders/deferred/vpl.comp).
 pub fn vpl_decl() -> ComputeDecl {
     ComputeDecl::new("deferred.vpls", "deferred/vpl.comp")
@@ -200,14 +205,7 @@ pub struct VplPass {
 impl VplPass {
     /// VPLs (at least `count` x 48 bytes) from `rsm`.
     pub fn new(gpu: &Gpu, shaders: &Shaders, rsm: &RsmPass, count: u32) -> Result<VplPass> {
-        let n = u64::from(count.max(1));
-        let texels = Buffer::new(
-            gpu,
-            "deferred.vpl_texels",
-            n * 8,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            Location::CpuToGpu,
-        )?;
+        let texels = texels(count).make_buffer(gpu, "deferred")?;
         let texel_count = f64::from(rsm.side) * f64::from(rsm.side);
         Ok(VplPass {
             pass: vpl_decl().build(gpu, shaders)?,

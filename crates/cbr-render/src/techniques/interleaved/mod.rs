@@ -17,7 +17,7 @@
 
 pub mod split;
 
-use cbr_gpu::{Access, Image, ImageDesc, Readback, Result, vk};
+use cbr_gpu::{Access, Image, Readback, Result, vk};
 
 use super::LayerReadbacks;
 use super::deferred::lighting::{InterleavedLighting, Interleaving, LightingPass, LightingPush};
@@ -349,6 +349,15 @@ pub struct Interleaved {
 /// The debug bits' format (filter.glsl): one u32 per pixel.
 const DEBUG_FORMAT: vk::Format = vk::Format::R32_UINT;
 
+/// `debug`: the per-pixel debug bits and their readback (`readback.interleaved_bits`).
+fn debug_resources(w: u32, h: u32) -> [crate::pass::ResourceDecl; 2] {
+    use crate::pass::ResourceDecl;
+    [
+        ResourceDecl::image("debug_bits", DEBUG_FORMAT, w, h),
+        ResourceDecl::readback("interleaved_bits", DEBUG_FORMAT, w, h),
+    ]
+}
+
 impl Interleaved {
     /// What [`Interleaved::new`] allocates (crate::memory): deferred's G-buffer and lights, the
     /// M x N split images (none with `implicit`), the gathered estimates, the seed's blur images,
@@ -358,8 +367,9 @@ impl Interleaved {
         deferred::estimate_gbuffer_and_lights(&mut e, "interleaved", &config.lights, w, h);
         SplitPasses::estimate(&mut e, config, w, h);
         if config.debug {
-            e.image("interleaved.debug_bits", DEBUG_FORMAT, w, h);
-            e.readback("readback.interleaved_bits", DEBUG_FORMAT, w, h, 1);
+            let [bits, rb] = debug_resources(w, h);
+            e.append(crate::pass::estimate(&[bits], "interleaved"));
+            e.append(crate::pass::estimate(&[rb], "readback"));
         }
         LayerReadbacks::estimate(&mut e, w, h);
         e
@@ -370,17 +380,9 @@ impl Interleaved {
         let (raster, gbuffer_pass, g) = deferred::gbuffer(ctx, "interleaved")?;
         let split = SplitPasses::new(ctx, &config)?;
         let debug = if config.debug {
-            let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
-            let d = ImageDesc::new_2d(
-                "interleaved.debug_bits",
-                DEBUG_FORMAT,
-                ctx.width,
-                ctx.height,
-                usage,
-            );
-            let image = Image::new(ctx.gpu, &d)?;
-            let rb = Readback::for_image(ctx.gpu, "readback.interleaved_bits", &image)?;
-            Some((image, rb))
+            let [bits, rb] = debug_resources(ctx.width, ctx.height);
+            let image = bits.make_image(ctx.gpu, "interleaved")?;
+            Some((image, rb.make_readback(ctx.gpu, "readback")?))
         } else {
             None
         };

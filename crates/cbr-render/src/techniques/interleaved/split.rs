@@ -6,12 +6,12 @@
 //! `floor` a copy kernel moving the split and gather passes' bytes (`interleaved.copy_floor`).
 //! One set layout and one set serve every pipeline.
 
-use cbr_gpu::{Buffer, Cmd, Image, ImageDesc, Location, Profiler, Readback, Result, vk};
+use cbr_gpu::{Buffer, Cmd, Image, Profiler, Readback, Result, vk};
 
 use super::{Filter, InterleavedConfig};
 use crate::gpu_scene::GpuScene;
 use crate::memory::MemoryEstimate;
-use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, Use};
+use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, ResourceDecl, Use};
 use crate::resolve::CopyFloor;
 use crate::targets::GBUFFER_FORMAT;
 use crate::technique::BuildCtx;
@@ -193,6 +193,51 @@ pub fn moved_bytes(width: u32, height: u32) -> (u64, u64) {
 /// Bytes of one texel of the split mosaic (a vec4 of f32).
 const MOSAIC_WORD: u64 = 16;
 
+/// What the split passes allocate under `interleaved`: the split mosaic's buffers (one vec4 of
+/// f32 per texel; not with `implicit`): position, normal and per estimate its own; the
+/// full-resolution estimates (irradiance, `direct`: specular), and with `seed` each estimate's
+/// two blur images.
+fn resources(config: &InterleavedConfig, w: u32, h: u32) -> Vec<ResourceDecl> {
+    let (ws, hs) = sub_image(w, h, config.m, config.n);
+    let bytes = u64::from(config.m * ws) * u64::from(config.n * hs) * MOSAIC_WORD;
+    let mut r = Vec::new();
+    let mut estimate = |split: &'static str, gathered, seed: [&'static str; 2]| {
+        if !config.implicit {
+            r.push(ResourceDecl::buffer(split, bytes));
+        }
+        r.push(ResourceDecl::image(gathered, GBUFFER_FORMAT, w, h));
+        if config.filter == Filter::Seed {
+            r.extend(seed.map(|n| ResourceDecl::image(n, GBUFFER_FORMAT, w, h)));
+        }
+    };
+    estimate("split_irradiance", "irradiance", ["seed_tmp", "seed_out"]);
+    if config.direct {
+        estimate(
+            "split_specular",
+            "specular",
+            ["seed_tmp_specular", "seed_out_specular"],
+        );
+    }
+    if !config.implicit {
+        r.push(ResourceDecl::buffer("split_position", bytes));
+        r.push(ResourceDecl::buffer("split_normal", bytes));
+    }
+    r
+}
+
+/// `debug` with a split: the readback of the irradiance mosaic (`readback.interleaved_mosaic`).
+fn mosaic_readback(config: &InterleavedConfig, w: u32, h: u32) -> Option<ResourceDecl> {
+    let (ws, hs) = sub_image(w, h, config.m, config.n);
+    (config.debug && !config.implicit).then(|| {
+        ResourceDecl::readback(
+            "interleaved_mosaic",
+            vk::Format::R32G32B32A32_SFLOAT,
+            config.m * ws,
+            config.n * hs,
+        )
+    })
+}
+
 /// The buffers of the `floor` copy kernel.
 const FLOOR: &str = "interleaved.copy_floor";
 
@@ -243,31 +288,12 @@ pub struct SplitPasses {
 impl SplitPasses {
     /// What [`SplitPasses::new`] allocates.
     pub fn estimate(e: &mut MemoryEstimate, config: &InterleavedConfig, w: u32, h: u32) {
-        let (ws, hs) = sub_image(w, h, config.m, config.n);
-        let (sw, sh) = (config.m * ws, config.n * hs);
-        if !config.implicit {
-            let bytes = u64::from(sw) * u64::from(sh) * MOSAIC_WORD;
-            for name in ["split_position", "split_normal", "split_irradiance"] {
-                e.storage_buffer(format!("interleaved.{name}"), bytes, false);
-            }
-            if config.direct {
-                e.storage_buffer("interleaved.split_specular".to_string(), bytes, false);
-            }
-            if config.debug {
-                e.buffer("readback.interleaved_mosaic", bytes, true);
-            }
-        }
-        e.image("interleaved.irradiance", GBUFFER_FORMAT, w, h);
-        if config.direct {
-            e.image("interleaved.specular", GBUFFER_FORMAT, w, h);
-        }
-        if config.filter == Filter::Seed {
-            e.image("interleaved.seed_tmp", GBUFFER_FORMAT, w, h);
-            e.image("interleaved.seed_out", GBUFFER_FORMAT, w, h);
-            if config.direct {
-                e.image("interleaved.seed_tmp_specular", GBUFFER_FORMAT, w, h);
-                e.image("interleaved.seed_out_specular", GBUFFER_FORMAT, w, h);
-            }
+        e.append(crate::pass::estimate(
+            &resources(config, w, h),
+            "interleaved",
+        ));
+        if let Some(rb) = mosaic_readback(config, w, h) {
+            e.append(crate::pass::estimate(&[rb], "readback"));
         }
         if config.floor {
             CopyFloor::estimate(e, FLOOR, moved_bytes(w, h));
@@ -298,59 +324,45 @@ impl SplitPasses {
         };
         let (w, h) = (ctx.width, ctx.height);
         let (ws, hs) = sub_image(w, h, m, n);
-        let read_back = if config.debug {
-            vk::BufferUsageFlags::TRANSFER_SRC
-        } else {
-            vk::BufferUsageFlags::empty()
+        let decls = resources(config, w, h);
+        let decl = |name: &str| {
+            decls
+                .iter()
+                .find(|d| d.name == name)
+                .ok_or_else(|| cbr_gpu::GpuError::Other(format!("interleaved: no `{name}`")))
         };
-        let mosaic_bytes = u64::from(m * ws) * u64::from(n * hs) * MOSAIC_WORD;
-        let buffer = |name: &str, bytes, usage| {
-            let name = format!("interleaved.{name}");
-            let usage = vk::BufferUsageFlags::STORAGE_BUFFER | usage;
-            Buffer::new(gpu, &name, bytes, usage, Location::GpuOnly)
+        let buffer = |name: &str| -> Result<Option<Buffer>> {
+            match config.implicit {
+                true => Ok(None),
+                false => decl(name)?.make_buffer(gpu, "interleaved").map(Some),
+            }
         };
-        let none = vk::BufferUsageFlags::empty();
-        let split_buffer = |name: &str, usage| match config.implicit {
-            true => Ok(None),
-            false => buffer(name, mosaic_bytes, usage).map(Some),
-        };
-        let split_position = split_buffer("split_position", none)?;
-        let split_normal = split_buffer("split_normal", none)?;
-        let img = |name: &str, usage| {
-            let name = format!("interleaved.{name}");
-            Image::new(gpu, &ImageDesc::new_2d(&name, GBUFFER_FORMAT, w, h, usage))
-        };
-        let storage = vk::ImageUsageFlags::STORAGE;
-        let sampled = storage | vk::ImageUsageFlags::SAMPLED;
+        let img = |name: &str| decl(name)?.make_image(gpu, "interleaved");
+        let split_position = buffer("split_position")?;
+        let split_normal = buffer("split_normal")?;
         // An estimate's buffer and images: `split_NAME`, `NAME`, and `seed_tmp`, `seed_out` with
         // `suffix` (none for the irradiance, `_specular` for `direct`'s).
-        let estimate = |name: &str, suffix: &str, usage| -> Result<Estimate> {
+        let estimate = |name: &str, suffix: &str| -> Result<Estimate> {
             Ok(Estimate {
-                split: split_buffer(&format!("split_{name}"), usage)?,
-                gathered: img(name, sampled)?,
+                split: buffer(&format!("split_{name}"))?,
+                gathered: img(name)?,
                 seed: match seed {
                     Some(_) => Some((
-                        img(&format!("seed_tmp{suffix}"), storage)?,
-                        img(&format!("seed_out{suffix}"), sampled)?,
+                        img(&format!("seed_tmp{suffix}"))?,
+                        img(&format!("seed_out{suffix}"))?,
                     )),
                     None => None,
                 },
             })
         };
-        let irradiance = estimate("irradiance", "", read_back)?;
+        let irradiance = estimate("irradiance", "")?;
         let specular = match config.direct {
-            true => Some(estimate("specular", "_specular", none)?),
+            true => Some(estimate("specular", "_specular")?),
             false => None,
         };
-        let mosaic = match (&irradiance.split, config.debug) {
-            (Some(_), true) => Some(Readback::for_buffer(
-                gpu,
-                "readback.interleaved_mosaic",
-                mosaic_bytes,
-                m * ws,
-                n * hs,
-            )?),
-            _ => None,
+        let mosaic = match mosaic_readback(config, w, h) {
+            Some(rb) => Some(rb.make_readback(gpu, "readback")?),
+            None => None,
         };
         let floor = if config.floor {
             Some(CopyFloor::named(
