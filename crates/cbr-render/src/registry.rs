@@ -1,33 +1,19 @@
-//! The registries: every technique and every post pass, in the order `cbr render --help` and
-//! errors list them. Adding one is its module, its shader folder and one line here. Nothing else
-//! names a technique: the sequencer, the spec parser and the CLI look them up here.
+//! The registries: every technique (crate::techniques::TECHNIQUES) and every post pass
+//! (crate::post::POST_PASSES), in the order `cbr render --help` and errors list them, each list
+//! written once beside the modules it declares: adding one is its module, its shader folder and
+//! its name in that list. Nothing else names a technique: the sequencer, the spec parser and the
+//! CLI look them up here.
 
 use crate::post::PostRegistration;
 use crate::spec::{Part, Spec};
 use crate::technique::Registration;
 
-/// Every technique, in the order `cbr render --help` and errors list them.
-pub const TECHNIQUES: &[Registration] = &[
-    crate::techniques::native::REGISTRATION,
-    crate::techniques::ssaa::REGISTRATION,
-    crate::techniques::msaa::REGISTRATION,
-    crate::techniques::checkerboard::REGISTRATION,
-    crate::techniques::upscale::REGISTRATION,
-    crate::techniques::interlaced::REGISTRATION,
-    crate::techniques::analytic::REGISTRATION,
-    crate::techniques::deferred::REGISTRATION,
-    crate::techniques::interleaved::REGISTRATION,
-];
+pub use crate::post::POST_PASSES;
+pub use crate::techniques::TECHNIQUES;
 
 pub fn find(name: &str) -> Option<&'static Registration> {
     TECHNIQUES.iter().find(|t| t.name == name)
 }
-
-pub const POST_PASSES: &[PostRegistration] = &[
-    crate::post::fxaa::REGISTRATION,
-    crate::post::taa::REGISTRATION,
-    crate::post::sharpen::REGISTRATION,
-];
 
 pub fn find_post(name: &str) -> Option<&'static PostRegistration> {
     POST_PASSES.iter().find(|p| p.name == name)

@@ -1,8 +1,8 @@
 //! What a technique is to the frame sequencer: a registration (name, parameters, device needs,
 //! the layers it writes, a constructor) and a [`Technique`] that renders one full-resolution
 //! frame per call through its own chain of passes. The sequencer (crate::renderer) knows no
-//! technique by name; adding one is a module under `techniques/`, a shader folder and one line in
-//! crate::registry::TECHNIQUES (docs/OVERVIEW.md walks through `upscale` as the example).
+//! technique by name; adding one is a module under `techniques/`, a shader folder and its name in
+//! the `techniques!` list of crate::techniques (docs/OVERVIEW.md walks through an example).
 
 use cbr_gpu::{Buffer, Caps, Cmd, Gpu, Image, PassTiming, Profiler, Result, Shaders};
 use cbr_scene::Scene;

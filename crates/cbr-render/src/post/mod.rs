@@ -1,11 +1,18 @@
 //! Post passes: a full-resolution HDR frame in, one out, chained after any technique that gives
-//! a full frame (`SPEC+sharpen+...`). One module and shader folder each, one line in
-//! crate::registry::POST_PASSES. Each pass is declared once (crate::pass); its input (the technique's colour or
-//! the previous link's output) is bound when it records.
+//! a full frame (`SPEC+sharpen+...`). One module and shader folder each, and its name in the one
+//! list below. Each pass is declared once (crate::pass); its input (the technique's colour or the
+//! previous link's output) is bound when it records.
 
-pub mod fxaa;
-pub mod sharpen;
-pub mod taa;
+/// Declares each post pass's module and lists its registration.
+macro_rules! post_passes {
+    ($($m:ident),* $(,)?) => {
+        $(pub mod $m;)*
+        /// Every post pass, in the order `cbr render --help` lists them.
+        pub const POST_PASSES: &[PostRegistration] = &[$($m::REGISTRATION),*];
+    };
+}
+
+post_passes!(fxaa, taa, sharpen);
 
 use cbr_gpu::{Cmd, Gpu, GpuError, Image, Profiler, Result, Shaders};
 

@@ -1,16 +1,27 @@
-//! The registered techniques (crate::registry::TECHNIQUES), one module each, and what several
-//! of them share: reading the four common layers back.
+//! The registered techniques, one module each, and what several of them share: reading the four
+//! common layers back.
 
-pub mod analytic;
-pub mod checkerboard;
-pub mod deferred;
-pub mod interlaced;
-pub mod interleaved;
-pub mod msaa;
+/// Declares each technique's module and lists its registration: adding a technique is its
+/// module, its shader folder and its name in the one list below.
+macro_rules! techniques {
+    ($($m:ident),* $(,)?) => {
+        $(pub mod $m;)*
+        /// Every technique, in the order `cbr render --help` and errors list them.
+        pub const TECHNIQUES: &[crate::technique::Registration] = &[$($m::REGISTRATION),*];
+    };
+}
 
-pub mod native;
-pub mod ssaa;
-pub mod upscale;
+techniques!(
+    native,
+    ssaa,
+    msaa,
+    checkerboard,
+    upscale,
+    interlaced,
+    analytic,
+    deferred,
+    interleaved,
+);
 
 use cbr_gpu::{Buffer, Cmd, Gpu, Image, PassKind, Profiler, Readback, Result, Shaders};
 use half::f16;
