@@ -10,7 +10,7 @@
 
 mod common;
 
-use cbr_render::{FrameOutput, RenderSettings, Renderer};
+use cbr_render::{AnalyticLayers, FrameOutput, RenderSettings, Renderer};
 use cbr_scene::Scene;
 use common::{assert_clean, gpu};
 
@@ -99,12 +99,8 @@ fn nan_and_inf_are_counted_and_never_spread() {
             f.color.iter().all(|c| c.is_finite()),
             "analytic: a non-finite pixel"
         );
-        let flagged = f
-            .analytic
-            .as_ref()
-            .expect("analytic layers")
-            .nonfinite
-            .iter();
+        let layers = AnalyticLayers::from_frame(&f).expect("analytic layers");
+        let flagged = layers.nonfinite.iter();
         assert!(
             flagged.filter(|&&n| n != 0).count() > 0,
             "analytic flagged nothing"

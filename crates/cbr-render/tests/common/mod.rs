@@ -82,3 +82,20 @@ pub fn upload(gpu: &Gpu, parts: &[(&cbr_gpu::Image, Vec<u8>)]) -> cbr_gpu::Resul
         Ok(())
     })
 }
+
+/// Frames `frames` of `spec` over `s` at the scene's resolution (a fresh renderer).
+pub fn render_spec(
+    gpu: &Gpu,
+    s: &cbr_scene::Scene,
+    spec: &str,
+    frames: &[u32],
+) -> Vec<cbr_render::FrameOutput> {
+    let shaders = cbr_render::shader_library();
+    let (w, h) = (s.settings.width, s.settings.height);
+    let settings = cbr_render::RenderSettings::parse(w, h, spec).expect("spec");
+    let mut r = cbr_render::Renderer::new(gpu, &shaders, s, settings).expect("renderer");
+    frames
+        .iter()
+        .map(|&f| r.render(s, f).expect("frame"))
+        .collect()
+}
