@@ -196,10 +196,16 @@ pub struct Outputs {
     /// Its per-frame statistics (run.json writes `null` for one a frame lacks).
     pub stats: &'static [StatDecl],
     /// Its debug images of a frame, given the frame as displayed (RGBA8).
-    pub pngs: Option<fn(&FrameOutput, &[u8]) -> Vec<DebugPng>>,
+    pub pngs: Option<DebugPngs>,
     /// run.json's `settings.<technique name>` entry for these parameters (`null` when `None`).
-    pub settings: Option<fn(&[&str]) -> Option<serde_json::Value>>,
+    pub settings: Option<SettingsJson>,
 }
+
+/// A technique's debug images of a frame, given the frame as displayed (RGBA8).
+pub type DebugPngs = fn(&FrameOutput, &[u8]) -> Vec<DebugPng>;
+
+/// run.json's `settings.<technique name>` entry for a technique's parameters (`None`: `null`).
+pub type SettingsJson = fn(&[&str]) -> Option<serde_json::Value>;
 
 impl Outputs {
     /// The four common layers only.

@@ -432,10 +432,8 @@ fn screen_poly(s: &Scene, o: &Object, tri: usize) -> Poly {
 }
 
 fn render(gpu: &Gpu, s: &Scene, spec: &str) -> FrameOutput {
-    let shaders = cbr_render::shader_library();
     let settings = RenderSettings::new(W, H, Spec::parse(spec).unwrap());
-    let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
-    r.render(s, 0).expect("frame")
+    common::render_settings(gpu, s, settings, &[0]).remove(0)
 }
 
 fn rgb(out: &FrameOutput, i: usize) -> [f64; 3] {
@@ -1058,7 +1056,7 @@ fn fragments_beyond_k_are_counted_as_overflow_and_lists_that_cannot_fit_are_refu
     // default, 32 (some pixels here hold more than 32).
     let deep = render(&gpu, &s, "analytic");
     for (out, k) in [(&wide, 16u32), (&deep, 32)] {
-        let a = AnalyticLayers::from_frame(&out).unwrap();
+        let a = AnalyticLayers::from_frame(out).unwrap();
         let beyond = a.fragments.iter().filter(|&&f| f > k).count();
         assert!(beyond > 0, "no pixel holds more than {k}");
         for (i, (&f, &o)) in a.fragments.iter().zip(&a.overflow).enumerate() {
@@ -2518,7 +2516,7 @@ fn any_k_that_holds_every_fragment_renders_as_a_power_of_two_does() {
     let ks = [6, 7, 8];
     let frames = ks.map(|k| render(&gpu, &s, &format!("analytic:frags={k}")));
     for f in &frames {
-        let a = AnalyticLayers::from_frame(&f).unwrap();
+        let a = AnalyticLayers::from_frame(f).unwrap();
         assert_eq!(a.overflow.iter().filter(|&&o| o > 0).count(), 0);
         assert!(
             a.fragments.iter().any(|&n| n >= 4),

@@ -26,10 +26,7 @@ fn render(
     spec: &str,
     f: &[u32],
 ) -> Vec<FrameOutput> {
-    let (w, h) = (s.settings.width, s.settings.height);
-    let settings = RenderSettings::parse(w, h, spec).expect("spec");
-    let mut r = Renderer::new(gpu, shaders, s, settings).expect("renderer");
-    f.iter().map(|&f| r.render(s, f).expect("frame")).collect()
+    common::render_with(gpu, shaders, s, common::settings_of(s, spec), f)
 }
 
 fn builtin(name: &str, w: u32, h: u32) -> Scene {

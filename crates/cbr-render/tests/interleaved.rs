@@ -14,17 +14,14 @@ mod common;
 use cbr_gpu::Gpu;
 use cbr_render::gpu_types::Vpl;
 use cbr_render::techniques::deferred;
-use cbr_render::{FrameOutput, InterleavedLayers, RenderSettings, Renderer, Spec};
+use cbr_render::{FrameOutput, InterleavedLayers, Spec};
 use cbr_scene::Scene;
 use common::lighting::{SUN, compare, direct, floor_and_wall, fp16_step, irradiance, surface};
 use common::{assert_clean, gpu};
 use glam::DVec3;
 
 fn render(gpu: &Gpu, shaders: &cbr_gpu::Shaders, s: &Scene, spec: &str) -> FrameOutput {
-    let (w, h) = (s.settings.width, s.settings.height);
-    let settings = RenderSettings::parse(w, h, spec).expect("spec");
-    let mut r = Renderer::new(gpu, shaders, s, settings).expect("renderer");
-    r.render(s, 0).expect("frame")
+    common::render_with(gpu, shaders, s, common::settings_of(s, spec), &[0]).remove(0)
 }
 
 /// 1x1: one sub-image, every VPL, a window of one pixel: `deferred` within fp16 rounding (and
@@ -296,7 +293,7 @@ impl Frame<'_> {
 
 /// The debug bits' fields (filter.glsl) as the frame reads them back.
 fn fallback_of(out: &FrameOutput, x: i64, y: i64) -> u32 {
-    let i = InterleavedLayers::from_frame(&out).expect("debug layers");
+    let i = InterleavedLayers::from_frame(out).expect("debug layers");
     u32::from(i.fallback[(y * i64::from(out.width) + x) as usize])
 }
 
@@ -785,7 +782,7 @@ fn the_same_surface_thresholds_move_the_fallback() {
     (s.settings.width, s.settings.height) = (96, 54);
     let base = "interleaved:4x4:vpls=256:debug";
     let fallback = |out: &FrameOutput| -> u64 {
-        let i = InterleavedLayers::from_frame(&out).expect("debug layers");
+        let i = InterleavedLayers::from_frame(out).expect("debug layers");
         i.fallback.iter().map(|&f| u64::from(f)).sum()
     };
     let default = render(&gpu, &shaders, &s, base);

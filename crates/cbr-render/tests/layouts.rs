@@ -22,13 +22,11 @@ fn untextured_demo(w: u32, h: u32) -> Scene {
 }
 
 fn render(gpu: &Gpu, s: &Scene, technique: Spec, frame: u32, count: bool) -> FrameOutput {
-    let shaders = cbr_render::shader_library();
     let settings = RenderSettings {
         count_shaded: count,
         ..RenderSettings::new(s.settings.width, s.settings.height, technique)
     };
-    let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
-    r.render(s, frame).expect("frame")
+    common::render_settings(gpu, s, settings, &[frame]).remove(0)
 }
 
 /// The raw checkerboard frame of `layout` (no resolve).
@@ -43,7 +41,7 @@ fn native() -> Spec {
 /// Compares a checkerboard frame with native at its shaded pixels; returns the fraction of shaded
 /// pixels whose object ID differs (geometry edges may round differently at other resolutions).
 fn compare(name: &str, cb: &FrameOutput, native: &FrameOutput) -> f64 {
-    let mask = cbr_render::techniques::mask(&cb).expect("mask");
+    let mask = cbr_render::techniques::mask(cb).expect("mask");
     let parity = cb.count("parity").expect("parity") as u32;
     let (w, h) = (cb.width, cb.height);
     let (mut shaded, mut id_diff, mut worst_color, mut worst_depth) =
@@ -523,7 +521,7 @@ fn gradients_mode_adds_the_lod_bias_to_its_footprint() {
         render_lod(&gpu, &s, c.spec(), lod_bias, false, 6)
     };
     let mean_diff = |a: &FrameOutput, b: &FrameOutput| {
-        let mask = cbr_render::techniques::mask(&a).expect("mask");
+        let mask = cbr_render::techniques::mask(a).expect("mask");
         let (mut sum, mut n) = (0.0f64, 0usize);
         for (i, _) in mask.iter().enumerate().filter(|(_, m)| **m == 1) {
             for c in 0..3 {

@@ -116,7 +116,7 @@ fn frames_carry_the_layers_and_statistics_their_registrations_declare() {
                     assert_eq!(out.count("parity"), Some(f as u64 % 2), "{spec}");
                     let m = mask(out).expect("mask");
                     assert_eq!(m.len(), 48 * 32);
-                    assert!(m.iter().any(|&x| x == 1) && m.iter().any(|&x| x == 0));
+                    assert!(m.contains(&1) && m.contains(&0));
                 }
                 if spec.contains("none") {
                     assert!(ResolveOutput::from_frame(first).is_none(), "{spec}");
