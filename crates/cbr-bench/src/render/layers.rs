@@ -105,3 +105,86 @@ pub fn add_settings(spec: &Spec, settings: &mut Value) {
         settings[r.name] = f(&spec.technique.params()).unwrap_or(Value::Null);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use cbr_render::Stat;
+
+    /// run.json keeps the fields it had before the layers were generic: every record has
+    /// `parity`, `resolve_reset`, `analytic` and `interleaved` (null where the frame has none),
+    /// a dotted statistic lands in its object, and `settings.checkerboard` is null but for
+    /// checkerboard specs.
+    #[test]
+    fn every_record_has_the_same_fields_and_statistics_nest_by_their_dots() {
+        let mut out = FrameOutput::new(1, 1, vec![], vec![], vec![], vec![]);
+        let mut record = json!({"index": 0});
+        add_stats(&out, &mut record);
+        for key in ["parity", "resolve_reset", "analytic", "interleaved"] {
+            assert_eq!(record.get(key), Some(&Value::Null), "{key} in {record}");
+        }
+        out.set_stat("parity", Stat::Count(1));
+        out.set_stat("resolve_reset", Stat::Flag(true));
+        out.set_stat("analytic.tail_fragments", Stat::Count(7));
+        out.set_stat("analytic.seed_differs_edge_fraction", Stat::Real(0.0));
+        out.set_stat("interleaved.tile", Stat::Counts(vec![4, 2]));
+        let mut record = json!({"index": 0});
+        add_stats(&out, &mut record);
+        assert_eq!(record["index"], 0);
+        assert_eq!(record["parity"], 1);
+        assert_eq!(record["resolve_reset"], true);
+        assert_eq!(record["analytic"]["tail_fragments"], 7);
+        assert!(record["analytic"]["seed_differs_edge_fraction"].is_f64());
+        assert_eq!(record["interleaved"]["tile"], json!([4, 2]));
+
+        let mut settings = json!({"technique": "native"});
+        add_settings(&Spec::parse("native").expect("spec"), &mut settings);
+        assert_eq!(settings.get("checkerboard"), Some(&Value::Null));
+        let mut settings = json!({});
+        let spec = Spec::parse("checkerboard:split:pq4k:prepass").expect("spec");
+        add_settings(&spec, &mut settings);
+        let cb = &settings["checkerboard"];
+        assert_eq!(cb["layout"], "split");
+        assert_eq!(cb["id_prepass"], true);
+        assert_eq!(cb["resolve"]["mode"], "pq4k");
+    }
+
+    /// Each sample type goes to the EXR type its layer declares; host-only layers stay out.
+    #[test]
+    fn layers_convert_to_their_declared_exr_types() {
+        let decl = |name, samples, exr| cbr_render::LayerDecl {
+            name,
+            channels: &["Y"],
+            samples,
+            exr,
+            about: "",
+        };
+        let mut out = FrameOutput::new(2, 1, vec![], vec![], vec![], vec![]);
+        let mask = decl("mask", cbr_render::SampleType::U8, Some(ExrType::Half));
+        out.layers
+            .push(mask.layer(2, 1, vec![vec![0u8, 1]]).expect("mask"));
+        let count = decl("n", cbr_render::SampleType::U32, Some(ExrType::Float));
+        out.layers
+            .push(count.layer(2, 1, vec![vec![3u32, 9]]).expect("n"));
+        let host = decl("host", cbr_render::SampleType::F32, None);
+        out.layers
+            .push(host.layer(2, 1, vec![vec![1.0f32, 2.0]]).expect("host"));
+        let exr = exr_layers(&out).expect("converted");
+        assert_eq!(exr.len(), 2, "the host-only layer is not written");
+        assert_eq!(
+            exr[0],
+            (
+                "mask".to_string(),
+                vec![(
+                    "Y".to_string(),
+                    ChannelSamples::F16(vec![f16::ZERO, f16::ONE])
+                )]
+            )
+        );
+        assert_eq!(exr[1].1[0].1, ChannelSamples::F32(vec![3.0, 9.0]));
+        let bad = decl("bad", cbr_render::SampleType::F32, Some(ExrType::Uint));
+        out.layers
+            .push(bad.layer(2, 1, vec![vec![0.5f32, 1.0]]).expect("bad"));
+        assert!(exr_layers(&out).is_err(), "floats as uint are refused");
+    }
+}
