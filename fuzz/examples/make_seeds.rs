@@ -5,7 +5,7 @@
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
-use cbr_metrics::io::{FrameLayers, write_frame_exr};
+use cbr_metrics::io::{ChannelSamples, FrameLayers, write_frame_exr};
 use exr::prelude::*;
 use half::f16;
 use image::{DynamicImage, ImageFormat};
@@ -80,7 +80,7 @@ fn exr_files(tmp: &Path) -> Vec<(String, Vec<u8>)> {
         .collect();
     let velocity: Vec<[f32; 2]> = (0..n).map(|i| [i as f32 * 0.5, -1.0]).collect();
     let ids: Vec<[u32; 2]> = (0..n).map(|i| [i as u32 % 3, i as u32]).collect();
-    let mask: Vec<u8> = (0..n).map(|i| (i % 2) as u8).collect();
+    let mask: Vec<f16> = (0..n).map(|i| f16::from_f32((i % 2) as f32)).collect();
     let frame = tmp.join("frame.exr");
     write_frame_exr(
         &frame,
@@ -91,9 +91,7 @@ fn exr_files(tmp: &Path) -> Vec<(String, Vec<u8>)> {
             depth: &depth,
             velocity: &velocity,
             ids: &ids,
-            mask: Some(&mask),
-            prepass: None,
-            extra: Vec::new(),
+            extra: vec![("mask".into(), vec![("Y".into(), ChannelSamples::F16(mask))])],
             metadata: vec![("cbr.frame".into(), "0".into())],
         },
     )

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use cbr_gpu::Gpu;
 use cbr_metrics::{CompareOptions, DisplayTransform, Metric, compare_images};
-use cbr_render::{FrameOutput, Renderer};
+use cbr_render::{AnalyticLayers, Coverage, FrameOutput, Renderer, ResolveOutput};
 use cbr_scene::Scene;
 use indicatif::ProgressBar;
 use serde_json::json;
@@ -54,7 +54,7 @@ pub struct RefFrame {
 }
 
 pub fn edge_mask(out: &FrameOutput) -> Vec<bool> {
-    if let Some(c) = &out.coverage {
+    if let Some(c) = Coverage::from_frame(out) {
         return c.edge.iter().map(|&e| e != 0).collect();
     }
     let (w, h) = (out.width as usize, out.height as usize);
@@ -351,17 +351,19 @@ fn compare_frame(
             })
             .collect()
     };
-    let bits = out.resolve.as_ref().and_then(|r| r.debug_bits.as_ref());
+    let bits = ResolveOutput::from_frame(out).and_then(|r| r.debug_bits);
     if let (Some(bits), Some(map)) = (bits, map.as_ref()) {
         m.attribution
             .get_or_insert_default()
-            .add(bits, &pixel_error(), &map.data, &rf.disocc);
+            .add(&bits, &pixel_error(), &map.data, &rf.disocc);
     }
-    if let (Some(layers), Some(cov), Some(map)) =
-        (out.analytic.as_ref(), out.coverage.as_ref(), map.as_ref())
-    {
+    if let (Some(layers), Some(cov), Some(map)) = (
+        AnalyticLayers::from_frame(out),
+        Coverage::from_frame(out),
+        map.as_ref(),
+    ) {
         m.analytic_attribution.get_or_insert_default().add(
-            layers,
+            &layers,
             &cov.edge,
             &pixel_error(),
             &map.data,

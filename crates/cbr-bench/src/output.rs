@@ -52,9 +52,11 @@ pub fn save_snapshot(
             depth: &o.depth,
             velocity: &o.velocity,
             ids: &o.ids,
-            mask: o.mask.as_deref(),
-            prepass: None,
-            extra: Vec::new(),
+            // Of the technique's layers, the snapshot keeps the shaded-pixel mask only.
+            extra: match o.layer("mask") {
+                Some(l) => crate::render::layers::exr_layer(l)?.into_iter().collect(),
+                None => Vec::new(),
+            },
             metadata: vec![
                 ("cbr.config".to_string(), name.to_string()),
                 ("cbr.frame".to_string(), o.index.to_string()),

@@ -109,19 +109,37 @@ pub struct FrameLayers<'a> {
     pub depth: &'a [f32],
     pub velocity: &'a [[f32; 2]],
     pub ids: &'a [[u32; 2]],
-    /// Checkerboard frames: 1 where the frame shaded the pixel (written as layer `mask`, `Y`).
-    pub mask: Option<&'a [u8]>,
-    /// The native-resolution depth + ID prepass (layers `prepass_depth`, `prepass_object_id`,
-    /// `prepass_primitive_id`).
-    pub prepass: Option<(&'a [f32], &'a [[u32; 2]])>,
-    /// Further float layers: (layer name, [(channel name, values)]) (the resolve's debug views).
+    /// Further layers after those five, in order: (layer name, [(channel name, samples)]) (a
+    /// technique's own: checkerboard's `mask`, the resolve's debug views, ...).
     pub extra: Vec<ExtraLayer>,
     /// Text attributes attached to every part (scene, technique, frame, ...).
     pub metadata: Vec<(String, String)>,
 }
 
-/// One extra float layer of a frame EXR: its name and (channel, values) pairs.
-pub type ExtraLayer = (String, Vec<(String, Vec<f32>)>);
+/// One extra layer of a frame EXR: its name and (channel, samples) pairs.
+pub type ExtraLayer = (String, Vec<(String, ChannelSamples)>);
+
+/// One channel's samples in one of OpenEXR's three sample types.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ChannelSamples {
+    F16(Vec<f16>),
+    F32(Vec<f32>),
+    U32(Vec<u32>),
+}
+
+impl ChannelSamples {
+    pub fn len(&self) -> usize {
+        match self {
+            ChannelSamples::F16(v) => v.len(),
+            ChannelSamples::F32(v) => v.len(),
+            ChannelSamples::U32(v) => v.len(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
 
 /// Part (layer) names of a frame EXR.
 pub const COLOR_LAYER: &str = "color";
@@ -129,7 +147,6 @@ pub const DEPTH_LAYER: &str = "depth";
 pub const VELOCITY_LAYER: &str = "velocity";
 pub const OBJECT_ID_LAYER: &str = "object_id";
 pub const PRIMITIVE_ID_LAYER: &str = "primitive_id";
-pub const MASK_LAYER: &str = "mask";
 
 /// Scanline ZIP: read by every EXR reader (OpenImageIO, exrheader), unlike the crate's tiled preset.
 fn encoding() -> Encoding {
@@ -223,48 +240,16 @@ pub fn write_frame_exr(path: &Path, f: &FrameLayers) -> Result<(), IoError> {
             )]),
         ),
     ];
-    if let Some(mask) = f.mask {
-        check("mask", mask.len())?;
-        let samples = FlatSamples::F16(
-            mask.iter()
-                .map(|&m| half::f16::from_f32(f32::from(m)))
-                .collect(),
-        );
-        layers.push(Layer::new(
-            size,
-            attrs(MASK_LAYER),
-            encoding(),
-            AnyChannels::sort(smallvec::smallvec![channel("Y", samples)]),
-        ));
-    }
-    if let Some((depth, ids)) = f.prepass {
-        check("prepass depth", depth.len())?;
-        check("prepass ids", ids.len())?;
-        let one = |name: &str, ch: &str, samples| {
-            Layer::new(
-                size,
-                attrs(name),
-                encoding(),
-                AnyChannels::sort(smallvec::smallvec![channel(ch, samples)]),
-            )
-        };
-        layers.push(one("prepass_depth", "Z", FlatSamples::F32(depth.to_vec())));
-        layers.push(one(
-            "prepass_object_id",
-            "id",
-            FlatSamples::U32(ids.iter().map(|v| v[0]).collect()),
-        ));
-        layers.push(one(
-            "prepass_primitive_id",
-            "id",
-            FlatSamples::U32(ids.iter().map(|v| v[1]).collect()),
-        ));
-    }
     for (name, channels) in &f.extra {
         let mut list = smallvec::SmallVec::new();
         for (ch, values) in channels {
             check(name, values.len())?;
-            list.push(channel(ch, FlatSamples::F32(values.clone())));
+            let samples = match values {
+                ChannelSamples::F16(v) => FlatSamples::F16(v.clone()),
+                ChannelSamples::F32(v) => FlatSamples::F32(v.clone()),
+                ChannelSamples::U32(v) => FlatSamples::U32(v.clone()),
+            };
+            list.push(channel(ch, samples));
         }
         layers.push(Layer::new(
             size,
@@ -369,8 +354,6 @@ mod tests {
             depth: &depth,
             velocity: &velocity,
             ids: &ids,
-            mask: None,
-            prepass: None,
             extra: Vec::new(),
             metadata: vec![("cbr.frame".into(), "7".into())],
         };
@@ -410,7 +393,7 @@ mod tests {
         let depth = vec![1.0f32; n];
         let velocity = vec![[0.5f32, -0.5]; n];
         let ids = vec![[1u32, 2]; n];
-        let mask = vec![1u8; n];
+        let mask = vec![f16::ONE; n];
         let metadata: Vec<(String, String)> = ["scene", "technique", "frame", "time", "device"]
             .iter()
             .map(|k| (format!("cbr.{k}"), format!("value of {k}")))
@@ -424,9 +407,20 @@ mod tests {
                 depth: &depth,
                 velocity: &velocity,
                 ids: &ids,
-                mask: Some(&mask),
-                prepass: None,
-                extra: vec![("extra".into(), vec![("Y".into(), vec![0.25; n])])],
+                extra: vec![
+                    (
+                        "mask".into(),
+                        vec![("Y".into(), ChannelSamples::F16(mask.clone()))],
+                    ),
+                    (
+                        "extra".into(),
+                        vec![("Y".into(), ChannelSamples::F32(vec![0.25; n]))],
+                    ),
+                    (
+                        "ids".into(),
+                        vec![("id".into(), ChannelSamples::U32(vec![7; n]))],
+                    ),
+                ],
                 metadata: metadata.clone(),
             };
             write_frame_exr(&path, &layers).expect("write");
@@ -440,7 +434,7 @@ mod tests {
         // The sorted file still reads, attributes and pixels.
         let path = dir.path().join("f0.exr");
         let img = exr::prelude::read_all_flat_layers_from_file(&path).expect("read back");
-        assert_eq!(img.layer_data.len(), 7);
+        assert_eq!(img.layer_data.len(), 8);
         for layer in &img.layer_data {
             let frame = layer.attributes.other.get(&Text::from("cbr.frame"));
             assert_eq!(

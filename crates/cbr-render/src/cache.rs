@@ -25,11 +25,12 @@ use cbr_gpu::{Gpu, GpuError, Result, Shaders};
 use cbr_scene::Scene;
 use half::f16;
 
-use crate::frame::{Coverage, FrameOutput};
+use crate::frame::{ExrType, FrameOutput, Layer, Samples, Stat};
 use crate::gpu_scene::FrameView;
 use crate::renderer::RenderSettings;
 
-const MAGIC: &[u8; 8] = b"CBRF0001";
+/// The format: 0002 holds every layer and statistic of the frame (0001 only ssaa's coverage).
+const MAGIC: &[u8; 8] = b"CBRF0002";
 
 /// The default cache folder: `$CBR_CACHE_DIR`, else `$XDG_CACHE_HOME/cbr`, else
 /// `$HOME/.cache/cbr`, else `.cbr-cache` in the working directory.
@@ -278,6 +279,13 @@ pub fn put(path: &Path, out: &FrameOutput) -> Option<PathBuf> {
     }
 }
 
+fn put_str(b: &mut Vec<u8>, s: &str) {
+    b.extend_from_slice(&(s.len() as u32).to_le_bytes());
+    b.extend_from_slice(s.as_bytes());
+}
+
+/// The four common layers, then every layer (name, channels, size, sample and EXR types,
+/// samples) and every statistic (name, kind, value), then a blake3 checksum of it all.
 fn encode(o: &FrameOutput) -> Vec<u8> {
     let mut b = MAGIC.to_vec();
     b.extend_from_slice(&o.width.to_le_bytes());
@@ -286,19 +294,71 @@ fn encode(o: &FrameOutput) -> Vec<u8> {
     b.extend_from_slice(bytemuck::cast_slice(&o.depth));
     b.extend_from_slice(bytemuck::cast_slice(&o.velocity));
     b.extend_from_slice(bytemuck::cast_slice(&o.ids));
-    match &o.coverage {
-        Some(c) => {
-            b.push(1);
-            b.extend_from_slice(&c.edge);
-            b.extend_from_slice(bytemuck::cast_slice(&c.fraction));
+    b.extend_from_slice(&(o.layers.len() as u32).to_le_bytes());
+    for l in &o.layers {
+        put_str(&mut b, &l.name);
+        b.extend_from_slice(&(l.channels.len() as u32).to_le_bytes());
+        for c in &l.channels {
+            put_str(&mut b, c);
         }
-        None => b.push(0),
+        b.extend_from_slice(&l.width.to_le_bytes());
+        b.extend_from_slice(&l.height.to_le_bytes());
+        b.push(match l.exr {
+            None => 0,
+            Some(ExrType::Half) => 1,
+            Some(ExrType::Float) => 2,
+            Some(ExrType::Uint) => 3,
+        });
+        b.extend_from_slice(&(l.samples.len() as u64).to_le_bytes());
+        match &l.samples {
+            Samples::U8(v) => {
+                b.push(0);
+                b.extend_from_slice(v);
+            }
+            Samples::U32(v) => {
+                b.push(1);
+                v.iter().for_each(|x| b.extend_from_slice(&x.to_le_bytes()));
+            }
+            Samples::F16(v) => {
+                b.push(2);
+                v.iter().for_each(|x| b.extend_from_slice(&x.to_le_bytes()));
+            }
+            Samples::F32(v) => {
+                b.push(3);
+                v.iter().for_each(|x| b.extend_from_slice(&x.to_le_bytes()));
+            }
+        }
+    }
+    b.extend_from_slice(&(o.stats.len() as u32).to_le_bytes());
+    for (name, s) in &o.stats {
+        put_str(&mut b, name);
+        match s {
+            Stat::Count(n) => {
+                b.push(0);
+                b.extend_from_slice(&n.to_le_bytes());
+            }
+            Stat::Real(x) => {
+                b.push(1);
+                b.extend_from_slice(&x.to_le_bytes());
+            }
+            Stat::Flag(f) => {
+                b.push(2);
+                b.push(u8::from(*f));
+            }
+            Stat::Counts(v) => {
+                b.push(3);
+                b.extend_from_slice(&(v.len() as u32).to_le_bytes());
+                v.iter().for_each(|x| b.extend_from_slice(&x.to_le_bytes()));
+            }
+        }
     }
     let sum = blake3::hash(&b);
     b.extend_from_slice(sum.as_bytes());
     b
 }
 
+/// Reads what [`encode`] wrote; every length is checked against the bytes left before anything
+/// is allocated, so a corrupt entry is an error, never a panic or a huge allocation.
 fn decode(b: &[u8]) -> std::result::Result<FrameOutput, String> {
     if b.len() < MAGIC.len() + 8 + 32 || &b[..MAGIC.len()] != MAGIC {
         return Err("not a cbr frame file of this version".into());
@@ -307,29 +367,18 @@ fn decode(b: &[u8]) -> std::result::Result<FrameOutput, String> {
     if blake3::hash(body).as_bytes() != sum {
         return Err("checksum mismatch".into());
     }
-    let mut at = MAGIC.len();
-    let mut take = |n: usize| -> std::result::Result<&[u8], String> {
-        let s = body.get(at..at + n).ok_or("truncated")?;
-        at += n;
-        Ok(s)
+    let mut r = Reader {
+        body,
+        at: MAGIC.len(),
     };
-    let u32_at = |s: &[u8]| u32::from_le_bytes([s[0], s[1], s[2], s[3]]);
-    let w = u32_at(take(4)?);
-    let h = u32_at(take(4)?);
+    let w = r.u32()?;
+    let h = r.u32()?;
     let n = (w as usize) * (h as usize);
     // Copy into typed vectors (the file bytes carry no alignment).
-    let color: Vec<f16> = take(8 * n)?
-        .chunks_exact(2)
-        .map(|c| f16::from_le_bytes([c[0], c[1]]))
-        .collect();
-    let f32s = |s: &[u8]| -> Vec<f32> {
-        s.chunks_exact(4)
-            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-            .collect()
-    };
-    let depth = f32s(take(4 * n)?);
-    let vel = f32s(take(8 * n)?);
-    let ids: Vec<u32> = take(8 * n)?.chunks_exact(4).map(u32_at).collect();
+    let color: Vec<f16> = r.array::<2>(4 * n)?.map(f16::from_le_bytes).collect();
+    let depth: Vec<f32> = r.array::<4>(n)?.map(f32::from_le_bytes).collect();
+    let vel: Vec<f32> = r.array::<4>(2 * n)?.map(f32::from_le_bytes).collect();
+    let ids: Vec<u32> = r.array::<4>(2 * n)?.map(u32::from_le_bytes).collect();
     let mut out = FrameOutput::new(
         w,
         h,
@@ -338,15 +387,103 @@ fn decode(b: &[u8]) -> std::result::Result<FrameOutput, String> {
         vel.chunks_exact(2).map(|v| [v[0], v[1]]).collect(),
         ids.chunks_exact(2).map(|v| [v[0], v[1]]).collect(),
     );
-    if take(1)?[0] == 1 {
-        let edge = take(n)?.to_vec();
-        let fraction = f32s(take(4 * n)?);
-        out.coverage = Some(Coverage { edge, fraction });
+    for _ in 0..r.u32()? {
+        let name = r.str()?;
+        let channels = (0..r.u32()?)
+            .map(|_| r.str())
+            .collect::<std::result::Result<Vec<_>, _>>()?;
+        let (width, height) = (r.u32()?, r.u32()?);
+        let exr = match r.u8()? {
+            0 => None,
+            1 => Some(ExrType::Half),
+            2 => Some(ExrType::Float),
+            3 => Some(ExrType::Uint),
+            t => return Err(format!("layer `{name}`: EXR type {t}")),
+        };
+        let len = usize::try_from(r.u64()?).map_err(|_| "a layer too long")?;
+        let expected = (width as usize)
+            .checked_mul(height as usize)
+            .and_then(|p| p.checked_mul(channels.len()));
+        if expected != Some(len) {
+            return Err(format!("layer `{name}`: {len} samples"));
+        }
+        let samples = match r.u8()? {
+            0 => Samples::U8(r.take(len)?.to_vec()),
+            1 => Samples::U32(r.array::<4>(len)?.map(u32::from_le_bytes).collect()),
+            2 => Samples::F16(r.array::<2>(len)?.map(f16::from_le_bytes).collect()),
+            3 => Samples::F32(r.array::<4>(len)?.map(f32::from_le_bytes).collect()),
+            t => return Err(format!("layer `{name}`: sample type {t}")),
+        };
+        out.layers.push(Layer {
+            name,
+            channels,
+            width,
+            height,
+            samples,
+            exr,
+        });
     }
-    if at != body.len() {
+    for _ in 0..r.u32()? {
+        let name = r.str()?;
+        let stat = match r.u8()? {
+            0 => Stat::Count(r.u64()?),
+            1 => Stat::Real(f64::from_bits(r.u64()?)),
+            2 => Stat::Flag(r.u8()? != 0),
+            3 => {
+                let k = r.u32()? as usize;
+                Stat::Counts(r.array::<8>(k)?.map(u64::from_le_bytes).collect())
+            }
+            t => return Err(format!("statistic `{name}`: kind {t}")),
+        };
+        out.stats.insert(name, stat);
+    }
+    if r.at != body.len() {
         return Err("trailing bytes".into());
     }
     Ok(out)
+}
+
+/// Reads an entry's body front to back.
+struct Reader<'a> {
+    body: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Reader<'a> {
+    fn take(&mut self, n: usize) -> std::result::Result<&'a [u8], String> {
+        let end = self.at.checked_add(n).ok_or("truncated")?;
+        let s = self.body.get(self.at..end).ok_or("truncated")?;
+        self.at = end;
+        Ok(s)
+    }
+
+    /// `count` values of `N` bytes each.
+    fn array<const N: usize>(
+        &mut self,
+        count: usize,
+    ) -> std::result::Result<impl Iterator<Item = [u8; N]> + 'a, String> {
+        let bytes = self.take(count.checked_mul(N).ok_or("truncated")?)?;
+        Ok(bytes.chunks_exact(N).map(|c| std::array::from_fn(|i| c[i])))
+    }
+
+    fn u8(&mut self) -> std::result::Result<u8, String> {
+        Ok(self.take(1)?[0])
+    }
+
+    fn u32(&mut self) -> std::result::Result<u32, String> {
+        let s = self.take(4)?;
+        Ok(u32::from_le_bytes([s[0], s[1], s[2], s[3]]))
+    }
+
+    fn u64(&mut self) -> std::result::Result<u64, String> {
+        let s = self.take(8)?;
+        Ok(u64::from_le_bytes(std::array::from_fn(|i| s[i])))
+    }
+
+    fn str(&mut self) -> std::result::Result<String, String> {
+        let n = self.u32()? as usize;
+        String::from_utf8(self.take(n)?.to_vec()).map_err(|_| "a name not UTF-8".to_string())
+    }
 }
 
 #[cfg(test)]
@@ -380,7 +517,8 @@ mod tests {
             &a.depth,
             &a.velocity,
             &a.ids,
-            &a.coverage,
+            &a.layers,
+            &a.stats,
         ) == (
             b.width,
             b.height,
@@ -388,7 +526,8 @@ mod tests {
             &b.depth,
             &b.velocity,
             &b.ids,
-            &b.coverage,
+            &b.layers,
+            &b.stats,
         )
     }
 
@@ -544,10 +683,38 @@ mod tests {
             vec![[0.1, -0.2], [0.0, 3.0]],
             vec![[1, 7], [0, 0]],
         );
-        o.coverage = Some(Coverage {
+        let coverage = crate::techniques::Coverage {
             edge: vec![1, 0],
             fraction: vec![0.75, 0.0],
-        });
+        };
+        o.layers.push(coverage.layer(2, 1).expect("coverage"));
+        // A layer of each sample type, one of another size, and a statistic of each kind.
+        let decl = |name, samples, exr| crate::frame::LayerDecl {
+            name,
+            channels: &["a", "b"],
+            samples,
+            exr,
+            about: "",
+        };
+        use crate::frame::SampleType;
+        let u8s = decl("u8s", SampleType::U8, None);
+        o.layers
+            .push(u8s.layer(2, 1, vec![vec![3u8, 4], vec![5, 6]]).expect("u8"));
+        let u32s = decl("u32s", SampleType::U32, Some(ExrType::Uint));
+        o.layers.push(
+            u32s.layer(1, 2, vec![vec![7u32, u32::MAX], vec![0, 9]])
+                .expect("u32"),
+        );
+        let f16s = decl("f16s", SampleType::F16, Some(ExrType::Half));
+        let h = f16::from_f32;
+        o.layers.push(
+            f16s.layer(1, 1, vec![vec![h(0.5)], vec![h(-2.0)]])
+                .expect("f16"),
+        );
+        o.set_stat("n", Stat::Count(u64::MAX));
+        o.set_stat("x.real", Stat::Real(0.1));
+        o.set_stat("flag", Stat::Flag(true));
+        o.set_stat("tile", Stat::Counts(vec![4, 2]));
         let b = encode(&o);
         let d = decode(&b).expect("decodes");
         assert_eq!((d.width, d.height), (2, 1));
@@ -555,7 +722,13 @@ mod tests {
         assert_eq!(d.depth, o.depth);
         assert_eq!(d.velocity, o.velocity);
         assert_eq!(d.ids, o.ids);
-        assert_eq!(d.coverage, o.coverage);
+        assert_eq!(d.layers, o.layers);
+        assert_eq!(d.stats, o.stats);
+        assert_eq!(
+            crate::techniques::Coverage::from_frame(&d),
+            Some(coverage),
+            "typed access after the round trip"
+        );
         for i in [0, 9, 20, b.len() - 1] {
             let mut bad = b.clone();
             bad[i] ^= 0x10;

@@ -23,11 +23,15 @@ pub mod targets;
 pub mod technique;
 pub mod techniques;
 
-pub use frame::{AnalyticLayers, Coverage, FrameOutput, InterleavedLayers, ResolveOutput};
+pub use frame::{ExrType, FrameOutput, Layer, LayerDecl, SampleType, Samples, Stat, StatDecl};
 pub use renderer::{RenderSettings, Renderer};
+pub use resolve::ResolveOutput;
 pub use resolve::{Mapping, ResolveMode, ResolveSettings};
 pub use spec::Spec;
+pub use techniques::Coverage;
+pub use techniques::analytic::AnalyticLayers;
 pub use techniques::checkerboard::{self, CheckerboardConfig, LodMode};
+pub use techniques::interleaved::InterleavedLayers;
 pub use techniques::upscale;
 
 mod embedded {

@@ -7,7 +7,7 @@
 use cbr_gpu::{Buffer, Caps, Cmd, Gpu, Image, PassTiming, Profiler, Result, Shaders};
 use cbr_scene::Scene;
 
-use crate::frame::FrameOutput;
+use crate::frame::{DebugPng, FrameOutput, LayerDecl, StatDecl};
 use crate::gpu_scene::{FrameView, GpuScene};
 use crate::memory::MemoryEstimate;
 
@@ -189,8 +189,9 @@ pub struct Registration {
     /// The grammar of its spec, e.g. `ssaa:N[:jittered]`.
     pub grammar: &'static str,
     pub about: &'static str,
-    /// EXR layers it writes beyond colour, depth, velocity and IDs.
-    pub layers: &'static [&'static str],
+    /// What its frames carry beyond colour, depth, velocity and IDs (layers, statistics) and
+    /// how `cbr render` shows it (debug PNGs, run.json's settings entry).
+    pub outputs: Outputs,
     /// Reads the parameters (after the name); the error names the one it could not read.
     pub check: fn(&[&str]) -> std::result::Result<(), String>,
     /// The device feature the parameters need and `caps` lacks, if any.
@@ -201,6 +202,37 @@ pub struct Registration {
     /// Its passes, for compiling without building (`cbr_render::registry::passes`).
     pub passes: Passes,
     pub build: Build,
+}
+
+/// What a technique's frames carry beyond the four common layers, declared once: the writers
+/// (EXR, run.json, PNGs) and the cache handle them without knowing the technique.
+#[derive(Clone, Copy)]
+pub struct Outputs {
+    /// Its layers, in the order its frames hold them (the EXR's order); a frame holds those its
+    /// parameters produce.
+    pub layers: &'static [LayerDecl],
+    /// Its per-frame statistics (run.json writes `null` for one a frame lacks).
+    pub stats: &'static [StatDecl],
+    /// Its debug images of a frame, given the frame as displayed (RGBA8).
+    pub pngs: Option<DebugPngs>,
+    /// run.json's `settings.<technique name>` entry for these parameters (`null` when `None`).
+    pub settings: Option<SettingsJson>,
+}
+
+/// A technique's debug images of a frame, given the frame as displayed (RGBA8).
+pub type DebugPngs = fn(&FrameOutput, &[u8]) -> Vec<DebugPng>;
+
+/// run.json's `settings.<technique name>` entry for a technique's parameters (`None`: `null`).
+pub type SettingsJson = fn(&[&str]) -> Option<serde_json::Value>;
+
+impl Outputs {
+    /// The four common layers only.
+    pub const NONE: Outputs = Outputs {
+        layers: &[],
+        stats: &[],
+        pngs: None,
+        settings: None,
+    };
 }
 
 /// A technique's refusal of its parameters: the spec (`name:params`) and why.

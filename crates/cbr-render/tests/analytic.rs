@@ -15,7 +15,7 @@ use cbr_render::techniques::analytic::{
     ALBEDO_JOBS_PER_PIXEL_START, DEFAULT_SAMPLES, MAX_MATERIALS, grown_job_capacity,
     grown_tail_capacity, occluder_group, parse, plan_lists,
 };
-use cbr_render::{FrameOutput, RenderSettings, Renderer, Spec};
+use cbr_render::{AnalyticLayers, Coverage, FrameOutput, RenderSettings, Renderer, Spec};
 use cbr_scene::{
     AlphaSource, CameraKey, CameraPath, DirLight, LoadStats, Material, Object, PointLight, Scene,
     Settings, Texture, Vertex,
@@ -432,10 +432,8 @@ fn screen_poly(s: &Scene, o: &Object, tri: usize) -> Poly {
 }
 
 fn render(gpu: &Gpu, s: &Scene, spec: &str) -> FrameOutput {
-    let shaders = cbr_render::shader_library();
     let settings = RenderSettings::new(W, H, Spec::parse(spec).unwrap());
-    let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
-    r.render(s, 0).expect("frame")
+    common::render_settings(gpu, s, settings, &[0]).remove(0)
 }
 
 fn rgb(out: &FrameOutput, i: usize) -> [f64; 3] {
@@ -456,7 +454,8 @@ fn worst_relative(a: &FrameOutput, b: &FrameOutput) -> f64 {
 }
 
 fn coverage_of(out: &FrameOutput) -> &[f32] {
-    &out.coverage.as_ref().expect("coverage layer").fraction
+    out.channel::<f32>("coverage", "fraction")
+        .expect("coverage layer")
 }
 
 /// Asserts that the coverage layer is `poly`'s f64 area in every pixel (within 2e-4: the GPU
@@ -914,7 +913,9 @@ fn the_seed_shortcut_is_flagged_exactly_where_it_is_off() {
     let s = scene(vec![tri], vec![emissive("e", [1.0; 3])], [0.0; 3]);
     let poly = screen_poly(&s, &s.objects[0], 0);
     let out = render(&gpu, &s, "analytic:seed");
-    let flags = &out.analytic.as_ref().expect("analytic layers").seed_differs;
+    let flags = &AnalyticLayers::from_frame(&out)
+        .expect("analytic layers")
+        .seed_differs;
     let cov = coverage_of(&out);
     let (mut off, mut flagged) = (0, 0);
     for y in 0..H as i64 {
@@ -981,7 +982,7 @@ fn every_touched_pixel_is_reached_by_slivers_and_subpixel_triangles() {
     let obj = mesh("dust", &verts, idx, 0);
     let s = scene(vec![obj], vec![emissive("e", [1.0; 3])], [0.0; 3]);
     let out = render(&gpu, &s, "analytic:frags=16");
-    let a = out.analytic.as_ref().unwrap();
+    let a = AnalyticLayers::from_frame(&out).unwrap();
     let o = &s.objects[0];
     let mut checked = 0;
     for y in 0..H as i64 {
@@ -1022,7 +1023,7 @@ fn fragments_beyond_k_are_counted_as_overflow_and_lists_that_cannot_fit_are_refu
         .collect();
     let s = scene(objects, vec![emissive("e", [1.0; 3])], [0.0; 3]);
     let out = render(&gpu, &s, "analytic:frags=1");
-    let a = out.analytic.as_ref().unwrap();
+    let a = AnalyticLayers::from_frame(&out).unwrap();
     let over: u32 = a.overflow.iter().sum();
     assert!(over > 0, "no overflow with one slot per pixel");
     assert!(out.color.iter().all(|h| h.to_f32().is_finite()));
@@ -1055,7 +1056,7 @@ fn fragments_beyond_k_are_counted_as_overflow_and_lists_that_cannot_fit_are_refu
     // default, 32 (some pixels here hold more than 32).
     let deep = render(&gpu, &s, "analytic");
     for (out, k) in [(&wide, 16u32), (&deep, 32)] {
-        let a = out.analytic.as_ref().unwrap();
+        let a = AnalyticLayers::from_frame(out).unwrap();
         let beyond = a.fragments.iter().filter(|&&f| f > k).count();
         assert!(beyond > 0, "no pixel holds more than {k}");
         for (i, (&f, &o)) in a.fragments.iter().zip(&a.overflow).enumerate() {
@@ -2209,7 +2210,9 @@ fn kept_fragments_are_lit_at_their_own_point_as_native_shades_the_pixel() {
     };
     let native = frame("native");
     let analytic = frame("analytic");
-    let edge = &analytic.coverage.as_ref().expect("coverage layer").edge;
+    let edge = &Coverage::from_frame(&analytic)
+        .expect("coverage layer")
+        .edge;
     let (mut interior, mut worst, mut range) = (0, 0.0f64, [f64::MAX, 0.0f64]);
     for (i, &e) in edge.iter().enumerate() {
         if e != 0 || native.ids[i][0] == 0 {
@@ -2261,7 +2264,7 @@ fn a_fragment_whose_light_is_not_finite_is_dropped_and_what_is_behind_shows() {
         intensity: 3.0e38,
     }];
     let out = render(&gpu, &s, "analytic");
-    let layers = out.analytic.as_ref().expect("analytic layers");
+    let layers = AnalyticLayers::from_frame(&out).expect("analytic layers");
     let o = &s.objects[1];
     let outline: Poly = (0..4).map(|k| project(&s, o.vertices[k].pos)).collect();
     let mut flagged = 0;
@@ -2323,12 +2326,12 @@ fn fragments_beyond_k_are_lit_by_the_tail_pass_and_the_record_buffer_grows_to_ho
         .collect();
     let one = render(&gpu, &s, "analytic:frags=1");
     let all = render(&gpu, &s, "analytic:frags=16");
-    let tails = one.analytic.as_ref().unwrap().tail_fragments;
+    let tails = AnalyticLayers::from_frame(&one).unwrap().tail_fragments;
     assert!(
         tails > u64::from(W * H),
         "{tails} tail fragments: the buffer (one record a pixel) did not have to grow"
     );
-    assert_eq!(all.analytic.as_ref().unwrap().tail_fragments, 0);
+    assert_eq!(AnalyticLayers::from_frame(&all).unwrap().tail_fragments, 0);
     // The growth: the count and a quarter more, at most one storage buffer (lavapipe's 128 MiB
     // holds 3,355,443 records of 40 bytes); beyond that the frame is refused with its count.
     let range = 134_217_728;
@@ -2405,11 +2408,14 @@ fn textured_fragments_are_filtered_by_the_albedo_pass_and_its_job_buffer_grows()
     let mut r = Renderer::new(&gpu, &shaders, &s, settings).expect("renderer");
     let first = r.render(&s, 0).expect("frame");
     let again = r.render(&s, 0).expect("frame");
-    let jobs = first.analytic.as_ref().unwrap().albedo_jobs;
+    let jobs = AnalyticLayers::from_frame(&first).unwrap().albedo_jobs;
     let start = u64::from(W * H) * ALBEDO_JOBS_PER_PIXEL_START;
     println!("{jobs} albedo jobs; the buffer starts with {start}");
     assert!(jobs > start, "{jobs} jobs: the buffer did not have to grow");
-    assert_eq!(again.analytic.as_ref().unwrap().albedo_jobs, jobs);
+    assert_eq!(
+        AnalyticLayers::from_frame(&again).unwrap().albedo_jobs,
+        jobs
+    );
     assert!(
         first.color == again.color,
         "the grown frame differs from the same frame again"
@@ -2426,7 +2432,7 @@ fn textured_fragments_are_filtered_by_the_albedo_pass_and_its_job_buffer_grows()
         render(&gpu, &s, "analytic:frags=1"),
         render(&gpu, &p, "analytic:frags=1"),
     );
-    let tails = t1.analytic.as_ref().unwrap().tail_fragments;
+    let tails = AnalyticLayers::from_frame(&t1).unwrap().tail_fragments;
     assert!(tails > u64::from(W * H), "{tails} tail fragments");
     let worst = worst_relative(&t1, &p1);
     println!("K = 1 ({tails} tail fragments): worst {worst:.2e} relative");
@@ -2510,7 +2516,7 @@ fn any_k_that_holds_every_fragment_renders_as_a_power_of_two_does() {
     let ks = [6, 7, 8];
     let frames = ks.map(|k| render(&gpu, &s, &format!("analytic:frags={k}")));
     for f in &frames {
-        let a = f.analytic.as_ref().unwrap();
+        let a = AnalyticLayers::from_frame(f).unwrap();
         assert_eq!(a.overflow.iter().filter(|&&o| o > 0).count(), 0);
         assert!(
             a.fragments.iter().any(|&n| n >= 4),
@@ -2574,7 +2580,7 @@ fn a_pixel_of_more_than_32_fragments_composites_every_one_at_k_64() {
     );
     let out = render(&gpu, &s, "analytic:frags=64");
     assert_clean(&gpu);
-    let a = out.analytic.as_ref().unwrap();
+    let a = AnalyticLayers::from_frame(&out).unwrap();
     let cov = coverage_of(&out);
     let (cx, cy) = (W as i64 / 2, H as i64 / 2);
     for (x, y) in [(cx - 1, cy - 1), (cx, cy - 1), (cx - 1, cy), (cx, cy)] {

@@ -6,7 +6,7 @@
 mod common;
 
 use cbr_render::post::sharpen;
-use cbr_render::{FrameOutput, RenderSettings, Renderer, Spec};
+use cbr_render::{Coverage, FrameOutput, RenderSettings, Renderer, Spec};
 use cbr_scene::{CameraKey, CameraPath, LoadStats, Material, Object, Scene, Settings, Vertex};
 use common::{assert_clean, demo, gpu};
 use glam::{DVec3, DVec4};
@@ -41,7 +41,7 @@ fn ssaa_1_is_native_bit_for_bit() {
     let native = &frames(&gpu, &s, spec(96, 54, "native"), &[3])[0];
     let ssaa = &frames(&gpu, &s, spec(96, 54, "ssaa:1"), &[3])[0];
     assert!(bits(native) == bits(ssaa), "ssaa:1 differs from native");
-    let cov = ssaa.coverage.as_ref().expect("coverage layer");
+    let cov = Coverage::from_frame(ssaa).expect("coverage layer");
     assert!(cov.edge.iter().all(|&e| e == 0), "one sample: no edges");
     for (f, id) in cov.fraction.iter().zip(&ssaa.ids) {
         assert_eq!(*f, if id[0] != 0 { 1.0 } else { 0.0 });
@@ -176,7 +176,7 @@ fn ssaa_converges_to_the_exact_area_weighted_colour() {
     let mut mean_errors = Vec::new();
     for n in [1u32, 2, 4, 8, 16] {
         let out = &frames(&gpu, &s, spec(W, H, &format!("ssaa:{n}")), &[0])[0];
-        let cov = out.coverage.as_ref().expect("coverage");
+        let cov = Coverage::from_frame(out).expect("coverage");
         let bound = 3.0 * f64::from(2 * n - 1) / f64::from(n * n) + 0.011;
         let (mut sum, mut count, mut worst) = (0.0, 0usize, 0.0f64);
         for y in 0..H {
@@ -223,7 +223,7 @@ fn coverage_marks_edges_and_counts_hits() {
     let gpu = gpu();
     let (s, tri) = triangle_scene();
     let out = &frames(&gpu, &s, spec(W, H, "ssaa:4"), &[0])[0];
-    let cov = out.coverage.as_ref().expect("coverage");
+    let cov = Coverage::from_frame(out).expect("coverage");
     let mut edges = 0;
     for y in 0..H {
         for x in 0..W {
@@ -273,7 +273,11 @@ fn the_cache_returns_the_same_frame_and_recomputes_corrupt_entries() {
             b.index
         );
         assert!(bits(a) == bits(b));
-        assert_eq!(a.coverage, b.coverage);
+        assert_eq!(a.layers, b.layers);
+        assert!(
+            Coverage::from_frame(a).is_some(),
+            "the coverage layer from the cache"
+        );
     }
     // Corrupt one entry: it is detected, recomputed and rewritten.
     let path = again[0].cached.clone().expect("path");

@@ -11,8 +11,8 @@ mod common;
 
 use cbr_gpu::Gpu;
 use cbr_render::gpu_types::Vpl;
-use cbr_render::techniques::deferred::DEFAULT_REACH;
 use cbr_render::techniques::deferred::vpl::{SunView, random_point_lights, vpl_texels};
+use cbr_render::techniques::deferred::{self, DEFAULT_REACH};
 use cbr_render::{FrameOutput, RenderSettings, Renderer, Spec};
 use cbr_scene::Scene;
 use common::lighting::{FLOOR_ALBEDO, SUN, compare, floor_and_wall, fp16_step, reference, surface};
@@ -26,10 +26,7 @@ fn render(
     spec: &str,
     f: &[u32],
 ) -> Vec<FrameOutput> {
-    let (w, h) = (s.settings.width, s.settings.height);
-    let settings = RenderSettings::parse(w, h, spec).expect("spec");
-    let mut r = Renderer::new(gpu, shaders, s, settings).expect("renderer");
-    f.iter().map(|&f| r.render(s, f).expect("frame")).collect()
+    common::render_with(gpu, shaders, s, common::settings_of(s, spec), f)
 }
 
 fn builtin(name: &str, w: u32, h: u32) -> Scene {
@@ -148,8 +145,8 @@ fn vpls_are_deterministic_per_seed() {
     let a = render(&gpu, &shaders, &s, spec, &[0]).remove(0);
     let b = render(&gpu, &shaders, &s, spec, &[0]).remove(0);
     let (va, vb) = (
-        a.vpls.as_deref().expect("VPLs"),
-        b.vpls.as_deref().expect("VPLs"),
+        &deferred::vpls(&a).expect("VPLs"),
+        &deferred::vpls(&b).expect("VPLs"),
     );
     assert_eq!(va.len(), 256);
     assert!(vpl_bits(va) == vpl_bits(vb), "same seed, other VPLs");
@@ -159,7 +156,7 @@ fn vpls_are_deterministic_per_seed() {
     let mut other = s.clone();
     other.settings.seed = s.settings.seed + 1;
     let c = render(&gpu, &shaders, &other, spec, &[0]).remove(0);
-    let vc = c.vpls.as_deref().expect("VPLs");
+    let vc = &deferred::vpls(&c).expect("VPLs");
     let same = va.iter().zip(vc).filter(|(x, y)| x == y).count();
     assert!(same < 16, "{same} of 256 VPLs equal under another seed");
     assert!(a.color != c.color);
@@ -189,7 +186,7 @@ fn vpl_lighting_matches_the_cpu_reference() {
     for (n, side) in [(16u32, 64u32), (256, 512)] {
         let spec = format!("deferred:vpls={n}:rsm={side}:clamp={clamp}");
         let out = render(&gpu, &shaders, &s, &spec, &[0]).remove(0);
-        let vpls = out.vpls.as_deref().expect("VPLs");
+        let vpls = &deferred::vpls(&out).expect("VPLs");
         // The VPLs against the map's geometry.
         let view = SunView::new([0.0, -1.0, 0.0], s.bounds(), cam, side).expect("sun");
         let inv = view.clip_from_world.inverse();
@@ -319,7 +316,7 @@ fn zero_vpls_is_plain_deferred() {
     let plain = render(&gpu, &shaders, &s, "deferred", &[1]).remove(0);
     let zero = render(&gpu, &shaders, &s, "deferred:vpls=0:points=0", &[1]).remove(0);
     assert!(plain.color == zero.color);
-    assert!(zero.vpls.is_none() && plain.vpls.is_none());
+    assert!(deferred::vpls(&zero).is_none() && deferred::vpls(&plain).is_none());
     assert_clean(&gpu);
 }
 
@@ -357,7 +354,7 @@ fn a_sun_that_sees_nothing_adds_nothing() {
     let shaders = cbr_render::shader_library();
     let s = floor_and_wall(false, 48, 32);
     let lit = render(&gpu, &shaders, &s, "deferred:vpls=64", &[0]).remove(0);
-    let vpls = lit.vpls.as_deref().expect("VPLs");
+    let vpls = &deferred::vpls(&lit).expect("VPLs");
     assert!(
         vpls.iter().all(|v| *v == Vpl::default()),
         "{:?}",
@@ -401,7 +398,7 @@ fn nan_albedo_makes_dead_vpls_not_nan_light() {
     let shaders = cbr_render::shader_library();
     let s = builtin("nan", 64, 36);
     let out = render(&gpu, &shaders, &s, "deferred:vpls=16384", &[0]).remove(0);
-    let vpls = out.vpls.as_deref().expect("VPLs");
+    let vpls = &deferred::vpls(&out).expect("VPLs");
     assert!(vpls.iter().all(|v| v.flux.iter().all(|f| f.is_finite())));
     let alive = vpls.iter().filter(|v| v.position[3] == 1.0).count();
     assert!(alive > 1000, "{alive} VPLs alive");

@@ -7,6 +7,7 @@
 mod common;
 
 use cbr_gpu::{Gpu, Profiler};
+use cbr_render::FrameOutput;
 use cbr_render::resolve::reference::Sample;
 use cbr_render::resolve::{
     DBG_CLAMPED, DBG_REJECT_DEPTH, DBG_REJECT_ID, DBG_RENDERED, DBG_REPROJECTED, DBG_SPATIAL,
@@ -15,23 +16,10 @@ use cbr_render::resolve::{
 use cbr_render::targets::FrameTargets;
 use cbr_render::techniques::interlaced::reference::{self, HistoryRef, Inputs};
 use cbr_render::techniques::interlaced::{self, InterlacedFrame, InterlacedResolve};
-use cbr_render::{FrameOutput, RenderSettings, Renderer};
-use cbr_scene::Scene;
-use common::{assert_clean, demo, gpu, static_demo};
+use common::{
+    assert_clean, demo, gpu, render_settings as render, settings_of as spec, static_demo,
+};
 use half::f16;
-
-fn render(gpu: &Gpu, s: &Scene, settings: RenderSettings, frames: &[u32]) -> Vec<FrameOutput> {
-    let shaders = cbr_render::shader_library();
-    let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
-    frames
-        .iter()
-        .map(|&f| r.render(s, f).expect("frame"))
-        .collect()
-}
-
-fn spec(s: &Scene, spec: &str) -> RenderSettings {
-    RenderSettings::parse(s.settings.width, s.settings.height, spec).expect("spec")
-}
 
 /// Per pixel: every bit of colour (RGBA), depth, velocity and IDs.
 fn pixel_bits(o: &FrameOutput, i: usize) -> Vec<u32> {
@@ -128,8 +116,8 @@ fn rows_rendered_follow_the_frame_parity() {
     let out = render(&gpu, &s, spec(&s, "interlaced"), &frames);
     for (n, o) in native.iter().zip(&out) {
         let parity = o.index % 2;
-        assert_eq!(o.parity, Some(parity));
-        let mask = o.mask.as_ref().expect("mask");
+        assert_eq!(o.count("parity"), Some(u64::from(parity)));
+        let mask = cbr_render::techniques::mask(o).expect("mask");
         assert_eq!(mask, &interlaced::row_mask(96, 54, parity));
         let d = differing(o, n);
         assert!(

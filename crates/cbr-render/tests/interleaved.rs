@@ -13,17 +13,15 @@ mod common;
 
 use cbr_gpu::Gpu;
 use cbr_render::gpu_types::Vpl;
-use cbr_render::{FrameOutput, RenderSettings, Renderer, Spec};
+use cbr_render::techniques::deferred;
+use cbr_render::{FrameOutput, InterleavedLayers, Spec};
 use cbr_scene::Scene;
 use common::lighting::{SUN, compare, direct, floor_and_wall, fp16_step, irradiance, surface};
 use common::{assert_clean, gpu};
 use glam::DVec3;
 
 fn render(gpu: &Gpu, shaders: &cbr_gpu::Shaders, s: &Scene, spec: &str) -> FrameOutput {
-    let (w, h) = (s.settings.width, s.settings.height);
-    let settings = RenderSettings::parse(w, h, spec).expect("spec");
-    let mut r = Renderer::new(gpu, shaders, s, settings).expect("renderer");
-    r.render(s, 0).expect("frame")
+    common::render_with(gpu, shaders, s, common::settings_of(s, spec), &[0]).remove(0)
 }
 
 /// 1x1: one sub-image, every VPL, a window of one pixel: `deferred` within fp16 rounding (and
@@ -44,7 +42,10 @@ fn one_by_one_is_deferred() {
         "interleaved:1x1:vpls=256:direct:seed",
     ] {
         let got = render(&gpu, &shaders, &s, spec);
-        assert!(got.vpls == reference.vpls, "{spec}: other VPLs");
+        assert!(
+            deferred::vpls(&got) == deferred::vpls(&reference),
+            "{spec}: other VPLs"
+        );
         let diff = compare(spec, &reference, &got);
         println!("{spec} against deferred:vpls=256: {diff:?}");
         assert!(diff.max_ulps <= 1, "{spec}: {diff:?}");
@@ -99,12 +100,10 @@ fn raw_pixels_hold_their_own_subset() {
     for (m, n) in [(4u32, 4u32), (3, 2)] {
         let spec = format!("interleaved:{m}x{n}:vpls=96:rsm=64:clamp={CLAMP}:raw:debug");
         let out = render(&gpu, &shaders, &s, &spec);
-        let vpls = out.vpls.clone().expect("VPLs");
+        let vpls = deferred::vpls(&out).expect("VPLs");
         let subsets = (m * n) as usize;
         let clamp_d2 = f64::from(CLAMP * CLAMP);
-        let (mw, _, mosaic) = out
-            .interleaved
-            .clone()
+        let (mw, _, mosaic) = InterleavedLayers::from_frame(&out)
             .expect("debug")
             .mosaic
             .expect("mosaic");
@@ -294,7 +293,7 @@ impl Frame<'_> {
 
 /// The debug bits' fields (filter.glsl) as the frame reads them back.
 fn fallback_of(out: &FrameOutput, x: i64, y: i64) -> u32 {
-    let i = out.interleaved.as_ref().expect("debug layers");
+    let i = InterleavedLayers::from_frame(out).expect("debug layers");
     u32::from(i.fallback[(y * i64::from(out.width) + x) as usize])
 }
 
@@ -361,8 +360,8 @@ fn the_filters_match_their_cpu_model() {
             let param = param.replace("HALF", &(subsets / 2).to_string());
             let spec = format!("interleaved:{m}x{n}:vpls=96:rsm=64:clamp={CLAMP}:{param}:debug");
             let out = render(&gpu, &shaders, &s, &spec);
-            let vpls = out.vpls.clone().expect("VPLs");
-            let layers = out.interleaved.clone().expect("debug layers");
+            let vpls = deferred::vpls(&out).expect("VPLs");
+            let layers = InterleavedLayers::from_frame(&out).expect("debug layers");
             assert_eq!(layers.roundtrip_mismatches, 0, "{spec}");
             let id = |(x, y): Px| out.ids[(y * w + x) as usize][0];
             let surf = |q: Px| surface(&s, id(q), q.0 as u32, q.1 as u32);
@@ -528,8 +527,8 @@ fn direct_matches_its_cpu_model() {
             let spec =
                 format!("interleaved:{m}x{n}:vpls=96:rsm=64:clamp={CLAMP}:{param}:direct:debug");
             let out = render(&gpu, &shaders, &s, &spec);
-            let vpls = out.vpls.clone().expect("VPLs");
-            let layers = out.interleaved.clone().expect("debug layers");
+            let vpls = deferred::vpls(&out).expect("VPLs");
+            let layers = InterleavedLayers::from_frame(&out).expect("debug layers");
             let id = |(x, y): Px| out.ids[(y * w + x) as usize][0];
             let surf = |q: Px| surface(&s, id(q), q.0 as u32, q.1 as u32);
             let ns = |q: Px| f64::from(SPECULAR[id(q) as usize - 1].1);
@@ -711,7 +710,7 @@ fn gather_of_split_is_the_identity() {
     for (m, n) in [(4u32, 4u32), (3, 5), (8, 1), (1, 1), (5, 8)] {
         let spec = format!("interleaved:{m}x{n}:vpls={}:none:debug", 8 * m * n);
         let out = render(&gpu, &shaders, &s, &spec);
-        let l = out.interleaved.as_ref().expect("debug layers");
+        let l = InterleavedLayers::from_frame(&out).expect("debug layers");
         assert_eq!(l.roundtrip_mismatches, 0, "{spec}");
         assert_eq!(l.tile, (m, n));
         let drawn = out.ids.iter().filter(|i| i[0] != 0).count();
@@ -783,7 +782,7 @@ fn the_same_surface_thresholds_move_the_fallback() {
     (s.settings.width, s.settings.height) = (96, 54);
     let base = "interleaved:4x4:vpls=256:debug";
     let fallback = |out: &FrameOutput| -> u64 {
-        let i = out.interleaved.as_ref().expect("debug layers");
+        let i = InterleavedLayers::from_frame(out).expect("debug layers");
         i.fallback.iter().map(|&f| u64::from(f)).sum()
     };
     let default = render(&gpu, &shaders, &s, base);

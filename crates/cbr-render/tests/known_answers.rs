@@ -4,7 +4,7 @@
 mod common;
 
 use cbr_gpu::Gpu;
-use cbr_render::{FrameOutput, RenderSettings, Renderer};
+use cbr_render::{FrameOutput, RenderSettings};
 use cbr_scene::{
     CameraKey, CameraPath, DirLight, LoadStats, Material, Object, Scene, Settings, Vertex,
 };
@@ -70,10 +70,8 @@ fn key(time: f64, x: f64) -> CameraKey {
 }
 
 fn render(gpu: &Gpu, s: &Scene, frame: u32) -> FrameOutput {
-    let shaders = cbr_render::shader_library();
     let settings = RenderSettings::native(s.settings.width, s.settings.height);
-    let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
-    r.render(s, frame).expect("frame")
+    common::render_settings(gpu, s, settings, &[frame]).remove(0)
 }
 
 #[test]

@@ -9,6 +9,7 @@
 mod common;
 
 use cbr_gpu::{Gpu, Layout};
+use cbr_render::techniques::IdPass;
 use cbr_render::{CheckerboardConfig, FrameOutput, LodMode, RenderSettings, Renderer, Spec};
 use cbr_scene::Scene;
 use common::{assert_clean, demo, gpu, strip_textures};
@@ -21,13 +22,11 @@ fn untextured_demo(w: u32, h: u32) -> Scene {
 }
 
 fn render(gpu: &Gpu, s: &Scene, technique: Spec, frame: u32, count: bool) -> FrameOutput {
-    let shaders = cbr_render::shader_library();
     let settings = RenderSettings {
         count_shaded: count,
         ..RenderSettings::new(s.settings.width, s.settings.height, technique)
     };
-    let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
-    r.render(s, frame).expect("frame")
+    common::render_settings(gpu, s, settings, &[frame]).remove(0)
 }
 
 /// The raw checkerboard frame of `layout` (no resolve).
@@ -42,8 +41,8 @@ fn native() -> Spec {
 /// Compares a checkerboard frame with native at its shaded pixels; returns the fraction of shaded
 /// pixels whose object ID differs (geometry edges may round differently at other resolutions).
 fn compare(name: &str, cb: &FrameOutput, native: &FrameOutput) -> f64 {
-    let mask = cb.mask.as_ref().expect("mask");
-    let parity = cb.parity.expect("parity");
+    let mask = cbr_render::techniques::mask(cb).expect("mask");
+    let parity = cb.count("parity").expect("parity") as u32;
     let (w, h) = (cb.width, cb.height);
     let (mut shaded, mut id_diff, mut worst_color, mut worst_depth) =
         (0usize, 0usize, 0.0f32, 0.0f32);
@@ -244,11 +243,14 @@ fn every_checkerboard_pixel_is_shaded_exactly_once() {
                 assert!(
                     out.ids
                         .iter()
-                        .zip(out.mask.as_ref().expect("mask"))
+                        .zip(cbr_render::techniques::mask(&out).expect("mask"))
                         .all(|(id, &m)| m == 0 || id[0] == 1),
                     "the quad covers every sample"
                 );
-                for (c, &m) in covered.iter_mut().zip(out.mask.as_ref().expect("mask")) {
+                for (c, &m) in covered
+                    .iter_mut()
+                    .zip(cbr_render::techniques::mask(&out).expect("mask"))
+                {
                     *c += m;
                 }
                 // lavapipe's statistics also count helper invocations, so they only bound the count.
@@ -419,7 +421,7 @@ fn lod_difference(
             bias,
         ),
     );
-    let mask = cb.mask.as_ref().expect("mask");
+    let mask = cbr_render::techniques::mask(&cb).expect("mask");
     let mut d: Vec<f64> = (0..mask.len())
         // Samples of the ground (object 1, textured) where the LOD matters: inside the mip chain
         // of its 256-texel checker (levels 0..8), not magnified or past the last level.
@@ -519,7 +521,7 @@ fn gradients_mode_adds_the_lod_bias_to_its_footprint() {
         render_lod(&gpu, &s, c.spec(), lod_bias, false, 6)
     };
     let mean_diff = |a: &FrameOutput, b: &FrameOutput| {
-        let mask = a.mask.as_ref().expect("mask");
+        let mask = cbr_render::techniques::mask(a).expect("mask");
         let (mut sum, mut n) = (0.0f64, 0usize);
         for (i, _) in mask.iter().enumerate().filter(|(_, m)| **m == 1) {
             for c in 0..3 {
@@ -559,7 +561,7 @@ fn id_prepass_equals_natives_depth_and_ids() {
         // Native's own LOD: alpha-tested foliage must cover the same pixels in both.
         let native = render(&gpu, &s, native(), 3, false);
         let out = r.render(&s, 3).expect("frame");
-        let (depth, ids) = out.prepass.expect("prepass outputs");
+        let (depth, ids) = IdPass::from_frame(&out).expect("prepass outputs");
         let id_diff = ids.iter().zip(&native.ids).filter(|(a, b)| a != b).count();
         assert_eq!(
             id_diff,

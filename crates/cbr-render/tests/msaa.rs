@@ -19,9 +19,7 @@ const POSITIONS_4X: [[f32; 2]; 4] = [
 ];
 
 fn render(gpu: &cbr_gpu::Gpu, s: &Scene, settings: RenderSettings, frame: u32) -> FrameOutput {
-    let shaders = cbr_render::shader_library();
-    let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
-    r.render(s, frame).expect("frame")
+    common::render_settings(gpu, s, settings, &[frame]).remove(0)
 }
 
 fn scene(w: u32, h: u32, textured: bool) -> Scene {

@@ -451,7 +451,7 @@ fn fp16_arithmetic_and_f16_history_stay_close_to_the_reference() {
 
 // ---- Scenes ----------------------------------------------------------------------------------
 
-use cbr_render::{CheckerboardConfig, FrameOutput, RenderSettings, Renderer};
+use cbr_render::{CheckerboardConfig, FrameOutput, RenderSettings, Renderer, ResolveOutput};
 use cbr_scene::Scene;
 
 /// The demo with a still camera (its first key) and nothing moving.
@@ -573,7 +573,7 @@ fn ghosts(
     before: &FrameOutput,
     spinner: u32,
 ) -> (usize, usize) {
-    let parity = out.parity.expect("parity");
+    let parity = out.count("parity").expect("parity") as u32;
     let (w, h) = (out.width, out.height);
     let lum = |c: &[f16]| 0.2126 * c[0].to_f32() + 0.7152 * c[1].to_f32() + 0.0722 * c[2].to_f32();
     let (mut disoccluded, mut ghost) = (0, 0);
@@ -594,7 +594,7 @@ fn ghosts(
             let c = &out.color[4 * i..4 * i + 3];
             let to_now = (lum(c) - lum(&now.color[4 * i..])).abs();
             let to_before = (lum(c) - lum(&before.color[4 * i..])).abs();
-            let bits = out.resolve.as_ref().and_then(|r| r.debug_bits.as_ref());
+            let bits = ResolveOutput::from_frame(out).and_then(|r| r.debug_bits);
             let from_history = bits.expect("debug bits")[i] & DBG_REPROJECTED != 0;
             if from_history && to_before < to_now && to_now > 0.05 {
                 ghost += 1;

@@ -9,13 +9,7 @@ mod common;
 use cbr_render::post::taa::{self, RefInputs, TaaConfig};
 use cbr_render::{FrameOutput, RenderSettings, Renderer};
 use cbr_scene::Scene;
-use common::{assert_clean, demo, gpu, static_demo};
-
-fn render(gpu: &cbr_gpu::Gpu, s: &Scene, settings: RenderSettings, f: &[u32]) -> Vec<FrameOutput> {
-    let shaders = cbr_render::shader_library();
-    let mut r = Renderer::new(gpu, &shaders, s, settings).expect("renderer");
-    f.iter().map(|&f| r.render(s, f).expect("frame")).collect()
-}
+use common::{assert_clean, demo, gpu, render_settings as render, static_demo};
 
 fn spec(w: u32, h: u32, s: &str) -> RenderSettings {
     RenderSettings::parse(w, h, s).expect("spec")

@@ -1,7 +1,8 @@
 //! `cbr render` as a library: a scene's frames to EXR (all layers) + PNG (display) and run.json
-//! (its schema is here), beside [`crate::run`] for `cbr bench`. What particular techniques add
-//! (EXR layers, debug PNGs, run.json summaries) lives in [`layers`] and [`pngs`]; their shorthand
-//! flags in [`flags`].
+//! (its schema is here), beside [`crate::run`] for `cbr bench`. What a technique adds (its layers
+//! in the EXR, its statistics and settings in run.json: [`layers`]; its debug PNGs: [`pngs`]) is
+//! written from its registration's declarations, naming no technique; the shorthand flags are in
+//! [`flags`].
 
 pub mod device;
 pub mod flags;
@@ -153,12 +154,7 @@ pub fn run(a: &RenderOptions) -> Result<RenderResult> {
                 depth: &out.depth,
                 velocity: &out.velocity,
                 ids: &out.ids,
-                mask: out.mask.as_deref(),
-                prepass: out
-                    .prepass
-                    .as_ref()
-                    .map(|(d, i)| (d.as_slice(), i.as_slice())),
-                extra: layers::exr_layers(&out),
+                extra: layers::exr_layers(&out)?,
                 metadata: meta,
             },
         )?;
@@ -171,7 +167,13 @@ pub fn run(a: &RenderOptions) -> Result<RenderResult> {
                 )
             });
         }
-        pngs::write(&a.out, f, &out, &display.to_rgba8(&out.color))?;
+        pngs::write(
+            &a.out,
+            f,
+            &settings.spec,
+            &out,
+            &display.to_rgba8(&out.color),
+        )?;
         for t in &out.timings {
             pass_times.entry(t.name.clone()).or_default().push(t.gpu_ms);
         }
@@ -181,15 +183,13 @@ pub fn run(a: &RenderOptions) -> Result<RenderResult> {
             "exr": file_name(&exr),
             "png": file_name(&png),
             "passes": out.timings,
-            "parity": out.parity,
-            "resolve_reset": out.resolve.as_ref().map(|r| r.reset),
             "cached": out.cached,
             "shaded_fragments": out.shaded_fragments,
             "nonfinite_fragments": out.nonfinite_fragments,
         });
-        for (key, summary) in layers::frame_summaries(&out) {
-            record[key] = summary;
-        }
+        // The technique's statistics: `parity`, `resolve_reset`, `analytic`, ... (every
+        // registration's, `null` where this frame has none).
+        layers::add_stats(&out, &mut record);
         frame_records.push(record);
         bar.inc(1);
     }
@@ -235,9 +235,7 @@ pub fn run(a: &RenderOptions) -> Result<RenderResult> {
         "validation": {"enabled": validation, "messages": messages.len(), "list": messages},
         "wall_s": started.elapsed().as_secs_f64(),
     });
-    for (key, value) in layers::settings(&settings.spec) {
-        run["settings"][key] = value;
-    }
+    layers::add_settings(&settings.spec, &mut run["settings"]);
     let run_json = a.out.join("run.json");
     write_bytes(&run_json, serde_json::to_string_pretty(&run)?.as_bytes())?;
     Ok(RenderResult {

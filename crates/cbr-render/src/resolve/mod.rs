@@ -3,12 +3,15 @@
 //! layout works) and the previous resolved frame, with history ping-pong of colour, depth and IDs.
 //! `reference` is the CPU implementation the shader is tested against.
 
+pub mod layers;
 pub mod reference;
 
 use cbr_gpu::{
     Access, Buffer, Cmd, Gpu, GpuError, Image, LevelCopy, Location, Profiler, Readback, Result,
     Shaders, vk,
 };
+
+pub use layers::{DEBUG_LAYERS, ResolveOutput};
 
 use crate::layouts::LayoutPlan;
 use crate::memory::MemoryEstimate;

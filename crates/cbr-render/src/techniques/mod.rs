@@ -1,5 +1,5 @@
 //! The registered techniques, one module each, and what several of them share: reading the four
-//! common layers back.
+//! common layers back, and the layers several write (`mask`, the prepass's, `coverage`).
 
 /// Declares each technique's module and lists its registration: adding a technique is its
 /// module, its shader folder and its name in the one list below.
@@ -26,7 +26,7 @@ techniques!(
 use cbr_gpu::{Buffer, Cmd, Gpu, Image, PassKind, Profiler, Readback, Result, Shaders};
 use half::f16;
 
-use crate::frame::FrameOutput;
+use crate::frame::{ExrType, FrameOutput, Layer, LayerDecl, SampleType};
 use crate::gpu_scene::GpuScene;
 use crate::memory::MemoryEstimate;
 use crate::pass::{Binds, ResourceDecl};
@@ -135,6 +135,107 @@ impl IdPass {
             linear_depths(bytemuck::cast_slice(self.depth_rb.bytes()?), near),
             bytemuck::cast_slice::<u8, [u32; 2]>(self.ids_rb.bytes()?).to_vec(),
         ))
+    }
+
+    /// The frame's [`PREPASS_LAYERS`] from [`IdPass::output`].
+    pub fn layers(&self, w: u32, h: u32, near: f64) -> Result<Vec<Layer>> {
+        let (depth, ids) = self.output(near)?;
+        let [d, o, p] = &PREPASS_LAYERS;
+        Ok(vec![
+            d.layer(w, h, vec![depth])?,
+            o.layer(w, h, vec![ids.iter().map(|i| i[0]).collect()])?,
+            p.layer(w, h, vec![ids.iter().map(|i| i[1]).collect()])?,
+        ])
+    }
+
+    /// A frame's prepass outputs (view depths, IDs), when it has them.
+    pub fn from_frame(out: &FrameOutput) -> Option<(Vec<f32>, Vec<[u32; 2]>)> {
+        let depth = out.channel::<f32>("prepass_depth", "Z")?;
+        let object = out.channel::<u32>("prepass_object_id", "id")?;
+        let primitive = out.channel::<u32>("prepass_primitive_id", "id")?;
+        let ids = object
+            .iter()
+            .zip(primitive)
+            .map(|(&o, &p)| [o, p])
+            .collect();
+        Some((depth.to_vec(), ids))
+    }
+}
+
+/// `mask`: 1 where this frame shaded the pixel (checkerboard, interlaced).
+pub const MASK_LAYER: LayerDecl = LayerDecl {
+    name: "mask",
+    channels: &["Y"],
+    samples: SampleType::U8,
+    exr: Some(ExrType::Half),
+    about: "1 where this frame shaded the pixel",
+};
+
+/// A frame's [`MASK_LAYER`].
+pub fn mask(out: &FrameOutput) -> Option<&[u8]> {
+    out.channel("mask", "Y")
+}
+
+/// The native-resolution depth + ID prepass ([`IdPass`]): view depth (+inf where empty), object
+/// and primitive IDs.
+pub const PREPASS_LAYERS: [LayerDecl; 3] = [
+    LayerDecl {
+        name: "prepass_depth",
+        channels: &["Z"],
+        samples: SampleType::F32,
+        exr: Some(ExrType::Float),
+        about: "the ID prepass's view depth (+inf where empty)",
+    },
+    LayerDecl {
+        name: "prepass_object_id",
+        channels: &["id"],
+        samples: SampleType::U32,
+        exr: Some(ExrType::Uint),
+        about: "the ID prepass's object IDs",
+    },
+    LayerDecl {
+        name: "prepass_primitive_id",
+        channels: &["id"],
+        samples: SampleType::U32,
+        exr: Some(ExrType::Uint),
+        about: "the ID prepass's primitive IDs",
+    },
+];
+
+/// `coverage` (supersampled and analytic frames): `edge`, 1 where the pixel's samples saw more
+/// than one object ID (background counts as one), and `fraction`, of the samples on geometry.
+pub const COVERAGE_LAYER: LayerDecl = LayerDecl {
+    name: "coverage",
+    channels: &["edge", "fraction"],
+    samples: SampleType::F32,
+    exr: Some(ExrType::Float),
+    about: "edge: 1 where the pixel's samples saw several object IDs; fraction: of the samples \
+            on geometry",
+};
+
+/// The [`COVERAGE_LAYER`] of supersampled (`ssaa`) and `analytic` frames, typed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Coverage {
+    /// 1 where the pixel's samples saw more than one object ID (background counts as one).
+    pub edge: Vec<u8>,
+    /// Fraction of the pixel's samples that hit geometry.
+    pub fraction: Vec<f32>,
+}
+
+impl Coverage {
+    /// A frame's coverage, when it has the layer.
+    pub fn from_frame(out: &FrameOutput) -> Option<Coverage> {
+        let edge = out.channel::<f32>("coverage", "edge")?;
+        Some(Coverage {
+            edge: edge.iter().map(|&e| u8::from(e != 0.0)).collect(),
+            fraction: out.channel::<f32>("coverage", "fraction")?.to_vec(),
+        })
+    }
+
+    /// The layer of this coverage at `w` x `h`.
+    pub fn layer(&self, w: u32, h: u32) -> Result<Layer> {
+        let edge = self.edge.iter().map(|&e| f32::from(e)).collect();
+        COVERAGE_LAYER.layer(w, h, vec![edge, self.fraction.clone()])
     }
 }
 

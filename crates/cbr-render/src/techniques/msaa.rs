@@ -24,7 +24,7 @@ pub const REGISTRATION: Registration = Registration {
     grammar: "msaa:N[:sample][:hdr]",
     about: "hardware MSAA (N = 2, 4, 8 as the device allows), per-pixel or per-sample shading, \
             box or HDR-safe compute resolve",
-    layers: &[],
+    outputs: crate::technique::Outputs::NONE,
     check: |p| parse(p).map(|_| ()),
     needs,
     estimate: |ctx, p| Ok(Msaa::estimate(parse(p)?, ctx.width, ctx.height)),

@@ -14,7 +14,7 @@ pub const REGISTRATION: Registration = Registration {
     name: "native",
     grammar: "native",
     about: "full resolution, one sample at each pixel centre: the reconstruction reference",
-    layers: &[],
+    outputs: crate::technique::Outputs::NONE,
     check: |p| no_params("native", p),
     needs: |_, _| None,
     estimate: |ctx, _| Ok(Native::estimate(ctx.width, ctx.height)),

@@ -13,19 +13,22 @@ use cbr_gpu::{Image, PassKind, Readback, Result, vk};
 use cbr_scene::rng::SplitMix;
 use half::f16;
 
-use super::LayerReadbacks;
-use crate::frame::{Coverage, FrameOutput};
+use super::{COVERAGE_LAYER, Coverage, LayerReadbacks};
+use crate::frame::FrameOutput;
 use crate::memory::MemoryEstimate;
 use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, ResourceDecl, Resources, Use};
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::{COLOR_FORMAT, FrameTargets};
-use crate::technique::{BuildCtx, FrameCtx, Registration, Technique, unknown_param};
+use crate::technique::{BuildCtx, FrameCtx, Outputs, Registration, Technique, unknown_param};
 
 pub const REGISTRATION: Registration = Registration {
     name: "ssaa",
     grammar: "ssaa:N[:jittered]",
     about: "N x N sub-pixel samples per pixel (N = 1..32), box filter: the ground-truth reference",
-    layers: &["coverage"],
+    outputs: Outputs {
+        layers: &[COVERAGE_LAYER],
+        ..Outputs::NONE
+    },
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
     estimate: |ctx, _| Ok(Ssaa::estimate(ctx.width, ctx.height)),
@@ -283,13 +286,14 @@ impl Technique for Ssaa {
         out.color = bytemuck::cast_slice::<u8, f16>(self.out_rb.bytes()?).to_vec();
         let aux: &[[u32; 2]] = bytemuck::cast_slice(self.aux_rb.bytes()?);
         let samples = (self.c.n * self.c.n) as f32;
-        out.coverage = Some(Coverage {
+        let coverage = Coverage {
             edge: aux.iter().map(|a| u8::from(a[1] & EDGE != 0)).collect(),
             fraction: aux
                 .iter()
                 .map(|a| (a[1] & !EDGE) as f32 / samples)
                 .collect(),
-        });
+        };
+        out.layers.push(coverage.layer(v.width, v.height)?);
         Ok(out)
     }
 

@@ -17,7 +17,7 @@ pub const REGISTRATION: Registration = Registration {
     grammar: "upscale[:bilinear|bicubic]",
     about: "render W/sqrt(2) x H/sqrt(2) (the checkerboard's pixel count), then upscale: the \
             baseline checkerboard must beat",
-    layers: &[],
+    outputs: crate::technique::Outputs::NONE,
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
     estimate: |ctx, _| Ok(Upscale::estimate(ctx.width, ctx.height)),

@@ -82,3 +82,44 @@ pub fn upload(gpu: &Gpu, parts: &[(&cbr_gpu::Image, Vec<u8>)]) -> cbr_gpu::Resul
         Ok(())
     })
 }
+
+/// Frames `frames` of `settings` over `s`, one renderer, with `shaders` (tests that render
+/// many configurations share one library: its compile cache).
+pub fn render_with(
+    gpu: &Gpu,
+    shaders: &cbr_gpu::Shaders,
+    s: &cbr_scene::Scene,
+    settings: cbr_render::RenderSettings,
+    frames: &[u32],
+) -> Vec<cbr_render::FrameOutput> {
+    let mut r = cbr_render::Renderer::new(gpu, shaders, s, settings).expect("renderer");
+    frames
+        .iter()
+        .map(|&f| r.render(s, f).expect("frame"))
+        .collect()
+}
+
+/// Frames `frames` of `settings` over `s` (a fresh renderer and shader library).
+pub fn render_settings(
+    gpu: &Gpu,
+    s: &cbr_scene::Scene,
+    settings: cbr_render::RenderSettings,
+    frames: &[u32],
+) -> Vec<cbr_render::FrameOutput> {
+    render_with(gpu, &cbr_render::shader_library(), s, settings, frames)
+}
+
+/// `spec` at the scene's resolution.
+pub fn settings_of(s: &cbr_scene::Scene, spec: &str) -> cbr_render::RenderSettings {
+    cbr_render::RenderSettings::parse(s.settings.width, s.settings.height, spec).expect("spec")
+}
+
+/// Frames `frames` of `spec` over `s` at the scene's resolution (a fresh renderer).
+pub fn render_spec(
+    gpu: &Gpu,
+    s: &cbr_scene::Scene,
+    spec: &str,
+    frames: &[u32],
+) -> Vec<cbr_render::FrameOutput> {
+    render_settings(gpu, s, settings_of(s, spec), frames)
+}

@@ -22,7 +22,10 @@
 //! `texture_box`), or with `:aniso` by one anisotropic trilinear filter (the taps along the
 //! longer side only).
 
+pub mod layers;
 pub mod reference;
+
+pub use layers::AnalyticLayers;
 
 use cbr_gpu::{
     Access, BindingDesc, Buffer, Caps, ComputeDesc, DescriptorKind, DescriptorSet, GpuError,
@@ -31,12 +34,14 @@ use cbr_gpu::{
 };
 use half::f16;
 
-use super::linear_depths;
-use crate::frame::{AnalyticLayers, Coverage, FrameOutput};
+use super::{Coverage, linear_depths};
+use crate::frame::FrameOutput;
 use crate::memory::MemoryEstimate;
 use crate::scene_pass::{self, MATERIAL_SET, SCENE_SET};
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, FrameTargets, ID_FORMAT, VELOCITY_FORMAT};
-use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, unknown_param};
+use crate::technique::{
+    BuildCtx, FrameCtx, Geometry, Outputs, Registration, Technique, unknown_param,
+};
 
 pub const REGISTRATION: Registration = Registration {
     name: "analytic",
@@ -44,7 +49,12 @@ pub const REGISTRATION: Registration = Registration {
     about: "exact area of each pixel covered by each triangle, per-pixel fragment lists resolved \
             front to back; `seed`: the seed's column shortcut; `samples=N`: the visibility mask's \
             samples (32, 64, 128); `aniso`: the albedo texture filtered anisotropically, not as a box",
-    layers: &["coverage", "analytic"],
+    outputs: Outputs {
+        layers: &layers::LAYERS,
+        stats: &layers::STATS,
+        pngs: Some(layers::debug_pngs),
+        settings: None,
+    },
     check: |p| parse(p).map(|_| ()),
     needs,
     estimate: |ctx, p| {
@@ -1374,14 +1384,14 @@ impl Technique for Analytic {
             bytemuck::cast_slice::<u8, [u32; 2]>(ids.bytes()?).to_vec(),
         );
         let counts: &[[u32; 4]] = bytemuck::cast_slice(cnt.bytes()?);
-        out.coverage = Some(Coverage {
+        let coverage = Coverage {
             edge: counts
                 .iter()
                 .map(|c| u8::from(c[2] & FLAG_EDGE != 0))
                 .collect(),
             fraction: bytemuck::cast_slice::<u8, f32>(cov.bytes()?).to_vec(),
-        });
-        out.analytic = Some(AnalyticLayers {
+        };
+        AnalyticLayers {
             fragments: counts.iter().map(|c| c[0]).collect(),
             overflow: counts.iter().map(|c| c[1]).collect(),
             visible: counts.iter().map(|c| c[3]).collect(),
@@ -1396,7 +1406,8 @@ impl Technique for Analytic {
             kept_per_pixel: self.frags,
             tail_fragments: self.recorded_tails()?,
             albedo_jobs: self.recorded_jobs()?,
-        });
+        }
+        .write(&coverage, &mut out)?;
         Ok(out)
     }
 

@@ -60,6 +60,19 @@ const EXPECTED: &str = "a layout (rotated, split, masked, msaa2x) first, then a 
     (ours, fused, pq4k, intel, spatial, temporal, none) and options pixel, quad, 8, 16, fp16, \
     f32history, debug, prepass, locations, bias, gradients, tol=T, without-velocity|depth|ids|clamp|prepass";
 
+/// run.json's `settings.checkerboard`: layout, LOD mode, resolve settings, prepass and sample
+/// locations of these parameters (`None` where they do not parse).
+pub fn settings_json(params: &[&str]) -> Option<serde_json::Value> {
+    let c = CheckerboardConfig::parse(params).ok()?;
+    Some(serde_json::json!({
+        "layout": c.layout.name(),
+        "lod_mode": c.lod_mode,
+        "resolve": c.resolve,
+        "id_prepass": c.prepass,
+        "sample_locations": c.locations,
+    }))
+}
+
 impl CheckerboardConfig {
     pub fn new(layout: Layout, resolve: Option<ResolveSettings>) -> CheckerboardConfig {
         CheckerboardConfig {

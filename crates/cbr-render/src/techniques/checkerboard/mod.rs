@@ -12,22 +12,32 @@ use half::f16;
 pub use config::{CheckerboardConfig, LodMode};
 use unpack::{UnpackPass, UnpackedPixel};
 
-use super::{IdPass, linear_depths};
-use crate::frame::{FrameOutput, ResolveOutput};
+use super::{IdPass, MASK_LAYER, PREPASS_LAYERS, linear_depths};
+use crate::frame::{FrameOutput, LayerDecl, Stat, join};
 use crate::gpu_scene::{FrameView, RasterUniforms};
 use crate::gpu_types::FLAG_PARITY;
 use crate::layouts::LayoutPlan;
 use crate::memory::MemoryEstimate;
-use crate::resolve::{ResolveFrame, ResolvePass, ResolveReadbacks, ResolveSettings};
+use crate::resolve::{
+    DEBUG_LAYERS, ResolveFrame, ResolveOutput, ResolvePass, ResolveReadbacks, ResolveSettings,
+};
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::FrameTargets;
-use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique};
+use crate::technique::{BuildCtx, FrameCtx, Geometry, Outputs, Registration, Technique};
+
+/// `mask`, the prepass's layers, then the resolve's debug views.
+const LAYERS: [LayerDecl; 13] = join(join::<1, 3, 4>([MASK_LAYER], PREPASS_LAYERS), DEBUG_LAYERS);
 
 pub const REGISTRATION: Registration = Registration {
     name: "checkerboard",
     grammar: "checkerboard[:LAYOUT][:MODE][:OPTION...]",
     about: "half the pixels per frame, alternating parity, then the resolve",
-    layers: &["mask", "prepass_*", "resolve_* (debug)"],
+    outputs: Outputs {
+        layers: &LAYERS,
+        stats: &crate::resolve::layers::STATS,
+        pngs: Some(crate::resolve::layers::debug_pngs),
+        settings: Some(config::settings_json),
+    },
     check: |p| CheckerboardConfig::parse(p).map(|_| ()),
     needs: |p, caps| {
         let c = CheckerboardConfig::parse(p).ok()?;
@@ -303,14 +313,13 @@ impl Technique for Checkerboard {
                 .collect(),
             px.iter().map(|p| [p.ids[0], p.ids[1]]).collect(),
         );
-        out.mask = Some(
-            px.iter()
-                .map(|p| u8::from(p.velocity_depth_mask[3] > 0.5))
-                .collect(),
-        );
-        out.parity = Some(parity);
+        let (w, h) = (ctx.view.width, ctx.view.height);
+        let mask = px.iter().map(|p| u8::from(p.velocity_depth_mask[3] > 0.5));
+        out.layers
+            .push(MASK_LAYER.layer(w, h, vec![mask.collect()])?);
+        out.set_stat("parity", Stat::Count(u64::from(parity)));
         if let Some(p) = &self.prepass {
-            out.prepass = Some(p.output(near)?);
+            out.layers.extend(p.layers(w, h, near)?);
         }
         if let Some(r) = &self.resolve {
             // The resolved frame replaces the raw colour; depth, velocity, IDs and the mask stay
@@ -322,7 +331,7 @@ impl Technique for Checkerboard {
                     .flat_map(|c| [c[0], c[1], c[2], 1.0].map(f16::from_f32))
                     .collect();
             let debug = settings.debug;
-            out.resolve = Some(ResolveOutput {
+            ResolveOutput {
                 reset,
                 debug_bits: debug
                     .then(|| {
@@ -338,7 +347,8 @@ impl Technique for Checkerboard {
                             .map(|b| bytemuck::cast_slice::<u8, [f32; 2]>(b).to_vec())
                     })
                     .transpose()?,
-            });
+            }
+            .write(&mut out)?;
         }
         Ok(out)
     }

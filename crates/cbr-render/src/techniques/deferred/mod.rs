@@ -21,10 +21,11 @@ pub mod vpl;
 use cbr_gpu::{Access, Image, Result};
 
 use super::LayerReadbacks;
-use crate::frame::FrameOutput;
+use crate::frame::{FrameOutput, LayerDecl, SampleType};
+use crate::gpu_types::Vpl;
 use crate::memory::MemoryEstimate;
 use crate::scene_pass::{RasterConfig, ScenePass};
-use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique};
+use crate::technique::{BuildCtx, FrameCtx, Geometry, Outputs, Registration, Technique};
 pub use config::*;
 pub use gbuffer::GBuffer;
 use lighting::{LightingPass, LightingPush};
@@ -36,7 +37,10 @@ pub const REGISTRATION: Registration = Registration {
     about: "G-buffer then a lighting pass (native's shading); `vpls=N`: one-bounce indirect light \
             from N virtual point lights of the sun's reflective shadow map; `points=N`: N random \
             point lights",
-    layers: &[],
+    outputs: Outputs {
+        layers: &[VPL_LAYER],
+        ..Outputs::NONE
+    },
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
     estimate: |ctx, p| Ok(Deferred::estimate(&parse(p)?, ctx.width, ctx.height)),
@@ -128,8 +132,62 @@ pub fn output(
     ctx: &FrameCtx,
 ) -> Result<FrameOutput> {
     let mut out = readbacks.output(ctx.view.width, ctx.view.height, ctx.view.camera.near)?;
-    out.vpls = lights.read_vpls()?;
+    if let Some(vpls) = lights.read_vpls()? {
+        out.layers.push(vpl_layer(&vpls)?);
+    }
     Ok(out)
+}
+
+/// `vpls` (`vpls=N`): the frame's N virtual point lights, camera-relative, as an N x 1 layer of
+/// [`Vpl`]'s twelve floats; on the host only (no image: not in the EXR).
+pub const VPL_LAYER: LayerDecl = LayerDecl {
+    name: "vpls",
+    channels: &[
+        "position.x",
+        "position.y",
+        "position.z",
+        "position.w",
+        "normal.x",
+        "normal.y",
+        "normal.z",
+        "normal.w",
+        "flux.x",
+        "flux.y",
+        "flux.z",
+        "flux.w",
+    ],
+    samples: SampleType::F32,
+    exr: None,
+    about: "the frame's virtual point lights (position, w: alive; normal; flux), camera-relative",
+};
+
+fn vpl_layer(vpls: &[Vpl]) -> Result<crate::frame::Layer> {
+    let floats = |v: &Vpl| -> [f32; 12] { bytemuck::cast(*v) };
+    let planes = (0..12)
+        .map(|c| vpls.iter().map(|v| floats(v)[c]).collect())
+        .collect();
+    VPL_LAYER.layer(vpls.len() as u32, 1, planes)
+}
+
+/// A frame's VPLs (`deferred:vpls=N`, `interleaved`), when it has them.
+pub fn vpls(out: &FrameOutput) -> Option<Vec<Vpl>> {
+    let l = out.layer(VPL_LAYER.name)?;
+    let planes: Vec<&[f32]> = VPL_LAYER
+        .channels
+        .iter()
+        .map(|c| l.channel::<f32>(c))
+        .collect::<Option<_>>()?;
+    Some(
+        (0..l.width as usize)
+            .map(|i| {
+                let mut f = [0f32; 12];
+                for (c, p) in planes.iter().enumerate() {
+                    f[c] = p[i];
+                }
+                bytemuck::cast(f)
+            })
+            .collect(),
+    )
 }
 
 /// The G-buffer raster: native's with the surface written instead of its shading, after a depth

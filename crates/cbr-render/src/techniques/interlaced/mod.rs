@@ -11,20 +11,32 @@ use half::f16;
 
 pub use resolve::{InterlacedFrame, InterlacedResolve, InterlacedSettings, ResolvedReadbacks};
 
-use super::linear_depths;
-use crate::frame::{FrameOutput, ResolveOutput};
+use super::{MASK_LAYER, linear_depths};
+use crate::frame::{FrameOutput, LayerDecl, Stat, join};
 use crate::gpu_types::FLAG_PARITY;
 use crate::memory::MemoryEstimate;
+use crate::resolve::{DEBUG_LAYERS, ResolveOutput};
 use crate::scene_pass::{LAYOUT_INTERLACED, RasterConfig, ScenePass};
 use crate::targets::FrameTargets;
-use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, unknown_param};
+use crate::technique::{
+    BuildCtx, FrameCtx, Geometry, Outputs, Registration, Technique, unknown_param,
+};
+
+/// `mask` (the rows shaded this frame) and, with `debug`, the resolve's debug views (the same
+/// bits as the checkerboard resolve's; `resolve_velocity` is never written).
+const LAYERS: [LayerDecl; 10] = join([MASK_LAYER], DEBUG_LAYERS);
 
 pub const REGISTRATION: Registration = Registration {
     name: "interlaced",
     grammar: "interlaced[:debug][:margin=M][:without-history|ids|depth|clamp|diagonals]",
     about: "even rows on even frames, odd rows on odd frames; missing rows from the previous \
             frame (velocity, ID and depth tests), else edge-directed line averaging",
-    layers: &["mask", "resolve_* (debug)"],
+    outputs: Outputs {
+        layers: &LAYERS,
+        stats: &crate::resolve::layers::STATS,
+        pngs: Some(crate::resolve::layers::debug_pngs),
+        settings: None,
+    },
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
     estimate: |ctx, p| Ok(Interlaced::estimate(&parse(p)?, ctx.width, ctx.height)),
@@ -200,13 +212,15 @@ impl Technique for Interlaced {
             raw.velocity,
             raw.ids,
         );
-        out.mask = Some(row_mask(w, h, parity));
-        out.parity = Some(parity);
-        out.resolve = Some(ResolveOutput {
+        out.layers
+            .push(MASK_LAYER.layer(w, h, vec![row_mask(w, h, parity)])?);
+        out.set_stat("parity", Stat::Count(u64::from(parity)));
+        ResolveOutput {
             reset: ctx.reset || !self.resolve.settings().history,
             debug_bits: raw.debug,
             velocity: None,
-        });
+        }
+        .write(&mut out)?;
         Ok(out)
     }
 

@@ -15,6 +15,7 @@
 //! filtered with the VPLs' irradiance and their specular term beside it; the lighting pass then
 //! shades the directional lights only.
 
+pub mod layers;
 pub mod split;
 
 use cbr_gpu::{Access, Image, Readback, Result, vk};
@@ -23,11 +24,21 @@ use super::LayerReadbacks;
 use super::deferred::lighting::{InterleavedLighting, Interleaving, LightingPass, LightingPush};
 use super::deferred::lights::ManyLights;
 use super::deferred::{self, DeferredConfig, GBuffer};
-use crate::frame::{FrameOutput, InterleavedLayers};
+use crate::frame::{FrameOutput, LayerDecl};
 use crate::memory::MemoryEstimate;
 use crate::scene_pass::{RasterConfig, ScenePass};
-use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique, unknown_param};
+use crate::technique::{
+    BuildCtx, FrameCtx, Geometry, Outputs, Registration, Technique, unknown_param,
+};
+pub use layers::InterleavedLayers;
 use split::SplitPasses;
+
+/// deferred's VPLs, then with `debug` the views.
+const LAYERS: [LayerDecl; 3] = [
+    deferred::VPL_LAYER,
+    layers::DEBUG_LAYER,
+    layers::MOSAIC_LAYER,
+];
 
 pub const REGISTRATION: Registration = Registration {
     name: "interleaved",
@@ -39,7 +50,12 @@ pub const REGISTRATION: Registration = Registration {
             geometry-aware, missing subsets shaded at the pixel; seed: the seed's edge-skipping \
             Gaussian; box; none), times albedo; direct: the point lights in subsets too; implicit: \
             no split",
-    layers: &["interleaved (debug)"],
+    outputs: Outputs {
+        layers: &LAYERS,
+        stats: &layers::STATS,
+        pngs: Some(layers::debug_pngs),
+        settings: None,
+    },
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
     estimate: |ctx, p| Ok(Interleaved::estimate(&parse(p)?, ctx.width, ctx.height)),
@@ -521,7 +537,9 @@ impl Technique for Interleaved {
 
     fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput> {
         let mut out = deferred::output(&self.readbacks, &self.lights, ctx)?;
-        out.interleaved = self.layers()?;
+        if let Some(views) = self.layers()? {
+            views.write(&mut out)?;
+        }
         Ok(out)
     }
 
