@@ -112,15 +112,16 @@ fn estimates_list_what_every_technique_and_post_pass_allocates() {
     let gpu = gpu();
     let shaders = cbr_render::shader_library();
     let scene = demo(W, H);
-    // Every registration appears in the list.
+    // Every registration is covered: by a case in the list, or else by its bare name (a new
+    // technique needs no line here).
+    let mut specs: Vec<&str> = SPECS.to_vec();
     for t in cbr_render::registry::TECHNIQUES {
-        assert!(
-            SPECS
-                .iter()
-                .any(|s| s.split(['+', ':']).next() == Some(t.name)),
-            "technique `{}` has no case",
-            t.name
-        );
+        if !SPECS
+            .iter()
+            .any(|s| s.split(['+', ':']).next() == Some(t.name))
+        {
+            specs.push(t.name);
+        }
     }
     for p in cbr_render::registry::POST_PASSES {
         let plus = format!("+{}", p.name);
@@ -131,7 +132,7 @@ fn estimates_list_what_every_technique_and_post_pass_allocates() {
     }
     let mut problems = Vec::new();
     let mut ran = 0;
-    for (spec, instrument) in SPECS
+    for (spec, instrument) in specs
         .iter()
         .map(|s| (*s, false))
         .chain([("checkerboard:rotated:ours", true)])
