@@ -21,6 +21,7 @@ techniques!(
     analytic,
     deferred,
     interleaved,
+    flicker,
 );
 
 use cbr_gpu::{Buffer, Cmd, Gpu, Image, PassKind, Profiler, Readback, Result, Shaders};
