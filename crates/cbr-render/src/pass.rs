@@ -46,11 +46,15 @@ pub enum Filter {
     Linear,
     /// Bilinear in texel units (Vulkan's unnormalizedCoordinates): the resolve's history reads.
     LinearTexels,
+    /// The sampler bound with the image ([`Binds::texture`]): a scene texture read through the
+    /// scene's sampler (its mips and wrap), which the pass does not make.
+    Given,
 }
 
 impl Filter {
-    fn desc(self) -> SamplerDesc {
-        match self {
+    /// The sampler the pass makes (none for [`Filter::Given`]).
+    fn desc(self) -> Option<SamplerDesc> {
+        Some(match self {
             Filter::Nearest => SamplerDesc::NEAREST,
             Filter::Linear => SamplerDesc {
                 linear: true,
@@ -61,7 +65,8 @@ impl Filter {
                 unnormalized: true,
                 ..SamplerDesc::NEAREST
             },
-        }
+            Filter::Given => return None,
+        })
     }
 }
 
@@ -87,6 +92,7 @@ impl BindKind {
 
     fn what(self) -> &'static str {
         match self {
+            BindKind::Sampled(Filter::Given) => "texture (an image with its sampler)",
             BindKind::Sampled(_) => "sampled image",
             BindKind::StorageImage(_) => "storage image",
             BindKind::StorageBuffer(_) | BindKind::Uniform => "buffer",
@@ -123,6 +129,10 @@ impl Binding {
             name,
             kind: BindKind::Sampled(filter),
         }
+    }
+    /// A texture read through the sampler bound with it ([`Filter::Given`]).
+    pub const fn texture(name: &'static str) -> Binding {
+        Binding::sampled_with(name, Filter::Given)
     }
     pub const fn image(name: &'static str, u: Use) -> Binding {
         Binding {
@@ -263,6 +273,11 @@ macro_rules! push_constants {
     (@align $t:ty as array) => { <$t as $crate::pass::GlslArray>::ALIGN };
 }
 
+push_constants! {
+    /// The push constants of a pass that declares none (its dispatches pass `&NoPush`).
+    pub struct NoPush {}
+}
+
 /// One compute pass, declared once.
 #[derive(Clone, Debug)]
 pub struct ComputeDecl {
@@ -390,12 +405,13 @@ impl ComputeDecl {
         let mut samplers = BTreeMap::new();
         for b in &self.bindings {
             if let BindKind::Sampled(filter) = b.kind
+                && let Some(desc) = filter.desc()
                 && !samplers.contains_key(&(filter as u8))
             {
                 let s = Sampler::new(
                     gpu,
                     &format!("{}.{filter:?}", self.name).to_lowercase(),
-                    filter.desc(),
+                    desc,
                 )?;
                 samplers.insert(filter as u8, s);
             }
@@ -420,6 +436,8 @@ fn declaration(pass: &str, message: String) -> GpuError {
 #[derive(Clone)]
 pub enum Bound<'a> {
     Image(&'a Image),
+    /// An image with the sampler it is read through ([`Filter::Given`]).
+    Texture(&'a Image, &'a Sampler),
     Buffer(&'a Buffer),
 }
 
@@ -458,6 +476,12 @@ impl<'a> Binds<'a> {
 
     pub fn buffer(mut self, name: &'static str, buffer: &'a Buffer) -> Binds<'a> {
         self.set(name, Bound::Buffer(buffer));
+        self
+    }
+
+    /// Binds `name` (a [`Binding::texture`]) to `image` read through `sampler`.
+    pub fn texture(mut self, name: &'static str, image: &'a Image, sampler: &'a Sampler) -> Binds<'a> {
+        self.set(name, Bound::Texture(image, sampler));
         self
     }
 
@@ -533,17 +557,17 @@ impl ComputePass {
             })?;
             let ok = matches!(
                 (b.kind, given),
-                (
-                    BindKind::Sampled(_) | BindKind::StorageImage(_),
-                    Bound::Image(_)
-                ) | (
-                    BindKind::StorageBuffer(_) | BindKind::Uniform,
-                    Bound::Buffer(_)
-                )
-            );
+                (BindKind::Sampled(Filter::Given), Bound::Texture(..))
+                    | (BindKind::StorageImage(_), Bound::Image(_))
+                    | (
+                        BindKind::StorageBuffer(_) | BindKind::Uniform,
+                        Bound::Buffer(_)
+                    )
+            ) || matches!((b.kind, given), (BindKind::Sampled(f), Bound::Image(_)) if f != Filter::Given);
             if !ok {
                 let got = match given {
                     Bound::Image(_) => "an image",
+                    Bound::Texture(..) => "an image with its sampler",
                     Bound::Buffer(_) => "a buffer",
                 };
                 return Err(declaration(
@@ -597,7 +621,7 @@ impl ComputePass {
         for b in &self.decl.bindings {
             let access = b.kind.compute_access();
             match binds.get(b.name) {
-                Some(Bound::Image(i)) => cmd.use_image(i, access),
+                Some(Bound::Image(i) | Bound::Texture(i, _)) => cmd.use_image(i, access),
                 Some(Bound::Buffer(x)) => cmd.use_buffer(x, access),
                 None => {}
             }
@@ -612,6 +636,56 @@ impl ComputePass {
         binds: &Binds,
         push: &P,
         groups: [u32; 3],
+    ) -> Result<()> {
+        self.record(cmd, binds, push, |cmd| {
+            cmd.dispatch(groups[0], groups[1], groups[2]);
+        })
+    }
+
+    /// The barriers of [`ComputePass::prepare`] and those of `args` read as an indirect
+    /// dispatch's parameters (first: [`Access::ComputeIndirect`] also covers the shader's reads
+    /// of `args` where the pass binds it, so that their barrier, read after read, is none).
+    pub fn prepare_indirect(&self, cmd: &mut Cmd, binds: &Binds, args: &Buffer) -> Result<()> {
+        cmd.use_buffer(args, Access::ComputeIndirect);
+        self.prepare(cmd, binds)
+    }
+
+    /// Records the barriers (with `args`'), then (timed under the pass's name) one dispatch whose
+    /// group counts the GPU wrote into `args` at byte `offset` (VkDispatchIndirectCommand).
+    pub fn dispatch_indirect<P: PushConstants>(
+        &self,
+        cmd: &mut Cmd,
+        profiler: &mut Profiler,
+        binds: &Binds,
+        push: &P,
+        (args, offset): (&Buffer, u64),
+    ) -> Result<()> {
+        self.prepare_indirect(cmd, binds, args)?;
+        let scope = profiler.begin(cmd, &self.decl.name, PassKind::Compute);
+        let r = self.dispatch_indirect_untimed(cmd, binds, push, (args, offset));
+        profiler.end(cmd, scope);
+        r
+    }
+
+    /// One indirect dispatch without barriers or timing (after
+    /// [`ComputePass::prepare_indirect`]).
+    pub fn dispatch_indirect_untimed<P: PushConstants>(
+        &self,
+        cmd: &mut Cmd,
+        binds: &Binds,
+        push: &P,
+        (args, offset): (&Buffer, u64),
+    ) -> Result<()> {
+        self.record(cmd, binds, push, |cmd| cmd.dispatch_indirect(args, offset))
+    }
+
+    /// Binds the pipeline, the dispatch's set and `push`, then records `dispatch`.
+    fn record<P: PushConstants>(
+        &self,
+        cmd: &mut Cmd,
+        binds: &Binds,
+        push: &P,
+        dispatch: impl FnOnce(&mut Cmd),
     ) -> Result<()> {
         let want = self.decl.push.as_ref().map_or(0, |p| p.0) as usize;
         if std::mem::size_of::<P>() != want {
@@ -629,7 +703,7 @@ impl ComputePass {
         if want > 0 {
             cmd.push_constants(&self.pipeline, bytemuck::bytes_of(push));
         }
-        cmd.dispatch(groups[0], groups[1], groups[2]);
+        dispatch(cmd);
         cmd.keep(set);
         Ok(())
     }
@@ -645,6 +719,9 @@ impl ComputePass {
                 _ => None,
             };
             match (binds.get(b.name), sampler) {
+                (Some(Bound::Texture(img, s)), _) => {
+                    writes.push(Write::Sampled(n, vec![(*img, *s)]));
+                }
                 (Some(Bound::Image(img)), Some(s)) => {
                     writes.push(Write::Sampled(n, vec![(*img, s)]));
                 }
@@ -808,6 +885,14 @@ impl ResourceDecl {
         self
     }
 
+    /// A buffer also read as an indirect dispatch's parameters (INDIRECT_BUFFER).
+    pub fn indirect(mut self) -> ResourceDecl {
+        if let ResourceKind::Buffer { usage, .. } = &mut self.kind {
+            *usage |= vk::BufferUsageFlags::INDIRECT_BUFFER;
+        }
+        self
+    }
+
     /// As a ping-pong pair.
     pub fn history(mut self) -> ResourceDecl {
         self.history = true;
@@ -860,6 +945,36 @@ enum Owned {
 pub struct Resources {
     owner: String,
     items: Vec<(&'static str, Owned)>,
+    decls: Vec<ResourceDecl>,
+}
+
+/// Allocates one resource (one slot of a history) of `d` under `name`.
+fn allocate(gpu: &Gpu, d: &ResourceDecl, name: &str) -> Result<Owned> {
+    Ok(match &d.kind {
+        ResourceKind::Image {
+            format,
+            width,
+            height,
+            usage,
+            samples,
+        } => Owned::Image(Image::new(
+            gpu,
+            &ImageDesc {
+                samples: *samples,
+                ..ImageDesc::new_2d(name, *format, *width, *height, *usage)
+            },
+        )?),
+        ResourceKind::Buffer { bytes, usage, host } => Owned::Buffer(Buffer::new(
+            gpu,
+            name,
+            *bytes,
+            *usage,
+            match host {
+                true => cbr_gpu::Location::GpuToCpu,
+                false => cbr_gpu::Location::GpuOnly,
+            },
+        )?),
+    })
 }
 
 impl Resources {
@@ -870,33 +985,7 @@ impl Resources {
                 return Err(declaration(owner, format!("resource `{}` twice", d.name)));
             }
             let names = d.slot_names(owner);
-            let make = |name: &str| -> Result<Owned> {
-                Ok(match &d.kind {
-                    ResourceKind::Image {
-                        format,
-                        width,
-                        height,
-                        usage,
-                        samples,
-                    } => Owned::Image(Image::new(
-                        gpu,
-                        &ImageDesc {
-                            samples: *samples,
-                            ..ImageDesc::new_2d(name, *format, *width, *height, *usage)
-                        },
-                    )?),
-                    ResourceKind::Buffer { bytes, usage, host } => Owned::Buffer(Buffer::new(
-                        gpu,
-                        name,
-                        *bytes,
-                        *usage,
-                        match host {
-                            true => cbr_gpu::Location::GpuToCpu,
-                            false => cbr_gpu::Location::GpuOnly,
-                        },
-                    )?),
-                })
-            };
+            let make = |name: &str| allocate(gpu, d, name);
             let owned = if d.history {
                 let image = |o: Owned| match o {
                     Owned::Image(i) => Ok(i),
@@ -914,7 +1003,29 @@ impl Resources {
         Ok(Resources {
             owner: owner.to_string(),
             items,
+            decls: decls.to_vec(),
         })
+    }
+
+    /// Replaces the buffer `name` by one of `bytes` with its declared usage and location: a
+    /// buffer that grows to what a frame needed (analytic's tail records and albedo jobs). The
+    /// estimate ([`estimate`]) is its declared size, the size it starts with. The old buffer must
+    /// not be in use by a command buffer that has not completed; the declared passes make their
+    /// descriptor sets per dispatch, so their next dispatch binds the new one.
+    pub fn grow(&mut self, gpu: &Gpu, name: &str, bytes: u64) -> Result<()> {
+        let owner = &self.owner;
+        let i = self
+            .items
+            .iter()
+            .position(|(n, o)| *n == name && matches!(o, Owned::Buffer(_)))
+            .ok_or_else(|| declaration(owner, format!("no buffer `{name}` to grow")))?;
+        let mut d = self.decls[i].clone();
+        if let ResourceKind::Buffer { bytes: b, .. } = &mut d.kind {
+            *b = bytes;
+        }
+        let new = allocate(gpu, &d, &d.slot_names(owner)[0])?;
+        self.items[i].1 = new;
+        Ok(())
     }
 
     fn find(&self, name: &str) -> Result<&Owned> {
