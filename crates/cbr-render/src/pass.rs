@@ -480,7 +480,12 @@ impl<'a> Binds<'a> {
     }
 
     /// Binds `name` (a [`Binding::texture`]) to `image` read through `sampler`.
-    pub fn texture(mut self, name: &'static str, image: &'a Image, sampler: &'a Sampler) -> Binds<'a> {
+    pub fn texture(
+        mut self,
+        name: &'static str,
+        image: &'a Image,
+        sampler: &'a Sampler,
+    ) -> Binds<'a> {
         self.set(name, Bound::Texture(image, sampler));
         self
     }
@@ -1140,6 +1145,9 @@ mod tests {
         ];
         decls.extend(crate::post::fxaa::decls());
         decls.extend(interleaved::split::decls(&interleaved));
+        let analytic = crate::techniques::analytic::parse(&[]).expect("analytic");
+        let k = crate::techniques::analytic::Kernel::new(analytic, 64, 36, 1 << 27).expect("fits");
+        decls.extend(crate::techniques::analytic::decls(&k));
         for d in decls.iter().filter(|d| d.push.is_some()) {
             let words = shaders
                 .compile(d.shader, &d.all_defines())
