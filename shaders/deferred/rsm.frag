@@ -8,11 +8,11 @@
 #include "../inc/scene_types.glsl"
 #include "rsm.glsl"
 
-layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
-layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
-layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
-layout(set = 1, binding = BINDING_ALBEDO) uniform sampler2D albedo_tex;
-layout(set = 1, binding = BINDING_MASK) uniform sampler2D mask_tex;
+layout(std430, set = SET_SCENE, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
+layout(std430, set = SET_SCENE, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
+layout(std430, set = SET_SCENE, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
+layout(set = SET_MATERIAL, binding = BINDING_ALBEDO) uniform sampler2D albedo_tex;
+layout(set = SET_MATERIAL, binding = BINDING_MASK) uniform sampler2D mask_tex;
 
 layout(location = 0) in vec3 v_world;
 layout(location = 1) in vec3 v_normal;

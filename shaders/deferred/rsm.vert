@@ -5,8 +5,8 @@
 #include "../inc/scene_types.glsl"
 #include "rsm.glsl"
 
-layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
-layout(std430, set = 0, binding = BINDING_VERTICES) readonly buffer Vertices { float vdata[]; };
+layout(std430, set = SET_SCENE, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
+layout(std430, set = SET_SCENE, binding = BINDING_VERTICES) readonly buffer Vertices { float vdata[]; };
 
 layout(location = 0) out vec3 v_world;  // camera-relative world position
 layout(location = 1) out vec3 v_normal;

@@ -8,20 +8,20 @@
 // (shaders/deferred/lighting.comp) calls the same `shade` on the same bits.
 #include "../inc/scene_types.glsl"
 
-layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
-layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
-layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
-layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
+layout(set = SET_SCENE, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
+layout(std430, set = SET_SCENE, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
+layout(std430, set = SET_SCENE, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
+layout(std430, set = SET_SCENE, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
 // shaded_fragments: FLAG_COUNT_SHADED only; nonfinite_fragments: always (NaN/Inf containment).
-layout(std430, set = 0, binding = BINDING_COUNTER) buffer Counter {
+layout(std430, set = SET_SCENE, binding = BINDING_COUNTER) buffer Counter {
     uint shaded_fragments;
     uint nonfinite_fragments;
 };
 // Per-material set; slots a material does not use hold a 1x1 white texture.
-layout(set = 1, binding = BINDING_ALBEDO) uniform sampler2D albedo_tex;
-layout(set = 1, binding = BINDING_MASK) uniform sampler2D mask_tex;
-layout(set = 1, binding = BINDING_BUMP) uniform sampler2D bump_tex;
-layout(push_constant) uniform Push { uint object_index; } pc;
+layout(set = SET_MATERIAL, binding = BINDING_ALBEDO) uniform sampler2D albedo_tex;
+layout(set = SET_MATERIAL, binding = BINDING_MASK) uniform sampler2D mask_tex;
+layout(set = SET_MATERIAL, binding = BINDING_BUMP) uniform sampler2D bump_tex;
+PUSH_CONSTANTS
 
 #include "../inc/shading.glsl"
 

@@ -7,10 +7,10 @@
 #extension GL_ARB_shader_viewport_layer_array : require
 #endif
 
-layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
-layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
-layout(std430, set = 0, binding = BINDING_VERTICES) readonly buffer Vertices { float vdata[]; };
-layout(push_constant) uniform Push { uint object_index; } pc;
+layout(set = SET_SCENE, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
+layout(std430, set = SET_SCENE, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
+layout(std430, set = SET_SCENE, binding = BINDING_VERTICES) readonly buffer Vertices { float vdata[]; };
+PUSH_CONSTANTS
 
 layout(location = 0) out vec3 v_world;   // camera-relative world position
 layout(location = 1) out vec3 v_normal;

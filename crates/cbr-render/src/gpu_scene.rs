@@ -113,6 +113,24 @@ fn material_data(m: &cbr_scene::Material, bump: bool) -> MaterialData {
     }
 }
 
+/// Per material of `scene`, the texture paths its shading takes (MAT_ALBEDO, MAT_MASK,
+/// MAT_BUMP): which raster pipeline variant it draws with (crate::scene_pass::MaterialVariants),
+/// known without a device (the compile-only build's `PassCtx::materials`).
+pub fn material_features(scene: &Scene) -> Vec<u32> {
+    scene
+        .materials
+        .iter()
+        .map(|m| {
+            // tex: albedo, mask, the mask's channel (no path of its own), bump; -1 = none.
+            [MAT_ALBEDO, MAT_MASK, 0, MAT_BUMP]
+                .iter()
+                .zip(material_data(m, scene.settings.bump).tex)
+                .filter(|&(_, t)| t >= 0)
+                .fold(0, |f, (bit, _)| f | bit)
+        })
+        .collect()
+}
+
 /// What an alpha-tested material's coverage texture is made of: its albedo texture, its mask
 /// texture and the mask's channel.
 type CoverageSource = (Option<u32>, u32, u32);
@@ -341,17 +359,7 @@ impl GpuScene {
                 [m.kd_tex, mask, m.bump_tex]
             })
             .collect();
-        let material_features = mats
-            .iter()
-            .map(|m| {
-                // tex: albedo, mask, the mask's channel (no path of its own), bump; -1 = none.
-                [MAT_ALBEDO, MAT_MASK, 0, MAT_BUMP]
-                    .iter()
-                    .zip(m.tex)
-                    .filter(|&(_, t)| t >= 0)
-                    .fold(0, |f, (bit, _)| f | bit)
-            })
-            .collect();
+        let material_features = material_features(scene);
         let sampler = Sampler::new(
             gpu,
             "scene.sampler",

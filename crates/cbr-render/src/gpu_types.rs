@@ -69,13 +69,6 @@ pub struct Vpl {
     pub flux: [f32; 4],
 }
 
-/// Push constants of the scene pass.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct ScenePush {
-    pub object_index: u32,
-}
-
 #[cfg(test)]
 pub(crate) mod tests {
     use std::collections::HashMap;

@@ -24,11 +24,14 @@ use std::collections::BTreeMap;
 
 use cbr_gpu::{
     Access, BindingDesc, Buffer, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Gpu, GpuError,
-    Image, ImageDesc, PassKind, Pipeline, Profiler, Result, Sampler, SamplerDesc, SetLayout,
-    Shaders, Write, vk,
+    Image, ImageDesc, PassKind, Pipeline, Profiler, Readback, Result, Sampler, SamplerDesc,
+    SetLayout, Shaders, Write, vk,
 };
 
 use crate::memory::MemoryEstimate;
+
+mod graphics;
+pub use graphics::{GraphicsDecl, GraphicsPass, RasterState};
 
 /// How a shader uses a storage binding (the barrier before the dispatch follows from it).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -46,15 +49,14 @@ pub enum Filter {
     Linear,
     /// Bilinear in texel units (Vulkan's unnormalizedCoordinates): the resolve's history reads.
     LinearTexels,
-    /// The sampler bound with the image ([`Binds::texture`]): a scene texture read through the
-    /// scene's sampler (its mips and wrap), which the pass does not make.
+    /// The sampler comes with the image ([`Binds::sampled`]): the scene's textures, mipmapped
+    /// and anisotropic, sampled through the scene's own sampler.
     Given,
 }
 
 impl Filter {
-    /// The sampler the pass makes (none for [`Filter::Given`]).
-    fn desc(self) -> Option<SamplerDesc> {
-        Some(match self {
+    fn desc(self) -> SamplerDesc {
+        match self {
             Filter::Nearest => SamplerDesc::NEAREST,
             Filter::Linear => SamplerDesc {
                 linear: true,
@@ -65,8 +67,8 @@ impl Filter {
                 unnormalized: true,
                 ..SamplerDesc::NEAREST
             },
-            Filter::Given => return None,
-        })
+            Filter::Given => unreachable!("a given sampler is not made by the pass"),
+        }
     }
 }
 
@@ -92,7 +94,6 @@ impl BindKind {
 
     fn what(self) -> &'static str {
         match self {
-            BindKind::Sampled(Filter::Given) => "texture (an image with its sampler)",
             BindKind::Sampled(_) => "sampled image",
             BindKind::StorageImage(_) => "storage image",
             BindKind::StorageBuffer(_) | BindKind::Uniform => "buffer",
@@ -111,6 +112,234 @@ impl BindKind {
             BindKind::Uniform => Access::ComputeStorageRead,
         }
     }
+
+    /// The access a draw makes (storage images are not declared for graphics passes: refused
+    /// when the pass is built).
+    fn graphics_access(self) -> Access {
+        match self {
+            BindKind::Sampled(_) => Access::FragmentSampled,
+            BindKind::StorageBuffer(Use::Read) | BindKind::Uniform => Access::GraphicsRead,
+            BindKind::StorageBuffer(_) | BindKind::StorageImage(_) => Access::FragmentStorageWrite,
+        }
+    }
+}
+
+/// A descriptor set several passes share and that is made once, not per dispatch: the scene's
+/// buffers, one material's textures. Its bindings are declared once like a pass's own (numbered
+/// by position, `BINDING_<NAME>`), and a pass that uses it says at which set index
+/// ([`SetRef::Shared`]; the shader reads the index as `SET_<NAME>`). Its resources are
+/// barriered by their owner (the scene's buffers are written by the host before the frame).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SetDecl {
+    pub name: &'static str,
+    pub bindings: &'static [Binding],
+}
+
+impl SetDecl {
+    pub fn binding_descs(&self) -> Vec<BindingDesc> {
+        binding_descs(self.bindings)
+    }
+
+    /// One set of this declaration, its bindings from `binds` (checked by name and kind; a
+    /// sampled binding must come with its sampler: [`Filter::Given`]).
+    pub fn make(
+        &self,
+        gpu: &Gpu,
+        owner: &str,
+        layout: &SetLayout,
+        binds: &Binds,
+    ) -> Result<DescriptorSet> {
+        let name = format!("{owner}.{}", self.name);
+        check_binds(&name, self.bindings, binds)?;
+        make_set(gpu, &name, layout, self.bindings, binds, &BTreeMap::new())
+    }
+}
+
+/// One set of a pass's pipeline layout: the pass's own bindings (bound from [`Binds`] at each
+/// dispatch or draw pass; `SET_PASS` in the shader) or a shared set.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SetRef {
+    Own,
+    Shared(SetDecl),
+}
+
+/// The set layout's bindings of `bindings`: numbered by position.
+fn binding_descs(bindings: &[Binding]) -> Vec<BindingDesc> {
+    bindings
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let (kind, count) = b.kind.descriptor();
+            BindingDesc {
+                name: b.name,
+                binding: i as u32,
+                kind,
+                count,
+            }
+        })
+        .collect()
+}
+
+/// The bindings of set `r` (the pass's own: `own`).
+fn set_bindings<'a>(r: &SetRef, own: &'a [Binding]) -> &'a [Binding] {
+    match r {
+        SetRef::Own => own,
+        SetRef::Shared(s) => s.bindings,
+    }
+}
+
+/// `SET_<NAME>` (`SET_PASS` for the own set) and `BINDING_<NAME>` of every set.
+fn set_defines(sets: &[SetRef], own: &[Binding]) -> Vec<(String, String)> {
+    let mut d = Vec::new();
+    for (i, r) in sets.iter().enumerate() {
+        let name = match r {
+            SetRef::Own => "PASS".to_string(),
+            SetRef::Shared(s) => s.name.to_uppercase(),
+        };
+        d.push((format!("SET_{name}"), i.to_string()));
+        d.extend(
+            binding_descs(set_bindings(r, own))
+                .iter()
+                .map(BindingDesc::define),
+        );
+    }
+    d
+}
+
+/// A declaration's own checks: binding names unique across its sets (they share the shader's
+/// `BINDING_<NAME>` namespace), the own set listed at most once.
+fn check_sets(pass: &str, sets: &[SetRef], own: &[Binding]) -> Result<()> {
+    if sets.iter().filter(|r| **r == SetRef::Own).count() > 1 {
+        return Err(declaration(pass, "its own set twice".into()));
+    }
+    let all: Vec<&Binding> = sets.iter().flat_map(|r| set_bindings(r, own)).collect();
+    for (i, b) in all.iter().enumerate() {
+        if all[..i].iter().any(|o| o.name == b.name) {
+            return Err(declaration(pass, format!("binding `{}` twice", b.name)));
+        }
+    }
+    if !own.is_empty() && !sets.contains(&SetRef::Own) {
+        return Err(declaration(
+            pass,
+            "bindings of its own but no set for them".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// The set layouts of `sets`, in set order.
+fn set_layouts(gpu: &Gpu, pass: &str, sets: &[SetRef], own: &[Binding]) -> Result<Vec<SetLayout>> {
+    sets.iter()
+        .map(|r| {
+            let name = match r {
+                SetRef::Own => format!("{pass}.set_layout"),
+                SetRef::Shared(s) => format!("{pass}.{}_layout", s.name),
+            };
+            SetLayout::new(gpu, &name, &binding_descs(set_bindings(r, own)))
+        })
+        .collect()
+}
+
+/// One sampler per filter the sampled bindings name (given samplers come with their images).
+fn samplers(gpu: &Gpu, pass: &str, bindings: &[Binding]) -> Result<BTreeMap<u8, Sampler>> {
+    let mut samplers = BTreeMap::new();
+    for b in bindings {
+        if let BindKind::Sampled(filter) = b.kind
+            && filter != Filter::Given
+            && !samplers.contains_key(&(filter as u8))
+        {
+            let s = Sampler::new(
+                gpu,
+                &format!("{pass}.{filter:?}").to_lowercase(),
+                filter.desc(),
+            )?;
+            samplers.insert(filter as u8, s);
+        }
+    }
+    Ok(samplers)
+}
+
+/// Checks that `binds` give every one of `bindings` something of its kind, and name nothing
+/// `bindings` lack (resources taken by [`Binds::of`] that are not bound here are other passes'
+/// and are ignored).
+fn check_binds(pass: &str, bindings: &[Binding], binds: &Binds) -> Result<()> {
+    for (name, _, explicit) in &binds.list {
+        if *explicit && !bindings.iter().any(|b| b.name == *name) {
+            return Err(declaration(
+                pass,
+                format!("`{name}` is bound but not declared"),
+            ));
+        }
+    }
+    for b in bindings {
+        let given = binds
+            .get(b.name)
+            .ok_or_else(|| declaration(pass, format!("nothing bound to `{}`", b.name)))?;
+        let ok = matches!(
+            (b.kind, given),
+            (BindKind::Sampled(Filter::Given), Bound::Sampled(..))
+                | (BindKind::StorageImage(_), Bound::Image(_))
+                | (
+                    BindKind::StorageBuffer(_) | BindKind::Uniform,
+                    Bound::Buffer(_)
+                )
+        ) || matches!(
+            (b.kind, given),
+            (BindKind::Sampled(f), Bound::Image(_)) if f != Filter::Given
+        );
+        if !ok {
+            let got = match given {
+                Bound::Image(_) => "an image",
+                Bound::Sampled(..) => "an image with its sampler",
+                Bound::Buffer(_) => "a buffer",
+                Bound::Set(_) => "a set",
+            };
+            let what = match b.kind {
+                BindKind::Sampled(Filter::Given) => "sampled image with a given sampler",
+                k => k.what(),
+            };
+            return Err(declaration(
+                pass,
+                format!("`{}` is a {what}, given {got}", b.name),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The descriptor set of `bindings` from `binds` (checked by [`check_binds`]; anything else is
+/// still an error here or in `DescriptorSet::update`).
+fn make_set(
+    gpu: &Gpu,
+    name: &str,
+    layout: &SetLayout,
+    bindings: &[Binding],
+    binds: &Binds,
+    samplers: &BTreeMap<u8, Sampler>,
+) -> Result<DescriptorSet> {
+    let mut writes = Vec::with_capacity(bindings.len());
+    for (i, b) in bindings.iter().enumerate() {
+        let n = i as u32;
+        let sampler = match b.kind {
+            BindKind::Sampled(filter) => samplers.get(&(filter as u8)),
+            _ => None,
+        };
+        match (binds.get(b.name), sampler) {
+            (Some(Bound::Sampled(img, s)), _) => writes.push(Write::Sampled(n, vec![(*img, *s)])),
+            (Some(Bound::Image(img)), Some(s)) => {
+                writes.push(Write::Sampled(n, vec![(*img, s)]));
+            }
+            (Some(Bound::Image(img)), None) => writes.push(Write::Storage(n, img)),
+            (Some(Bound::Buffer(x)), _) => writes.push(Write::Buffer(n, x)),
+            _ => {
+                return Err(declaration(
+                    name,
+                    format!("`{}` cannot be bound as given", b.name),
+                ));
+            }
+        }
+    }
+    DescriptorSet::new(gpu, &format!("{name}.set"), layout, &writes)
 }
 
 /// One binding of a pass: its name (the shader's `BINDING_<NAME>`) and what it holds.
@@ -129,10 +358,6 @@ impl Binding {
             name,
             kind: BindKind::Sampled(filter),
         }
-    }
-    /// A texture read through the sampler bound with it ([`Filter::Given`]).
-    pub const fn texture(name: &'static str) -> Binding {
-        Binding::sampled_with(name, Filter::Given)
     }
     pub const fn image(name: &'static str, u: Use) -> Binding {
         Binding {
@@ -286,7 +511,11 @@ pub struct ComputeDecl {
     /// Path under `shaders/`.
     pub shader: &'static str,
     pub defines: Vec<(String, String)>,
+    /// The pass's own set: bound from [`Binds`] at each dispatch.
     pub bindings: Vec<Binding>,
+    /// The pipeline layout's sets: the own set first, then the shared ones
+    /// ([`ComputeDecl::shared`]).
+    pub sets: Vec<SetRef>,
     /// The push-constant block's bytes and GLSL (`PUSH_CONSTANTS`), and its members.
     pub push: Option<(u32, String)>,
     pub push_fields: &'static [PushField],
@@ -301,10 +530,17 @@ impl ComputeDecl {
             shader,
             defines: Vec::new(),
             bindings: Vec::new(),
+            sets: vec![SetRef::Own],
             push: None,
             push_fields: &[],
             group: [8, 8],
         }
+    }
+
+    /// A shared set at the next set index (bound with [`Binds::set`]).
+    pub fn shared(mut self, set: SetDecl) -> ComputeDecl {
+        self.sets.push(SetRef::Shared(set));
+        self
     }
 
     pub fn define(mut self, name: &str, value: impl ToString) -> ComputeDecl {
@@ -342,27 +578,15 @@ impl ComputeDecl {
         self
     }
 
-    /// The set layout's bindings: numbered by position.
+    /// The own set layout's bindings: numbered by position.
     pub fn binding_descs(&self) -> Vec<BindingDesc> {
-        self.bindings
-            .iter()
-            .enumerate()
-            .map(|(i, b)| {
-                let (kind, count) = b.kind.descriptor();
-                BindingDesc {
-                    name: b.name,
-                    binding: i as u32,
-                    kind,
-                    count,
-                }
-            })
-            .collect()
+        binding_descs(&self.bindings)
     }
 
     /// Every define the shader is compiled with.
     pub fn all_defines(&self) -> Vec<(String, String)> {
         let mut d = self.defines.clone();
-        d.extend(self.binding_descs().iter().map(BindingDesc::define));
+        d.extend(set_defines(&self.sets, &self.bindings));
         if let Some((_, glsl)) = &self.push {
             d.push(("PUSH_CONSTANTS".into(), glsl.clone()));
         }
@@ -371,54 +595,32 @@ impl ComputeDecl {
         d
     }
 
-    /// Checks the declaration itself: unique binding names.
+    /// Checks the declaration itself: unique binding names, the own set first.
     fn check(&self) -> Result<()> {
-        for (i, b) in self.bindings.iter().enumerate() {
-            if self.bindings[..i].iter().any(|o| o.name == b.name) {
-                return Err(declaration(
-                    &self.name,
-                    format!("binding `{}` twice", b.name),
-                ));
-            }
+        if self.sets.first() != Some(&SetRef::Own) {
+            return Err(declaration(&self.name, "its own set is not set 0".into()));
         }
-        Ok(())
+        check_sets(&self.name, &self.sets, &self.bindings)
     }
 
-    /// The compile-only build: set layout, samplers and pipeline; no image, no memory.
+    /// The compile-only build: set layouts, samplers and pipeline; no image, no memory.
     pub fn build(&self, gpu: &Gpu, shaders: &Shaders) -> Result<ComputePass> {
         self.check()?;
-        let layout = SetLayout::new(
-            gpu,
-            &format!("{}.set_layout", self.name),
-            &self.binding_descs(),
-        )?;
+        let layouts = set_layouts(gpu, &self.name, &self.sets, &self.bindings)?;
         let cs = shaders.compile(self.shader, &self.all_defines())?;
         let pipeline = Pipeline::compute(
             gpu,
             &ComputeDesc {
                 name: &self.name,
                 shader: &cs,
-                set_layouts: &[&layout],
+                set_layouts: &layouts.iter().collect::<Vec<_>>(),
                 push_constant_bytes: self.push.as_ref().map_or(0, |p| p.0),
             },
         )?;
-        let mut samplers = BTreeMap::new();
-        for b in &self.bindings {
-            if let BindKind::Sampled(filter) = b.kind
-                && let Some(desc) = filter.desc()
-                && !samplers.contains_key(&(filter as u8))
-            {
-                let s = Sampler::new(
-                    gpu,
-                    &format!("{}.{filter:?}", self.name).to_lowercase(),
-                    desc,
-                )?;
-                samplers.insert(filter as u8, s);
-            }
-        }
+        let samplers = samplers(gpu, &self.name, &self.bindings)?;
         Ok(ComputePass {
             decl: self.clone(),
-            layout,
+            layouts,
             pipeline,
             samplers,
         })
@@ -436,9 +638,11 @@ fn declaration(pass: &str, message: String) -> GpuError {
 #[derive(Clone)]
 pub enum Bound<'a> {
     Image(&'a Image),
-    /// An image with the sampler it is read through ([`Filter::Given`]).
-    Texture(&'a Image, &'a Sampler),
+    /// A sampled image with its own sampler ([`Filter::Given`]).
+    Sampled(&'a Image, &'a Sampler),
     Buffer(&'a Buffer),
+    /// A shared set, by its [`SetDecl::name`].
+    Set(&'a DescriptorSet),
 }
 
 /// The resources of one dispatch, by binding name: what [`Resources`] hold of the same names,
@@ -462,7 +666,7 @@ impl<'a> Binds<'a> {
             match r {
                 Owned::Image(i) => b.list.push((name, Bound::Image(i), false)),
                 Owned::Buffer(x) => b.list.push((name, Bound::Buffer(x), false)),
-                Owned::History(_) => {}
+                Owned::History(_) | Owned::Readback(_) => {}
             }
         }
         b
@@ -479,14 +683,20 @@ impl<'a> Binds<'a> {
         self
     }
 
-    /// Binds `name` (a [`Binding::texture`]) to `image` read through `sampler`.
-    pub fn texture(
+    /// Binds `name` (a sampled binding of [`Filter::Given`]) to `image` read through `sampler`.
+    pub fn sampled(
         mut self,
         name: &'static str,
         image: &'a Image,
         sampler: &'a Sampler,
     ) -> Binds<'a> {
-        self.set(name, Bound::Texture(image, sampler));
+        self.set(name, Bound::Sampled(image, sampler));
+        self
+    }
+
+    /// Binds the shared set `set` (made by [`SetDecl::make`]) under its declaration's name.
+    pub fn shared(mut self, decl: &SetDecl, set: &'a DescriptorSet) -> Binds<'a> {
+        self.set(decl.name, Bound::Set(set));
         self
     }
 
@@ -509,9 +719,52 @@ impl<'a> Binds<'a> {
             list: self
                 .list
                 .iter()
-                .filter(|(n, ..)| pass.decl.bindings.iter().any(|b| b.name == *n))
+                .filter(|(n, ..)| {
+                    pass.decl.bindings.iter().any(|b| b.name == *n)
+                        || pass.decl.sets.iter().any(|r| shared_named(r, n))
+                })
                 .cloned()
                 .collect(),
+        }
+    }
+
+    /// The entries named in `bindings`.
+    fn own_only(&self, bindings: &[Binding]) -> Binds<'a> {
+        Binds {
+            list: self
+                .list
+                .iter()
+                .filter(|(n, ..)| bindings.iter().any(|b| b.name == *n))
+                .cloned()
+                .collect(),
+        }
+    }
+
+    /// The names given here (not taken from [`Resources`]).
+    fn explicit(&self) -> impl Iterator<Item = &'static str> + '_ {
+        self.list.iter().filter(|e| e.2).map(|e| e.0)
+    }
+
+    /// The entries that are not shared sets (what a pass's own set is checked against).
+    fn without_sets(&self) -> Binds<'a> {
+        Binds {
+            list: self
+                .list
+                .iter()
+                .filter(|(_, b, _)| !matches!(b, Bound::Set(_)))
+                .cloned()
+                .collect(),
+        }
+    }
+
+    /// The shared set `decl` bound under its name.
+    fn shared_set(&self, pass: &str, decl: &SetDecl) -> Result<&'a DescriptorSet> {
+        match self.get(decl.name) {
+            Some(Bound::Set(s)) => Ok(*s),
+            _ => Err(declaration(
+                pass,
+                format!("no `{}` set bound (Binds::shared)", decl.name),
+            )),
         }
     }
 
@@ -534,7 +787,7 @@ impl<'a> Binds<'a> {
 /// through.
 pub struct ComputePass {
     pub decl: ComputeDecl,
-    layout: SetLayout,
+    layouts: Vec<SetLayout>,
     pipeline: Pipeline,
     samplers: BTreeMap<u8, Sampler>,
 }
@@ -544,40 +797,21 @@ impl ComputePass {
         &self.decl.name
     }
 
-    /// Checks that `binds` give every binding of the declaration something of its kind, and
-    /// name nothing the declaration lacks (resources taken by [`Binds::of`] that this pass does
-    /// not bind are other passes' and are ignored).
+    /// Checks that `binds` give every binding of the declaration something of its kind, name
+    /// nothing the declaration lacks (resources taken by [`Binds::of`] that this pass does not
+    /// bind are other passes' and are ignored), and give every shared set.
     pub fn check(&self, binds: &Binds) -> Result<()> {
-        for (name, _, explicit) in &binds.list {
-            if *explicit && !self.decl.bindings.iter().any(|b| b.name == *name) {
-                return Err(declaration(
-                    &self.decl.name,
-                    format!("`{name}` is bound but not declared"),
-                ));
+        check_binds(&self.decl.name, &self.decl.bindings, &binds.without_sets())?;
+        for r in &self.decl.sets {
+            if let SetRef::Shared(s) = r {
+                binds.shared_set(&self.decl.name, s)?;
             }
         }
-        for b in &self.decl.bindings {
-            let given = binds.get(b.name).ok_or_else(|| {
-                declaration(&self.decl.name, format!("nothing bound to `{}`", b.name))
-            })?;
-            let ok = matches!(
-                (b.kind, given),
-                (BindKind::Sampled(Filter::Given), Bound::Texture(..))
-                    | (BindKind::StorageImage(_), Bound::Image(_))
-                    | (
-                        BindKind::StorageBuffer(_) | BindKind::Uniform,
-                        Bound::Buffer(_)
-                    )
-            ) || matches!((b.kind, given), (BindKind::Sampled(f), Bound::Image(_)) if f != Filter::Given);
-            if !ok {
-                let got = match given {
-                    Bound::Image(_) => "an image",
-                    Bound::Texture(..) => "an image with its sampler",
-                    Bound::Buffer(_) => "a buffer",
-                };
+        for (name, b, _) in &binds.list {
+            if matches!(b, Bound::Set(_)) && !self.decl.sets.iter().any(|r| shared_named(r, name)) {
                 return Err(declaration(
                     &self.decl.name,
-                    format!("`{}` is a {}, given {got}", b.name, b.kind.what()),
+                    format!("set `{name}` is bound but not declared"),
                 ));
             }
         }
@@ -626,9 +860,9 @@ impl ComputePass {
         for b in &self.decl.bindings {
             let access = b.kind.compute_access();
             match binds.get(b.name) {
-                Some(Bound::Image(i) | Bound::Texture(i, _)) => cmd.use_image(i, access),
+                Some(Bound::Image(i) | Bound::Sampled(i, _)) => cmd.use_image(i, access),
                 Some(Bound::Buffer(x)) => cmd.use_buffer(x, access),
-                None => {}
+                Some(Bound::Set(_)) | None => {}
             }
         }
         Ok(())
@@ -702,9 +936,25 @@ impl ComputePass {
                 ),
             ));
         }
-        let set = self.set(cmd.gpu(), binds)?;
+        let set = make_set(
+            cmd.gpu(),
+            &self.decl.name,
+            &self.layouts[0],
+            &self.decl.bindings,
+            &binds.without_sets(),
+            &self.samplers,
+        )?;
         cmd.bind_pipeline(&self.pipeline);
         cmd.bind_set(&self.pipeline, 0, &set);
+        for (i, r) in self.decl.sets.iter().enumerate() {
+            if let SetRef::Shared(s) = r {
+                cmd.bind_set(
+                    &self.pipeline,
+                    i as u32,
+                    binds.shared_set(&self.decl.name, s)?,
+                );
+            }
+        }
         if want > 0 {
             cmd.push_constants(&self.pipeline, bytemuck::bytes_of(push));
         }
@@ -712,41 +962,11 @@ impl ComputePass {
         cmd.keep(set);
         Ok(())
     }
+}
 
-    /// The dispatch's descriptor set (the binds were checked by [`ComputePass::prepare`];
-    /// anything else is still an error here or in `DescriptorSet::update`).
-    fn set(&self, gpu: &Gpu, binds: &Binds) -> Result<DescriptorSet> {
-        let mut writes = Vec::with_capacity(self.decl.bindings.len());
-        for (i, b) in self.decl.bindings.iter().enumerate() {
-            let n = i as u32;
-            let sampler = match b.kind {
-                BindKind::Sampled(filter) => self.samplers.get(&(filter as u8)),
-                _ => None,
-            };
-            match (binds.get(b.name), sampler) {
-                (Some(Bound::Texture(img, s)), _) => {
-                    writes.push(Write::Sampled(n, vec![(*img, *s)]));
-                }
-                (Some(Bound::Image(img)), Some(s)) => {
-                    writes.push(Write::Sampled(n, vec![(*img, s)]));
-                }
-                (Some(Bound::Image(img)), None) => writes.push(Write::Storage(n, img)),
-                (Some(Bound::Buffer(x)), _) => writes.push(Write::Buffer(n, x)),
-                _ => {
-                    return Err(declaration(
-                        &self.decl.name,
-                        format!("`{}` cannot be bound as given", b.name),
-                    ));
-                }
-            }
-        }
-        DescriptorSet::new(
-            gpu,
-            &format!("{}.set", self.decl.name),
-            &self.layout,
-            &writes,
-        )
-    }
+/// Whether `r` is the shared set named `name`.
+fn shared_named(r: &SetRef, name: &str) -> bool {
+    matches!(r, SetRef::Shared(s) if s.name == name)
 }
 
 /// A ping-pong pair: frame f writes slot f % 2 and reads the other (written by frame f - 1).
@@ -797,6 +1017,17 @@ pub enum ResourceKind {
         height: u32,
         usage: vk::ImageUsageFlags,
         samples: u32,
+        /// Array layers (the split layout's two).
+        layers: u32,
+        flags: vk::ImageCreateFlags,
+    },
+    /// A host-visible buffer an image of `format`, `width` x `height` x `layers` is copied into
+    /// after the frame (`Readback`).
+    Readback {
+        format: vk::Format,
+        width: u32,
+        height: u32,
+        layers: u32,
     },
     /// A storage buffer, device-local or (`host`) host-visible: read by the host after the
     /// frame.
@@ -832,9 +1063,117 @@ impl ResourceDecl {
                 height,
                 usage,
                 samples,
+                layers: 1,
+                flags: vk::ImageCreateFlags::empty(),
             },
             history: false,
         }
+    }
+
+    /// The readback of a `width` x `height` image of `format` (one layer: see
+    /// [`ResourceDecl::layers`]).
+    pub fn readback(
+        name: &'static str,
+        format: vk::Format,
+        width: u32,
+        height: u32,
+    ) -> ResourceDecl {
+        ResourceDecl {
+            name,
+            kind: ResourceKind::Readback {
+                format,
+                width,
+                height,
+                layers: 1,
+            },
+            history: false,
+        }
+    }
+
+    /// With `n` array layers (an image, or the readback of one).
+    pub fn layers(mut self, n: u32) -> ResourceDecl {
+        match &mut self.kind {
+            ResourceKind::Image { layers, .. } | ResourceKind::Readback { layers, .. } => {
+                *layers = n
+            }
+            ResourceKind::Buffer { .. } => {}
+        }
+        self
+    }
+
+    /// An image with creation flags (a depth target compatible with custom sample locations).
+    pub fn flags(mut self, more: vk::ImageCreateFlags) -> ResourceDecl {
+        if let ResourceKind::Image { flags, .. } = &mut self.kind {
+            *flags |= more;
+        }
+        self
+    }
+
+    /// Allocates this image as `<owner>.<name>` (for structs that keep their images in fields,
+    /// like the frame targets: the declaration is still the one description).
+    pub fn make_image(&self, gpu: &Gpu, owner: &str) -> Result<Image> {
+        match self.make(gpu, &self.slot_names(owner)[0])? {
+            Owned::Image(i) => Ok(i),
+            _ => Err(declaration(
+                owner,
+                format!("`{}` is not an image", self.name),
+            )),
+        }
+    }
+
+    /// Allocates this readback as `<owner>.<name>`.
+    pub fn make_readback(&self, gpu: &Gpu, owner: &str) -> Result<Readback> {
+        match self.make(gpu, &self.slot_names(owner)[0])? {
+            Owned::Readback(r) => Ok(r),
+            _ => Err(declaration(
+                owner,
+                format!("`{}` is not a readback", self.name),
+            )),
+        }
+    }
+
+    fn make(&self, gpu: &Gpu, name: &str) -> Result<Owned> {
+        Ok(match &self.kind {
+            ResourceKind::Image {
+                format,
+                width,
+                height,
+                usage,
+                samples,
+                layers,
+                flags,
+            } => Owned::Image(Image::new(
+                gpu,
+                &ImageDesc {
+                    samples: *samples,
+                    layers: *layers,
+                    flags: *flags,
+                    ..ImageDesc::new_2d(name, *format, *width, *height, *usage)
+                },
+            )?),
+            ResourceKind::Buffer { bytes, usage, host } => Owned::Buffer(Buffer::new(
+                gpu,
+                name,
+                *bytes,
+                *usage,
+                match host {
+                    true => cbr_gpu::Location::GpuToCpu,
+                    false => cbr_gpu::Location::GpuOnly,
+                },
+            )?),
+            ResourceKind::Readback {
+                format,
+                width,
+                height,
+                layers,
+            } => Owned::Readback(Readback::for_buffer(
+                gpu,
+                name,
+                readback_bytes(*format, *width, *height, *layers),
+                *width,
+                *height,
+            )?),
+        })
     }
 
     /// A render target of `samples` samples a raster pass writes and a later pass samples
@@ -923,9 +1262,16 @@ impl ResourceDecl {
                     width,
                     height,
                     samples,
+                    layers,
                     ..
-                } => e.image_array(name, *format, *width, *height, 1, *samples),
+                } => e.image_array(name, *format, *width, *height, *layers, *samples),
                 ResourceKind::Buffer { bytes, host, .. } => e.storage_buffer(name, *bytes, *host),
+                ResourceKind::Readback {
+                    format,
+                    width,
+                    height,
+                    layers,
+                } => e.readback(name, *format, *width, *height, *layers),
             }
         }
     }
@@ -943,7 +1289,13 @@ pub fn estimate(decls: &[ResourceDecl], owner: &str) -> MemoryEstimate {
 enum Owned {
     Image(Image),
     Buffer(Buffer),
+    Readback(Readback),
     History(History<Image>),
+}
+
+/// Bytes of the readback of a `width` x `height` x `layers` image of `format`.
+fn readback_bytes(format: vk::Format, width: u32, height: u32, layers: u32) -> u64 {
+    u64::from(width) * u64::from(height) * u64::from(layers) * crate::memory::texel_bytes(format)
 }
 
 /// The resources of one owner, allocated from their declarations, found by name.
@@ -951,35 +1303,6 @@ pub struct Resources {
     owner: String,
     items: Vec<(&'static str, Owned)>,
     decls: Vec<ResourceDecl>,
-}
-
-/// Allocates one resource (one slot of a history) of `d` under `name`.
-fn allocate(gpu: &Gpu, d: &ResourceDecl, name: &str) -> Result<Owned> {
-    Ok(match &d.kind {
-        ResourceKind::Image {
-            format,
-            width,
-            height,
-            usage,
-            samples,
-        } => Owned::Image(Image::new(
-            gpu,
-            &ImageDesc {
-                samples: *samples,
-                ..ImageDesc::new_2d(name, *format, *width, *height, *usage)
-            },
-        )?),
-        ResourceKind::Buffer { bytes, usage, host } => Owned::Buffer(Buffer::new(
-            gpu,
-            name,
-            *bytes,
-            *usage,
-            match host {
-                true => cbr_gpu::Location::GpuToCpu,
-                false => cbr_gpu::Location::GpuOnly,
-            },
-        )?),
-    })
 }
 
 impl Resources {
@@ -990,7 +1313,7 @@ impl Resources {
                 return Err(declaration(owner, format!("resource `{}` twice", d.name)));
             }
             let names = d.slot_names(owner);
-            let make = |name: &str| allocate(gpu, d, name);
+            let make = |name: &str| d.make(gpu, name);
             let owned = if d.history {
                 let image = |o: Owned| match o {
                     Owned::Image(i) => Ok(i),
@@ -1028,7 +1351,7 @@ impl Resources {
         if let ResourceKind::Buffer { bytes: b, .. } = &mut d.kind {
             *b = bytes;
         }
-        let new = allocate(gpu, &d, &d.slot_names(owner)[0])?;
+        let new = d.make(gpu, &d.slot_names(owner)[0])?;
         self.items[i].1 = new;
         Ok(())
     }
@@ -1039,6 +1362,16 @@ impl Resources {
             .find(|(n, _)| *n == name)
             .map(|(_, o)| o)
             .ok_or_else(|| declaration(&self.owner, format!("no resource `{name}`")))
+    }
+
+    pub fn readback(&self, name: &str) -> Result<&Readback> {
+        match self.find(name)? {
+            Owned::Readback(r) => Ok(r),
+            _ => Err(declaration(
+                &self.owner,
+                format!("`{name}` is not a readback"),
+            )),
+        }
     }
 
     pub fn image(&self, name: &str) -> Result<&Image> {
@@ -1148,18 +1481,45 @@ mod tests {
         let analytic = crate::techniques::analytic::parse(&[]).expect("analytic");
         let k = crate::techniques::analytic::Kernel::new(analytic, 64, 36, 1 << 27).expect("fits");
         decls.extend(crate::techniques::analytic::decls(&k));
-        for d in decls.iter().filter(|d| d.push.is_some()) {
+        /// A pass's name, one of its shaders with its defines, and its push-constant members.
+        type Stage<'a> = (String, &'a str, Vec<(String, String)>, &'a [PushField]);
+        let mut stages: Vec<Stage> = decls
+            .iter()
+            .filter(|d| d.push.is_some())
+            .map(|d| (d.name.clone(), d.shader, d.all_defines(), d.push_fields))
+            .collect();
+        // The raster passes' blocks, in every stage that declares them.
+        let mut rasters = crate::scene_pass::decls(
+            "scene",
+            &crate::scene_pass::RasterConfig::native(64, 36),
+            &[],
+        )
+        .expect("scene pass");
+        rasters.extend(crate::techniques::analytic::raster_decls(&k, &[]));
+        for d in rasters.iter().chain([&deferred::rsm::decl()]) {
+            for (shader, defines) in d.stages() {
+                stages.push((d.name.clone(), shader, defines, d.push_fields));
+            }
+        }
+        for raster in [
+            "scene/forward.vert",
+            "scene/forward.frag",
+            "deferred/rsm.vert",
+            "analytic/raster.frag",
+        ] {
+            assert!(stages.iter().any(|s| s.1 == raster), "{raster} not checked");
+        }
+        for (name, shader, defines, fields) in stages {
             let words = shaders
-                .compile(d.shader, &d.all_defines())
-                .unwrap_or_else(|e| panic!("{}: {e}", d.name));
+                .compile(shader, &defines)
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
             let offsets = crate::gpu_types::tests::member_offsets(&words);
-            for (i, f) in d.push_fields.iter().enumerate() {
+            for (i, f) in fields.iter().enumerate() {
                 let glsl = offsets.get(&("Push".to_string(), i as u32)).copied();
                 assert_eq!(
                     glsl,
                     Some(f.offset as u32),
-                    "{}: push constant `{}`",
-                    d.name,
+                    "{name}: push constant `{}`",
                     f.name
                 );
             }

@@ -74,13 +74,14 @@ impl Spec {
     }
 }
 
-/// The compute passes `spec` builds at the context's size, each declared once: the technique's,
-/// then each post pass's, in chain order. Building them (`ComputeDecl::build`) compiles every
-/// compute pipeline of the spec without an image, memory or a command buffer.
+/// The passes `spec` builds at the context's size, each declared once: the technique's compute
+/// and raster passes, then each post pass's, in chain order. Building them (`ComputeDecl::build`,
+/// `GraphicsDecl::build`) compiles every pipeline of the spec without an image, memory or a
+/// command buffer.
 pub fn passes(
     spec: &Spec,
     ctx: &crate::technique::PassCtx,
-) -> std::result::Result<Vec<crate::pass::ComputeDecl>, String> {
+) -> std::result::Result<crate::technique::PassList, String> {
     let t = find(&spec.technique.name)
         .ok_or_else(|| format!("no technique `{}`", spec.technique.name))?;
     // A post pass that reads the frame's geometry makes the technique write it (BuildCtx too).
@@ -92,14 +93,14 @@ pub fn passes(
         geometry: ctx.geometry || geometry,
         ..*ctx
     };
-    let list = (t.passes)(&ctx, &spec.technique.params()).map_err(|e| format!("`{spec}`: {e}"))?;
-    let mut all = list.compute;
+    let mut list =
+        (t.passes)(&ctx, &spec.technique.params()).map_err(|e| format!("`{spec}`: {e}"))?;
     for part in &spec.post {
         let p = find_post(&part.name).ok_or_else(|| format!("no post pass `+{}`", part.name))?;
-        all.extend(
+        list.compute.extend(
             (p.passes)(&part.params(), list.packed_geometry)
                 .map_err(|e| format!("`{spec}`: {e}"))?,
         );
     }
-    Ok(all)
+    Ok(list)
 }

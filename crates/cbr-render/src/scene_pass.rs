@@ -2,13 +2,14 @@
 //! centre: the reference), for every checkerboard layout and for `interlaced` (the LAYOUT define).
 
 use cbr_gpu::{
-    Attachment, BindingDesc, Buffer, Cmd, DescriptorKind, DescriptorSet, Gpu, GraphicsDesc, Image,
-    Layout, PassKind, Pipeline, Profiler, Result, SetLayout, Shaders, Write, vk,
+    Attachment, Buffer, Cmd, DescriptorSet, Gpu, Layout, PassKind, Pipeline, Profiler, Result,
+    Shaders, vk,
 };
 
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::{MAT_ALBEDO, MAT_BUMP, MAT_MASK, ScenePush};
+use crate::gpu_types::{MAT_ALBEDO, MAT_BUMP, MAT_MASK};
 use crate::layouts::LayoutPlan;
+use crate::pass::{Binding, Binds, Filter, GraphicsDecl, GraphicsPass, RasterState, SetDecl, Use};
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, GBUFFER_FORMAT, ID_FORMAT, VELOCITY_FORMAT};
 
 /// `LAYOUT` values of the scene shaders (shaders/inc/scene_types.glsl).
@@ -29,41 +30,47 @@ pub fn layout_id(l: Layout) -> u32 {
     }
 }
 
-/// The scene pass's descriptor set: the one definition the pipeline layout, the descriptor writes
-/// and (through `shader_defines`) the GLSL binding numbers all come from.
-pub const BINDINGS: [BindingDesc; 6] = [
-    BindingDesc::one("frame", 0, DescriptorKind::UniformBuffer),
-    BindingDesc::one("objects", 1, DescriptorKind::StorageBuffer),
-    BindingDesc::one("vertices", 2, DescriptorKind::StorageBuffer),
-    BindingDesc::one("materials", 3, DescriptorKind::StorageBuffer),
-    BindingDesc::one("lights", 4, DescriptorKind::StorageBuffer),
-    BindingDesc::one("counter", 5, DescriptorKind::StorageBuffer),
-];
+/// The scene's set: its buffers and the shaded-fragment counter, made once per pass and shared by
+/// every raster of the scene (and by `analytic`'s compute passes).
+pub const SCENE_SET: SetDecl = SetDecl {
+    name: "scene",
+    bindings: &[
+        Binding::uniform("frame"),
+        Binding::buffer("objects", Use::Read),
+        Binding::buffer("vertices", Use::Read),
+        Binding::buffer("materials", Use::Read),
+        Binding::buffer("lights", Use::Read),
+        Binding::buffer("counter", Use::Write),
+    ],
+};
 
-/// Set 1, one per material. Separate samplers rather than an indexed array: lavapipe has no
-/// `shaderSampledImageArrayDynamicIndexing`.
-pub const MATERIAL_BINDINGS: [BindingDesc; 3] = [
-    BindingDesc::one("albedo", 0, DescriptorKind::CombinedImageSampler),
-    BindingDesc::one("mask", 1, DescriptorKind::CombinedImageSampler),
-    BindingDesc::one("bump", 2, DescriptorKind::CombinedImageSampler),
-];
+/// One set per material. Separate samplers rather than an indexed array: lavapipe has no
+/// `shaderSampledImageArrayDynamicIndexing`. Sampled through the scene's sampler (mipmapped,
+/// anisotropic).
+pub const MATERIAL_SET: SetDecl = SetDecl {
+    name: "material",
+    bindings: &[
+        Binding::sampled_with("albedo", Filter::Given),
+        Binding::sampled_with("mask", Filter::Given),
+        Binding::sampled_with("bump", Filter::Given),
+    ],
+};
 
-fn binding(name: &str) -> u32 {
-    BINDINGS
-        .iter()
-        .chain(&MATERIAL_BINDINGS)
-        .find(|b| b.name == name)
-        .map(|b| b.binding)
-        .unwrap_or(u32::MAX)
+crate::push_constants! {
+    /// Push constants of the scene passes: the object drawn.
+    pub struct ScenePush {
+        object_index: u32,
+    }
 }
 
-/// Defines for the scene shaders: the binding numbers and the layout.
+/// The scene sets' defines (set 0: the scene's, set 1: the material's, and the scene push
+/// constants) for shaders whose passes build their pipelines by hand (`analytic`'s).
 pub fn shader_defines(layout: u32) -> Vec<(String, String)> {
-    let mut d: Vec<(String, String)> = BINDINGS
-        .iter()
-        .chain(&MATERIAL_BINDINGS)
-        .map(BindingDesc::define)
-        .collect();
+    let mut d = GraphicsDecl::new("scene", "", "")
+        .shared(SCENE_SET)
+        .shared(MATERIAL_SET)
+        .push::<ScenePush>()
+        .stage_defines();
     d.push(("LAYOUT".into(), layout.to_string()));
     d
 }
@@ -150,22 +157,139 @@ impl RasterConfig {
     }
 }
 
-/// The G-buffer pass's colour attachments: position, normal, albedo, velocity, IDs.
-const GBUFFER_FORMATS: [vk::Format; 5] = [
-    GBUFFER_FORMAT,
-    GBUFFER_FORMAT,
-    GBUFFER_FORMAT,
-    VELOCITY_FORMAT,
-    ID_FORMAT,
-];
-
 /// The pipelines of one combination of material features (MAT_FEATURES).
 struct Variant {
-    pipeline: Pipeline,
+    pass: GraphicsPass,
     /// `RasterConfig::depth_prepass`: the depth-only pipeline drawn first, and for bump-mapped
     /// materials the pass proper with late tests (below).
-    depth: Option<Pipeline>,
-    late: Option<Pipeline>,
+    depth: Option<GraphicsPass>,
+    late: Option<GraphicsPass>,
+}
+
+/// The declarations of one variant ([`Variant`]).
+struct VariantDecls {
+    main: GraphicsDecl,
+    depth: Option<GraphicsDecl>,
+    late: Option<GraphicsDecl>,
+}
+
+/// The scene pass's pipelines for `config`, material feature combination `f`.
+fn variant_decls(name: &str, config: &RasterConfig, f: u32) -> Result<VariantDecls> {
+    if config.depth_prepass && (!config.gbuffer || config.samples != 1) {
+        return Err(cbr_gpu::GpuError::Other(format!(
+            "{name}: a depth pre-pass is built for the single-sample G-buffer pass only"
+        )));
+    }
+    let mut base = GraphicsDecl::new(
+        format!("{name}.mat{f}"),
+        "scene/forward.vert",
+        "scene/forward.frag",
+    )
+    .shared(SCENE_SET)
+    .shared(MATERIAL_SET)
+    .push::<ScenePush>()
+    .define("LAYOUT", config.layout)
+    .fragment_define("MAT_FEATURES", f)
+    .depth("depth", DEPTH_FORMAT);
+    for (on, flag) in [
+        (config.id_only, "ID_ONLY"),
+        (!config.write_ids, "NO_IDS"),
+        (config.sample_shading, "SAMPLE_SHADING"),
+        (config.gbuffer, "GBUFFER"),
+        (config.lod_gradients, "LOD_GRADIENTS"),
+    ] {
+        if on {
+            base = base.define(flag, 1);
+        }
+    }
+    let colors: &[(&'static str, vk::Format)] = match (config.id_only, config.gbuffer) {
+        (true, _) => &[("ids", ID_FORMAT)],
+        (false, true) => &[
+            ("position", GBUFFER_FORMAT),
+            ("normal", GBUFFER_FORMAT),
+            ("albedo", GBUFFER_FORMAT),
+            ("velocity", VELOCITY_FORMAT),
+            ("ids", ID_FORMAT),
+        ],
+        (false, false) if config.write_ids => &[
+            ("color", COLOR_FORMAT),
+            ("velocity", VELOCITY_FORMAT),
+            ("ids", ID_FORMAT),
+        ],
+        (false, false) => &[("color", COLOR_FORMAT), ("velocity", VELOCITY_FORMAT)],
+    };
+    // Reverse-Z: nearer is larger. After a depth pre-pass (GREATER, writing), the pass proper
+    // tests EQUAL against its depths, so only its surface passes. The same vertex shader bits
+    // in every pipeline: the EQUAL test needs the same depths.
+    let mut main = base.clone().state(RasterState {
+        depth_compare: if config.depth_prepass {
+            vk::CompareOp::EQUAL
+        } else {
+            vk::CompareOp::GREATER
+        },
+        depth_write: !config.depth_prepass,
+        samples: config.samples,
+        sample_shading: config.sample_shading,
+        sample_locations: config.sample_locations.is_some(),
+        ..RasterState::default()
+    });
+    for (n, format) in colors {
+        main = main.color(n, *format);
+    }
+    if !config.depth_prepass {
+        return Ok(VariantDecls {
+            main,
+            depth: None,
+            late: None,
+        });
+    }
+    let depth = GraphicsDecl {
+        name: format!("{}.depth", main.name),
+        colors: Vec::new(),
+        state: RasterState::default(),
+        ..base
+    }
+    .fragment_define("DEPTH_ONLY", 1);
+    // Bump mapping differentiates a texture lookup, and on llvmpipe a lane that fails an early
+    // depth test does not take part in that derivative (tests/deferred.rs,
+    // bump_mapping_matches_native, saw up to 1072 fp16 ulps): bump-mapped materials keep late
+    // tests, EQUAL against the pre-pass's depth.
+    let late = (f & MAT_BUMP != 0).then(|| GraphicsDecl {
+        name: format!("{}.late", main.name),
+        ..main.clone()
+    });
+    Ok(VariantDecls {
+        main: main.fragment_define("EARLY_TESTS", 1),
+        depth: Some(depth),
+        late,
+    })
+}
+
+/// [`decls`] for the compile-only list (its errors as text).
+pub fn listed(
+    name: &str,
+    config: &RasterConfig,
+    features: &[u32],
+) -> std::result::Result<Vec<GraphicsDecl>, String> {
+    decls(name, config, features).map_err(|e| e.to_string())
+}
+
+/// Every pipeline a scene pass builds for `config` and a scene whose materials have `features`
+/// (one MAT_FEATURES combination each): the compile-only list's raster entries.
+pub fn decls(name: &str, config: &RasterConfig, features: &[u32]) -> Result<Vec<GraphicsDecl>> {
+    let mut all = Vec::new();
+    for f in feature_variants(features).0 {
+        let v = variant_decls(name, config, f)?;
+        all.extend([Some(v.main), v.depth, v.late].into_iter().flatten());
+    }
+    Ok(all)
+}
+
+/// The distinct material feature combinations of `features` (sorted; the one with every path
+/// when there is none): one pipeline variant each, for passes that declare their own
+/// (`analytic`'s raster).
+pub fn feature_combinations(features: &[u32]) -> Vec<u32> {
+    feature_variants(features).0
 }
 
 /// The distinct feature combinations of `features` (sorted) and each entry's index among them;
@@ -214,14 +338,13 @@ impl<P> MaterialVariants<P> {
 
 pub struct ScenePass {
     variants: MaterialVariants<Variant>,
-    _layouts: [SetLayout; 2],
     set: DescriptorSet,
     material_sets: Vec<DescriptorSet>,
     name: String,
 }
 
 impl ScenePass {
-    /// Builds the pipeline for `config`'s layout and sample count (the same for both parities).
+    /// Builds the pipelines for `config`'s layout and sample count (the same for both parities).
     pub fn new(
         gpu: &Gpu,
         shaders: &Shaders,
@@ -230,111 +353,26 @@ impl ScenePass {
         config: &RasterConfig,
         counter: &Buffer,
     ) -> Result<ScenePass> {
-        let layout = SetLayout::new(gpu, &format!("{name}.set_layout"), &BINDINGS)?;
-        let material_layout =
-            SetLayout::new(gpu, &format!("{name}.material_layout"), &MATERIAL_BINDINGS)?;
-        let mut defines = shader_defines(config.layout);
-        if config.id_only {
-            defines.push(("ID_ONLY".into(), "1".into()));
-        }
-        if !config.write_ids {
-            defines.push(("NO_IDS".into(), "1".into()));
-        }
-        if config.sample_shading {
-            defines.push(("SAMPLE_SHADING".into(), "1".into()));
-        }
-        if config.gbuffer {
-            defines.push(("GBUFFER".into(), "1".into()));
-        }
-        if config.lod_gradients {
-            defines.push(("LOD_GRADIENTS".into(), "1".into()));
-        }
-        let vs = shaders.compile("scene/forward.vert", &defines)?;
-        if config.depth_prepass && (!config.gbuffer || config.samples != 1) {
-            return Err(cbr_gpu::GpuError::Other(format!(
-                "{name}: a depth pre-pass is built for the single-sample G-buffer pass only"
-            )));
-        }
-        let with_features = |f: u32, extra: Option<&str>| {
-            let mut d = defines.clone();
-            d.push(("MAT_FEATURES".into(), f.to_string()));
-            if let Some(e) = extra {
-                d.push((e.into(), "1".into()));
-            }
-            d
-        };
-        // Reverse-Z: nearer is larger. After a depth pre-pass (GREATER, writing), the pass proper
-        // tests EQUAL against its depths, so only its surface passes. The same vertex shader bits
-        // in every pipeline: the EQUAL test needs the same depths.
-        let desc = |name: &str, fragment: &[u32], depth_only: bool| {
-            Pipeline::graphics(
-                gpu,
-                &GraphicsDesc {
-                    name,
-                    vertex: &vs,
-                    geometry: None,
-                    fragment,
-                    set_layouts: &[&layout, &material_layout],
-                    push_constant_bytes: std::mem::size_of::<ScenePush>() as u32,
-                    color_formats: match (depth_only, config.id_only, config.gbuffer) {
-                        (true, _, _) => &[],
-                        (false, true, _) => &[ID_FORMAT],
-                        (false, false, true) => &GBUFFER_FORMATS,
-                        (false, false, false) if config.write_ids => {
-                            &[COLOR_FORMAT, VELOCITY_FORMAT, ID_FORMAT]
-                        }
-                        (false, false, false) => &[COLOR_FORMAT, VELOCITY_FORMAT],
-                    },
-                    depth_format: Some(DEPTH_FORMAT),
-                    depth_compare: if config.depth_prepass && !depth_only {
-                        vk::CompareOp::EQUAL
-                    } else {
-                        vk::CompareOp::GREATER
-                    },
-                    depth_write: depth_only || !config.depth_prepass,
-                    samples: config.samples,
-                    min_sample_shading: (config.sample_shading && !depth_only).then_some(1.0),
-                    cull_back_faces: false,
-                    sample_locations: config.sample_locations.is_some(),
-                },
-            )
-        };
         let variants = MaterialVariants::build(&scene.material_features, |f| {
-            let vname = format!("{name}.mat{f}");
-            Ok(if config.depth_prepass {
-                let depth_fs =
-                    shaders.compile("scene/forward.frag", &with_features(f, Some("DEPTH_ONLY")))?;
-                let early_fs = shaders
-                    .compile("scene/forward.frag", &with_features(f, Some("EARLY_TESTS")))?;
-                // Bump mapping differentiates a texture lookup, and on llvmpipe a lane that fails
-                // an early depth test does not take part in that derivative (tests/deferred.rs,
-                // bump_mapping_matches_native, saw up to 1072 fp16 ulps): bump-mapped materials
-                // keep late tests, EQUAL against the pre-pass's depth.
-                let late = if f & MAT_BUMP != 0 {
-                    let late_fs = shaders.compile("scene/forward.frag", &with_features(f, None))?;
-                    Some(desc(&format!("{vname}.late"), &late_fs, false)?)
-                } else {
-                    None
-                };
-                Variant {
-                    pipeline: desc(&vname, &early_fs, false)?,
-                    depth: Some(desc(&format!("{vname}.depth"), &depth_fs, true)?),
-                    late,
-                }
-            } else {
-                let fs = shaders.compile("scene/forward.frag", &with_features(f, None))?;
-                Variant {
-                    pipeline: desc(&vname, &fs, false)?,
-                    depth: None,
-                    late: None,
-                }
+            let d = variant_decls(name, config, f)?;
+            let build = |d: Option<GraphicsDecl>| d.map(|d| d.build(gpu, shaders)).transpose();
+            Ok(Variant {
+                pass: d.main.build(gpu, shaders)?,
+                depth: build(d.depth)?,
+                late: build(d.late)?,
             })
         })?;
-        let set = scene_set(gpu, name, &layout, scene, counter)?;
-        let material_sets = material_sets(gpu, name, &material_layout, scene, MaskSlot::Mask)?;
+        let first = &variants.first().pass;
+        let set = SCENE_SET.make(
+            gpu,
+            name,
+            first.layout("scene")?,
+            &scene_binds(scene, counter),
+        )?;
+        let material_sets =
+            material_sets(gpu, name, first.layout("material")?, scene, MaskSlot::Mask)?;
         Ok(ScenePass {
             variants,
-            _layouts: [layout, material_layout],
             set,
             material_sets,
             name: name.to_string(),
@@ -350,25 +388,29 @@ impl ScenePass {
         targets: &crate::targets::FrameTargets,
         counter: &Buffer,
         config: &RasterConfig,
-    ) {
-        let t = targets;
-        self.record(cmd, profiler, scene, &t.colors(), &t.depth, counter, config);
+    ) -> Result<()> {
+        let binds = targets.bind(Binds::new());
+        self.record(cmd, profiler, scene, &binds, counter, config)
     }
 
-    /// Clears `colors` (in the pipeline's order: colour, velocity, IDs; IDs only for `id_only`;
-    /// position, normal, albedo, velocity, IDs for `gbuffer`, all cleared to 0) and `depth`, and draws every object. Colour clears to the background radiance with alpha 1
-    /// for native, 0 for the other layouts (checkerboard, interlaced: alpha marks shaded samples).
-    #[allow(clippy::too_many_arguments)]
+    /// Clears the colour attachments `binds` name (by the pipeline's names: `color`, `velocity`,
+    /// `ids`; `ids` only for `id_only`; `position`, `normal`, `albedo`, `velocity`, `ids` for
+    /// `gbuffer`, all cleared to 0) and `depth`, and draws every object. Colour clears to the
+    /// background radiance with alpha 1 for native, 0 for the other layouts (checkerboard,
+    /// interlaced: alpha marks shaded samples).
     pub fn record(
         &self,
         cmd: &mut Cmd,
         profiler: &mut Profiler,
         scene: &GpuScene,
-        colors: &[&Image],
-        depth: &Image,
+        binds: &Binds,
         counter: &Buffer,
         config: &RasterConfig,
-    ) {
+    ) -> Result<()> {
+        let first = self.variants.first();
+        let (colors, depth) = first.pass.attachments(binds)?;
+        let depth = depth.ok_or_else(|| cbr_gpu::GpuError::Other("no depth".into()))?;
+        first.pass.prepare(cmd, binds)?;
         use_scene_buffers(cmd, scene);
         cmd.use_buffer(counter, cbr_gpu::Access::FragmentStorageWrite);
         let bg = scene.background;
@@ -399,9 +441,11 @@ impl ScenePass {
                 stencil: 0,
             },
         };
+        let scene_set = Binds::new().shared(&SCENE_SET, &self.set);
+        let material = first.pass.set_index("material")?;
         let [x, y, w, h] = config.viewport;
-        let prepass = self.variants.first().depth.is_some();
-        if let Some(depth_pipeline) = &self.variants.first().depth {
+        let prepass = first.depth.is_some();
+        if let Some(depth_pass) = &first.depth {
             let scope = profiler.begin(cmd, &format!("{}.depth", self.name), PassKind::Graphics);
             cmd.begin_rendering(
                 &[],
@@ -412,10 +456,22 @@ impl ScenePass {
                 config.layers,
             );
             cmd.set_viewport(x, y, w, h);
-            cmd.bind_set(depth_pipeline, 0, &self.set);
-            draw_scene(cmd, scene, &self.material_sets, config.instances, |m| {
-                self.variants.of(m).depth.as_ref().unwrap_or(depth_pipeline)
-            });
+            depth_pass.bind(cmd, &scene_set)?;
+            draw_scene(
+                cmd,
+                scene,
+                &self.material_sets,
+                material,
+                config.instances,
+                |m| {
+                    self.variants
+                        .of(m)
+                        .depth
+                        .as_ref()
+                        .unwrap_or(depth_pass)
+                        .pipeline()
+                },
+            );
             cmd.end_rendering();
             profiler.end(cmd, scope);
         }
@@ -433,13 +489,21 @@ impl ScenePass {
         if let Some(l) = config.sample_locations {
             cmd.set_sample_locations(depth, l);
         }
-        cmd.bind_set(&self.variants.first().pipeline, 0, &self.set);
-        draw_scene(cmd, scene, &self.material_sets, config.instances, |m| {
-            let v = self.variants.of(m);
-            v.late.as_ref().unwrap_or(&v.pipeline)
-        });
+        first.pass.bind(cmd, &scene_set)?;
+        draw_scene(
+            cmd,
+            scene,
+            &self.material_sets,
+            material,
+            config.instances,
+            |m| {
+                let v = self.variants.of(m);
+                v.late.as_ref().unwrap_or(&v.pass).pipeline()
+            },
+        );
         cmd.end_rendering();
         profiler.end(cmd, scope);
+        Ok(())
     }
 }
 
@@ -457,27 +521,15 @@ pub fn use_scene_buffers(cmd: &mut Cmd, scene: &GpuScene) {
     }
 }
 
-/// The scene pass's set 0 ([`BINDINGS`]) over `scene`'s buffers.
-pub fn scene_set(
-    gpu: &Gpu,
-    name: &str,
-    layout: &SetLayout,
-    scene: &GpuScene,
-    counter: &Buffer,
-) -> Result<DescriptorSet> {
-    DescriptorSet::new(
-        gpu,
-        &format!("{name}.set"),
-        layout,
-        &[
-            Write::Buffer(binding("frame"), &scene.frame),
-            Write::Buffer(binding("objects"), &scene.objects),
-            Write::Buffer(binding("vertices"), &scene.vertices),
-            Write::Buffer(binding("materials"), &scene.materials),
-            Write::Buffer(binding("lights"), &scene.lights),
-            Write::Buffer(binding("counter"), counter),
-        ],
-    )
+/// The scene set's resources ([`SCENE_SET`]): `scene`'s buffers and the counter.
+pub fn scene_binds<'a>(scene: &'a GpuScene, counter: &'a Buffer) -> Binds<'a> {
+    Binds::new()
+        .buffer("frame", &scene.frame)
+        .buffer("objects", &scene.objects)
+        .buffer("vertices", &scene.vertices)
+        .buffer("materials", &scene.materials)
+        .buffer("lights", &scene.lights)
+        .buffer("counter", counter)
 }
 
 /// What an alpha-tested material's mask slot holds.
@@ -490,12 +542,12 @@ pub enum MaskSlot {
     Coverage,
 }
 
-/// One set 1 ([`MATERIAL_BINDINGS`]) per material; slots a material does not use hold the 1x1
-/// white texture.
+/// One [`MATERIAL_SET`] per material; slots a material does not use hold the 1x1 white
+/// texture.
 pub fn material_sets(
     gpu: &Gpu,
     name: &str,
-    layout: &SetLayout,
+    layout: &cbr_gpu::SetLayout,
     scene: &GpuScene,
     mask_slot: MaskSlot,
 ) -> Result<Vec<DescriptorSet>> {
@@ -510,33 +562,27 @@ pub fn material_sets(
                 MaskSlot::Coverage => coverage,
             };
             let tex = |slot: Option<u32>| {
-                (
-                    slot.map(|t| &scene.textures[t as usize])
-                        .unwrap_or(&scene.white),
-                    &scene.sampler,
-                )
+                slot.map(|t| &scene.textures[t as usize])
+                    .unwrap_or(&scene.white)
             };
-            DescriptorSet::new(
-                gpu,
-                &format!("{name}.material[{i}]"),
-                layout,
-                &[
-                    Write::Sampled(binding("albedo"), vec![tex(slots[0])]),
-                    Write::Sampled(binding("mask"), vec![tex(mask)]),
-                    Write::Sampled(binding("bump"), vec![tex(slots[2])]),
-                ],
-            )
+            let binds = Binds::new()
+                .sampled("albedo", tex(slots[0]), &scene.sampler)
+                .sampled("mask", tex(mask), &scene.sampler)
+                .sampled("bump", tex(slots[2]), &scene.sampler);
+            MATERIAL_SET.make(gpu, &format!("{name}.material[{i}]"), layout, &binds)
         })
         .collect()
 }
 
 /// Draws every object of `scene` with the pipeline `pipeline` picks for its material, bound here
-/// when it changes (set 0 bound by the caller; all pipelines' layouts alike, so that a switch
-/// keeps it; set 1 per material, the object index as push constant), `instances` instances each.
+/// when it changes (the scene set bound by the caller; all pipelines' layouts alike, so that a
+/// switch keeps it; the material's set at index `material_set`, the object index as push
+/// constant), `instances` instances each.
 pub fn draw_scene<'a>(
     cmd: &mut Cmd,
     scene: &GpuScene,
     material_sets: &[DescriptorSet],
+    material_set: u32,
     instances: u32,
     pipeline: impl Fn(u32) -> &'a Pipeline,
 ) {
@@ -548,7 +594,7 @@ pub fn draw_scene<'a>(
             cmd.bind_pipeline(p);
             bound = Some(p);
         }
-        cmd.bind_set(p, 1, &material_sets[d.material as usize]);
+        cmd.bind_set(p, material_set, &material_sets[d.material as usize]);
         let push = ScenePush {
             object_index: d.object,
         };

@@ -1,8 +1,9 @@
 //! The per-frame outputs of a scene raster pass, and their formats (one place).
 
-use cbr_gpu::{Gpu, Image, ImageDesc, Result, vk};
+use cbr_gpu::{Gpu, Image, Result, vk};
 
 use crate::memory::MemoryEstimate;
+use crate::pass::ResourceDecl;
 
 pub const COLOR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 pub const VELOCITY_FORMAT: vk::Format = vk::Format::R32G32_SFLOAT;
@@ -64,6 +65,37 @@ impl FrameTargets {
             * BYTES_PER_SAMPLE
     }
 
+    /// The four targets' declarations: `layers` array layers and `samples` samples each
+    /// (checkerboard layouts); `sample_locations`: a depth target compatible with custom sample
+    /// locations (msaa2x with VK_EXT_sample_locations). TRANSFER_DST: tests upload synthetic
+    /// samples (the resolve's CPU-reference test).
+    pub fn decls(
+        width: u32,
+        height: u32,
+        layers: u32,
+        samples: u32,
+        sample_locations: bool,
+    ) -> [ResourceDecl; 4] {
+        let more = vk::ImageUsageFlags::TRANSFER_SRC
+            | vk::ImageUsageFlags::TRANSFER_DST
+            | vk::ImageUsageFlags::SAMPLED;
+        let target = |name, format| {
+            ResourceDecl::attachment(name, format, width, height, samples)
+                .usage(more)
+                .layers(layers)
+        };
+        let mut depth = target("depth", DEPTH_FORMAT);
+        if sample_locations {
+            depth = depth.flags(vk::ImageCreateFlags::SAMPLE_LOCATIONS_COMPATIBLE_DEPTH_EXT);
+        }
+        [
+            target("color", COLOR_FORMAT),
+            target("velocity", VELOCITY_FORMAT),
+            target("ids", ID_FORMAT),
+            depth,
+        ]
+    }
+
     /// What [`FrameTargets::layered`] allocates (crate::memory).
     pub fn estimate(
         e: &mut MemoryEstimate,
@@ -73,15 +105,8 @@ impl FrameTargets {
         layers: u32,
         samples: u32,
     ) {
-        for (name, format) in [
-            ("color", COLOR_FORMAT),
-            ("velocity", VELOCITY_FORMAT),
-            ("ids", ID_FORMAT),
-            ("depth", DEPTH_FORMAT),
-        ] {
-            let name = format!("{prefix}.{name}");
-            e.image_array(name, format, width, height, layers, samples);
-        }
+        let decls = FrameTargets::decls(width, height, layers, samples, false);
+        e.append(crate::pass::estimate(&decls, prefix));
     }
 
     /// Single-layer, single-sample targets (the native technique).
@@ -89,9 +114,7 @@ impl FrameTargets {
         FrameTargets::layered(gpu, prefix, width, height, 1, 1, false)
     }
 
-    /// Targets with `layers` array layers and `samples` samples each (checkerboard layouts);
-    /// `sample_locations`: a depth target compatible with custom sample locations (msaa2x with
-    /// VK_EXT_sample_locations).
+    /// The targets of [`FrameTargets::decls`].
     pub fn layered(
         gpu: &Gpu,
         prefix: &str,
@@ -101,33 +124,13 @@ impl FrameTargets {
         samples: u32,
         sample_locations: bool,
     ) -> Result<FrameTargets> {
-        // TRANSFER_DST: tests upload synthetic samples (the resolve's CPU-reference test).
-        let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT
-            | vk::ImageUsageFlags::TRANSFER_SRC
-            | vk::ImageUsageFlags::TRANSFER_DST
-            | vk::ImageUsageFlags::SAMPLED;
-        let img = |name: &str, format, usage| {
-            let name = format!("{prefix}.{name}");
-            let mut d = ImageDesc::new_2d(&name, format, width, height, usage);
-            d.layers = layers;
-            d.samples = samples;
-            if sample_locations && format == DEPTH_FORMAT {
-                d.flags = vk::ImageCreateFlags::SAMPLE_LOCATIONS_COMPATIBLE_DEPTH_EXT;
-            }
-            Image::new(gpu, &d)
-        };
+        let [color, velocity, ids, depth] =
+            FrameTargets::decls(width, height, layers, samples, sample_locations);
         Ok(FrameTargets {
-            color: img("color", COLOR_FORMAT, usage)?,
-            velocity: img("velocity", VELOCITY_FORMAT, usage)?,
-            ids: img("ids", ID_FORMAT, usage)?,
-            depth: img(
-                "depth",
-                DEPTH_FORMAT,
-                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
-                    | vk::ImageUsageFlags::TRANSFER_SRC
-                    | vk::ImageUsageFlags::TRANSFER_DST
-                    | vk::ImageUsageFlags::SAMPLED,
-            )?,
+            color: color.make_image(gpu, prefix)?,
+            velocity: velocity.make_image(gpu, prefix)?,
+            ids: ids.make_image(gpu, prefix)?,
+            depth: depth.make_image(gpu, prefix)?,
         })
     }
 }

@@ -150,15 +150,33 @@ pub struct PassCtx<'a> {
     pub height: u32,
     pub instrument: bool,
     pub geometry: bool,
+    /// The material feature combinations (`MAT_FEATURES`) the scene's materials use: one raster
+    /// pipeline variant each (crate::scene_pass::MaterialVariants); empty: the one variant with
+    /// every texture path.
+    pub materials: &'a [u32],
 }
 
-/// The compute passes a technique (or post pass) builds for its parameters, each declared once
+/// The passes a technique (or post pass) builds for its parameters, each declared once
 /// (the same `decl` functions its constructor builds from), and whether its frame geometry is
 /// packed (the checkerboard resolve's: `+taa` compiles its PACKED variant).
 #[derive(Default)]
 pub struct PassList {
     pub compute: Vec<crate::pass::ComputeDecl>,
+    pub graphics: Vec<crate::pass::GraphicsDecl>,
     pub packed_geometry: bool,
+}
+
+impl PassList {
+    /// Every shader the list compiles, with its defines (each stage of a raster pipeline).
+    pub fn shaders(&self) -> Vec<(&'static str, Vec<(String, String)>)> {
+        let mut s: Vec<_> = self
+            .compute
+            .iter()
+            .map(|d| (d.shader, d.all_defines()))
+            .collect();
+        s.extend(self.graphics.iter().flat_map(|d| d.stages()));
+        s
+    }
 }
 
 /// A technique's compile-only list; `Err`: the parameters are refused (named in the message).
@@ -179,7 +197,7 @@ pub struct Registration {
     /// The GPU memory `build` allocates (targets, per-pixel buffers, readbacks), written beside
     /// the constructor; the renderer refuses what cannot fit before anything is allocated.
     pub estimate: Estimate,
-    /// Its compute passes, for compiling without building (`cbr_render::registry::passes`).
+    /// Its passes, for compiling without building (`cbr_render::registry::passes`).
     pub passes: Passes,
     pub build: Build,
 }

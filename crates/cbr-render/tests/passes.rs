@@ -96,6 +96,115 @@ fn declared_passes_build_without_allocating() {
     common::assert_clean(&gpu);
 }
 
+/// Every raster pipeline the scene pass and the RSM declare, over every material variant.
+fn declared_rasters() -> Vec<cbr_render::pass::GraphicsDecl> {
+    use cbr_render::scene_pass::{self, RasterConfig};
+    let native = RasterConfig::native(64, 36);
+    let configs = [
+        native.clone(),
+        RasterConfig {
+            gbuffer: true,
+            depth_prepass: true,
+            ..native.clone()
+        },
+        RasterConfig {
+            id_only: true,
+            ..native.clone()
+        },
+        RasterConfig {
+            samples: 4,
+            write_ids: false,
+            sample_shading: true,
+            ..native.clone()
+        },
+        RasterConfig::for_plan(&LayoutPlan::new(Layout::Rotated, 64, 36, 0)),
+        RasterConfig::for_plan(&LayoutPlan::new(Layout::Split, 64, 36, 1)),
+    ];
+    let features: Vec<u32> = (0..8).collect();
+    let mut d = vec![deferred::rsm::decl()];
+    for (i, c) in configs.iter().enumerate() {
+        d.extend(scene_pass::decls(&format!("raster{i}"), c, &features).expect("declared"));
+    }
+    // analytic's select and raster passes, with the seed and the anisotropic filter.
+    let c = cbr_render::techniques::analytic::parse(&["seed", "aniso"]).expect("analytic");
+    let k = cbr_render::techniques::analytic::Kernel::new(c, 64, 36, 1 << 27).expect("fits");
+    d.extend(cbr_render::techniques::analytic::raster_decls(
+        &k, &features,
+    ));
+    d
+}
+
+#[test]
+fn declared_rasters_build_without_allocating() {
+    let gpu = common::gpu();
+    let shaders = cbr_render::shader_library();
+    let before = gpu.allocations_made();
+    let decls = declared_rasters();
+    for d in &decls {
+        d.build(&gpu, &shaders)
+            .unwrap_or_else(|e| panic!("{}: {e}", d.name));
+    }
+    // 6 configurations x 8 variants, the G-buffer's with a depth pre-pass and (4 bump-mapped
+    // variants) late tests, the RSM, and analytic's select and raster x 8 variants.
+    assert_eq!(decls.len(), 6 * 8 + 8 + 4 + 1 + 2 * 8);
+    assert_eq!(
+        gpu.allocations_made(),
+        before,
+        "a compile-only build allocated memory"
+    );
+    common::assert_clean(&gpu);
+}
+
+/// A raster pass's attachments are bound by name and checked against their declared formats;
+/// a name it does not declare is an error.
+#[test]
+fn raster_attachments_are_checked_by_name_and_format() {
+    let gpu = common::gpu();
+    let shaders = cbr_render::shader_library();
+    let pass = deferred::rsm::decl().build(&gpu, &shaders).expect("rsm");
+    let make = |name, format, usage| {
+        Image::new(&gpu, &ImageDesc::new_2d(name, format, 8, 8, usage)).expect("image")
+    };
+    let color = vk::ImageUsageFlags::COLOR_ATTACHMENT;
+    let f32x4 = make("t.f32x4", vk::Format::R32G32B32A32_SFLOAT, color);
+    let f16x4 = make("t.f16x4", vk::Format::R16G16B16A16_SFLOAT, color);
+    let depth = make(
+        "t.depth",
+        vk::Format::D32_SFLOAT,
+        vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+    );
+    let good = Binds::new()
+        .image("position", &f32x4)
+        .image("normal", &f32x4)
+        .image("flux", &f32x4)
+        .image("depth", &depth);
+    let (colors, d) = pass.attachments(&good).expect("attachments");
+    assert_eq!((colors.len(), d.is_some()), (3, true));
+    let message = |r: cbr_gpu::Result<_>| match r {
+        Err(GpuError::Declaration { message, .. }) => message,
+        Err(e) => panic!("expected a declaration error, got {e}"),
+        Ok(_) => panic!("expected a declaration error"),
+    };
+    let wrong = message(pass.attachments(&good.clone().image("flux", &f16x4)));
+    assert!(wrong.contains("attachment `flux`"), "{wrong}");
+    let missing = message(pass.attachments(&Binds::new().image("position", &f32x4)));
+    assert!(
+        missing.contains("no image bound to attachment `normal`"),
+        "{missing}"
+    );
+    let misspelt = good.clone().image("flx", &f32x4);
+    let misspelt = gpu
+        .submit("t.misspelt", |cmd| pass.prepare(cmd, &misspelt))
+        .expect_err("misspelt");
+    assert!(
+        misspelt
+            .to_string()
+            .contains("`flx` is bound but not declared"),
+        "{misspelt}"
+    );
+    common::assert_clean(&gpu);
+}
+
 #[test]
 fn binds_that_do_not_fit_the_declaration_are_errors() {
     let gpu = common::gpu();
@@ -142,7 +251,7 @@ fn binds_that_do_not_fit_the_declaration_are_errors() {
         misspelt.contains("`outt` is bound but not declared"),
         "{misspelt}"
     );
-    // A texture binding takes an image with its sampler (analytic's albedo pass: a scene texture
+    // A binding of a given sampler takes an image with its sampler (analytic's albedo pass: a scene texture
     // through the scene's sampler), and a plain image is refused.
     let k = analytic::Kernel::new(analytic::parse(&[]).expect("analytic"), 8, 8, 1 << 27)
         .expect("fits");
@@ -166,17 +275,17 @@ fn binds_that_do_not_fit_the_declaration_are_errors() {
     .fold(Binds::new(), |b, name| b.buffer(name, &counter));
     assert!(
         albedo
-            .check(&buffers.clone().texture("albedo_texture", &a, &sampler))
+            .check(&buffers.clone().sampled("albedo_texture", &a, &sampler))
             .is_ok()
     );
     let untextured = declaration(albedo.check(&buffers.clone().image("albedo_texture", &a)));
     assert!(
         untextured
-            .contains("`albedo_texture` is a texture (an image with its sampler), given an image"),
+            .contains("`albedo_texture` is a sampled image with a given sampler, given an image"),
         "{untextured}"
     );
     let textured =
-        declaration(pass.check(&Binds::new().texture("src", &a, &sampler).image("out", &b)));
+        declaration(pass.check(&Binds::new().sampled("src", &a, &sampler).image("out", &b)));
     assert!(
         textured.contains("`src` is a sampled image, given an image with its sampler"),
         "{textured}"
@@ -200,12 +309,14 @@ fn the_compile_only_list_is_what_rendering_builds() {
     let gpu = common::gpu();
     let shaders = cbr_render::shader_library();
     let scene = common::demo(64, 36);
+    let materials = cbr_render::gpu_scene::material_features(&scene);
     let ctx = cbr_render::technique::PassCtx {
         caps: gpu.caps(),
         width: 64,
         height: 36,
         instrument: false,
         geometry: false,
+        materials: &materials,
     };
     let specs = [
         "native",
@@ -235,11 +346,11 @@ fn the_compile_only_list_is_what_rendering_builds() {
         let mut listed: Vec<(String, Vec<(String, String)>)> =
             cbr_render::registry::passes(&settings.spec, &ctx)
                 .unwrap_or_else(|e| panic!("{text}: {e}"))
-                .iter()
-                .map(|d| {
-                    let mut defines = d.all_defines();
+                .shaders()
+                .into_iter()
+                .map(|(shader, mut defines)| {
                     defines.sort();
-                    (d.shader.to_string(), defines)
+                    (shader.to_string(), defines)
                 })
                 .collect();
         listed.sort();
@@ -249,11 +360,11 @@ fn the_compile_only_list_is_what_rendering_builds() {
             cbr_render::Renderer::new(&gpu, &shaders, &scene, settings)
                 .unwrap_or_else(|e| panic!("{text}: {e}")),
         );
-        let built: Vec<_> = shaders
-            .requests_since(mark)
-            .into_iter()
-            .filter(|(path, _)| path.ends_with(".comp"))
-            .collect();
+        let built: Vec<_> = shaders.requests_since(mark);
+        assert!(
+            built.iter().any(|(path, _)| path.ends_with(".frag")),
+            "`{text}`: no raster pipeline built"
+        );
         assert_eq!(
             listed, built,
             "`{text}`: the compile-only list and the build differ"

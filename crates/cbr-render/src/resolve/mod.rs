@@ -356,6 +356,22 @@ pub fn decl(settings: &ResolveSettings, plan: &LayoutPlan, prepass: bool) -> Com
 
 /// Two history slots (colour, geometry) and the debug bits and velocity, filled by copies too
 /// (tests seed the history).
+/// The readbacks of the resolved colour (the history's format), the history geometry and the
+/// debug bits and velocity.
+fn readbacks(settings: &ResolveSettings, w: u32, h: u32) -> [ResourceDecl; 4] {
+    let color = if settings.f32_history {
+        vk::Format::R32G32B32A32_SFLOAT
+    } else {
+        vk::Format::R16G16B16A16_SFLOAT
+    };
+    [
+        ResourceDecl::readback("resolved", color, w, h),
+        ResourceDecl::readback("resolved_geom", HISTORY_GEOM_FORMAT, w, h),
+        ResourceDecl::readback("resolve_debug", vk::Format::R32_UINT, w, h),
+        ResourceDecl::readback("resolve_velocity", vk::Format::R32G32_SFLOAT, w, h),
+    ]
+}
+
 fn resources(settings: &ResolveSettings, w: u32, h: u32) -> Vec<ResourceDecl> {
     let color = if settings.f32_history {
         vk::Format::R32G32B32A32_SFLOAT
@@ -399,21 +415,10 @@ impl ResolvePass {
                 CopyFloor::bytes(w, h, settings.f32_history),
             );
         }
-        let color = if settings.f32_history {
-            vk::Format::R32G32B32A32_SFLOAT
-        } else {
-            vk::Format::R16G16B16A16_SFLOAT
-        };
-        e.readback("readback.resolved", color, w, h, 1);
-        e.readback("readback.resolved_geom", HISTORY_GEOM_FORMAT, w, h, 1);
-        e.readback("readback.resolve_debug", vk::Format::R32_UINT, w, h, 1);
-        e.readback(
-            "readback.resolve_velocity",
-            vk::Format::R32G32_SFLOAT,
-            w,
-            h,
-            1,
-        );
+        e.append(crate::pass::estimate(
+            &readbacks(settings, w, h),
+            "readback",
+        ));
     }
 
     /// `prepass`: whether the native-resolution ID and depth images are bound when it records.
@@ -602,15 +607,14 @@ impl ResolvePass {
 
     /// Readbacks sized for the resolved colour, the debug bits and the debug velocity.
     pub fn readbacks(&self, gpu: &Gpu) -> Result<ResolveReadbacks> {
-        let rb = |name: &str, image: &Image| Readback::for_image(gpu, name, image);
+        let (w, h) = (self.width, self.height);
+        let [color, geom, debug_bits, debug_velocity] =
+            readbacks(&self.settings, w, h).map(|r| r.make_readback(gpu, "readback"));
         Ok(ResolveReadbacks {
-            color: rb("readback.resolved", self.history("history_color", 0)?)?,
-            geom: rb("readback.resolved_geom", self.history("history_geom", 0)?)?,
-            debug_bits: rb("readback.resolve_debug", self.res.image("debug_bits")?)?,
-            debug_velocity: rb(
-                "readback.resolve_velocity",
-                self.res.image("debug_velocity")?,
-            )?,
+            color: color?,
+            geom: geom?,
+            debug_bits: debug_bits?,
+            debug_velocity: debug_velocity?,
         })
     }
 

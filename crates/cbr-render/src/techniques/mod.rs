@@ -18,6 +18,7 @@ use half::f16;
 use crate::frame::FrameOutput;
 use crate::gpu_scene::GpuScene;
 use crate::memory::MemoryEstimate;
+use crate::pass::{Binds, ResourceDecl};
 use crate::scene_pass::{RasterConfig, ScenePass};
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, FrameTargets, ID_FORMAT, VELOCITY_FORMAT};
 
@@ -33,6 +34,27 @@ pub struct IdPass {
 }
 
 impl IdPass {
+    const NAME: &str = "id_prepass.raster";
+
+    /// Native's raster, depth and IDs only.
+    fn raster(w: u32, h: u32) -> RasterConfig {
+        RasterConfig {
+            id_only: true,
+            ..RasterConfig::native(w, h)
+        }
+    }
+
+    /// Its raster pipelines, for the compile-only list.
+    pub fn decls(
+        ctx: &crate::technique::PassCtx,
+    ) -> std::result::Result<Vec<crate::pass::GraphicsDecl>, String> {
+        crate::scene_pass::listed(
+            Self::NAME,
+            &Self::raster(ctx.width, ctx.height),
+            ctx.materials,
+        )
+    }
+
     pub fn new(
         gpu: &Gpu,
         shaders: &Shaders,
@@ -41,15 +63,15 @@ impl IdPass {
         h: u32,
         counter: &Buffer,
     ) -> Result<IdPass> {
-        let config = RasterConfig {
-            id_only: true,
-            ..RasterConfig::native(w, h)
-        };
-        let pass = ScenePass::new(gpu, shaders, scene, "id_prepass.raster", &config, counter)?;
-        // Only the ID and depth targets are kept; colour and velocity are dropped unused.
-        let FrameTargets { ids, depth, .. } = FrameTargets::new(gpu, "id_prepass", w, h)?;
-        let ids_rb = Readback::for_image(gpu, "readback.prepass_ids", &ids)?;
-        let depth_rb = Readback::for_image(gpu, "readback.prepass_depth", &depth)?;
+        let config = Self::raster(w, h);
+        let pass = ScenePass::new(gpu, shaders, scene, Self::NAME, &config, counter)?;
+        let [ids, depth, ids_rb, depth_rb] = Self::resources(w, h);
+        let (ids, depth) = (
+            ids.make_image(gpu, "id_prepass")?,
+            depth.make_image(gpu, "id_prepass")?,
+        );
+        let ids_rb = ids_rb.make_readback(gpu, "readback")?;
+        let depth_rb = depth_rb.make_readback(gpu, "readback")?;
         Ok(IdPass {
             pass,
             config,
@@ -60,13 +82,22 @@ impl IdPass {
         })
     }
 
-    /// What [`IdPass::new`] keeps: the ID and depth targets (colour and velocity are freed as
-    /// soon as they are made, before anything else is allocated) and their readbacks.
+    /// Its ID and depth targets (native's) and their readbacks (`readback.prepass_*`).
+    fn resources(w: u32, h: u32) -> [ResourceDecl; 4] {
+        let [_, _, ids, depth] = FrameTargets::decls(w, h, 1, 1, false);
+        [
+            ids,
+            depth,
+            ResourceDecl::readback("prepass_ids", ID_FORMAT, w, h),
+            ResourceDecl::readback("prepass_depth", DEPTH_FORMAT, w, h),
+        ]
+    }
+
+    /// What [`IdPass::new`] allocates.
     pub fn estimate(e: &mut MemoryEstimate, w: u32, h: u32) {
-        e.image("id_prepass.ids", ID_FORMAT, w, h);
-        e.image("id_prepass.depth", DEPTH_FORMAT, w, h);
-        e.readback("readback.prepass_ids", ID_FORMAT, w, h, 1);
-        e.readback("readback.prepass_depth", DEPTH_FORMAT, w, h, 1);
+        let [ids, depth, ids_rb, depth_rb] = Self::resources(w, h);
+        e.append(crate::pass::estimate(&[ids, depth], "id_prepass"));
+        e.append(crate::pass::estimate(&[ids_rb, depth_rb], "readback"));
     }
 
     /// Records the raster and the copies of its IDs and depth.
@@ -76,18 +107,15 @@ impl IdPass {
         profiler: &mut Profiler,
         scene: &GpuScene,
         counter: &Buffer,
-    ) {
-        self.pass.record(
-            cmd,
-            profiler,
-            scene,
-            &[&self.ids],
-            &self.depth,
-            counter,
-            &self.config,
-        );
+    ) -> Result<()> {
+        let targets = Binds::new()
+            .image("ids", &self.ids)
+            .image("depth", &self.depth);
+        self.pass
+            .record(cmd, profiler, scene, &targets, counter, &self.config)?;
         cmd.read_image(&self.ids, &self.ids_rb);
         cmd.read_image(&self.depth, &self.depth_rb);
+        Ok(())
     }
 
     /// View depths (+inf where empty) and IDs.
@@ -109,22 +137,35 @@ pub struct LayerReadbacks {
 }
 
 impl LayerReadbacks {
-    pub fn new(gpu: &Gpu, [color, depth, velocity, ids]: [&Image; 4]) -> Result<LayerReadbacks> {
+    /// The four readbacks of `width` x `height` layers (depth D32 or R32F: 4 bytes either way).
+    pub fn decls(width: u32, height: u32) -> [ResourceDecl; 4] {
+        [
+            ResourceDecl::readback("color", COLOR_FORMAT, width, height),
+            ResourceDecl::readback("depth", DEPTH_FORMAT, width, height),
+            ResourceDecl::readback("velocity", VELOCITY_FORMAT, width, height),
+            ResourceDecl::readback("ids", ID_FORMAT, width, height),
+        ]
+    }
+
+    /// The readbacks of `images` (colour, depth, velocity, IDs: [`LayerReadbacks::record`]'s
+    /// order), at the colour's size.
+    pub fn new(gpu: &Gpu, images: [&Image; 4]) -> Result<LayerReadbacks> {
+        let [color, depth, velocity, ids] =
+            LayerReadbacks::decls(images[0].width, images[0].height);
         Ok(LayerReadbacks {
-            color: Readback::for_image(gpu, "readback.color", color)?,
-            depth: Readback::for_image(gpu, "readback.depth", depth)?,
-            velocity: Readback::for_image(gpu, "readback.velocity", velocity)?,
-            ids: Readback::for_image(gpu, "readback.ids", ids)?,
+            color: color.make_readback(gpu, "readback")?,
+            depth: depth.make_readback(gpu, "readback")?,
+            velocity: velocity.make_readback(gpu, "readback")?,
+            ids: ids.make_readback(gpu, "readback")?,
         })
     }
 
-    /// What [`LayerReadbacks::new`] allocates for `width` x `height` layers (depth D32 or R32F:
-    /// 4 bytes either way).
+    /// What [`LayerReadbacks::new`] allocates for `width` x `height` layers.
     pub fn estimate(e: &mut MemoryEstimate, width: u32, height: u32) {
-        e.readback("readback.color", COLOR_FORMAT, width, height, 1);
-        e.readback("readback.depth", DEPTH_FORMAT, width, height, 1);
-        e.readback("readback.velocity", VELOCITY_FORMAT, width, height, 1);
-        e.readback("readback.ids", ID_FORMAT, width, height, 1);
+        e.append(crate::pass::estimate(
+            &LayerReadbacks::decls(width, height),
+            "readback",
+        ));
     }
 
     /// Records the copies (timed as `readback`).

@@ -28,9 +28,17 @@ pub const REGISTRATION: Registration = Registration {
     check: |p| parse(p).map(|_| ()),
     needs,
     estimate: |ctx, p| Ok(Msaa::estimate(parse(p)?, ctx.width, ctx.height)),
-    passes: |_, p| {
+    passes: |ctx, p| {
+        let c = parse(p)?;
+        let mut graphics = crate::scene_pass::listed(
+            "msaa.raster",
+            &raster(c, ctx.width, ctx.height),
+            ctx.materials,
+        )?;
+        graphics.extend(IdPass::decls(ctx)?);
         Ok(crate::technique::PassList {
-            compute: vec![decl(parse(p)?)],
+            compute: vec![decl(c)],
+            graphics,
             packed_geometry: false,
         })
     },
@@ -39,6 +47,25 @@ pub const REGISTRATION: Registration = Registration {
         Ok(Box::new(Msaa::new(ctx, c)?))
     },
 };
+
+/// The readbacks of the resolved colour and velocity.
+fn readbacks(w: u32, h: u32) -> [ResourceDecl; 2] {
+    [
+        ResourceDecl::readback("msaa.color", COLOR_FORMAT, w, h),
+        ResourceDecl::readback("msaa.velocity", VELOCITY_FORMAT, w, h),
+    ]
+}
+
+/// The multisampled raster: colour and velocity (no IDs: devices without multisampled integer
+/// attachments), per sample with `sample`.
+fn raster(c: MsaaConfig, w: u32, h: u32) -> RasterConfig {
+    RasterConfig {
+        samples: c.samples,
+        write_ids: false,
+        sample_shading: c.sample_shading,
+        ..RasterConfig::native(w, h)
+    }
+}
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MsaaConfig {
@@ -155,19 +182,13 @@ impl Msaa {
     pub fn estimate(c: MsaaConfig, w: u32, h: u32) -> MemoryEstimate {
         let mut e = crate::pass::estimate(&resources(c, w, h), "msaa");
         IdPass::estimate(&mut e, w, h);
-        e.readback("readback.msaa.color", COLOR_FORMAT, w, h, 1);
-        e.readback("readback.msaa.velocity", VELOCITY_FORMAT, w, h, 1);
+        e.append(crate::pass::estimate(&readbacks(w, h), "readback"));
         e
     }
 
     pub fn new(ctx: &BuildCtx, c: MsaaConfig) -> Result<Msaa> {
         let (gpu, w, h) = (ctx.gpu, ctx.width, ctx.height);
-        let config = RasterConfig {
-            samples: c.samples,
-            write_ids: false,
-            sample_shading: c.sample_shading,
-            ..RasterConfig::native(w, h)
-        };
+        let config = raster(c, w, h);
         let pass = ScenePass::new(
             gpu,
             ctx.shaders,
@@ -179,9 +200,8 @@ impl Msaa {
         let res = Resources::new(gpu, "msaa", &resources(c, w, h))?;
         let ids = IdPass::new(gpu, ctx.shaders, ctx.scene, w, h, ctx.counter)?;
         let resolve = decl(c).build(gpu, ctx.shaders)?;
-        let color_rb = Readback::for_image(gpu, "readback.msaa.color", res.image("out_color")?)?;
-        let velocity_rb =
-            Readback::for_image(gpu, "readback.msaa.velocity", res.image("out_velocity")?)?;
+        let [color_rb, velocity_rb] = readbacks(w, h).map(|r| r.make_readback(gpu, "readback"));
+        let (color_rb, velocity_rb) = (color_rb?, velocity_rb?);
         Ok(Msaa {
             c,
             pass,
@@ -204,16 +224,13 @@ impl Technique for Msaa {
         let this = &*self;
         ctx.submit("frame", |cmd, profiler, gs| {
             let r = &this.res;
-            this.ids.record(cmd, profiler, gs, counter);
-            this.pass.record(
-                cmd,
-                profiler,
-                gs,
-                &[r.image("color")?, r.image("velocity")?],
-                r.image("depth")?,
-                counter,
-                &this.config,
-            );
+            this.ids.record(cmd, profiler, gs, counter)?;
+            let targets = Binds::new()
+                .image("color", r.image("color")?)
+                .image("velocity", r.image("velocity")?)
+                .image("depth", r.image("depth")?);
+            this.pass
+                .record(cmd, profiler, gs, &targets, counter, &this.config)?;
             let push = Push {
                 size_samples: [
                     this.size.0 as i32,

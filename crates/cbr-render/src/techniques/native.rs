@@ -18,7 +18,16 @@ pub const REGISTRATION: Registration = Registration {
     check: |p| no_params("native", p),
     needs: |_, _| None,
     estimate: |ctx, _| Ok(Native::estimate(ctx.width, ctx.height)),
-    passes: |_, _| Ok(crate::technique::PassList::default()),
+    passes: |ctx, _| {
+        Ok(crate::technique::PassList {
+            graphics: crate::scene_pass::listed(
+                "native.raster",
+                &RasterConfig::native(ctx.width, ctx.height),
+                ctx.materials,
+            )?,
+            ..Default::default()
+        })
+    },
     build: |ctx, _| Ok(Box::new(Native::new(ctx)?)),
 };
 
@@ -72,7 +81,7 @@ impl Technique for Native {
             ctx.counter,
         );
         ctx.submit("frame", |cmd, profiler, scene| {
-            pass.record_targets(cmd, profiler, scene, targets, counter, config);
+            pass.record_targets(cmd, profiler, scene, targets, counter, config)?;
             rb.record(cmd, profiler, targets.layers());
             cmd.use_buffer(counter, cbr_gpu::Access::HostRead);
             Ok(())

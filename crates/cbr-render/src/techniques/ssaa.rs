@@ -29,10 +29,15 @@ pub const REGISTRATION: Registration = Registration {
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
     estimate: |ctx, _| Ok(Ssaa::estimate(ctx.width, ctx.height)),
-    passes: |_, p| {
+    passes: |ctx, p| {
         parse(p)?;
         Ok(crate::technique::PassList {
             compute: vec![decl()],
+            graphics: crate::scene_pass::listed(
+                "ssaa.raster",
+                &RasterConfig::native(ctx.width, ctx.height),
+                ctx.materials,
+            )?,
             packed_geometry: false,
         })
     },
@@ -43,6 +48,14 @@ pub const REGISTRATION: Registration = Registration {
 };
 
 pub const MAX_N: u32 = 32;
+
+/// The readbacks of the frame (`out`) and its coverage (`aux`).
+fn readbacks(w: u32, h: u32) -> [ResourceDecl; 2] {
+    [
+        ResourceDecl::readback("ssaa.out", COLOR_FORMAT, w, h),
+        ResourceDecl::readback("ssaa.aux", vk::Format::R32G32_UINT, w, h),
+    ]
+}
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SsaaConfig {
@@ -138,8 +151,7 @@ impl Ssaa {
         FrameTargets::estimate(&mut e, "ssaa", w, h, 1, 1);
         e.append(crate::pass::estimate(&resources(w, h), "ssaa"));
         LayerReadbacks::estimate(&mut e, w, h);
-        e.readback("readback.ssaa.out", COLOR_FORMAT, w, h, 1);
-        e.readback("readback.ssaa.aux", vk::Format::R32G32_UINT, w, h, 1);
+        e.append(crate::pass::estimate(&readbacks(w, h), "readback"));
         e
     }
 
@@ -158,8 +170,8 @@ impl Ssaa {
         let accumulate = decl().build(gpu, ctx.shaders)?;
         let res = Resources::new(gpu, "ssaa", &resources(w, h))?;
         let centre = LayerReadbacks::new(gpu, targets.layers())?;
-        let out_rb = Readback::for_image(gpu, "readback.ssaa.out", res.image("out")?)?;
-        let aux_rb = Readback::for_image(gpu, "readback.ssaa.aux", res.image("aux")?)?;
+        let [out_rb, aux_rb] = readbacks(w, h).map(|r| r.make_readback(gpu, "readback"));
+        let (out_rb, aux_rb) = (out_rb?, aux_rb?);
         Ok(Ssaa {
             c,
             pass,
@@ -212,7 +224,7 @@ impl Ssaa {
         ctx.submit("ssaa.sample", |cmd, profiler, gs| {
             let t = &self.targets;
             self.pass
-                .record_targets(cmd, profiler, gs, t, counter, &self.config);
+                .record_targets(cmd, profiler, gs, t, counter, &self.config)?;
             if centre {
                 self.centre.record(cmd, profiler, t.layers());
             }

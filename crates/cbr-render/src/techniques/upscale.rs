@@ -21,9 +21,15 @@ pub const REGISTRATION: Registration = Registration {
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
     estimate: |ctx, _| Ok(Upscale::estimate(ctx.width, ctx.height)),
-    passes: |_, p| {
+    passes: |ctx, p| {
+        let (lw, lh) = low_resolution(ctx.width, ctx.height);
         Ok(crate::technique::PassList {
             compute: vec![decl(parse(p)?)],
+            graphics: crate::scene_pass::listed(
+                "upscale.raster",
+                &RasterConfig::native(lw, lh),
+                ctx.materials,
+            )?,
             packed_geometry: false,
         })
     },
@@ -253,7 +259,7 @@ impl Technique for Upscale {
         ctx.submit("frame", |cmd, profiler, gs| {
             let t = &this.targets;
             this.pass
-                .record_targets(cmd, profiler, gs, t, counter, &this.config);
+                .record_targets(cmd, profiler, gs, t, counter, &this.config)?;
             this.up.record(cmd, profiler, t)?;
             this.readbacks.record(cmd, profiler, this.up.layers()?);
             cmd.use_buffer(counter, Access::HostRead);

@@ -38,7 +38,7 @@ use half::f16;
 use super::linear_depths;
 use crate::frame::{AnalyticLayers, Coverage, FrameOutput};
 use crate::memory::MemoryEstimate;
-use crate::pass::{Binds, NoPush, ResourceKind, Resources};
+use crate::pass::{Binds, NoPush, Resources};
 use crate::technique::{BuildCtx, FrameCtx, Geometry, PassList, Registration, Technique};
 
 pub use config::{
@@ -46,10 +46,11 @@ pub use config::{
     MAX_PRIMITIVES, parse,
 };
 pub use passes::{
-    AlbedoPush, FLAG_EDGE, FLAG_NONFINITE, FLAG_OVERFLOW, FLAG_SEED, Kernel, ResolvePush,
-    albedo_decl, albedo_plan_decl, albedo_scatter_decl, decls, resolve_decl, resources, tail_decl,
+    AlbedoPush, FLAG_EDGE, FLAG_NONFINITE, FLAG_OVERFLOW, FLAG_SEED, Kernel, READ_IMAGES,
+    ResolvePush, albedo_decl, albedo_plan_decl, albedo_scatter_decl, count_readbacks, decls,
+    image_readbacks, resolve_decl, resources, tail_decl,
 };
-pub use raster::RASTER_BINDINGS;
+pub use raster::{RASTER_BINDINGS, decls as raster_decls};
 pub use sizes::*;
 
 pub const REGISTRATION: Registration = Registration {
@@ -79,6 +80,7 @@ pub const REGISTRATION: Registration = Registration {
         )?;
         Ok(PassList {
             compute: decls(&k),
+            graphics: raster::decls(&k, ctx.materials),
             packed_geometry: false,
         })
     },
@@ -93,17 +95,6 @@ pub const REGISTRATION: Registration = Registration {
 fn count_read(rb: &Readback) -> Result<u64> {
     Ok(u64::from(bytemuck::cast_slice::<u8, u32>(rb.bytes()?)[0]))
 }
-
-/// The images read back each frame, in the order of `Analytic::readbacks`: colour, coverage,
-/// counts, depth, velocity, IDs (resource names; the readbacks are `readback.analytic.<layer>`).
-const READBACKS: [(&str, &str); 6] = [
-    ("out_color", "color"),
-    ("out_coverage", "coverage"),
-    ("out_counts", "counts"),
-    ("depth", "depth"),
-    ("velocity", "velocity"),
-    ("ids", "ids"),
-];
 
 pub struct Analytic {
     c: AnalyticConfig,
@@ -129,24 +120,9 @@ impl Analytic {
     /// colour, coverage and counts, native's velocity, ID and depth targets), the six image
     /// readbacks and the two counts read back.
     pub fn estimate(k: &Kernel) -> MemoryEstimate {
-        let decls = resources(k);
-        let mut e = crate::pass::estimate(&decls, "analytic");
-        for name in ["tail_count", "albedo_count"] {
-            e.buffer(format!("readback.analytic.{name}"), 4, true);
-        }
-        for (res, layer) in READBACKS {
-            for d in decls.iter().filter(|d| d.name == res) {
-                if let ResourceKind::Image { format, .. } = d.kind {
-                    e.readback(
-                        format!("readback.analytic.{layer}"),
-                        format,
-                        k.width,
-                        k.height,
-                        1,
-                    );
-                }
-            }
-        }
+        let mut e = crate::pass::estimate(&resources(k), "analytic");
+        e.append(crate::pass::estimate(&image_readbacks(k), "readback"));
+        e.append(crate::pass::estimate(&count_readbacks(), "readback"));
         e
     }
 
@@ -187,7 +163,7 @@ impl Analytic {
             )));
         }
         let res = Resources::new(gpu, "analytic", &resources(&k))?;
-        let raster = raster::RasterPasses::new(ctx, &k, &res)?;
+        let raster = raster::RasterPasses::new(ctx, &k)?;
         let passes = passes::Passes::new(gpu, ctx.shaders, &k)?;
         // The materials whose fragments leave albedo jobs (raster.frag: an albedo texture, no
         // alpha test).
@@ -199,12 +175,10 @@ impl Analytic {
             .filter(|(t, _)| t[0].is_some() && t[1].is_none())
             .map(|(_, m)| m)
             .collect();
-        let tail_count_rb = Readback::for_buffer(gpu, "readback.analytic.tail_count", 4, 1, 1)?;
-        let albedo_count_rb = Readback::for_buffer(gpu, "readback.analytic.albedo_count", 4, 1, 1)?;
-        let rb = |(name, layer): (&str, &str)| {
-            Readback::for_image(gpu, &format!("readback.analytic.{layer}"), res.image(name)?)
-        };
-        let [r0, r1, r2, r3, r4, r5] = READBACKS.map(rb);
+        let [tail_count_rb, albedo_count_rb] =
+            count_readbacks().map(|d| d.make_readback(gpu, "readback"));
+        let [r0, r1, r2, r3, r4, r5] =
+            image_readbacks(&k).map(|d| d.make_readback(gpu, "readback"));
         let readbacks = [r0?, r1?, r2?, r3?, r4?, r5?];
         Ok(Analytic {
             c,
@@ -214,8 +188,8 @@ impl Analytic {
             passes,
             albedo_materials,
             res,
-            tail_count_rb,
-            albedo_count_rb,
+            tail_count_rb: tail_count_rb?,
+            albedo_count_rb: albedo_count_rb?,
             readbacks,
             background: ctx.scene.background,
         })
@@ -279,7 +253,7 @@ impl Analytic {
                 let albedo =
                     binds
                         .only(&p.albedo)
-                        .texture("albedo_texture", texture, &scene.sampler);
+                        .sampled("albedo_texture", texture, &scene.sampler);
                 let args = (bins, u64::from(m) * ALBEDO_BIN_BYTES + 16);
                 p.albedo.prepare_indirect(cmd, &albedo, bins)?;
                 p.albedo.dispatch_indirect_untimed(
@@ -310,7 +284,7 @@ impl Analytic {
                 .dispatch_2d(cmd, profiler, &binds.only(&p.resolve), &push, size)?;
 
             let scope = profiler.begin(cmd, "readback", PassKind::Transfer);
-            for ((name, _), rb) in READBACKS.iter().zip(&self.readbacks) {
+            for (name, rb) in READ_IMAGES.iter().zip(&self.readbacks) {
                 cmd.read_image(res.image(name)?, rb);
             }
             for (name, rb) in [
@@ -351,7 +325,8 @@ impl Analytic {
     /// Replaces the tail-record buffer by one holding `needed` records and a quarter more (at most
     /// the device's largest storage buffer); or the refusal where one buffer cannot hold `needed`.
     /// The frame that counted them has completed (FrameCtx::submit waits), so nothing uses the
-    /// old buffer; the caller points the raster's set at the new one.
+    /// old buffer; every pass makes its set from the frame's binds, so the next frame binds the
+    /// new one.
     fn grow_tail_records(&mut self, gpu: &cbr_gpu::Gpu, needed: u64) -> Result<()> {
         let samples = self.c.samples;
         let capacity = grown_tail_capacity(needed, self.frags, samples, self.k.max_range)
@@ -408,7 +383,6 @@ impl Technique for Analytic {
             if jobs > jobs_held {
                 self.grow_albedo_jobs(ctx.gpu, jobs)?;
             }
-            self.raster.rebind(ctx.gpu, &self.res)?;
             ctx.timings = timings_before.clone();
         }
     }

@@ -15,7 +15,7 @@ use super::sizes::{
     TAIL_BYTES, TAIL_COUNT_BYTES, TAIL_ROW_GROUPS, occluder_bytes, occluder_group, plan_lists,
     slot_mask_bytes, start_job_capacity, start_tail_capacity, tail_mask_bytes, tail_record_bytes,
 };
-use crate::pass::{Binding, ComputeDecl, ComputePass, ResourceDecl, Use};
+use crate::pass::{Binding, ComputeDecl, ComputePass, Filter, ResourceDecl, Use};
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, ID_FORMAT, VELOCITY_FORMAT};
 
 /// Bits of the counts image's third channel (resolve.comp takes them from here).
@@ -158,7 +158,7 @@ pub fn albedo_decl(k: &Kernel) -> ComputeDecl {
             Binding::buffer("tail_records", Use::ReadWrite),
             Binding::uniform("frame"),
             Binding::buffer("materials", Use::Read),
-            Binding::texture("albedo_texture"),
+            Binding::sampled_with("albedo_texture", Filter::Given),
         ])
         .push::<AlbedoPush>()
         .group(LIST_GROUP, 1);
@@ -248,6 +248,37 @@ impl Passes {
             resolve: resolve_decl(k).build(gpu, shaders)?,
         })
     }
+}
+
+/// The images read back each frame, by resource name, in the order of their readbacks
+/// ([`image_readbacks`], `Analytic::readbacks`): colour, coverage, counts, depth, velocity, IDs.
+pub const READ_IMAGES: [&str; 6] = [
+    "out_color",
+    "out_coverage",
+    "out_counts",
+    "depth",
+    "velocity",
+    "ids",
+];
+
+/// The readbacks of [`READ_IMAGES`] (allocated as `readback.analytic.<layer>`).
+pub fn image_readbacks(k: &Kernel) -> [ResourceDecl; 6] {
+    let rb = |name, format| ResourceDecl::readback(name, format, k.width, k.height);
+    [
+        rb("analytic.color", COLOR_FORMAT),
+        rb("analytic.coverage", COVERAGE_FORMAT),
+        rb("analytic.counts", COUNTS_FORMAT),
+        rb("analytic.depth", DEPTH_FORMAT),
+        rb("analytic.velocity", VELOCITY_FORMAT),
+        rb("analytic.ids", ID_FORMAT),
+    ]
+}
+
+/// The readbacks of the two counts the frame's passes leave (`tail_count`, `albedo_count`: the
+/// first word of each).
+pub fn count_readbacks() -> [ResourceDecl; 2] {
+    let rb = |name| ResourceDecl::readback(name, vk::Format::R32_UINT, 1, 1);
+    [rb("analytic.tail_count"), rb("analytic.albedo_count")]
 }
 
 /// Every buffer and image `analytic` owns at `k` (allocated as `analytic.<name>`), bound by

@@ -1,159 +1,151 @@
 //! `analytic`'s two raster passes through the conservative raster (shaders/analytic/raster.geom,
-//! raster.frag): `analytic.select` (each pixel's K nearest keys) and `analytic.raster` (the kept
-//! fragments' slots, the tail records, native's depth, velocity and IDs). Set 0 is the scene's,
-//! set 1 the material's, set 2 [`RASTER_BINDINGS`] over analytic's resources, written by
-//! binding name.
+//! raster.frag), declared once ([`GraphicsDecl`]): `analytic.select` (each pixel's K nearest
+//! keys) and `analytic.raster` (the kept fragments' slots, the tail records, native's depth,
+//! velocity and IDs). The scene's set and the material's are the scene pass's shared sets; the
+//! pass's own set is [`RASTER_BINDINGS`] over analytic's resources of those names, made at each
+//! draw pass from the frame's binds (so a grown buffer is bound by the next frame).
 
-use cbr_gpu::{
-    Access, Attachment, BindingDesc, Cmd, DescriptorKind, DescriptorSet, Gpu, GraphicsDesc,
-    PassKind, Pipeline, Profiler, Result, SetLayout, Write, vk,
-};
+use cbr_gpu::{Attachment, Cmd, DescriptorSet, GpuError, PassKind, Profiler, Result, vk};
 
 use super::passes::Kernel;
 use crate::gpu_scene::GpuScene;
-use crate::pass::Resources;
-use crate::scene_pass::{self, BINDINGS as SCENE_BINDINGS, MATERIAL_BINDINGS};
+use crate::pass::{Binding, Binds, GraphicsDecl, GraphicsPass, RasterState, Resources, Use};
+use crate::scene_pass::{self, MATERIAL_SET, SCENE_SET, ScenePush};
 use crate::targets::{DEPTH_FORMAT, ID_FORMAT, VELOCITY_FORMAT};
 use crate::technique::BuildCtx;
 
-/// Set 2 of the raster passes (set 0: the scene's, set 1: the material's): analytic's resources
-/// of these names.
-pub const RASTER_BINDINGS: [BindingDesc; 16] = {
-    use DescriptorKind::StorageBuffer as B;
-    [
-        BindingDesc::one("keys", 0, B),
-        BindingDesc::one("slots", 1, B),
-        BindingDesc::one("counts", 2, B),
-        BindingDesc::one("colors", 3, B),
-        BindingDesc::one("planes", 4, B),
-        BindingDesc::one("planes_y", 5, B),
-        BindingDesc::one("occluders", 6, B),
-        BindingDesc::one("surfaces", 7, B),
-        BindingDesc::one("tail_records", 8, B),
-        BindingDesc::one("tail_count", 9, B),
-        BindingDesc::one("cells", 10, B),
-        BindingDesc::one("slot_masks", 11, B),
-        BindingDesc::one("cells_hi", 12, B),
-        BindingDesc::one("albedo_jobs", 13, B),
-        BindingDesc::one("albedo_count", 14, B),
-        BindingDesc::one("albedo_bins", 15, B),
-    ]
-};
+/// The raster passes' own set: analytic's resources of these names (raster.frag; the two it
+/// only writes declared so).
+pub const RASTER_BINDINGS: [Binding; 16] = [
+    Binding::buffer("keys", Use::ReadWrite),
+    Binding::buffer("slots", Use::ReadWrite),
+    Binding::buffer("counts", Use::ReadWrite),
+    Binding::buffer("colors", Use::ReadWrite),
+    Binding::buffer("planes", Use::ReadWrite),
+    Binding::buffer("planes_y", Use::ReadWrite),
+    Binding::buffer("occluders", Use::ReadWrite),
+    Binding::buffer("surfaces", Use::ReadWrite),
+    Binding::buffer("tail_records", Use::Write),
+    Binding::buffer("tail_count", Use::ReadWrite),
+    Binding::buffer("cells", Use::ReadWrite),
+    Binding::buffer("slot_masks", Use::ReadWrite),
+    Binding::buffer("cells_hi", Use::ReadWrite),
+    Binding::buffer("albedo_jobs", Use::Write),
+    Binding::buffer("albedo_count", Use::ReadWrite),
+    Binding::buffer("albedo_bins", Use::ReadWrite),
+];
+
+/// The select pass (`select`: each pixel's K nearest keys; its fragments all discard, no depth
+/// test or write) or the raster pass of material feature combination `f`.
+pub fn decl(k: &Kernel, f: u32, select: bool) -> GraphicsDecl {
+    let name = match select {
+        true => "analytic.select",
+        false => "analytic.raster",
+    };
+    let mut d = GraphicsDecl::new(
+        format!("{name}.mat{f}"),
+        "scene/forward.vert",
+        "analytic/raster.frag",
+    )
+    .geometry("analytic/raster.geom")
+    .shared(SCENE_SET)
+    .shared(MATERIAL_SET)
+    .own_set(&RASTER_BINDINGS)
+    .push::<ScenePush>()
+    .define("LAYOUT", scene_pass::LAYOUT_NATIVE);
+    for (n, v) in k.defines() {
+        d = d.define(n, v);
+    }
+    if k.c.seed {
+        d = d.define("SEED", 1);
+    }
+    if k.c.box_filter {
+        d = d.define("TEXTURE_BOX", 1);
+    }
+    d = d.fragment_define("MAT_FEATURES", f);
+    if select {
+        d = d.fragment_define("SELECT_PASS", 1);
+    }
+    d.color("velocity", VELOCITY_FORMAT)
+        .color("ids", ID_FORMAT)
+        .depth("depth", DEPTH_FORMAT)
+        .state(RasterState {
+            depth_compare: match select {
+                true => vk::CompareOp::ALWAYS,
+                false => vk::CompareOp::GREATER,
+            },
+            depth_write: !select,
+            ..RasterState::default()
+        })
+}
+
+/// Every raster pipeline `analytic` builds at `k` for a scene whose materials have `features`:
+/// the compile-only list's raster entries.
+pub fn decls(k: &Kernel, features: &[u32]) -> Vec<GraphicsDecl> {
+    scene_pass::feature_combinations(features)
+        .into_iter()
+        .flat_map(|f| [decl(k, f, true), decl(k, f, false)])
+        .collect()
+}
 
 /// One raster pass (select or shade): a pipeline per combination of material texture paths the
 /// scene uses (MAT_FEATURES, as the scene pass).
 struct Raster {
-    pipelines: scene_pass::MaterialVariants<Pipeline>,
+    pipelines: scene_pass::MaterialVariants<GraphicsPass>,
     name: &'static str,
 }
 
-/// The select and raster passes, and their sets.
+/// The select and raster passes, and the scene's sets they share.
 pub struct RasterPasses {
     select: Raster,
     raster: Raster,
     scene_set: DescriptorSet,
     material_sets: Vec<DescriptorSet>,
-    raster_layout: SetLayout,
-    raster_set: DescriptorSet,
-    _layouts: [SetLayout; 2],
-}
-
-/// Set 2's writes: each binding of [`RASTER_BINDINGS`] to the resource of its name.
-fn writes(res: &Resources) -> Result<Vec<Write<'_>>> {
-    RASTER_BINDINGS
-        .iter()
-        .map(|b| Ok(Write::Buffer(b.binding, res.buffer(b.name)?)))
-        .collect()
 }
 
 impl RasterPasses {
-    pub fn new(ctx: &BuildCtx, k: &Kernel, res: &Resources) -> Result<RasterPasses> {
-        let gpu = ctx.gpu;
-        let scene_layout = SetLayout::new(gpu, "analytic.scene_layout", &SCENE_BINDINGS)?;
-        let material_layout = SetLayout::new(gpu, "analytic.material_layout", &MATERIAL_BINDINGS)?;
-        let raster_layout = SetLayout::new(gpu, "analytic.raster_layout", &RASTER_BINDINGS)?;
-        let mut defines = scene_pass::shader_defines(scene_pass::LAYOUT_NATIVE);
-        defines.extend(RASTER_BINDINGS.iter().map(BindingDesc::define));
-        defines.extend(k.defines().map(|(n, v)| (n.to_string(), v)));
-        if k.c.seed {
-            defines.push(("SEED".into(), "1".into()));
-        }
-        if k.c.box_filter {
-            defines.push(("TEXTURE_BOX".into(), "1".into()));
-        }
-        let vs = ctx.shaders.compile("scene/forward.vert", &defines)?;
-        let gs = ctx.shaders.compile("analytic/raster.geom", &defines)?;
-        let layouts = [&scene_layout, &material_layout, &raster_layout];
-        let graphics = |name: &'static str, select: bool| -> Result<Raster> {
-            let pipelines =
-                scene_pass::MaterialVariants::build(&ctx.scene.material_features, |f| {
-                    let mut d = defines.clone();
-                    d.push(("MAT_FEATURES".into(), f.to_string()));
-                    if select {
-                        d.push(("SELECT_PASS".into(), "1".into()));
-                    }
-                    let fs = ctx.shaders.compile("analytic/raster.frag", &d)?;
-                    Pipeline::graphics(
-                        gpu,
-                        &GraphicsDesc {
-                            name: &format!("{name}.mat{f}"),
-                            vertex: &vs,
-                            geometry: Some(&gs),
-                            fragment: &fs,
-                            set_layouts: &layouts,
-                            push_constant_bytes: 4,
-                            color_formats: &[VELOCITY_FORMAT, ID_FORMAT],
-                            depth_format: Some(DEPTH_FORMAT),
-                            depth_compare: if select {
-                                vk::CompareOp::ALWAYS
-                            } else {
-                                vk::CompareOp::GREATER
-                            },
-                            depth_write: !select,
-                            samples: 1,
-                            min_sample_shading: None,
-                            cull_back_faces: false,
-                            sample_locations: false,
-                        },
-                    )
-                })?;
-            Ok(Raster { pipelines, name })
+    pub fn new(ctx: &BuildCtx, k: &Kernel) -> Result<RasterPasses> {
+        let (gpu, shaders) = (ctx.gpu, ctx.shaders);
+        let features = &ctx.scene.material_features;
+        let variants = |select: bool| {
+            scene_pass::MaterialVariants::build(features, |f| {
+                decl(k, f, select).build(gpu, shaders)
+            })
         };
-        let raster = graphics("analytic.raster", false)?;
-        let select = graphics("analytic.select", true)?;
-        let scene_set =
-            scene_pass::scene_set(gpu, "analytic", &scene_layout, ctx.scene, ctx.counter)?;
+        let raster = Raster {
+            pipelines: variants(false)?,
+            name: "analytic.raster",
+        };
+        let select = Raster {
+            pipelines: variants(true)?,
+            name: "analytic.select",
+        };
+        let first = raster.pipelines.first();
+        let scene_set = SCENE_SET.make(
+            gpu,
+            "analytic",
+            first.layout("scene")?,
+            &scene_pass::scene_binds(ctx.scene, ctx.counter),
+        )?;
         // The mask slot holds the coverage textures: the alpha test and the albedo of the
         // passing part in one lookup (raster.frag).
         let material_sets = scene_pass::material_sets(
             gpu,
             "analytic",
-            &material_layout,
+            first.layout("material")?,
             ctx.scene,
             scene_pass::MaskSlot::Coverage,
         )?;
-        let raster_set =
-            DescriptorSet::new(gpu, "analytic.raster_set", &raster_layout, &writes(res)?)?;
         Ok(RasterPasses {
             select,
             raster,
             scene_set,
             material_sets,
-            raster_layout,
-            raster_set,
-            _layouts: [scene_layout, material_layout],
         })
     }
 
-    /// Points set 2 at `res`'s buffers again, after one grew (the frame that bound the old one
-    /// has completed: FrameCtx::submit waits).
-    pub fn rebind(&self, gpu: &Gpu, res: &Resources) -> Result<()> {
-        self.raster_set
-            .update(gpu, &self.raster_layout, &writes(res)?)
-    }
-
     /// Records the select pass (`select`: it writes no attachment, its fragments all discard) or
-    /// the raster pass (which clears the attachments and writes them).
+    /// the raster pass (which clears the attachments and writes them), over `res`.
     pub fn record(
         &self,
         cmd: &mut Cmd,
@@ -166,38 +158,33 @@ impl RasterPasses {
             true => (&self.select, false),
             false => (&self.raster, true),
         };
+        let first = r.pipelines.first();
+        let binds = Binds::of(res).shared(&SCENE_SET, &self.scene_set);
+        let (colors, depth) = first.attachments(&binds)?;
+        let depth = depth.ok_or_else(|| GpuError::Other(format!("{}: no depth", r.name)))?;
         let scope = profiler.begin(cmd, r.name, PassKind::Graphics);
+        first.prepare(cmd, &binds)?;
         scene_pass::use_scene_buffers(cmd, scene);
-        for b in &RASTER_BINDINGS {
-            cmd.use_buffer(res.buffer(b.name)?, Access::FragmentStorageWrite);
-        }
-        let color_clear = |uint: bool| {
-            clear.then_some(vk::ClearValue {
-                color: if uint {
-                    vk::ClearColorValue { uint32: [0; 4] }
-                } else {
-                    vk::ClearColorValue { float32: [0.0; 4] }
-                },
+        let attachments: Vec<Attachment> = colors
+            .iter()
+            .map(|image| Attachment {
+                image,
+                clear: clear.then_some(vk::ClearValue {
+                    color: match image.format {
+                        ID_FORMAT => vk::ClearColorValue { uint32: [0; 4] },
+                        _ => vk::ClearColorValue { float32: [0.0; 4] },
+                    },
+                }),
             })
-        };
+            .collect();
         let depth_clear = clear.then_some(vk::ClearValue {
             depth_stencil: vk::ClearDepthStencilValue {
                 depth: 0.0,
                 stencil: 0,
             },
         });
-        let depth = res.image("depth")?;
         cmd.begin_rendering(
-            &[
-                Attachment {
-                    image: res.image("velocity")?,
-                    clear: color_clear(false),
-                },
-                Attachment {
-                    image: res.image("ids")?,
-                    clear: color_clear(true),
-                },
-            ],
+            &attachments,
             Some(Attachment {
                 image: depth,
                 clear: depth_clear,
@@ -205,9 +192,11 @@ impl RasterPasses {
             1,
         );
         cmd.set_viewport(0.0, 0.0, depth.width as f32, depth.height as f32);
-        cmd.bind_set(r.pipelines.first(), 0, &self.scene_set);
-        cmd.bind_set(r.pipelines.first(), 2, &self.raster_set);
-        scene_pass::draw_scene(cmd, scene, &self.material_sets, 1, |m| r.pipelines.of(m));
+        first.bind(cmd, &binds)?;
+        let material = first.set_index("material")?;
+        scene_pass::draw_scene(cmd, scene, &self.material_sets, material, 1, |m| {
+            r.pipelines.of(m).pipeline()
+        });
         cmd.end_rendering();
         profiler.end(cmd, scope);
         Ok(())

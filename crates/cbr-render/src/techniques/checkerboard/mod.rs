@@ -102,10 +102,24 @@ fn passes(
             compute.push(crate::resolve::copy_floor_decl("resolve.copy_floor"));
         }
     }
+    let name = format!("checkerboard.{}.raster", config.layout.name());
+    let mut graphics = crate::scene_pass::listed(&name, &raster(&config, &plan), ctx.materials)?;
+    if config.prepass {
+        graphics.extend(super::IdPass::decls(ctx)?);
+    }
     Ok(crate::technique::PassList {
         compute,
+        graphics,
         packed_geometry: config.resolve.is_some(),
     })
+}
+
+/// The raster of one parity's plan (the pipelines are the same for both).
+fn raster(config: &CheckerboardConfig, plan: &LayoutPlan) -> RasterConfig {
+    RasterConfig {
+        lod_gradients: config.lod_mode == LodMode::Gradients,
+        ..RasterConfig::for_plan(plan)
+    }
 }
 
 impl Checkerboard {
@@ -150,11 +164,7 @@ impl Checkerboard {
         if config.locations {
             plans = plans.map(LayoutPlan::with_sample_locations);
         }
-        let gradients = config.lod_mode == LodMode::Gradients;
-        let configs = plans.each_ref().map(|plan| RasterConfig {
-            lod_gradients: gradients,
-            ..RasterConfig::for_plan(plan)
-        });
+        let configs = plans.each_ref().map(|plan| raster(&config, plan));
         let name = format!("checkerboard.{}.raster", layout.name());
         let pass = ScenePass::new(gpu, shaders, ctx.scene, &name, &configs[0], ctx.counter)?;
         let (tw, th) = plans[0].target;
@@ -246,12 +256,12 @@ impl Technique for Checkerboard {
             if let Some(p) = &this.prepass {
                 // Native resolution: the frame constants' raster fields describe the checkerboard
                 // pass; the ID-only native variant ignores them (no jitter, tangram or layers).
-                p.record(cmd, profiler, gs, counter);
+                p.record(cmd, profiler, gs, counter)?;
             }
             let t = &this.targets;
             let config = &this.configs[parity as usize];
             this.pass
-                .record_targets(cmd, profiler, gs, t, counter, config);
+                .record_targets(cmd, profiler, gs, t, counter, config)?;
             if let Some(r) = &this.resolve {
                 let pre = this.prepass.as_ref().map(|p| (&p.ids, &p.depth));
                 r.pass.record(cmd, profiler, t, pre, &rf)?;

@@ -1,6 +1,8 @@
 //! The G-buffer of `deferred` and `interleaved`.
 
-use cbr_gpu::{Image, ImageDesc, Result, vk};
+use cbr_gpu::{Image, Result, vk};
+
+use crate::pass::ResourceDecl;
 
 use crate::frame::Geometry;
 use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, GBUFFER_FORMAT, ID_FORMAT, VELOCITY_FORMAT};
@@ -18,41 +20,44 @@ pub struct GBuffer {
 }
 
 impl GBuffer {
+    /// Its images: the scene pass's G-buffer attachments, and the lit frame (a storage image).
+    pub fn decls(width: u32, height: u32) -> [ResourceDecl; 7] {
+        let more = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC;
+        let target =
+            |name, format| ResourceDecl::attachment(name, format, width, height, 1).usage(more);
+        [
+            target("position", GBUFFER_FORMAT),
+            target("normal", GBUFFER_FORMAT),
+            target("albedo", GBUFFER_FORMAT),
+            target("velocity", VELOCITY_FORMAT),
+            target("ids", ID_FORMAT),
+            target("depth", DEPTH_FORMAT),
+            ResourceDecl::image("color", COLOR_FORMAT, width, height),
+        ]
+    }
+
     pub fn new(gpu: &cbr_gpu::Gpu, prefix: &str, width: u32, height: u32) -> Result<GBuffer> {
-        use vk::ImageUsageFlags as U;
-        let img = |name: &str, format, usage| {
-            let name = format!("{prefix}.{name}");
-            Image::new(gpu, &ImageDesc::new_2d(&name, format, width, height, usage))
-        };
-        let attachment = U::COLOR_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC;
+        let [position, normal, albedo, velocity, ids, depth, color] = GBuffer::decls(width, height);
         Ok(GBuffer {
-            position: img("position", GBUFFER_FORMAT, attachment)?,
-            normal: img("normal", GBUFFER_FORMAT, attachment)?,
-            albedo: img("albedo", GBUFFER_FORMAT, attachment)?,
-            velocity: img("velocity", VELOCITY_FORMAT, attachment)?,
-            ids: img("ids", ID_FORMAT, attachment)?,
-            depth: img(
-                "depth",
-                DEPTH_FORMAT,
-                U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED | U::TRANSFER_SRC,
-            )?,
-            color: img(
-                "color",
-                COLOR_FORMAT,
-                U::STORAGE | U::SAMPLED | U::TRANSFER_SRC,
-            )?,
+            position: position.make_image(gpu, prefix)?,
+            normal: normal.make_image(gpu, prefix)?,
+            albedo: albedo.make_image(gpu, prefix)?,
+            velocity: velocity.make_image(gpu, prefix)?,
+            ids: ids.make_image(gpu, prefix)?,
+            depth: depth.make_image(gpu, prefix)?,
+            color: color.make_image(gpu, prefix)?,
         })
     }
 
-    /// The G-buffer pass's colour attachments, in the pipeline's order.
-    pub fn attachments(&self) -> [&Image; 5] {
-        [
-            &self.position,
-            &self.normal,
-            &self.albedo,
-            &self.velocity,
-            &self.ids,
-        ]
+    /// The G-buffer pass's attachments under the scene pass's names.
+    pub fn bind(&self) -> crate::pass::Binds<'_> {
+        crate::pass::Binds::new()
+            .image("position", &self.position)
+            .image("normal", &self.normal)
+            .image("albedo", &self.albedo)
+            .image("velocity", &self.velocity)
+            .image("ids", &self.ids)
+            .image("depth", &self.depth)
     }
 
     /// Velocity, depth and IDs for temporal post passes.
@@ -70,6 +75,8 @@ impl GBuffer {
         [&self.color, &self.depth, &self.velocity, &self.ids]
     }
 
-    /// Bytes per pixel: three f32 RGBA surface layers, velocity, IDs, depth and the frame.
-    pub const BYTES_PER_PIXEL: u64 = 3 * 16 + 8 + 8 + 4 + 8;
+    /// Bytes of its images at `width` x `height` (from [`GBuffer::decls`]).
+    pub fn bytes(width: u32, height: u32) -> u64 {
+        crate::pass::estimate(&GBuffer::decls(width, height), "g").total()
+    }
 }

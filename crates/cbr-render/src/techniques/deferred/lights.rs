@@ -145,7 +145,7 @@ impl ManyLights {
         sun: Option<&SunFrame>,
     ) -> Result<()> {
         if let (Some(rsm), Some(vp), Some(sun)) = (&self.rsm, &self.vpl_pass, sun) {
-            rsm.record(cmd, profiler, scene, sun.view.as_ref());
+            rsm.record(cmd, profiler, scene, sun.view.as_ref())?;
             vp.record(cmd, profiler, rsm, &self.vpls)?;
         }
         Ok(())

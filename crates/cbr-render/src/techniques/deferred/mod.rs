@@ -25,7 +25,6 @@ use crate::frame::FrameOutput;
 use crate::gpu_types::{LightData, Vpl};
 use crate::memory::MemoryEstimate;
 use crate::scene_pass::{RasterConfig, ScenePass};
-use crate::targets::{COLOR_FORMAT, DEPTH_FORMAT, GBUFFER_FORMAT, ID_FORMAT, VELOCITY_FORMAT};
 use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique};
 pub use config::*;
 pub use gbuffer::GBuffer;
@@ -42,7 +41,7 @@ pub const REGISTRATION: Registration = Registration {
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
     estimate: |ctx, p| Ok(Deferred::estimate(&parse(p)?, ctx.width, ctx.height)),
-    passes: |_, p| {
+    passes: |ctx, p| {
         let c = parse(p)?;
         let mut compute = vec![lighting::decl(None)];
         if c.vpls > 0 {
@@ -50,6 +49,7 @@ pub const REGISTRATION: Registration = Registration {
         }
         Ok(crate::technique::PassList {
             compute,
+            graphics: raster_decls(ctx, "deferred", c.vpls)?,
             packed_geometry: false,
         })
     },
@@ -112,13 +112,7 @@ pub fn estimate_gbuffer_and_lights(
     w: u32,
     h: u32,
 ) {
-    for name in ["position", "normal", "albedo"] {
-        e.image(format!("{prefix}.{name}"), GBUFFER_FORMAT, w, h);
-    }
-    e.image(format!("{prefix}.velocity"), VELOCITY_FORMAT, w, h);
-    e.image(format!("{prefix}.ids"), ID_FORMAT, w, h);
-    e.image(format!("{prefix}.depth"), DEPTH_FORMAT, w, h);
-    e.image(format!("{prefix}.color"), COLOR_FORMAT, w, h);
+    e.append(crate::pass::estimate(&GBuffer::decls(w, h), prefix));
     let light = std::mem::size_of::<LightData>() as u64;
     e.storage_buffer(
         format!("{prefix}.points"),
@@ -128,11 +122,10 @@ pub fn estimate_gbuffer_and_lights(
     let vpl_bytes = u64::from(config.vpls.max(1)) * std::mem::size_of::<Vpl>() as u64;
     e.storage_buffer(format!("{prefix}.vpls"), vpl_bytes, false);
     if config.vpls > 0 {
-        let side = config.rsm;
-        for name in ["position", "normal", "flux"] {
-            e.image(format!("deferred.rsm.{name}"), GBUFFER_FORMAT, side, side);
-        }
-        e.image("deferred.rsm.depth", DEPTH_FORMAT, side, side);
+        e.append(crate::pass::estimate(
+            &rsm::resources(config.rsm),
+            "deferred.rsm",
+        ));
         e.storage_buffer("deferred.vpl_texels", u64::from(config.vpls) * 8, true);
         e.buffer("readback.vpls", vpl_bytes, true);
     }
@@ -149,13 +142,37 @@ pub fn output(
     Ok(out)
 }
 
-pub fn gbuffer(ctx: &BuildCtx, name: &str) -> Result<(RasterConfig, ScenePass, GBuffer)> {
-    let (w, h) = (ctx.width, ctx.height);
-    let raster = RasterConfig {
+/// The G-buffer raster: native's with the surface written instead of its shading, after a depth
+/// pre-pass.
+fn gbuffer_raster(w: u32, h: u32) -> RasterConfig {
+    RasterConfig {
         gbuffer: true,
         depth_prepass: true,
         ..RasterConfig::native(w, h)
-    };
+    }
+}
+
+/// The raster pipelines of `deferred` and `interleaved` (named `name`) with `vpls` VPLs: the
+/// G-buffer pass's and, with VPLs, the sun's map's (the compile-only list).
+pub fn raster_decls(
+    ctx: &crate::technique::PassCtx,
+    name: &str,
+    vpls: u32,
+) -> std::result::Result<Vec<crate::pass::GraphicsDecl>, String> {
+    let mut d = crate::scene_pass::listed(
+        &format!("{name}.gbuffer"),
+        &gbuffer_raster(ctx.width, ctx.height),
+        ctx.materials,
+    )?;
+    if vpls > 0 {
+        d.push(rsm::decl());
+    }
+    Ok(d)
+}
+
+pub fn gbuffer(ctx: &BuildCtx, name: &str) -> Result<(RasterConfig, ScenePass, GBuffer)> {
+    let (w, h) = (ctx.width, ctx.height);
+    let raster = gbuffer_raster(w, h);
     let pass = ScenePass::new(
         ctx.gpu,
         ctx.shaders,
@@ -177,15 +194,8 @@ impl Technique for Deferred {
         let this = &*self;
         ctx.submit("frame", |cmd, profiler, gs| {
             let g = &this.g;
-            this.gbuffer_pass.record(
-                cmd,
-                profiler,
-                gs,
-                &g.attachments(),
-                &g.depth,
-                counter,
-                &this.raster,
-            );
+            this.gbuffer_pass
+                .record(cmd, profiler, gs, &g.bind(), counter, &this.raster)?;
             this.lights.record(cmd, profiler, gs, sun.as_ref())?;
             this.lighting.record(
                 cmd,
@@ -218,6 +228,6 @@ impl Technique for Deferred {
 
     fn target_bytes(&self) -> u64 {
         let (w, h) = self.size;
-        u64::from(w) * u64::from(h) * GBuffer::BYTES_PER_PIXEL + self.lights.bytes()
+        GBuffer::bytes(w, h) + self.lights.bytes()
     }
 }

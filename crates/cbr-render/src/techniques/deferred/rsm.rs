@@ -2,44 +2,65 @@
 //! Stamminger 2005) rendered from the sun (shaders/deferred/rsm.*), and the VPL generation pass
 //! that turns the pattern's texels into virtual point lights (shaders/deferred/vpl.comp).
 
-use bytemuck::{Pod, Zeroable};
 use cbr_gpu::{
-    Attachment, Buffer, Cmd, DescriptorSet, Gpu, GraphicsDesc, Image, ImageDesc, Location,
-    PassKind, Pipeline, Profiler, Result, SetLayout, Shaders, vk,
+    Attachment, Buffer, Cmd, DescriptorSet, Gpu, Location, PassKind, Profiler, Result, Shaders, vk,
 };
 
 use super::vpl::SunView;
 use crate::gpu_scene::GpuScene;
-use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, Use};
-use crate::scene_pass::{self, LAYOUT_NATIVE, MATERIAL_BINDINGS};
+use crate::pass::{
+    Binding, Binds, ComputeDecl, ComputePass, GraphicsDecl, GraphicsPass, ResourceDecl, Resources,
+    Use,
+};
+use crate::scene_pass::{self, LAYOUT_NATIVE, MATERIAL_SET, SCENE_SET};
 use crate::targets::{DEPTH_FORMAT, GBUFFER_FORMAT};
 
-/// Push constants of the RSM pass (shaders/deferred/rsm.glsl).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct RsmPush {
-    pub clip_from_world: [f32; 16],
-    /// xyz: the sun's unit direction of travel; w: one texel's area (m^2).
-    pub sun: [f32; 4],
-    pub object_index: u32,
-    pub pad: [u32; 3],
+crate::push_constants! {
+    /// Push constants of the RSM pass (shaders/deferred/rsm.glsl).
+    pub struct RsmPush {
+        clip_from_world: [[f32; 4]; 4],
+        /// xyz: the sun's unit direction of travel; w: one texel's area (m^2).
+        sun: [f32; 4],
+        object_index: u32,
+    }
 }
 
-/// The map's layers: position, normal, flux (f32 RGBA) and reverse-Z depth.
-pub struct RsmTargets {
-    pub position: Image,
-    pub normal: Image,
-    pub flux: Image,
-    pub depth: Image,
+/// The map's layers: position, normal, flux (f32 RGBA) and reverse-Z depth, `side` x `side`.
+pub fn resources(side: u32) -> Vec<ResourceDecl> {
+    let mut r: Vec<ResourceDecl> = ["position", "normal", "flux"]
+        .into_iter()
+        .map(|n| ResourceDecl::attachment(n, GBUFFER_FORMAT, side, side, 1))
+        .collect();
+    r.push(ResourceDecl::attachment(
+        "depth",
+        DEPTH_FORMAT,
+        side,
+        side,
+        1,
+    ));
+    r
+}
+
+/// The RSM raster: the scene's sets, its push constants, the map's layers as attachments.
+pub fn decl() -> GraphicsDecl {
+    GraphicsDecl::new("deferred.rsm", "deferred/rsm.vert", "deferred/rsm.frag")
+        .shared(SCENE_SET)
+        .shared(MATERIAL_SET)
+        .push::<RsmPush>()
+        .define("LAYOUT", LAYOUT_NATIVE)
+        .color("position", GBUFFER_FORMAT)
+        .color("normal", GBUFFER_FORMAT)
+        .color("flux", GBUFFER_FORMAT)
+        .depth("depth", DEPTH_FORMAT)
 }
 
 /// The reflective shadow map pass: the scene from the sun into a `side` x `side` map.
 pub struct RsmPass {
-    pipeline: Pipeline,
-    _layouts: [SetLayout; 2],
+    pass: GraphicsPass,
     set: DescriptorSet,
     material_sets: Vec<DescriptorSet>,
-    pub targets: RsmTargets,
+    /// The map's layers ([`resources`]).
+    pub targets: Resources,
     pub side: u32,
 }
 
@@ -52,59 +73,23 @@ impl RsmPass {
         side: u32,
     ) -> Result<RsmPass> {
         let name = "deferred.rsm";
-        let layout = SetLayout::new(gpu, "deferred.rsm.set_layout", &scene_pass::BINDINGS)?;
-        let material_layout =
-            SetLayout::new(gpu, "deferred.rsm.material_layout", &MATERIAL_BINDINGS)?;
-        let defines = scene_pass::shader_defines(LAYOUT_NATIVE);
-        let vs = shaders.compile("deferred/rsm.vert", &defines)?;
-        let fs = shaders.compile("deferred/rsm.frag", &defines)?;
-        let pipeline = Pipeline::graphics(
+        let pass = decl().build(gpu, shaders)?;
+        let set = SCENE_SET.make(
             gpu,
-            &GraphicsDesc {
-                name,
-                vertex: &vs,
-                geometry: None,
-                fragment: &fs,
-                set_layouts: &[&layout, &material_layout],
-                push_constant_bytes: std::mem::size_of::<RsmPush>() as u32,
-                color_formats: &[GBUFFER_FORMAT; 3],
-                depth_format: Some(DEPTH_FORMAT),
-                depth_compare: vk::CompareOp::GREATER,
-                depth_write: true,
-                samples: 1,
-                min_sample_shading: None,
-                cull_back_faces: false,
-                sample_locations: false,
-            },
+            name,
+            pass.layout("scene")?,
+            &scene_pass::scene_binds(scene, counter),
         )?;
-        let set = scene_pass::scene_set(gpu, name, &layout, scene, counter)?;
         let material_sets = scene_pass::material_sets(
             gpu,
             name,
-            &material_layout,
+            pass.layout("material")?,
             scene,
             scene_pass::MaskSlot::Mask,
         )?;
-        let img = |n: &str, format, usage| {
-            Image::new(
-                gpu,
-                &ImageDesc::new_2d(&format!("{name}.{n}"), format, side, side, usage),
-            )
-        };
-        let color = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED;
-        let targets = RsmTargets {
-            position: img("position", GBUFFER_FORMAT, color)?,
-            normal: img("normal", GBUFFER_FORMAT, color)?,
-            flux: img("flux", GBUFFER_FORMAT, color)?,
-            depth: img(
-                "depth",
-                DEPTH_FORMAT,
-                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
-            )?,
-        };
+        let targets = Resources::new(gpu, name, &resources(side))?;
         Ok(RsmPass {
-            pipeline,
-            _layouts: [layout, material_layout],
+            pass,
             set,
             material_sets,
             targets,
@@ -114,7 +99,7 @@ impl RsmPass {
 
     /// Bytes of the map's four layers.
     pub fn bytes(&self) -> u64 {
-        u64::from(self.side) * u64::from(self.side) * (3 * 16 + 4)
+        crate::pass::estimate(&resources(self.side), "deferred.rsm").total()
     }
 
     /// Clears the map (position w = 0: nothing seen) and draws every object from the sun;
@@ -125,57 +110,59 @@ impl RsmPass {
         profiler: &mut Profiler,
         scene: &GpuScene,
         sun: Option<&SunView>,
-    ) {
+    ) -> Result<()> {
+        let binds = Binds::of(&self.targets).shared(&SCENE_SET, &self.set);
+        let (colors, depth) = self.pass.attachments(&binds)?;
+        self.pass.prepare(cmd, &binds)?;
         let scope = profiler.begin(cmd, "deferred.rsm", PassKind::Graphics);
         scene_pass::use_scene_buffers(cmd, scene);
-        let t = &self.targets;
         let clear = |image| Attachment {
             image,
             clear: Some(vk::ClearValue {
                 color: vk::ClearColorValue { float32: [0.0; 4] },
             }),
         };
-        let depth = Attachment {
-            image: &t.depth,
+        let depth = depth.map(|image| Attachment {
+            image,
             clear: Some(vk::ClearValue {
                 depth_stencil: vk::ClearDepthStencilValue {
                     depth: 0.0,
                     stencil: 0,
                 },
             }),
-        };
-        cmd.begin_rendering(
-            &[clear(&t.position), clear(&t.normal), clear(&t.flux)],
-            Some(depth),
-            1,
-        );
+        });
+        let colors: Vec<Attachment> = colors.into_iter().map(clear).collect();
+        cmd.begin_rendering(&colors, depth, 1);
         if let Some(sun) = sun {
-            self.draw(cmd, scene, sun);
+            self.pass.bind(cmd, &binds)?;
+            self.draw(cmd, scene, sun)?;
         }
         cmd.end_rendering();
         profiler.end(cmd, scope);
+        Ok(())
     }
 
-    fn draw(&self, cmd: &mut Cmd, scene: &GpuScene, sun: &SunView) {
-        cmd.bind_pipeline(&self.pipeline);
-        cmd.bind_set(&self.pipeline, 0, &self.set);
+    fn draw(&self, cmd: &mut Cmd, scene: &GpuScene, sun: &SunView) -> Result<()> {
+        let pipeline = self.pass.pipeline();
+        let material = self.pass.set_index("material")?;
         cmd.bind_index_buffer(&scene.indices);
         let d = sun.direction.as_vec3();
         let mut push = RsmPush {
-            clip_from_world: sun.clip_from_world.as_mat4().to_cols_array(),
+            clip_from_world: sun.clip_from_world.as_mat4().to_cols_array_2d(),
             sun: [d.x, d.y, d.z, sun.texel_area(self.side) as f32],
             ..RsmPush::default()
         };
         for draw in &scene.draws {
             cmd.bind_set(
-                &self.pipeline,
-                1,
+                pipeline,
+                material,
                 &self.material_sets[draw.material as usize],
             );
             push.object_index = draw.object;
-            cmd.push_constants(&self.pipeline, bytemuck::bytes_of(&push));
+            cmd.push_constants(pipeline, bytemuck::bytes_of(&push));
             cmd.draw_indexed(draw.index_count, 1, draw.first_index, 0);
         }
+        Ok(())
     }
 }
 
@@ -244,9 +231,9 @@ impl VplPass {
     ) -> Result<()> {
         let t = &rsm.targets;
         let binds = Binds::new()
-            .image("rsm_position", &t.position)
-            .image("rsm_normal", &t.normal)
-            .image("rsm_flux", &t.flux)
+            .image("rsm_position", t.image("position")?)
+            .image("rsm_normal", t.image("normal")?)
+            .image("rsm_flux", t.image("flux")?)
             .buffer("texels", &self.texels)
             .buffer("vpls", vpls);
         let push = VplPush {

@@ -28,9 +28,14 @@ pub const REGISTRATION: Registration = Registration {
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
     estimate: |ctx, p| Ok(Interlaced::estimate(&parse(p)?, ctx.width, ctx.height)),
-    passes: |_, p| {
+    passes: |ctx, p| {
         Ok(crate::technique::PassList {
             compute: vec![resolve::decl(&parse(p)?)],
+            graphics: crate::scene_pass::listed(
+                "interlaced.raster",
+                &raster(ctx.width, ctx.height),
+                ctx.materials,
+            )?,
             packed_geometry: false,
         })
     },
@@ -39,6 +44,14 @@ pub const REGISTRATION: Registration = Registration {
         Ok(Box::new(Interlaced::new(ctx, s)?))
     },
 };
+
+/// Native's targets, viewport and samples; the layout only demotes rows.
+fn raster(w: u32, h: u32) -> RasterConfig {
+    RasterConfig {
+        layout: LAYOUT_INTERLACED,
+        ..RasterConfig::native(w, h)
+    }
+}
 
 const EXPECTED: &str = "debug, margin=M, without-history, without-ids, without-depth, \
     without-clamp, without-diagonals";
@@ -107,11 +120,7 @@ impl Interlaced {
 
     pub fn new(ctx: &BuildCtx, settings: InterlacedSettings) -> Result<Interlaced> {
         let (w, h) = (ctx.width, ctx.height);
-        // Native's targets, viewport and samples; the layout only demotes rows.
-        let config = RasterConfig {
-            layout: LAYOUT_INTERLACED,
-            ..RasterConfig::native(w, h)
-        };
+        let config = raster(w, h);
         let pass = ScenePass::new(
             ctx.gpu,
             ctx.shaders,
@@ -157,7 +166,7 @@ impl Technique for Interlaced {
         ctx.submit("frame", |cmd, profiler, gs| {
             let t = &this.targets;
             this.pass
-                .record_targets(cmd, profiler, gs, t, counter, &this.config);
+                .record_targets(cmd, profiler, gs, t, counter, &this.config)?;
             this.resolve.record(cmd, profiler, t, &frame)?;
             this.resolve
                 .read(cmd, profiler, frame.slot, &this.readbacks)?;

@@ -132,6 +132,26 @@ pub fn decl(settings: &InterlacedSettings) -> ComputeDecl {
 
 /// The resolved frame's layers, each a history (this frame's output, the next one's history),
 /// and the debug bits.
+/// The readbacks of one slot's layers (colour, velocity, IDs, depth) and with `debug` the
+/// debug bits.
+fn readbacks(settings: &InterlacedSettings, w: u32, h: u32) -> Vec<ResourceDecl> {
+    let mut r = vec![
+        ResourceDecl::readback("color", COLOR_FORMAT, w, h),
+        ResourceDecl::readback("velocity", VELOCITY_FORMAT, w, h),
+        ResourceDecl::readback("ids", ID_FORMAT, w, h),
+        ResourceDecl::readback("depth", RESOLVED_DEPTH_FORMAT, w, h),
+    ];
+    if settings.debug {
+        r.push(ResourceDecl::readback(
+            "interlaced_debug",
+            vk::Format::R32_UINT,
+            w,
+            h,
+        ));
+    }
+    r
+}
+
 fn resources(w: u32, h: u32) -> Vec<ResourceDecl> {
     vec![
         ResourceDecl::image("resolved_color", COLOR_FORMAT, w, h).history(),
@@ -174,17 +194,10 @@ impl InterlacedResolve {
     /// `debug`).
     pub fn estimate(e: &mut MemoryEstimate, settings: &InterlacedSettings, w: u32, h: u32) {
         e.append(crate::pass::estimate(&resources(w, h), "interlaced"));
-        for (name, format) in [
-            ("color", COLOR_FORMAT),
-            ("velocity", VELOCITY_FORMAT),
-            ("ids", ID_FORMAT),
-            ("depth", RESOLVED_DEPTH_FORMAT),
-        ] {
-            e.readback(format!("readback.{name}"), format, w, h, 1);
-        }
-        if settings.debug {
-            e.readback("readback.interlaced_debug", vk::Format::R32_UINT, w, h, 1);
-        }
+        e.append(crate::pass::estimate(
+            &readbacks(settings, w, h),
+            "readback",
+        ));
     }
 
     /// The resolve of `targets` (a full-resolution raster).
@@ -261,18 +274,15 @@ impl InterlacedResolve {
 
     /// Readbacks sized for one slot (and the debug bits).
     pub fn readbacks(&self, gpu: &Gpu) -> Result<ResolvedReadbacks> {
-        let [c, d, v, i] = self.layers(0)?;
-        let rb = |name: &str, img: &Image| Readback::for_image(gpu, name, img);
+        let decls = readbacks(&self.settings, self.width, self.height);
+        let rb = |i: usize| decls[i].make_readback(gpu, "readback");
         Ok(ResolvedReadbacks {
-            color: rb("readback.color", c)?,
-            velocity: rb("readback.velocity", v)?,
-            ids: rb("readback.ids", i)?,
-            depth: rb("readback.depth", d)?,
+            color: rb(0)?,
+            velocity: rb(1)?,
+            ids: rb(2)?,
+            depth: rb(3)?,
             debug: match self.settings.debug {
-                true => Some(rb(
-                    "readback.interlaced_debug",
-                    self.res.image("debug_bits")?,
-                )?),
+                true => Some(rb(4)?),
                 false => None,
             },
         })

@@ -43,7 +43,7 @@ pub const REGISTRATION: Registration = Registration {
     check: |p| parse(p).map(|_| ()),
     needs: |_, _| None,
     estimate: |ctx, p| Ok(Interleaved::estimate(&parse(p)?, ctx.width, ctx.height)),
-    passes: |_, p| {
+    passes: |ctx, p| {
         let c = parse(p)?;
         let mut compute = Vec::new();
         if c.lights.vpls > 0 {
@@ -56,6 +56,7 @@ pub const REGISTRATION: Registration = Registration {
         compute.push(super::deferred::lighting::decl(Some(&lighting_variant(&c))));
         Ok(crate::technique::PassList {
             compute,
+            graphics: super::deferred::raster_decls(ctx, "interleaved", c.lights.vpls)?,
             packed_geometry: false,
         })
     },
@@ -472,15 +473,8 @@ impl Technique for Interleaved {
         let this = &*self;
         ctx.submit("frame", |cmd, profiler, gs| {
             let g = &this.g;
-            this.gbuffer_pass.record(
-                cmd,
-                profiler,
-                gs,
-                &g.attachments(),
-                &g.depth,
-                counter,
-                &this.raster,
-            );
+            this.gbuffer_pass
+                .record(cmd, profiler, gs, &g.bind(), counter, &this.raster)?;
             this.lights.record(cmd, profiler, gs, sun.as_ref())?;
             let sources = this.lights.sources();
             this.split.record(
@@ -531,9 +525,7 @@ impl Technique for Interleaved {
 
     fn target_bytes(&self) -> u64 {
         let (w, h) = self.size;
-        u64::from(w) * u64::from(h) * GBuffer::BYTES_PER_PIXEL
-            + self.lights.bytes()
-            + self.split.bytes()
+        GBuffer::bytes(w, h) + self.lights.bytes() + self.split.bytes()
     }
 }
 
