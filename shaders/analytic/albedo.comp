@@ -16,7 +16,7 @@
 #include "tail_record.glsl"
 #include "albedo_job.glsl"
 
-layout(local_size_x = 64) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 
 layout(std430, set = 0, binding = BINDING_ALBEDO_JOBS) readonly buffer AlbedoJobs { AlbedoJob albedo_jobs[]; };
 layout(std430, set = 0, binding = BINDING_ALBEDO_BINS) readonly buffer AlbedoBins { AlbedoBin albedo_bins[]; };
@@ -25,11 +25,12 @@ layout(std430, set = 0, binding = BINDING_COLORS) buffer Colors { uvec2 colors[]
 layout(std430, set = 0, binding = BINDING_CELLS) writeonly buffer Cells { uvec2 cells[]; };
 layout(std430, set = 0, binding = BINDING_CELLS_HI) writeonly buffer CellsHi { uvec2 cells_hi[]; };
 layout(std430, set = 0, binding = BINDING_TAIL_RECORDS) buffer TailRecords { TailRecord tail_records[]; };
-// The scene's set (the LOD bias, the materials' kd) and the material's (its albedo texture).
-layout(set = 1, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
-layout(std430, set = 1, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
-layout(set = 2, binding = BINDING_ALBEDO) uniform sampler2D albedo_tex;
-layout(push_constant) uniform Push { uint material; } pc;
+// The scene's buffers (the LOD bias, the materials' kd) and the material's albedo texture.
+layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
+layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
+layout(set = 0, binding = BINDING_ALBEDO_TEXTURE) uniform sampler2D albedo_tex;
+// pc.material (passes.rs's AlbedoPush).
+PUSH_CONSTANTS
 
 #include "texture.glsl"
 

@@ -8,12 +8,14 @@
 // slot or record, so the frame does not.
 #include "albedo_job.glsl"
 
-layout(local_size_x = 64) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 
+layout(std430, set = 0, binding = BINDING_ALBEDO_BINS) buffer AlbedoBins { AlbedoBin albedo_bins[]; };
+#ifndef BIN_PLAN
 layout(std430, set = 0, binding = BINDING_ALBEDO_JOBS) readonly buffer AlbedoJobs { AlbedoJob albedo_jobs[]; };
 layout(std430, set = 0, binding = BINDING_ALBEDO_COUNT) readonly buffer AlbedoCounts { AlbedoCount albedo_count; };
-layout(std430, set = 0, binding = BINDING_ALBEDO_BINS) buffer AlbedoBins { AlbedoBin albedo_bins[]; };
 layout(std430, set = 0, binding = BINDING_ALBEDO_ORDER) writeonly buffer AlbedoOrder { uint albedo_order[]; };
+#endif
 
 void main() {
 #ifdef BIN_PLAN

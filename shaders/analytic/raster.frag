@@ -22,55 +22,56 @@
 #include "tail_record.glsl"
 #include "albedo_job.glsl"
 
-layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
-layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
-layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
-layout(set = 1, binding = BINDING_ALBEDO) uniform sampler2D albedo_tex;
-layout(set = 1, binding = BINDING_MASK) uniform sampler2D mask_tex;
-layout(set = 1, binding = BINDING_BUMP) uniform sampler2D bump_tex;
-layout(std430, set = 2, binding = BINDING_KEYS) buffer Keys { uint64_t keys[]; };
+layout(set = SET_SCENE, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
+layout(std430, set = SET_SCENE, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
+layout(std430, set = SET_SCENE, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
+layout(set = SET_MATERIAL, binding = BINDING_ALBEDO) uniform sampler2D albedo_tex;
+layout(set = SET_MATERIAL, binding = BINDING_MASK) uniform sampler2D mask_tex;
+layout(set = SET_MATERIAL, binding = BINDING_BUMP) uniform sampler2D bump_tex;
+layout(std430, set = SET_PASS, binding = BINDING_KEYS) buffer Keys { uint64_t keys[]; };
 #ifdef SELECT_PASS
 // The same keys as 32-bit words (little-endian: word 2 i + 1 is key i's high word, its depth
 // part), for the select pass's plain reads: a 32-bit read is never torn.
-layout(std430, set = 2, binding = BINDING_KEYS) buffer KeyWords { uint key_words[]; };
+layout(std430, set = SET_PASS, binding = BINDING_KEYS) buffer KeyWords { uint key_words[]; };
 #endif
 // A kept fragment's slot, in two buffers (each must fit maxStorageBufferRange): coverage and
 // sample mask; colour (3 x f16), flags (8 bits) and the passing share of an alpha-tested
 // fragment without samples (8 bits, for the resolve's transmittance).
-layout(std430, set = 2, binding = BINDING_SLOTS) buffer Slots { uvec2 slots[]; };
+layout(std430, set = SET_PASS, binding = BINDING_SLOTS) buffer Slots { uvec2 slots[]; };
 // The sample mask's words after the first (MASK_WORDS - 1 per slot; unused with 32 samples).
-layout(std430, set = 2, binding = BINDING_SLOT_MASKS) buffer SlotMasks { uint slot_masks[]; };
-layout(std430, set = 2, binding = BINDING_COLORS) buffer Colors { uvec2 colors[]; };
+layout(std430, set = SET_PASS, binding = BINDING_SLOT_MASKS) buffer SlotMasks { uint slot_masks[]; };
+layout(std430, set = SET_PASS, binding = BINDING_COLORS) buffer Colors { uvec2 colors[]; };
 // A kept fragment's depth plane in the pixel: depth at the pixel centre and its change per pixel
 // in x (planes) and y (planes_y), for the resolve's per-sample visibility.
-layout(std430, set = 2, binding = BINDING_PLANES) buffer Planes { uvec2 planes[]; };
-layout(std430, set = 2, binding = BINDING_PLANES_Y) buffer PlanesY { uint planes_y[]; };
-layout(std430, set = 2, binding = BINDING_COUNTS) buffer Counts { uint counts[]; };
+layout(std430, set = SET_PASS, binding = BINDING_PLANES) buffer Planes { uvec2 planes[]; };
+layout(std430, set = SET_PASS, binding = BINDING_PLANES_Y) buffer PlanesY { uint planes_y[]; };
+layout(std430, set = SET_PASS, binding = BINDING_COUNTS) buffer Counts { uint counts[]; };
 // Per pixel and mask sample, the farthest depth over the pixel (f32 bits, reverse-Z: larger is
 // nearer; 0 where none) of the nearest fragment opaque at that sample: the select pass's
 // atomicMax. Behind the least of them, a fragment is hidden at every sample. A word per
 // OCCLUDER_GROUP consecutive samples (1 unless MASK_SAMPLES words a pixel exceed a storage buffer), written
 // only by fragments opaque at the whole group.
 #define OCCLUDER_WORDS (MASK_SAMPLES / OCCLUDER_GROUP)
-layout(std430, set = 2, binding = BINDING_OCCLUDERS) buffer Occluders { uint occluders[]; };
+layout(std430, set = SET_PASS, binding = BINDING_OCCLUDERS) buffer Occluders { uint occluders[]; };
 // A kept fragment's shading normal and point, for the resolve's lighting (surface.glsl).
-layout(std430, set = 2, binding = BINDING_SURFACES) buffer Surfaces { uvec2 surfaces[]; };
+layout(std430, set = SET_PASS, binding = BINDING_SURFACES) buffer Surfaces { uvec2 surfaces[]; };
 // Its albedo's luminance in the cells of a grid over the pixel (surface.glsl's pack_cells), for
 // the resolve's albedo of the part that shows (resolve.comp, shown_albedo).
-layout(std430, set = 2, binding = BINDING_CELLS) buffer Cells { uvec2 cells[]; };
-layout(std430, set = 2, binding = BINDING_CELLS_HI) buffer CellsHi { uvec2 cells_hi[]; };
+layout(std430, set = SET_PASS, binding = BINDING_CELLS) buffer Cells { uvec2 cells[]; };
+layout(std430, set = SET_PASS, binding = BINDING_CELLS_HI) buffer CellsHi { uvec2 cells_hi[]; };
 #ifndef SELECT_PASS
 // The fragments beyond the K nearest that are not hidden, for the tail pass (tail.comp) to light
 // and sum into the tails (tail_record.glsl); the buffer's length is the capacity, and the count
 // runs on past it when the frame needs more (the technique grows the buffer and renders again).
-layout(std430, set = 2, binding = BINDING_TAIL_RECORDS) writeonly buffer TailRecords { TailRecord tail_records[]; };
-layout(std430, set = 2, binding = BINDING_TAIL_COUNT) buffer TailCounts { TailCount tail_count; };
+layout(std430, set = SET_PASS, binding = BINDING_TAIL_RECORDS) writeonly buffer TailRecords { TailRecord tail_records[]; };
+layout(std430, set = SET_PASS, binding = BINDING_TAIL_COUNT) buffer TailCounts { TailCount tail_count; };
 // The textured fragments' albedo lookups, for the albedo pass (albedo_job.glsl).
-layout(std430, set = 2, binding = BINDING_ALBEDO_JOBS) writeonly buffer AlbedoJobs { AlbedoJob albedo_jobs[]; };
-layout(std430, set = 2, binding = BINDING_ALBEDO_COUNT) buffer AlbedoCounts { AlbedoCount albedo_count; };
-layout(std430, set = 2, binding = BINDING_ALBEDO_BINS) buffer AlbedoBins { AlbedoBin albedo_bins[]; };
+layout(std430, set = SET_PASS, binding = BINDING_ALBEDO_JOBS) writeonly buffer AlbedoJobs { AlbedoJob albedo_jobs[]; };
+layout(std430, set = SET_PASS, binding = BINDING_ALBEDO_COUNT) buffer AlbedoCounts { AlbedoCount albedo_count; };
+layout(std430, set = SET_PASS, binding = BINDING_ALBEDO_BINS) buffer AlbedoBins { AlbedoBin albedo_bins[]; };
 #endif
-layout(push_constant) uniform Push { uint object_index; } pc;
+// pc.object_index (scene_pass.rs's ScenePush).
+PUSH_CONSTANTS
 
 #include "coverage.glsl"
 #define RASTER_IO in

@@ -22,7 +22,7 @@
 layout(triangles) in;
 layout(triangle_strip, max_vertices = 8) out;
 
-layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
+layout(set = SET_SCENE, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
 
 layout(location = 0) in vec3 v_world[];
 layout(location = 1) in vec3 v_normal[];

@@ -56,7 +56,7 @@
 #include "coverage.glsl"
 #include "surface.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 
 layout(std430, set = 0, binding = BINDING_KEYS) readonly buffer Keys { uint64_t keys[]; };
 layout(std430, set = 0, binding = BINDING_SLOTS) readonly buffer Slots { uvec2 slots[]; };
@@ -71,28 +71,24 @@ layout(std430, set = 0, binding = BINDING_PLANES_Y) readonly buffer PlanesY { fl
 layout(std430, set = 0, binding = BINDING_SURFACES) readonly buffer Surfaces { uvec2 surfaces[]; };
 layout(std430, set = 0, binding = BINDING_CELLS) readonly buffer Cells { uvec2 cells[]; };
 layout(std430, set = 0, binding = BINDING_CELLS_HI) readonly buffer CellsHi { uvec2 cells_hi[]; };
-// The scene's set, for the lighting.
-layout(set = 1, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
-layout(std430, set = 1, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
-layout(std430, set = 1, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
-layout(std430, set = 1, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
+// The scene's buffers, for the lighting.
+layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
+layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
+layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
+layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
 layout(set = 0, binding = BINDING_OUT_COLOR, rgba16f) uniform writeonly image2D out_color;
 layout(set = 0, binding = BINDING_OUT_COVERAGE, r32f) uniform writeonly image2D out_coverage;
 layout(set = 0, binding = BINDING_OUT_COUNTS, rgba32ui) uniform writeonly uimage2D out_counts;
-layout(push_constant) uniform Push {
-    vec4 background;  // rgb
-    uvec4 size;       // width, height
-    mat4 world_from_clip;
-} pc;
+// pc.background (rgb), pc.size (width, height), pc.world_from_clip (passes.rs's ResolvePush).
+PUSH_CONSTANTS
 
 #include "../inc/shading.glsl"
 
 // Counts' channels: fragments that touched the pixel, overflow (beyond the K nearest), flags,
-// visible fragments.
-#define FLAG_EDGE 1u      // a visible fragment covers the pixel partly, or the background shows
-#define FLAG_SEED 2u      // analytic:seed: a visible fragment's shortcut area is off by > 1e-3
-#define FLAG_OVERFLOW 4u
-#define FLAG_NONFINITE 8u  // a kept fragment's shading was not finite (dropped)
+// visible fragments. The flags' bits are defines from Rust (passes.rs): FLAG_EDGE, a visible
+// fragment covers the pixel partly, or the background shows; FLAG_SEED, analytic:seed: a visible
+// fragment's shortcut area is off by > 1e-3; FLAG_OVERFLOW; FLAG_NONFINITE, a kept fragment's
+// shading was not finite (dropped).
 // A fragment's own flags (raster.frag).
 #define FRAG_SEED_OFF 1u   // analytic:seed: its shortcut area is off by > 1e-3
 #define FRAG_HOLES 2u      // alpha-tested without samples, or not finite: wins no samples

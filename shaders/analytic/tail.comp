@@ -15,7 +15,7 @@
 #include "mask.glsl"
 #include "tail_record.glsl"
 
-layout(local_size_x = 64) in;
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 
 layout(std430, set = 0, binding = BINDING_TAIL_RECORDS) readonly buffer TailRecords { TailRecord tail_records[]; };
 layout(std430, set = 0, binding = BINDING_TAIL_COUNT) readonly buffer TailCounts { TailCount tail_count; };
@@ -24,10 +24,10 @@ layout(std430, set = 0, binding = BINDING_TAIL_COUNT) readonly buffer TailCounts
 layout(std430, set = 0, binding = BINDING_TAIL) buffer Tail { uint64_t tail[]; };
 layout(std430, set = 0, binding = BINDING_TAIL_BACK) buffer TailBack { uint64_t tail_back[]; };
 layout(std430, set = 0, binding = BINDING_TAIL_MASKS) buffer TailMasks { uint tail_masks[]; };
-// The scene's set, for the lighting.
-layout(set = 1, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
-layout(std430, set = 1, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
-layout(std430, set = 1, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
+// The scene's buffers, for the lighting.
+layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
+layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
+layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
 
 #include "../inc/shading.glsl"
 

@@ -498,6 +498,11 @@ macro_rules! push_constants {
     (@align $t:ty as array) => { <$t as $crate::pass::GlslArray>::ALIGN };
 }
 
+push_constants! {
+    /// The push constants of a pass that declares none (its dispatches pass `&NoPush`).
+    pub struct NoPush {}
+}
+
 /// One compute pass, declared once.
 #[derive(Clone, Debug)]
 pub struct ComputeDecl {
@@ -871,6 +876,56 @@ impl ComputePass {
         push: &P,
         groups: [u32; 3],
     ) -> Result<()> {
+        self.record(cmd, binds, push, |cmd| {
+            cmd.dispatch(groups[0], groups[1], groups[2]);
+        })
+    }
+
+    /// The barriers of [`ComputePass::prepare`] and those of `args` read as an indirect
+    /// dispatch's parameters (first: [`Access::ComputeIndirect`] also covers the shader's reads
+    /// of `args` where the pass binds it, so that their barrier, read after read, is none).
+    pub fn prepare_indirect(&self, cmd: &mut Cmd, binds: &Binds, args: &Buffer) -> Result<()> {
+        cmd.use_buffer(args, Access::ComputeIndirect);
+        self.prepare(cmd, binds)
+    }
+
+    /// Records the barriers (with `args`'), then (timed under the pass's name) one dispatch whose
+    /// group counts the GPU wrote into `args` at byte `offset` (VkDispatchIndirectCommand).
+    pub fn dispatch_indirect<P: PushConstants>(
+        &self,
+        cmd: &mut Cmd,
+        profiler: &mut Profiler,
+        binds: &Binds,
+        push: &P,
+        (args, offset): (&Buffer, u64),
+    ) -> Result<()> {
+        self.prepare_indirect(cmd, binds, args)?;
+        let scope = profiler.begin(cmd, &self.decl.name, PassKind::Compute);
+        let r = self.dispatch_indirect_untimed(cmd, binds, push, (args, offset));
+        profiler.end(cmd, scope);
+        r
+    }
+
+    /// One indirect dispatch without barriers or timing (after
+    /// [`ComputePass::prepare_indirect`]).
+    pub fn dispatch_indirect_untimed<P: PushConstants>(
+        &self,
+        cmd: &mut Cmd,
+        binds: &Binds,
+        push: &P,
+        (args, offset): (&Buffer, u64),
+    ) -> Result<()> {
+        self.record(cmd, binds, push, |cmd| cmd.dispatch_indirect(args, offset))
+    }
+
+    /// Binds the pipeline, the dispatch's set and `push`, then records `dispatch`.
+    fn record<P: PushConstants>(
+        &self,
+        cmd: &mut Cmd,
+        binds: &Binds,
+        push: &P,
+        dispatch: impl FnOnce(&mut Cmd),
+    ) -> Result<()> {
         let want = self.decl.push.as_ref().map_or(0, |p| p.0) as usize;
         if std::mem::size_of::<P>() != want {
             return Err(declaration(
@@ -903,7 +958,7 @@ impl ComputePass {
         if want > 0 {
             cmd.push_constants(&self.pipeline, bytemuck::bytes_of(push));
         }
-        cmd.dispatch(groups[0], groups[1], groups[2]);
+        dispatch(cmd);
         cmd.keep(set);
         Ok(())
     }
@@ -1242,6 +1297,14 @@ impl ResourceDecl {
         self
     }
 
+    /// A buffer also read as an indirect dispatch's parameters (INDIRECT_BUFFER).
+    pub fn indirect(mut self) -> ResourceDecl {
+        if let ResourceKind::Buffer { usage, .. } = &mut self.kind {
+            *usage |= vk::BufferUsageFlags::INDIRECT_BUFFER;
+        }
+        self
+    }
+
     /// As a ping-pong pair.
     pub fn history(mut self) -> ResourceDecl {
         self.history = true;
@@ -1318,6 +1381,7 @@ fn readback_bytes(format: vk::Format, width: u32, height: u32, layers: u32) -> u
 pub struct Resources {
     owner: String,
     items: Vec<(&'static str, Owned)>,
+    decls: Vec<ResourceDecl>,
 }
 
 impl Resources {
@@ -1346,7 +1410,29 @@ impl Resources {
         Ok(Resources {
             owner: owner.to_string(),
             items,
+            decls: decls.to_vec(),
         })
+    }
+
+    /// Replaces the buffer `name` by one of `bytes` with its declared usage and location: a
+    /// buffer that grows to what a frame needed (analytic's tail records and albedo jobs). The
+    /// estimate ([`estimate`]) is its declared size, the size it starts with. The old buffer must
+    /// not be in use by a command buffer that has not completed; the declared passes make their
+    /// descriptor sets per dispatch, so their next dispatch binds the new one.
+    pub fn grow(&mut self, gpu: &Gpu, name: &str, bytes: u64) -> Result<()> {
+        let owner = &self.owner;
+        let i = self
+            .items
+            .iter()
+            .position(|(n, o)| *n == name && matches!(o, Owned::Buffer(_)))
+            .ok_or_else(|| declaration(owner, format!("no buffer `{name}` to grow")))?;
+        let mut d = self.decls[i].clone();
+        if let ResourceKind::Buffer { bytes: b, .. } = &mut d.kind {
+            *b = bytes;
+        }
+        let new = d.make(gpu, &d.slot_names(owner)[0])?;
+        self.items[i].1 = new;
+        Ok(())
     }
 
     fn find(&self, name: &str) -> Result<&Owned> {
@@ -1471,6 +1557,9 @@ mod tests {
         ];
         decls.extend(crate::post::fxaa::decls());
         decls.extend(interleaved::split::decls(&interleaved));
+        let analytic = crate::techniques::analytic::parse(&[]).expect("analytic");
+        let k = crate::techniques::analytic::Kernel::new(analytic, 64, 36, 1 << 27).expect("fits");
+        decls.extend(crate::techniques::analytic::decls(&k));
         /// A pass's name, one of its shaders with its defines, and its push-constant members.
         type Stage<'a> = (String, &'a str, Vec<(String, String)>, &'a [PushField]);
         let mut stages: Vec<Stage> = decls
@@ -1479,12 +1568,13 @@ mod tests {
             .map(|d| (d.name.clone(), d.shader, d.all_defines(), d.push_fields))
             .collect();
         // The raster passes' blocks, in every stage that declares them.
-        let rasters = crate::scene_pass::decls(
+        let mut rasters = crate::scene_pass::decls(
             "scene",
             &crate::scene_pass::RasterConfig::native(64, 36),
             &[],
         )
         .expect("scene pass");
+        rasters.extend(crate::techniques::analytic::raster_decls(&k, &[]));
         for d in rasters.iter().chain([&deferred::rsm::decl()]) {
             for (shader, defines) in d.stages() {
                 stages.push((d.name.clone(), shader, defines, d.push_fields));
@@ -1494,14 +1584,23 @@ mod tests {
             "scene/forward.vert",
             "scene/forward.frag",
             "deferred/rsm.vert",
+            "analytic/raster.frag",
         ] {
             assert!(stages.iter().any(|s| s.1 == raster), "{raster} not checked");
         }
+        // A raster stage that declares no push block (analytic's raster.geom) is skipped; every
+        // pass must have a stage that declares it.
+        let mut checked: Vec<String> = Vec::new();
+        let names: Vec<String> = stages.iter().map(|s| s.0.clone()).collect();
         for (name, shader, defines, fields) in stages {
             let words = shaders
                 .compile(shader, &defines)
                 .unwrap_or_else(|e| panic!("{name}: {e}"));
             let offsets = crate::gpu_types::tests::member_offsets(&words);
+            if shader.ends_with(".geom") && !offsets.keys().any(|(block, _)| block == "Push") {
+                continue;
+            }
+            checked.push(name.clone());
             for (i, f) in fields.iter().enumerate() {
                 let glsl = offsets.get(&("Push".to_string(), i as u32)).copied();
                 assert_eq!(
@@ -1511,6 +1610,12 @@ mod tests {
                     f.name
                 );
             }
+        }
+        for name in names {
+            assert!(
+                checked.contains(&name),
+                "{name}: no stage declares its push block"
+            );
         }
     }
 

@@ -285,6 +285,13 @@ pub fn decls(name: &str, config: &RasterConfig, features: &[u32]) -> Result<Vec<
     Ok(all)
 }
 
+/// The distinct material feature combinations of `features` (sorted; the one with every path
+/// when there is none): one pipeline variant each, for passes that declare their own
+/// (`analytic`'s raster).
+pub fn feature_combinations(features: &[u32]) -> Vec<u32> {
+    feature_variants(features).0
+}
+
 /// The distinct feature combinations of `features` (sorted) and each entry's index among them;
 /// one combination (every path) when there is none.
 fn feature_variants(features: &[u32]) -> (Vec<u32>, Vec<usize>) {

@@ -179,8 +179,7 @@ impl PassList {
     }
 }
 
-/// A technique's compile-only list; `Err`: the parameters are refused, or its passes are not all
-/// declared yet (named in the message).
+/// A technique's compile-only list; `Err`: the parameters are refused (named in the message).
 pub type Passes = fn(&PassCtx, &[&str]) -> std::result::Result<PassList, String>;
 
 /// One registered technique.

@@ -7,9 +7,10 @@ mod common;
 use cbr_gpu::{GpuError, Image, ImageDesc, Layout, vk};
 use cbr_render::checkerboard::unpack;
 use cbr_render::layouts::LayoutPlan;
-use cbr_render::pass::{Binding, Binds, ComputeDecl, Use};
+use cbr_render::pass::{Binding, Binds, ComputeDecl, ResourceDecl, Resources, Use};
 use cbr_render::post::{fxaa, sharpen, taa};
 use cbr_render::resolve::{self, Mapping, ResolveMode, ResolveSettings};
+use cbr_render::techniques::analytic;
 use cbr_render::techniques::deferred;
 use cbr_render::techniques::interlaced::{self, InterlacedSettings};
 use cbr_render::techniques::msaa::{self, MsaaConfig};
@@ -60,6 +61,17 @@ fn declared() -> Vec<ComputeDecl> {
             ..msaa::parse(&["4"]).expect("msaa:4")
         }));
     }
+    // analytic's five passes with each mask size, the seed, the box and the anisotropic filter
+    // (lavapipe's 128 MiB storage-buffer range).
+    for params in [
+        &[][..],
+        &["samples=32", "aniso"],
+        &["samples=128", "seed", "frags=3"],
+    ] {
+        let c = analytic::parse(params).expect("analytic");
+        let k = analytic::Kernel::new(c, 64, 36, 1 << 27).expect("fits");
+        d.extend(analytic::decls(&k));
+    }
     d
 }
 
@@ -75,7 +87,7 @@ fn declared_passes_build_without_allocating() {
                 .unwrap_or_else(|e| panic!("{}: {e}", d.name))
         })
         .collect();
-    assert_eq!(built.len(), 40);
+    assert_eq!(built.len(), 55);
     assert_eq!(
         gpu.allocations_made(),
         before,
@@ -113,6 +125,12 @@ fn declared_rasters() -> Vec<cbr_render::pass::GraphicsDecl> {
     for (i, c) in configs.iter().enumerate() {
         d.extend(scene_pass::decls(&format!("raster{i}"), c, &features).expect("declared"));
     }
+    // analytic's select and raster passes, with the seed and the anisotropic filter.
+    let c = cbr_render::techniques::analytic::parse(&["seed", "aniso"]).expect("analytic");
+    let k = cbr_render::techniques::analytic::Kernel::new(c, 64, 36, 1 << 27).expect("fits");
+    d.extend(cbr_render::techniques::analytic::raster_decls(
+        &k, &features,
+    ));
     d
 }
 
@@ -127,8 +145,8 @@ fn declared_rasters_build_without_allocating() {
             .unwrap_or_else(|e| panic!("{}: {e}", d.name));
     }
     // 6 configurations x 8 variants, the G-buffer's with a depth pre-pass and (4 bump-mapped
-    // variants) late tests, and the RSM.
-    assert_eq!(decls.len(), 6 * 8 + 8 + 4 + 1);
+    // variants) late tests, the RSM, and analytic's select and raster x 8 variants.
+    assert_eq!(decls.len(), 6 * 8 + 8 + 4 + 1 + 2 * 8);
     assert_eq!(
         gpu.allocations_made(),
         before,
@@ -233,6 +251,45 @@ fn binds_that_do_not_fit_the_declaration_are_errors() {
         misspelt.contains("`outt` is bound but not declared"),
         "{misspelt}"
     );
+    // A binding of a given sampler takes an image with its sampler (analytic's albedo pass: a scene texture
+    // through the scene's sampler), and a plain image is refused.
+    let k = analytic::Kernel::new(analytic::parse(&[]).expect("analytic"), 8, 8, 1 << 27)
+        .expect("fits");
+    let albedo = analytic::albedo_decl(&k)
+        .build(&gpu, &shaders)
+        .expect("albedo");
+    let sampler =
+        cbr_gpu::Sampler::new(&gpu, "t.sampler", cbr_gpu::SamplerDesc::NEAREST).expect("sampler");
+    let buffers = [
+        "albedo_jobs",
+        "albedo_bins",
+        "albedo_order",
+        "colors",
+        "cells",
+        "cells_hi",
+        "tail_records",
+        "frame",
+        "materials",
+    ]
+    .into_iter()
+    .fold(Binds::new(), |b, name| b.buffer(name, &counter));
+    assert!(
+        albedo
+            .check(&buffers.clone().sampled("albedo_texture", &a, &sampler))
+            .is_ok()
+    );
+    let untextured = declaration(albedo.check(&buffers.clone().image("albedo_texture", &a)));
+    assert!(
+        untextured
+            .contains("`albedo_texture` is a sampled image with a given sampler, given an image"),
+        "{untextured}"
+    );
+    let textured =
+        declaration(pass.check(&Binds::new().sampled("src", &a, &sampler).image("out", &b)));
+    assert!(
+        textured.contains("`src` is a sampled image, given an image with its sampler"),
+        "{textured}"
+    );
     // A declaration naming a binding twice is refused when it is built.
     let twice = ComputeDecl::new("twice", "post/sharpen.comp")
         .bind(Binding::sampled("src"))
@@ -246,7 +303,7 @@ fn binds_that_do_not_fit_the_declaration_are_errors() {
 
 /// The compile-only list of a spec (`registry::passes`) is exactly the compute shaders, with
 /// their defines, that building the spec's renderer compiles: rendering and the compile-only
-/// build use one list. Techniques whose passes are not all declared yet say so.
+/// build use one list.
 #[test]
 fn the_compile_only_list_is_what_rendering_builds() {
     let gpu = common::gpu();
@@ -280,13 +337,16 @@ fn the_compile_only_list_is_what_rendering_builds() {
         "interleaved:2x2:seed:direct:debug",
         "interleaved:4x4:box:direct",
         "interleaved:4x4:floor",
+        "analytic",
+        "analytic:seed:frags=3:samples=32",
+        "analytic:aniso:samples=128",
     ];
     // And every registered technique by its bare name where that is a spec (a new technique is
     // held to its list without a line here).
     let bare = cbr_render::registry::TECHNIQUES
         .iter()
         .map(|t| t.name)
-        .filter(|n| cbr_render::Spec::parse(n).is_ok() && *n != "analytic");
+        .filter(|n| cbr_render::Spec::parse(n).is_ok());
     for text in specs.into_iter().chain(bare) {
         let settings = cbr_render::RenderSettings::parse(64, 36, text).expect("spec");
         let mut listed: Vec<(String, Vec<(String, String)>)> =
@@ -316,11 +376,36 @@ fn the_compile_only_list_is_what_rendering_builds() {
             "`{text}`: the compile-only list and the build differ"
         );
     }
-    // `analytic` says its passes are not declared yet.
-    let spec = cbr_render::Spec::parse("analytic").expect("spec");
-    let Err(err) = cbr_render::registry::passes(&spec, &ctx) else {
-        panic!("analytic's passes listed");
-    };
-    assert!(err.contains("not declared yet"), "{err}");
+    common::assert_clean(&gpu);
+}
+
+/// A buffer resource grows to a new size under its name, with its declared usage (analytic's
+/// tail records and albedo jobs); only a buffer grows.
+#[test]
+fn a_buffer_resource_grows_under_its_name() {
+    let gpu = common::gpu();
+    let decls = [
+        ResourceDecl::buffer("list", 64).indirect(),
+        ResourceDecl::image("img", vk::Format::R32_SFLOAT, 4, 4),
+    ];
+    let mut res = Resources::new(&gpu, "t", &decls).expect("resources");
+    assert_eq!(res.buffer("list").expect("list").size(), 64);
+    res.grow(&gpu, "list", 4096).expect("grow");
+    assert_eq!(res.buffer("list").expect("list").size(), 4096);
+    let live: Vec<(String, u64)> = gpu.allocations();
+    assert!(
+        live.iter()
+            .any(|(name, bytes)| name == "t.list" && *bytes >= 4096),
+        "{live:?}"
+    );
+    assert!(matches!(
+        res.grow(&gpu, "img", 4096),
+        Err(GpuError::Declaration { .. })
+    ));
+    assert!(matches!(
+        res.grow(&gpu, "nothing", 4096),
+        Err(GpuError::Declaration { .. })
+    ));
+    drop(res);
     common::assert_clean(&gpu);
 }
