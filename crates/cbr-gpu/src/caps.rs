@@ -8,9 +8,26 @@ use serde::Serialize;
 /// nothing (tests start from it and set what they need).
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Caps {
+    /// Whether the device can allocate memory and execute commands. False on RADV's null device
+    /// (`RADV_FORCE_FAMILY`, crate::null_device), which only compiles pipelines: images,
+    /// buffers and submissions are refused there with `GpuError::CannotExecute`.
+    pub can_execute: bool,
+    /// VK_KHR_pipeline_executable_properties with pipelineExecutableInfo, enabled: pipelines can be
+    /// compiled with their statistics (and disassembly) captured (`CompileSettings`).
+    pub pipeline_executable_info: bool,
+    /// The subgroup (wave) size compute runs with when none is required.
+    pub subgroup_size: u32,
+    /// Subgroup sizes a compute pipeline can require (subgroupSizeControl, compute in
+    /// requiredSubgroupSizeStages: the powers of two from minSubgroupSize to maxSubgroupSize);
+    /// empty where it cannot. RDNA: [32, 64]; GCN: none (wave64 only); lavapipe: [8].
+    pub compute_subgroup_sizes: Vec<u32>,
     pub sample_rate_shading: bool,
     /// Sample counts usable for a colour + depth + integer-ID target together.
     pub sample_counts: Vec<u32>,
+    /// Sample counts usable for the integer colour attachments cbr renders
+    /// ([`INTEGER_ATTACHMENTS`]), asked per format and usage
+    /// (vkGetPhysicalDeviceImageFormatProperties), within `sample_counts`. Not Vulkan 1.2's
+    /// framebufferIntegerColorSampleCounts: RADV reports 1 there and 2/4/8 per format.
     pub integer_color_sample_counts: Vec<u32>,
     pub sample_locations: bool,
     /// VK_EXT_sample_locations usable for the msaa2x alternative: 2-sample locations settable,
@@ -80,6 +97,50 @@ impl Layout {
             Layout::Masked => "masked",
         }
     }
+}
+
+/// Every usage a frame target gets (crate cbr-render's `FrameTargets::decls`): colour attachment,
+/// sampled, copied from and to.
+pub const TARGET_USAGE: vk::ImageUsageFlags = vk::ImageUsageFlags::from_raw(
+    vk::ImageUsageFlags::COLOR_ATTACHMENT.as_raw()
+        | vk::ImageUsageFlags::SAMPLED.as_raw()
+        | vk::ImageUsageFlags::TRANSFER_SRC.as_raw()
+        | vk::ImageUsageFlags::TRANSFER_DST.as_raw(),
+);
+
+/// The integer colour attachments cbr renders multisampled, with their usages: the ID target
+/// (R32G32_UINT). `integer_color_sample_counts` is decided from these; a test in cbr-render holds
+/// `FrameTargets::decls` to this list.
+pub const INTEGER_ATTACHMENTS: &[(vk::Format, vk::ImageUsageFlags)] =
+    &[(vk::Format::R32G32_UINT, TARGET_USAGE)];
+
+/// The sample counts every integer attachment supports: the per-format answers (`None`: the
+/// format cannot be created with that usage at all) intersected, within `limits` (the colour and
+/// depth framebuffer counts). No answer at all gives no sample count.
+pub fn integer_sample_counts(
+    answers: &[Option<vk::SampleCountFlags>],
+    limits: vk::SampleCountFlags,
+) -> Vec<u32> {
+    if answers.is_empty() {
+        return Vec::new();
+    }
+    let common = answers.iter().fold(limits, |acc, a| match a {
+        Some(flags) => acc & *flags,
+        None => vk::SampleCountFlags::empty(),
+    });
+    sample_count_list(common)
+}
+
+/// The sizes a compute pipeline may require: powers of two from `min` to `max`, when subgroup
+/// size control is enabled and compute is among the stages that accept a required size.
+pub fn compute_subgroup_sizes(control: bool, compute_stage: bool, min: u32, max: u32) -> Vec<u32> {
+    if !control || !compute_stage || min == 0 || min > max {
+        return Vec::new();
+    }
+    (0..16)
+        .map(|b| 1u32 << b)
+        .filter(|s| (min..=max).contains(s))
+        .collect()
 }
 
 pub(crate) fn sample_count_list(flags: vk::SampleCountFlags) -> Vec<u32> {
@@ -173,6 +234,10 @@ mod tests {
 
     fn lavapipe_like() -> Caps {
         Caps {
+            can_execute: true,
+            pipeline_executable_info: false,
+            subgroup_size: 8,
+            compute_subgroup_sizes: vec![8],
             shader_float16: true,
             max_storage_buffer_range: 1 << 27,
             device_local_heap_bytes: 1 << 31,
@@ -245,6 +310,58 @@ mod tests {
         assert_eq!(heap_limits(&discrete), (80 << 30, false));
         assert_eq!(heap_limits(&[heap(4 << 30, false)]), (4 << 30, false));
         assert_eq!(heap_limits(&[]), (0, false));
+    }
+
+    #[test]
+    fn integer_attachments_are_decided_per_format() {
+        use vk::SampleCountFlags as S;
+        let all = S::TYPE_1 | S::TYPE_2 | S::TYPE_4 | S::TYPE_8;
+        // RADV: framebufferIntegerColorSampleCounts says 1, the per-format query 1/2/4/8.
+        let radv = integer_sample_counts(&[Some(all)], all);
+        assert_eq!(radv, vec![1, 2, 4, 8]);
+        let mut caps = lavapipe_like();
+        caps.sample_counts = vec![1, 2, 4, 8];
+        caps.integer_color_sample_counts = radv;
+        assert_eq!(caps.layout_unsupported(Layout::Msaa2x), None);
+        // lavapipe: 1 and 4 everywhere, so no 2x for anything.
+        let lvp = integer_sample_counts(&[Some(S::TYPE_1 | S::TYPE_4)], S::TYPE_1 | S::TYPE_4);
+        assert_eq!(lvp, vec![1, 4]);
+        caps.integer_color_sample_counts = lvp;
+        let why = caps.layout_unsupported(Layout::Msaa2x).unwrap_or_default();
+        assert!(
+            why.contains("2x MSAA for integer (ID) attachments"),
+            "{why}"
+        );
+        // The framebuffer limits bound what a format allows; one format without 2x, or one
+        // format/usage the device refuses, removes 2x; no format answers nothing.
+        assert_eq!(
+            integer_sample_counts(&[Some(all)], S::TYPE_1 | S::TYPE_4),
+            vec![1, 4]
+        );
+        assert_eq!(
+            integer_sample_counts(&[Some(all), Some(S::TYPE_1 | S::TYPE_4)], all),
+            vec![1, 4]
+        );
+        assert_eq!(
+            integer_sample_counts(&[Some(all), None], all),
+            Vec::<u32>::new()
+        );
+        assert_eq!(integer_sample_counts(&[], all), Vec::<u32>::new());
+    }
+
+    #[test]
+    fn compute_subgroup_sizes_span_the_range() {
+        assert_eq!(compute_subgroup_sizes(true, true, 32, 64), vec![32, 64]);
+        assert_eq!(compute_subgroup_sizes(true, true, 64, 64), vec![64]);
+        assert_eq!(compute_subgroup_sizes(true, true, 8, 8), vec![8]);
+        assert_eq!(
+            compute_subgroup_sizes(true, true, 4, 128),
+            vec![4, 8, 16, 32, 64, 128]
+        );
+        assert!(compute_subgroup_sizes(false, true, 32, 64).is_empty());
+        assert!(compute_subgroup_sizes(true, false, 32, 64).is_empty());
+        assert!(compute_subgroup_sizes(true, true, 0, 64).is_empty());
+        assert!(compute_subgroup_sizes(true, true, 64, 32).is_empty());
     }
 
     #[test]

@@ -8,8 +8,13 @@ use std::sync::{Arc, Mutex};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, Allocator, AllocatorCreateDesc};
 
-use crate::caps::{Caps, heap_limits, sample_count_list};
+use crate::caps::{
+    Caps, INTEGER_ATTACHMENTS, compute_subgroup_sizes, heap_limits, integer_sample_counts,
+    sample_count_list,
+};
 use crate::error::{GpuError, Result, VkContext};
+use crate::executables::{CompileSettings, PipelineExecutables};
+use crate::null_device;
 use crate::select::{self, Candidate, DeviceKind};
 
 /// How to open the device.
@@ -87,6 +92,12 @@ pub(crate) struct Inner {
     pub(crate) caps: Caps,
     /// VK_EXT_sample_locations entry points, when the device has the extension.
     pub(crate) sample_locations: Option<ash::ext::sample_locations::Device>,
+    /// VK_KHR_pipeline_executable_properties entry points, when enabled.
+    pub(crate) executable_properties: Option<ash::khr::pipeline_executable_properties::Device>,
+    /// What every pipeline creation also asks for (capture, wave size).
+    pub(crate) compile: Mutex<CompileSettings>,
+    /// What the pipelines created with capture on reported, in creation order.
+    pub(crate) captured: Mutex<Vec<PipelineExecutables>>,
 }
 
 /// The opened device. Cheap to clone; resources keep it alive.
@@ -166,6 +177,13 @@ fn required_features(
 struct Probe {
     props: vk::PhysicalDeviceProperties,
     f10: vk::PhysicalDeviceFeatures,
+    /// VK_KHR_pipeline_executable_properties' pipelineExecutableInfo (false without the extension).
+    pipeline_executable_info: bool,
+    /// subgroupSize (Vulkan 1.1 properties).
+    subgroup_size: u32,
+    /// minSubgroupSize, maxSubgroupSize, and whether compute is in requiredSubgroupSizeStages
+    /// (Vulkan 1.3 properties).
+    subgroup_range: (u32, u32, bool),
     f11_multiview: bool,
     f12: vk::PhysicalDeviceVulkan12Features<'static>,
     f13: vk::PhysicalDeviceVulkan13Features<'static>,
@@ -178,25 +196,51 @@ struct Probe {
 }
 
 fn probe(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Probe {
+    // SAFETY: `pd` was enumerated from `instance`.
+    let extensions: Vec<CString> = unsafe { instance.enumerate_device_extension_properties(pd) }
+        .unwrap_or_default()
+        .iter()
+        .filter_map(|e| e.extension_name_as_c_str().ok().map(CStr::to_owned))
+        .collect();
+    let has_exec_props = extensions
+        .iter()
+        .any(|e| e.as_c_str() == ash::khr::pipeline_executable_properties::NAME);
     let mut f11 = vk::PhysicalDeviceVulkan11Features::default();
     let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
     let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+    let mut fexec = vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default();
     let mut f2 = vk::PhysicalDeviceFeatures2::default()
         .push_next(&mut f11)
         .push_next(&mut f12)
         .push_next(&mut f13);
+    if has_exec_props {
+        f2 = f2.push_next(&mut fexec);
+    }
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
     let mut m3 = vk::PhysicalDeviceMaintenance3Properties::default();
+    let mut p11 = vk::PhysicalDeviceVulkan11Properties::default();
+    let mut p13 = vk::PhysicalDeviceVulkan13Properties::default();
     let mut p2 = vk::PhysicalDeviceProperties2::default()
         .push_next(&mut driver)
-        .push_next(&mut m3);
-    // SAFETY: `pd` was enumerated from `instance`; the chained structs outlive the calls.
+        .push_next(&mut m3)
+        .push_next(&mut p11)
+        .push_next(&mut p13);
+    // SAFETY: `pd` was enumerated from `instance`; the chained structs outlive the calls, and the
+    // extension's struct is chained only when the device has the extension.
     unsafe {
         instance.get_physical_device_features2(pd, &mut f2);
         instance.get_physical_device_properties2(pd, &mut p2);
     }
     let f10 = f2.features;
     let props = p2.properties;
+    let pipeline_executable_info = has_exec_props && fexec.pipeline_executable_info != 0;
+    let subgroup_size = p11.subgroup_size;
+    let subgroup_range = (
+        p13.min_subgroup_size,
+        p13.max_subgroup_size,
+        p13.required_subgroup_size_stages
+            .contains(vk::ShaderStageFlags::COMPUTE),
+    );
     let max_memory_allocation_size = m3.max_memory_allocation_size;
     let f11_multiview = f11.multiview != 0;
     // Drop the pNext chains so the structs can be stored.
@@ -210,12 +254,6 @@ fn probe(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Probe {
         .position(|q| q.queue_flags.contains(want) && q.timestamp_valid_bits > 0)
         .or_else(|| families.iter().position(|q| q.queue_flags.contains(want)))
         .map(|i| i as u32);
-    // SAFETY: as above.
-    let extensions = unsafe { instance.enumerate_device_extension_properties(pd) }
-        .unwrap_or_default()
-        .iter()
-        .filter_map(|e| e.extension_name_as_c_str().ok().map(CStr::to_owned))
-        .collect();
     let driver_name = driver
         .driver_name_as_c_str()
         .map(|s| s.to_string_lossy().into_owned())
@@ -227,6 +265,9 @@ fn probe(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Probe {
     Probe {
         props,
         f10,
+        pipeline_executable_info,
+        subgroup_size,
+        subgroup_range,
         f11_multiview,
         f12: vk::PhysicalDeviceVulkan12Features {
             p_next: std::ptr::null_mut(),
@@ -276,15 +317,40 @@ fn caps_of(instance: &ash::Instance, pd: vk::PhysicalDevice, p: &Probe) -> Caps 
         .get(..memory.memory_heap_count as usize)
         .unwrap_or(&[]);
     let (device_local_heap_bytes, unified_memory) = heap_limits(heaps);
+    let name = p
+        .props
+        .device_name_as_c_str()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let (min_subgroup, max_subgroup, compute_subgroups) = p.subgroup_range;
     let ts_bits = p
         .queue_family
         .and_then(|q| families.get(q as usize))
         .map(|q| q.timestamp_valid_bits)
         .unwrap_or(0);
     Caps {
+        can_execute: null_device::can_execute(
+            &name,
+            memory.memory_heap_count,
+            memory.memory_type_count,
+        ),
+        pipeline_executable_info: p.pipeline_executable_info,
+        subgroup_size: p.subgroup_size,
+        compute_subgroup_sizes: compute_subgroup_sizes(
+            p.f13.subgroup_size_control != 0,
+            compute_subgroups,
+            min_subgroup,
+            max_subgroup,
+        ),
         sample_rate_shading: p.f10.sample_rate_shading != 0,
         sample_counts: sample_count_list(both),
-        integer_color_sample_counts: Vec::new(), // Vulkan 1.2 property, filled in `Gpu::new`
+        integer_color_sample_counts: integer_sample_counts(
+            &INTEGER_ATTACHMENTS
+                .iter()
+                .map(|&(format, usage)| image_sample_counts(instance, pd, format, usage))
+                .collect::<Vec<_>>(),
+            both,
+        ),
         sample_locations: has_ext(ash::ext::sample_locations::NAME),
         sample_locations_2x: false, // properties read in `Gpu::new`
         maintenance4: p.f13.maintenance4 != 0,
@@ -316,12 +382,36 @@ fn caps_of(instance: &ash::Instance, pd: vk::PhysicalDevice, p: &Probe) -> Caps 
     }
 }
 
+/// The sample counts a 2D optimal-tiling image of `format` with `usage` may have, or `None` when
+/// the device cannot create one at all (vkGetPhysicalDeviceImageFormatProperties).
+fn image_sample_counts(
+    instance: &ash::Instance,
+    pd: vk::PhysicalDevice,
+    format: vk::Format,
+    usage: vk::ImageUsageFlags,
+) -> Option<vk::SampleCountFlags> {
+    // SAFETY: `pd` belongs to `instance`; a plain query.
+    unsafe {
+        instance.get_physical_device_image_format_properties(
+            pd,
+            format,
+            vk::ImageType::TYPE_2D,
+            vk::ImageTiling::OPTIMAL,
+            usage,
+            vk::ImageCreateFlags::empty(),
+        )
+    }
+    .ok()
+    .map(|p| p.sample_counts)
+}
+
 /// Describes every device the loader sees, for `cbr info` and the selection error.
 pub struct DeviceReport {
     pub candidates: Vec<Candidate>,
 }
 
 fn load_entry() -> Result<ash::Entry> {
+    null_device::check_forced_family()?;
     // SAFETY: loading libvulkan runs its initialisers; the loader is a well-behaved library.
     unsafe { ash::Entry::load() }.map_err(|e| GpuError::NoLoader(e.to_string()))
 }
@@ -442,9 +532,8 @@ impl Gpu {
         let queue_family = p.queue_family.unwrap_or(0);
         let mut caps = caps_of(&instance, pd, p);
         {
-            let mut p12 = vk::PhysicalDeviceVulkan12Properties::default();
             let mut psl = vk::PhysicalDeviceSampleLocationsPropertiesEXT::default();
-            let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut p12);
+            let mut p2 = vk::PhysicalDeviceProperties2::default();
             if caps.sample_locations {
                 p2 = p2.push_next(&mut psl);
             }
@@ -458,10 +547,6 @@ impl Gpu {
                 && psl.sample_location_sub_pixel_bits >= 2
                 && psl.sample_location_coordinate_range[0] <= 0.0
                 && psl.sample_location_coordinate_range[1] >= 0.75;
-            let both = p.props.limits.framebuffer_color_sample_counts
-                & p.props.limits.framebuffer_depth_sample_counts;
-            caps.integer_color_sample_counts =
-                sample_count_list(p12.framebuffer_integer_color_sample_counts & both);
         }
 
         // Enable what is required plus what is available and useful.
@@ -486,7 +571,11 @@ impl Gpu {
             .dynamic_rendering(true)
             .synchronization2(true)
             .shader_demote_to_helper_invocation(true)
-            .maintenance4(caps.maintenance4);
+            .maintenance4(caps.maintenance4)
+            .subgroup_size_control(p.f13.subgroup_size_control != 0)
+            .compute_full_subgroups(p.f13.compute_full_subgroups != 0);
+        let mut fexec = vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default()
+            .pipeline_executable_info(true);
         let prio = [1.0f32];
         let qinfo = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(queue_family)
@@ -495,12 +584,18 @@ impl Gpu {
         if caps.sample_locations {
             dev_exts.push(ash::ext::sample_locations::NAME.as_ptr());
         }
-        let dinfo = vk::DeviceCreateInfo::default()
+        if caps.pipeline_executable_info {
+            dev_exts.push(ash::khr::pipeline_executable_properties::NAME.as_ptr());
+        }
+        let mut dinfo = vk::DeviceCreateInfo::default()
             .queue_create_infos(&qinfo)
             .enabled_features(&f10)
             .enabled_extension_names(&dev_exts)
             .push_next(&mut f12)
             .push_next(&mut f13);
+        if caps.pipeline_executable_info {
+            dinfo = dinfo.push_next(&mut fexec);
+        }
         // SAFETY: features were checked against the device; pointers are to locals.
         let device = match unsafe { instance.create_device(pd, &dinfo, None) } {
             Ok(d) => d,
@@ -516,24 +611,31 @@ impl Gpu {
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
         let debug_device =
             has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
-        let allocator = Allocator::new(&AllocatorCreateDesc {
-            instance: instance.clone(),
-            device: device.clone(),
-            physical_device: pd,
-            debug_settings: Default::default(),
-            buffer_device_address: false,
-            allocation_sizes: Default::default(),
-        })
-        .map_err(|e| GpuError::Alloc {
-            name: "allocator".into(),
-            source: e,
-        })?;
-        let pool_info = vk::CommandPoolCreateInfo::default()
-            .queue_family_index(queue_family)
-            .flags(vk::CommandPoolCreateFlags::TRANSIENT);
-        // SAFETY: valid device and family.
-        let command_pool =
-            unsafe { device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
+        // A device that cannot execute (RADV's null device) gets neither allocator nor command
+        // pool: `Image::new`, `Buffer::new` and `Gpu::submit` refuse before reaching them.
+        let (allocator, command_pool) = if caps.can_execute {
+            let allocator = Allocator::new(&AllocatorCreateDesc {
+                instance: instance.clone(),
+                device: device.clone(),
+                physical_device: pd,
+                debug_settings: Default::default(),
+                buffer_device_address: false,
+                allocation_sizes: Default::default(),
+            })
+            .map_err(|e| GpuError::Alloc {
+                name: "allocator".into(),
+                source: e,
+            })?;
+            let pool_info = vk::CommandPoolCreateInfo::default()
+                .queue_family_index(queue_family)
+                .flags(vk::CommandPoolCreateFlags::TRANSIENT);
+            // SAFETY: valid device and family.
+            let command_pool = unsafe { device.create_command_pool(&pool_info, None) }
+                .vk("vkCreateCommandPool")?;
+            (Some(allocator), command_pool)
+        } else {
+            (None, vk::CommandPool::null())
+        };
 
         let cand = &cands[index];
         let info = DeviceInfo {
@@ -560,9 +662,15 @@ impl Gpu {
         let sample_locations = caps
             .sample_locations
             .then(|| ash::ext::sample_locations::Device::new(&instance, &device));
+        let executable_properties = caps
+            .pipeline_executable_info
+            .then(|| ash::khr::pipeline_executable_properties::Device::new(&instance, &device));
         let gpu = Gpu {
             inner: Arc::new(Inner {
                 sample_locations,
+                executable_properties,
+                compile: Mutex::new(CompileSettings::default()),
+                captured: Mutex::new(Vec::new()),
                 _entry: entry,
                 instance,
                 debug_instance,
@@ -570,7 +678,7 @@ impl Gpu {
                 device,
                 queue: Mutex::new(queue),
                 queue_family,
-                allocator: Mutex::new(Some(allocator)),
+                allocator: Mutex::new(allocator),
                 allocations_made: AtomicU64::new(0),
                 command_pool: Mutex::new(command_pool),
                 validation,
@@ -581,7 +689,9 @@ impl Gpu {
                 caps,
             }),
         };
-        gpu.name_object(command_pool, "cbr.command_pool");
+        if gpu.inner.caps.can_execute {
+            gpu.name_object(command_pool, "cbr.command_pool");
+        }
         Ok(gpu)
     }
 
@@ -647,6 +757,19 @@ impl Gpu {
         &self.inner.device
     }
 
+    /// `Err(GpuError::CannotExecute)` naming the device and `what`, on a device that can only
+    /// compile pipelines (`Caps::can_execute`).
+    pub fn require_execution(&self, what: &str) -> Result<()> {
+        if self.inner.caps.can_execute {
+            Ok(())
+        } else {
+            Err(GpuError::CannotExecute {
+                device: self.inner.info.name.clone(),
+                what: what.to_string(),
+            })
+        }
+    }
+
     /// Gives a Vulkan object a debug name (visible in validation messages and capture tools).
     pub fn name_object<H: vk::Handle>(&self, handle: H, name: &str) {
         let Some(du) = &self.inner.debug_device else {
@@ -669,6 +792,7 @@ impl Gpu {
         label: &str,
         record: impl FnOnce(&mut crate::cmd::Cmd) -> Result<R>,
     ) -> Result<R> {
+        self.require_execution(&format!("submitting `{label}`"))?;
         let dev = &self.inner.device;
         let pool = self
             .inner
@@ -798,9 +922,13 @@ impl Inner {
 
 impl Drop for Inner {
     fn drop(&mut self) {
-        // SAFETY: last owner; wait for the GPU, then destroy in dependency order.
-        unsafe {
-            let _ = self.device.device_wait_idle();
+        // A device that cannot execute has nothing to wait for (and RADV's null device crashes in
+        // vkDeviceWaitIdle).
+        if self.caps.can_execute {
+            // SAFETY: last owner; wait for the GPU, then destroy in dependency order.
+            unsafe {
+                let _ = self.device.device_wait_idle();
+            }
         }
         self.completed.store(u64::MAX, Ordering::SeqCst);
         self.collect_garbage();
@@ -813,7 +941,9 @@ impl Drop for Inner {
         // SAFETY: all children of the device are gone; the messenger goes before the instance and
         // before the log it points at (kept alive by `self.validation`).
         unsafe {
-            if let Ok(pool) = self.command_pool.lock() {
+            if let Ok(pool) = self.command_pool.lock()
+                && *pool != vk::CommandPool::null()
+            {
                 self.device.destroy_command_pool(*pool, None);
             }
             self.device.destroy_device(None);

@@ -18,6 +18,17 @@ pub enum GpuError {
         "validation was requested but the layer VK_LAYER_KHRONOS_validation is not installed (`apt-get install vulkan-validationlayers`)"
     )]
     NoValidationLayer,
+    /// Something that would allocate memory or execute commands, asked of a device that can only
+    /// compile pipelines (RADV's null winsys: `RADV_FORCE_FAMILY`, no memory heaps).
+    #[error(
+        "{what} needs a device that can execute, but `{device}` can only compile pipelines (RADV's null device, selected by RADV_FORCE_FAMILY: no memory, no queue submission); unset RADV_FORCE_FAMILY or choose another driver"
+    )]
+    CannotExecute { device: String, what: String },
+    /// `RADV_FORCE_FAMILY` names a family this Mesa does not know (its driver would abort).
+    #[error(
+        "RADV_FORCE_FAMILY={family}: not a GPU family Mesa's RADV knows (it would abort); known: {known}"
+    )]
+    UnknownFamily { family: String, known: String },
     #[error("device `{device}` does not support {feature}")]
     Unsupported { device: String, feature: String },
     #[error("Vulkan call {call} failed: {result}")]

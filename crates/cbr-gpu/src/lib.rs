@@ -7,6 +7,8 @@ pub mod caps;
 pub mod cmd;
 mod context;
 pub mod error;
+pub mod executables;
+pub mod null_device;
 pub mod pipeline;
 pub mod query;
 pub mod resource;
@@ -19,6 +21,7 @@ pub use caps::{Caps, Layout};
 pub use cmd::{Attachment, Cmd, LevelCopy};
 pub use context::{DeviceInfo, DeviceReport, Gpu, GpuOptions, ValidationLog};
 pub use error::{GpuError, Result};
+pub use executables::{CompileSettings, ExecutableStats, PipelineExecutables, StatValue};
 pub use pipeline::{
     BindingDesc, ComputeDesc, DescriptorKind, DescriptorSet, GraphicsDesc, Pipeline, SetLayout,
     Write,

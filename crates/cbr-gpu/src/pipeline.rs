@@ -6,6 +6,7 @@ use ash::vk;
 
 use crate::context::{Garbage, Gpu, Inner};
 use crate::error::{GpuError, Result, VkContext};
+use crate::executables::{self, PipelineExecutables};
 use crate::resource::{Buffer, Image, Sampler};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -300,6 +301,8 @@ pub struct Pipeline {
     pub(crate) layout: vk::PipelineLayout,
     pub(crate) bind_point: vk::PipelineBindPoint,
     pub push_constant_bytes: u32,
+    /// What the driver reported, when the device's `CompileSettings` captured statistics.
+    executables: Option<PipelineExecutables>,
 }
 
 fn make_layout(
@@ -424,7 +427,9 @@ impl Pipeline {
         let mut rendering = vk::PipelineRenderingCreateInfo::default()
             .color_attachment_formats(d.color_formats)
             .depth_attachment_format(d.depth_format.unwrap_or(vk::Format::UNDEFINED));
+        let settings = gpu.compile_settings();
         let info = vk::GraphicsPipelineCreateInfo::default()
+            .flags(settings.flags())
             .stages(&stages)
             .vertex_input_state(&vertex_input)
             .input_assembly_state(&ia)
@@ -452,13 +457,15 @@ impl Pipeline {
             }
         };
         gpu.name_object(raw, d.name);
-        Ok(Pipeline {
+        Pipeline {
             gpu: gpu.inner.clone(),
             raw,
             layout,
             bind_point: vk::PipelineBindPoint::GRAPHICS,
             push_constant_bytes: d.push_constant_bytes,
-        })
+            executables: None,
+        }
+        .captured(d.name, "graphics", &settings)
     }
 
     pub fn compute(gpu: &Gpu, d: &ComputeDesc) -> Result<Pipeline> {
@@ -468,11 +475,18 @@ impl Pipeline {
             dev,
             list: Vec::new(),
         };
-        let stage = vk::PipelineShaderStageCreateInfo::default()
+        let settings = gpu.compile_settings();
+        let mut wave = vk::PipelineShaderStageRequiredSubgroupSizeCreateInfo::default()
+            .required_subgroup_size(settings.compute_subgroup_size.unwrap_or(0));
+        let mut stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(modules.add(d.shader)?)
             .name(c"main");
+        if settings.compute_subgroup_size.is_some() {
+            stage = stage.push_next(&mut wave);
+        }
         let info = vk::ComputePipelineCreateInfo::default()
+            .flags(settings.flags())
             .stage(stage)
             .layout(layout);
         // SAFETY: valid create info.
@@ -490,13 +504,39 @@ impl Pipeline {
             }
         };
         gpu.name_object(raw, d.name);
-        Ok(Pipeline {
+        Pipeline {
             gpu: gpu.inner.clone(),
             raw,
             layout,
             bind_point: vk::PipelineBindPoint::COMPUTE,
             push_constant_bytes: d.push_constant_bytes,
-        })
+            executables: None,
+        }
+        .captured(d.name, "compute", &settings)
+    }
+
+    /// Reads what the driver reported when `settings` captured it, keeps it, and appends a copy
+    /// to the device's log (`Gpu::take_captured`).
+    fn captured(
+        mut self,
+        name: &str,
+        kind: &'static str,
+        settings: &executables::CompileSettings,
+    ) -> Result<Pipeline> {
+        if settings.captures() {
+            let e = executables::read(&self.gpu, self.raw, name, kind, settings)?;
+            if let Ok(mut log) = self.gpu.captured.lock() {
+                log.push(e.clone());
+            }
+            self.executables = Some(e);
+        }
+        Ok(self)
+    }
+
+    /// The driver's statistics (and disassembly, when asked) for this pipeline's executables,
+    /// when it was created with capture on (`Gpu::set_compile_settings`); `None` otherwise.
+    pub fn executables(&self) -> Option<&PipelineExecutables> {
+        self.executables.as_ref()
     }
 }
 

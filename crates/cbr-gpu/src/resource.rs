@@ -64,6 +64,7 @@ impl Buffer {
         usage: vk::BufferUsageFlags,
         location: MemoryLocation,
     ) -> Result<Buffer> {
+        gpu.require_execution(&format!("the buffer `{name}`"))?;
         let size = size.max(4);
         let info = vk::BufferCreateInfo::default()
             .size(size)
@@ -261,6 +262,8 @@ pub fn texel_size(f: vk::Format) -> Option<usize> {
 
 impl Image {
     pub fn new(gpu: &Gpu, d: &ImageDesc) -> Result<Image> {
+        // Before vkCreateImage: RADV's null device crashes in it.
+        gpu.require_execution(&format!("the image `{}`", d.name))?;
         let max = gpu.caps().max_image_dimension_2d;
         if d.width == 0 || d.height == 0 || d.width > max || d.height > max {
             return Err(GpuError::Unsupported {

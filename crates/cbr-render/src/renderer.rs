@@ -266,12 +266,13 @@ impl Renderer {
         Ok(e)
     }
 
-    /// What [`Renderer::new`] refuses before it allocates anything: an unknown spec, parameters
-    /// the technique does not read, a device feature it lacks, and memory the device cannot
-    /// hold (crate::memory::check: the estimate, its largest allocation and the device's
+    /// What [`Renderer::new`] refuses before it allocates anything: a device that cannot execute
+    /// (RADV's null device), an unknown spec, parameters the technique does not read, a device
+    /// feature it lacks, and memory the device cannot hold (crate::memory::check: the estimate, its largest allocation and the device's
     /// limits in one message). `cbr bench` calls it for every configuration before it renders.
     pub fn check(gpu: &Gpu, scene: &Scene, settings: &RenderSettings) -> Result<MemoryEstimate> {
         let spec = &settings.spec;
+        gpu.require_execution(&format!("rendering `{spec}`"))?;
         let reg = registration(spec)?;
         let params = spec.technique.params();
         (reg.check)(&params).map_err(|message| GpuError::Config {

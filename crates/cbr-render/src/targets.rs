@@ -134,3 +134,40 @@ impl FrameTargets {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pass::ResourceKind;
+
+    /// msaa2x's support is decided (cbr_gpu::Caps::integer_color_sample_counts) from the
+    /// per-format answers for `INTEGER_ATTACHMENTS`: every integer target the frame declares
+    /// must be there, with every usage it declares.
+    #[test]
+    fn integer_targets_are_the_ones_caps_asks_about() {
+        let mut integer = 0;
+        for sample_locations in [false, true] {
+            for d in FrameTargets::decls(64, 36, 1, 2, sample_locations) {
+                let ResourceKind::Image { format, usage, .. } = d.kind else {
+                    panic!("{}: not an image", d.name);
+                };
+                let f = format!("{format:?}");
+                if !(f.ends_with("_UINT") || f.ends_with("_SINT")) {
+                    continue;
+                }
+                integer += 1;
+                assert!(
+                    cbr_gpu::caps::INTEGER_ATTACHMENTS
+                        .iter()
+                        .any(|&(af, au)| af == format && au.contains(usage)),
+                    "{}: {f} with {usage:?} is not in INTEGER_ATTACHMENTS",
+                    d.name
+                );
+            }
+        }
+        assert_eq!(
+            integer, 2,
+            "the ID target, with and without sample locations"
+        );
+    }
+}

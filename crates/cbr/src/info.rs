@@ -61,6 +61,16 @@ pub fn run(a: &InfoArgs) -> Result<()> {
         "\nchosen: [{}] {}\n  driver: {} {}\n  API: {}",
         i.index, i.name, i.driver_name, i.driver_info, i.api_version
     );
+    if !caps.can_execute {
+        println!(
+            "  cannot execute: it can only compile pipelines (RADV's null device: no memory); \
+             render and bench are refused here"
+        );
+    }
+    println!(
+        "  subgroup size {}, compute can require {:?}, pipeline executable statistics {}",
+        caps.subgroup_size, caps.compute_subgroup_sizes, caps.pipeline_executable_info
+    );
     println!(
         "  sample counts (colour+depth): {:?}; integer colour: {:?}",
         caps.sample_counts, caps.integer_color_sample_counts
