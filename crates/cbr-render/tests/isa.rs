@@ -115,3 +115,143 @@ fn child_vega10() {
     }
     common::assert_clean(&gpu);
 }
+
+/// Every registered technique (its bare name and the specs below: every layout, msaa2x with and
+/// without sample locations, every resolve mode, every post pass) compiles on the null devices
+/// of vega10 (GCN) and navi21 (RDNA 2) through the declarations rendering uses, with validation
+/// on and no message: what lavapipe accepts and a GPU driver would not. Where a family lacks a
+/// feature a spec needs (navi21: sample locations), the registration's refusal names it.
+#[test]
+fn every_registered_pass_compiles_on_vega10_and_navi21() {
+    if null_device::radeon_icd().is_none() {
+        eprintln!(
+            "skipped: RADV's ICD {} is not installed",
+            null_device::RADEON_ICD
+        );
+        return;
+    }
+    // One child per family (the driver reads the family once per process), both at once.
+    let children: Vec<_> = ["vega10", "navi21"]
+        .into_iter()
+        .map(|family| {
+            let mut c = Command::new(std::env::current_exe().expect("test binary"));
+            c.args(["child_every_pass", "--exact", "--ignored", "--nocapture"]);
+            null_device::set_env(&mut c, family).expect(family);
+            c.env(CHILD, family);
+            c.stdout(std::process::Stdio::piped());
+            c.stderr(std::process::Stdio::piped());
+            (family, c.spawn().expect("run the test binary"))
+        })
+        .collect();
+    for (family, child) in children {
+        let out = child.wait_with_output().expect("the child's output");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        eprintln!("{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+        assert!(out.status.success(), "{family}: {:?}", out.status);
+        assert!(stdout.contains("1 passed"), "{family}: {stdout}");
+    }
+}
+
+#[test]
+#[ignore = "run by every_registered_pass_compiles_on_vega10_and_navi21"]
+fn child_every_pass() {
+    let Ok(family) = std::env::var(CHILD) else {
+        return;
+    };
+    let gpu = Gpu::new(&GpuOptions {
+        device: None,
+        validation: true,
+    })
+    .expect("a null device");
+    assert!(
+        gpu.info().name.to_lowercase().contains(&family),
+        "{} is not {family}",
+        gpu.info().name
+    );
+    let shaders = cbr_render::shader_library();
+    let scene = common::demo(64, 36);
+    let materials = cbr_render::gpu_scene::material_features(&scene);
+    let ctx = cbr_render::technique::PassCtx {
+        caps: gpu.caps(),
+        width: 64,
+        height: 36,
+        instrument: true,
+        geometry: false,
+        materials: &materials,
+    };
+    let mut specs: Vec<String> = cbr_render::registry::TECHNIQUES
+        .iter()
+        .map(|t| t.name.to_string())
+        .filter(|n| cbr_render::Spec::parse(n).is_ok())
+        .collect();
+    for layout in ["masked", "split", "rotated", "msaa2x"] {
+        specs.push(format!("checkerboard:{layout}:ours"));
+    }
+    for mode in cbr_render::ResolveMode::ALL {
+        specs.push(format!("checkerboard:rotated:{}:quad:8", mode.name()));
+    }
+    specs.extend(
+        [
+            "checkerboard:msaa2x:ours:locations",
+            "checkerboard:rotated:ours:prepass+taa",
+            "checkerboard:rotated:fused",
+            "ssaa:2",
+            "msaa:4:sample:hdr",
+            "analytic:seed:aniso",
+            "deferred:vpls=64",
+            "interleaved:4x4:vpls=64:seed:direct:debug:floor",
+            "interleaved:3x2:vpls=48:implicit",
+            "interlaced:debug",
+            "upscale:bicubic",
+            "native+taa+sharpen",
+            "native+taa:inside+fxaa",
+        ]
+        .map(String::from),
+    );
+    let mut built = std::collections::BTreeSet::new();
+    let mut refused = Vec::new();
+    for text in &specs {
+        let spec = cbr_render::Spec::parse(text).expect("spec");
+        let t = cbr_render::registry::find(&spec.technique.name).expect("registered");
+        if let Some(why) = (t.needs)(&spec.technique.params(), gpu.caps()) {
+            refused.push(format!("{text}: {why}"));
+            continue;
+        }
+        let list =
+            cbr_render::registry::passes(&spec, &ctx).unwrap_or_else(|e| panic!("{text}: {e}"));
+        for d in &list.compute {
+            if built.insert(format!("{} {:?}", d.shader, d.all_defines())) {
+                d.build(&gpu, &shaders)
+                    .unwrap_or_else(|e| panic!("{family} {text}: {}: {e}", d.name));
+            }
+        }
+        for d in &list.graphics {
+            if built.insert(format!("{:?} {:?}", d.stages(), d.state)) {
+                d.build(&gpu, &shaders)
+                    .unwrap_or_else(|e| panic!("{family} {text}: {}: {e}", d.name));
+            }
+        }
+    }
+    println!(
+        "{family}: {} pipelines of {} specs",
+        built.len(),
+        specs.len()
+    );
+    for r in &refused {
+        println!("{family}: refused {r}");
+    }
+    // navi21 has no sample locations: the locations variant is the one refusal there.
+    let expected: &[&str] = match family.as_str() {
+        "navi21" => &["checkerboard:msaa2x:ours:locations"],
+        _ => &[],
+    };
+    assert_eq!(
+        refused
+            .iter()
+            .map(|r| r.split(':').take(4).collect::<Vec<_>>().join(":"))
+            .collect::<Vec<_>>(),
+        expected,
+        "{family}: refusals {refused:?}"
+    );
+    common::assert_clean(&gpu);
+}
