@@ -55,19 +55,20 @@ pub enum Filter {
 }
 
 impl Filter {
-    fn desc(self) -> SamplerDesc {
+    /// The sampler the pass makes for this filter (`None`: the sampler comes with the image).
+    fn desc(self) -> Option<SamplerDesc> {
         match self {
-            Filter::Nearest => SamplerDesc::NEAREST,
-            Filter::Linear => SamplerDesc {
+            Filter::Nearest => Some(SamplerDesc::NEAREST),
+            Filter::Linear => Some(SamplerDesc {
                 linear: true,
                 ..SamplerDesc::NEAREST
-            },
-            Filter::LinearTexels => SamplerDesc {
+            }),
+            Filter::LinearTexels => Some(SamplerDesc {
                 linear: true,
                 unnormalized: true,
                 ..SamplerDesc::NEAREST
-            },
-            Filter::Given => unreachable!("a given sampler is not made by the pass"),
+            }),
+            Filter::Given => None,
         }
     }
 }
@@ -245,14 +246,10 @@ fn samplers(gpu: &Gpu, pass: &str, bindings: &[Binding]) -> Result<BTreeMap<u8, 
     let mut samplers = BTreeMap::new();
     for b in bindings {
         if let BindKind::Sampled(filter) = b.kind
-            && filter != Filter::Given
+            && let Some(desc) = filter.desc()
             && !samplers.contains_key(&(filter as u8))
         {
-            let s = Sampler::new(
-                gpu,
-                &format!("{pass}.{filter:?}").to_lowercase(),
-                filter.desc(),
-            )?;
+            let s = Sampler::new(gpu, &format!("{pass}.{filter:?}").to_lowercase(), desc)?;
             samplers.insert(filter as u8, s);
         }
     }
