@@ -22,15 +22,29 @@ fn declared_passes_compile_on_vega10_with_their_statistics() {
         );
         return;
     }
+    let child = spawn("child_vega10", "vega10", "1");
+    expect_pass("vega10", child);
+}
+
+/// Runs the ignored test `test` of this binary in a child process on `family`'s null device
+/// (`CHILD` set to `value`), its output piped.
+fn spawn(test: &str, family: &str, value: &str) -> std::process::Child {
     let mut c = Command::new(std::env::current_exe().expect("test binary"));
-    c.args(["child_vega10", "--exact", "--ignored", "--nocapture"]);
-    null_device::set_env(&mut c, "vega10").expect("vega10");
-    c.env(CHILD, "1");
-    let out = c.output().expect("run the test binary");
+    c.args([test, "--exact", "--ignored", "--nocapture"]);
+    null_device::set_env(&mut c, family).expect(family);
+    c.env(CHILD, value);
+    c.stdout(std::process::Stdio::piped());
+    c.stderr(std::process::Stdio::piped());
+    c.spawn().expect("run the test binary")
+}
+
+/// The child passed its one test.
+fn expect_pass(family: &str, child: std::process::Child) {
+    let out = child.wait_with_output().expect("the child's output");
     let stdout = String::from_utf8_lossy(&out.stdout);
     eprintln!("{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
-    assert!(out.status.success(), "{:?}", out.status);
-    assert!(stdout.contains("1 passed"), "{stdout}");
+    assert!(out.status.success(), "{family}: {:?}", out.status);
+    assert!(stdout.contains("1 passed"), "{family}: {stdout}");
 }
 
 #[test]
@@ -53,14 +67,7 @@ fn child_vega10() {
     let shaders = cbr_render::shader_library();
     let scene = common::demo(64, 36);
     let materials = cbr_render::gpu_scene::material_features(&scene);
-    let ctx = cbr_render::technique::PassCtx {
-        caps: gpu.caps(),
-        width: 64,
-        height: 36,
-        instrument: false,
-        geometry: false,
-        materials: &materials,
-    };
+    let ctx = common::pass_ctx(&gpu, &materials, false);
     for text in [
         "checkerboard:msaa2x:ours",
         "checkerboard:msaa2x:ours:locations",
@@ -133,22 +140,10 @@ fn every_registered_pass_compiles_on_vega10_and_navi21() {
     // One child per family (the driver reads the family once per process), both at once.
     let children: Vec<_> = ["vega10", "navi21"]
         .into_iter()
-        .map(|family| {
-            let mut c = Command::new(std::env::current_exe().expect("test binary"));
-            c.args(["child_every_pass", "--exact", "--ignored", "--nocapture"]);
-            null_device::set_env(&mut c, family).expect(family);
-            c.env(CHILD, family);
-            c.stdout(std::process::Stdio::piped());
-            c.stderr(std::process::Stdio::piped());
-            (family, c.spawn().expect("run the test binary"))
-        })
+        .map(|family| (family, spawn("child_every_pass", family, family)))
         .collect();
     for (family, child) in children {
-        let out = child.wait_with_output().expect("the child's output");
-        let stdout = String::from_utf8_lossy(&out.stdout);
-        eprintln!("{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
-        assert!(out.status.success(), "{family}: {:?}", out.status);
-        assert!(stdout.contains("1 passed"), "{family}: {stdout}");
+        expect_pass(family, child);
     }
 }
 
@@ -171,14 +166,7 @@ fn child_every_pass() {
     let shaders = cbr_render::shader_library();
     let scene = common::demo(64, 36);
     let materials = cbr_render::gpu_scene::material_features(&scene);
-    let ctx = cbr_render::technique::PassCtx {
-        caps: gpu.caps(),
-        width: 64,
-        height: 36,
-        instrument: true,
-        geometry: false,
-        materials: &materials,
-    };
+    let ctx = common::pass_ctx(&gpu, &materials, true);
     let mut specs: Vec<String> = cbr_render::registry::TECHNIQUES
         .iter()
         .map(|t| t.name.to_string())

@@ -312,14 +312,7 @@ fn the_compile_only_list_is_what_rendering_builds() {
     let shaders = cbr_render::shader_library();
     let scene = common::demo(64, 36);
     let materials = cbr_render::gpu_scene::material_features(&scene);
-    let ctx = cbr_render::technique::PassCtx {
-        caps: gpu.caps(),
-        width: 64,
-        height: 36,
-        instrument: false,
-        geometry: false,
-        materials: &materials,
-    };
+    let ctx = common::pass_ctx(&gpu, &materials, false);
     let specs = [
         "native",
         "ssaa:2",

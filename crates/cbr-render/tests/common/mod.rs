@@ -123,3 +123,20 @@ pub fn render_spec(
 ) -> Vec<cbr_render::FrameOutput> {
     render_settings(gpu, s, settings_of(s, spec), frames)
 }
+
+/// The compile-only build's context at 64 x 36 for `gpu` and the demo's material variants
+/// (`materials`: `gpu_scene::material_features` of the scene).
+pub fn pass_ctx<'a>(
+    gpu: &'a Gpu,
+    materials: &'a [u32],
+    instrument: bool,
+) -> cbr_render::technique::PassCtx<'a> {
+    cbr_render::technique::PassCtx {
+        caps: gpu.caps(),
+        width: 64,
+        height: 36,
+        instrument,
+        geometry: false,
+        materials,
+    }
+}
