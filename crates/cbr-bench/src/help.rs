@@ -2,11 +2,31 @@
 //! end without a period, as clap shows a one-paragraph doc comment.
 
 /// `--techniques`.
-pub const TECHNIQUES: &str = "Configurations, comma-separated technique specs (`cbr info` lists \
-    the registered ones): native, ssaa:N, msaa:N[:sample][:hdr], upscale:bilinear|bicubic, \
-    checkerboard:LAYOUT[:MODE][:pixel|quad][:8|16][:fp16][:prepass][:locations] (MODE: ours, \
-    pq4k, intel, spatial, temporal; default ours, quad, 8), each with post passes (+sharpen). \
-    The reference and native are always run";
+pub fn techniques() -> String {
+    format!(
+        "Configurations, comma-separated technique specs: {}. The reference and native are \
+         always run",
+        registered()
+    )
+}
+
+/// Every registered technique's grammar, then the post passes that may follow each (from the
+/// registries: `cbr info` says what each does).
+pub fn registered() -> String {
+    let techniques: Vec<&str> = cbr_render::registry::TECHNIQUES
+        .iter()
+        .map(|t| t.grammar)
+        .collect();
+    let post: Vec<String> = cbr_render::registry::POST_PASSES
+        .iter()
+        .map(|p| format!("+{}", p.grammar))
+        .collect();
+    format!(
+        "{}, each optionally followed by post passes {}",
+        techniques.join(", "),
+        post.join(", ")
+    )
+}
 /// `--mappings`.
 pub const MAPPINGS: &str =
     "Sweep: resolve mappings for every checkerboard configuration that does not name one";

@@ -14,7 +14,7 @@ pub struct BenchArgs {
     /// without one, the sweep file's `scenes`.
     #[arg(required_unless_present_any = ["sweep", "merge"])]
     scene: Option<String>,
-    #[arg(long, value_delimiter = ',', default_value = "native", help = help::TECHNIQUES)]
+    #[arg(long, value_delimiter = ',', default_value = "native", help = help::techniques())]
     techniques: Vec<String>,
     #[arg(long)]
     width: Option<u32>,

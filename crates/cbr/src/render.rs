@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use cbr_bench::render::{RenderOptions, Shorthand, TECHNIQUE_HELP};
+use cbr_bench::render::{RenderOptions, Shorthand, technique_help};
 use cbr_scene::MissingTextures;
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -27,7 +27,7 @@ pub struct RenderArgs {
     /// Number of frames of the scene's camera path to render (default: the scene's).
     #[arg(long)]
     frames: Option<u32>,
-    #[arg(long, default_value = "native", help = TECHNIQUE_HELP)]
+    #[arg(long, default_value = "native", help = technique_help())]
     technique: String,
     /// Device index or name substring (see `cbr info`).
     #[arg(long)]

@@ -27,10 +27,13 @@ use crate::stats::summarize;
 pub use flags::{Shorthand, finite_f32};
 
 /// `--technique`'s help.
-pub const TECHNIQUE_HELP: &str = "Technique spec: native, ssaa:N, msaa:N, \
-    checkerboard[:LAYOUT[:MODE...]], upscale[:FILTER], interlaced[:OPTION...], then post passes \
-    (+sharpen); `cbr info` lists them all. The flags below are shorthand that edits the spec; \
-    run.json records the result";
+pub fn technique_help() -> String {
+    format!(
+        "Technique spec: {}. The flags below are shorthand that edits the spec; run.json \
+         records the result",
+        crate::help::registered()
+    )
+}
 
 /// Everything a render run takes (the binary fills it from its arguments).
 #[derive(Clone, Debug, Default)]
