@@ -854,14 +854,7 @@ impl ComputePass {
     /// as one scope).
     pub fn prepare(&self, cmd: &mut Cmd, binds: &Binds) -> Result<()> {
         self.check(binds)?;
-        for b in &self.decl.bindings {
-            let access = b.kind.compute_access();
-            match binds.get(b.name) {
-                Some(Bound::Image(i) | Bound::Sampled(i, _)) => cmd.use_image(i, access),
-                Some(Bound::Buffer(x)) => cmd.use_buffer(x, access),
-                Some(Bound::Set(_)) | None => {}
-            }
-        }
+        record_uses(cmd, &self.decl.bindings, binds, BindKind::compute_access);
         Ok(())
     }
 
@@ -958,6 +951,19 @@ impl ComputePass {
         dispatch(cmd);
         cmd.keep(set);
         Ok(())
+    }
+}
+
+/// Records, for each of `bindings`, the barrier its declared use (`access`: a compute dispatch's
+/// or a draw's) needs on what `binds` give it.
+fn record_uses(cmd: &mut Cmd, bindings: &[Binding], binds: &Binds, access: fn(BindKind) -> Access) {
+    for b in bindings {
+        let access = access(b.kind);
+        match binds.get(b.name) {
+            Some(Bound::Image(i) | Bound::Sampled(i, _)) => cmd.use_image(i, access),
+            Some(Bound::Buffer(x)) => cmd.use_buffer(x, access),
+            Some(Bound::Set(_)) | None => {}
+        }
     }
 }
 

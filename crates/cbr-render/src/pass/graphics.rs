@@ -6,7 +6,8 @@
 
 use super::{
     BTreeMap, BindKind, Binding, Binds, Bound, PushConstants, PushField, SetDecl, SetRef,
-    check_binds, check_sets, declaration, make_set, samplers, set_defines, set_layouts,
+    check_binds, check_sets, declaration, make_set, record_uses, samplers, set_defines,
+    set_layouts,
 };
 use cbr_gpu::{Cmd, Gpu, GraphicsDesc, Image, Pipeline, Result, Sampler, SetLayout, Shaders, vk};
 
@@ -280,14 +281,7 @@ impl GraphicsPass {
         }
         let own = binds.own_only(&self.decl.bindings);
         check_binds(&self.decl.name, &self.decl.bindings, &own)?;
-        for b in &self.decl.bindings {
-            let access = b.kind.graphics_access();
-            match own.get(b.name) {
-                Some(Bound::Image(i) | Bound::Sampled(i, _)) => cmd.use_image(i, access),
-                Some(Bound::Buffer(x)) => cmd.use_buffer(x, access),
-                Some(Bound::Set(_)) | None => {}
-            }
-        }
+        record_uses(cmd, &self.decl.bindings, &own, BindKind::graphics_access);
         Ok(())
     }
 
