@@ -15,6 +15,7 @@ pub mod assemble;
 pub mod attribution;
 pub mod config;
 pub mod equal_error;
+pub mod gpu_stats;
 pub mod help;
 pub mod measure;
 pub mod merge;

@@ -6,7 +6,8 @@ use ash::vk;
 use crate::access::{Access, image_barrier, memory_barrier};
 use crate::context::Gpu;
 use crate::pipeline::{DescriptorSet, Pipeline};
-use crate::resource::{Buffer, Image, Readback};
+use crate::query::Traffic;
+use crate::resource::{Buffer, Image, Readback, is_depth_format};
 
 pub struct Cmd {
     gpu: Gpu,
@@ -14,6 +15,9 @@ pub struct Cmd {
     /// Descriptor sets made while recording (one per dispatch of a declared pass): kept until
     /// the submission has completed, then handed to the deletion queue.
     sets: Vec<DescriptorSet>,
+    /// What was recorded since the last [`Cmd::take_traffic`] declared it moves (the profiler
+    /// takes it per scope).
+    traffic: Traffic,
 }
 
 /// One attachment of a rendering pass; `clear: None` loads the previous contents.
@@ -36,7 +40,18 @@ impl Cmd {
             gpu,
             cb,
             sets: Vec::new(),
+            traffic: Traffic::default(),
         }
+    }
+
+    /// Adds to what the recording declares it moves ([`Traffic`]).
+    pub fn add_traffic(&mut self, t: &Traffic) {
+        self.traffic.add(t);
+    }
+
+    /// What was declared since the last call.
+    pub fn take_traffic(&mut self) -> Traffic {
+        std::mem::take(&mut self.traffic)
     }
 
     /// Keeps `set` alive until this command buffer's submission has completed.
@@ -253,6 +268,19 @@ impl Cmd {
         layers: u32,
     ) {
         let mut extent = vk::Extent2D::default();
+        // Attachments: written once; loaded ones (no clear) and the depth also read once.
+        let mut t = Traffic {
+            render_passes: 1,
+            ..Traffic::default()
+        };
+        for a in colors.iter().chain(depth.as_ref()) {
+            let b = a.image.traffic_bytes();
+            t.bytes_written += b;
+            if a.clear.is_none() || is_depth_format(a.image.format) {
+                t.bytes_read += b;
+            }
+        }
+        self.traffic.add(&t);
         let color_infos: Vec<vk::RenderingAttachmentInfo> = colors
             .iter()
             .map(|a| {

@@ -26,6 +26,8 @@ pub use pipeline::{
     BindingDesc, ComputeDesc, DescriptorKind, DescriptorSet, GraphicsDesc, Pipeline, SetLayout,
     Write,
 };
-pub use query::{PassKind, PassTiming, PipelineStats, Profiler};
+pub use query::{PassKind, PassTiming, PipelineStats, Profiler, Traffic};
 pub use resource::{Buffer, Image, ImageDesc, Location, Readback, Sampler, SamplerDesc};
-pub use shaders::{DirTree, Request, Shaders, SourceTree, StaticTree, semantic_words};
+pub use shaders::{
+    DirTree, Request, Shaders, SourceTree, StaticTree, referenced_bindings, semantic_words,
+};

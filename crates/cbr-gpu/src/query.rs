@@ -33,12 +33,48 @@ pub struct PipelineStats {
     pub compute_invocations: u64,
 }
 
+/// What one pass moves and runs, counted while it is recorded (not measured): the bytes of the
+/// images and buffers its declared reads and writes touch, each counted once in full (level 0,
+/// every layer and sample; a pass that reads half an image still counts all of it), and the
+/// compute invocations of its direct dispatches. The input of the static cost model
+/// (`cbr gpu-stats`, docs/gpu-isa.md); the device never reports it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Traffic {
+    pub bytes_read: u64,
+    pub bytes_written: u64,
+    /// Invocations of direct dispatches (groups x local size).
+    pub compute_invocations: u64,
+    pub dispatches: u32,
+    /// Dispatches whose group counts the GPU writes (not in `compute_invocations`).
+    pub indirect_dispatches: u32,
+    /// Render passes begun (attachments counted in the bytes).
+    pub render_passes: u32,
+}
+
+impl Traffic {
+    pub fn add(&mut self, o: &Traffic) {
+        self.bytes_read += o.bytes_read;
+        self.bytes_written += o.bytes_written;
+        self.compute_invocations += o.compute_invocations;
+        self.dispatches += o.dispatches;
+        self.indirect_dispatches += o.indirect_dispatches;
+        self.render_passes += o.render_passes;
+    }
+
+    pub fn is_empty(&self) -> bool {
+        *self == Traffic::default()
+    }
+}
+
 /// One measured pass.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct PassTiming {
     pub name: String,
     pub gpu_ms: f64,
     pub stats: Option<PipelineStats>,
+    /// What the pass's recording declared it reads, writes and dispatches ([`Traffic`]).
+    #[serde(skip_serializing_if = "Traffic::is_empty")]
+    pub traffic: Traffic,
 }
 
 /// Counted in graphics scopes, in flag-bit order: vertex (bit 2), clipping primitives (6),
@@ -74,6 +110,8 @@ pub struct Profiler {
     stats: Option<(vk::QueryPool, Option<vk::QueryPool>)>,
     capacity: u32,
     scopes: Vec<(String, PassKind)>,
+    /// What each scope's recording declared (from [`Cmd::take_traffic`]).
+    traffic: Vec<Traffic>,
     open: Option<u32>,
     period_ns: f64,
     /// Barriers around compute scopes (see module docs). Switchable to demonstrate the rule.
@@ -121,6 +159,7 @@ impl Profiler {
             stats,
             capacity,
             scopes: Vec::new(),
+            traffic: Vec::new(),
             open: None,
             period_ns: f64::from(gpu.caps().timestamp_period_ns),
             compute_fences: true,
@@ -149,6 +188,7 @@ impl Profiler {
     pub fn begin_frame(&mut self) {
         self.reset();
         self.scopes.clear();
+        self.traffic.clear();
         self.open = None;
     }
 
@@ -162,6 +202,7 @@ impl Profiler {
         );
         assert!(self.open.is_none(), "profiler scopes do not nest");
         self.scopes.push((name.to_string(), kind));
+        self.traffic.push(Traffic::default());
         self.open = Some(i);
         let dev = &self.gpu.device;
         // SAFETY: queries were reset; indices are in range.
@@ -210,6 +251,9 @@ impl Profiler {
     pub fn end(&mut self, cmd: &mut Cmd, scope: Scope) {
         let i = scope.0;
         let kind = self.scopes[i as usize].1;
+        // Everything declared since the previous scope ended: a pass's barriers and binds are
+        // recorded just before its scope opens.
+        self.traffic[i as usize] = cmd.take_traffic();
         if kind == PassKind::Compute && self.compute_fences {
             cmd.full_barrier();
         }
@@ -272,6 +316,7 @@ impl Profiler {
                 name: name.clone(),
                 gpu_ms: ts[2 * i + 1].saturating_sub(ts[2 * i]) as f64 * self.period_ns * 1e-6,
                 stats,
+                traffic: self.traffic[i],
             });
         }
         Ok(out)

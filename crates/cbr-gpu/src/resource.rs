@@ -261,6 +261,17 @@ pub fn texel_size(f: vk::Format) -> Option<usize> {
 }
 
 impl Image {
+    /// Bytes of level 0, every layer and sample ([`texel_size`]; a format it does not list
+    /// counts 16 bytes a texel, never under-counted).
+    pub fn traffic_bytes(&self) -> u64 {
+        let texel = texel_size(self.format).map_or(16, |t| t as u64);
+        u64::from(self.width)
+            * u64::from(self.height)
+            * u64::from(self.layers)
+            * u64::from(self.samples)
+            * texel
+    }
+
     pub fn new(gpu: &Gpu, d: &ImageDesc) -> Result<Image> {
         // Before vkCreateImage: RADV's null device crashes in it.
         gpu.require_execution(&format!("the image `{}`", d.name))?;

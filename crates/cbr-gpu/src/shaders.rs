@@ -79,6 +79,54 @@ pub type Request = (String, Vec<(String, String)>);
 /// OpSourceExtension, OpName, OpMemberName, OpString, OpLine, OpNoLine, OpModuleProcessed) and
 /// without the header's ID bound: what the module computes, unchanged by comments, line shifts
 /// or code in branches its defines exclude. Frame caches key on it.
+/// The (set, binding) pairs of the descriptors a SPIR-V module's entry points reference: from
+/// SPIR-V 1.4 on, an `OpEntryPoint` lists every global variable its call tree uses, so a binding
+/// that the preprocessor or the optimiser removed from the code is absent. `None` for older
+/// modules (whose entry points list only inputs and outputs) or words that do not parse.
+pub fn referenced_bindings(spirv: &[u32]) -> Option<std::collections::BTreeSet<(u32, u32)>> {
+    const MAGIC: u32 = 0x0723_0203;
+    const OP_ENTRY_POINT: u32 = 15;
+    const OP_DECORATE: u32 = 71;
+    const BINDING: u32 = 33;
+    const DESCRIPTOR_SET: u32 = 34;
+    if spirv.len() < 5 || spirv[0] != MAGIC || spirv[1] < 0x0001_0400 {
+        return None;
+    }
+    let mut interface = std::collections::BTreeSet::new();
+    let mut binding = std::collections::BTreeMap::new();
+    let mut set = std::collections::BTreeMap::new();
+    let mut i = 5;
+    while i < spirv.len() {
+        let (count, op) = ((spirv[i] >> 16) as usize, spirv[i] & 0xffff);
+        if count == 0 || i + count > spirv.len() {
+            return None;
+        }
+        let w = &spirv[i..i + count];
+        match op {
+            OP_ENTRY_POINT if count >= 3 => {
+                // Execution model, id, a nul-terminated name in words, then the interface ids.
+                let name_words = w[3..].iter().position(|x| x.to_le_bytes().contains(&0))? + 1;
+                interface.extend(w[3 + name_words..].iter().copied());
+            }
+            OP_DECORATE if count == 4 && w[2] == BINDING => {
+                binding.insert(w[1], w[3]);
+            }
+            OP_DECORATE if count == 4 && w[2] == DESCRIPTOR_SET => {
+                set.insert(w[1], w[3]);
+            }
+            _ => {}
+        }
+        i += count;
+    }
+    Some(
+        binding
+            .iter()
+            .filter(|(id, _)| interface.contains(*id))
+            .map(|(id, b)| (set.get(id).copied().unwrap_or(0), *b))
+            .collect(),
+    )
+}
+
 pub fn semantic_words(spirv: &[u32]) -> Vec<u32> {
     const DEBUG: [u32; 9] = [2, 3, 4, 5, 6, 7, 8, 317, 330];
     let mut out = Vec::with_capacity(spirv.len());

@@ -25,7 +25,7 @@ use std::collections::BTreeMap;
 use cbr_gpu::{
     Access, BindingDesc, Buffer, Cmd, ComputeDesc, DescriptorKind, DescriptorSet, Gpu, GpuError,
     Image, ImageDesc, PassKind, Pipeline, Profiler, Readback, Result, Sampler, SamplerDesc,
-    SetLayout, Shaders, Write, vk,
+    SetLayout, Shaders, Traffic, Write, vk,
 };
 
 use crate::memory::MemoryEstimate;
@@ -620,6 +620,7 @@ impl ComputeDecl {
             layouts,
             pipeline,
             samplers,
+            referenced: Referenced::of(&[cs.as_slice()], 0),
         })
     }
 }
@@ -787,6 +788,7 @@ pub struct ComputePass {
     layouts: Vec<SetLayout>,
     pipeline: Pipeline,
     samplers: BTreeMap<u8, Sampler>,
+    referenced: Referenced,
 }
 
 impl ComputePass {
@@ -854,7 +856,13 @@ impl ComputePass {
     /// as one scope).
     pub fn prepare(&self, cmd: &mut Cmd, binds: &Binds) -> Result<()> {
         self.check(binds)?;
-        record_uses(cmd, &self.decl.bindings, binds, BindKind::compute_access);
+        record_uses(
+            cmd,
+            &self.decl.bindings,
+            binds,
+            BindKind::compute_access,
+            &self.referenced,
+        );
         Ok(())
     }
 
@@ -866,6 +874,13 @@ impl ComputePass {
         push: &P,
         groups: [u32; 3],
     ) -> Result<()> {
+        let g = self.decl.group;
+        cmd.add_traffic(&Traffic {
+            compute_invocations: groups.iter().map(|&n| u64::from(n)).product::<u64>()
+                * u64::from(g[0] * g[1]),
+            dispatches: 1,
+            ..Traffic::default()
+        });
         self.record(cmd, binds, push, |cmd| {
             cmd.dispatch(groups[0], groups[1], groups[2]);
         })
@@ -905,6 +920,10 @@ impl ComputePass {
         push: &P,
         (args, offset): (&Buffer, u64),
     ) -> Result<()> {
+        cmd.add_traffic(&Traffic {
+            indirect_dispatches: 1,
+            ..Traffic::default()
+        });
         self.record(cmd, binds, push, |cmd| cmd.dispatch_indirect(args, offset))
     }
 
@@ -954,17 +973,70 @@ impl ComputePass {
     }
 }
 
+/// Which bindings of a pass's own set its compiled shaders reference
+/// (cbr_gpu::referenced_bindings): only those count in its traffic. A binding the shaders do
+/// not reference in this variant (a debug output, another mode's history) moves nothing.
+#[derive(Clone, Debug, Default)]
+pub struct Referenced(Option<std::collections::BTreeSet<u32>>);
+
+impl Referenced {
+    /// From the shaders' SPIR-V, for the own set at index `set`; unknown (every binding
+    /// counts) where a module does not say.
+    pub fn of(modules: &[&[u32]], set: u32) -> Referenced {
+        let mut all = std::collections::BTreeSet::new();
+        for m in modules {
+            match cbr_gpu::referenced_bindings(m) {
+                Some(r) => all.extend(r.into_iter().filter(|p| p.0 == set).map(|p| p.1)),
+                None => return Referenced(None),
+            }
+        }
+        Referenced(Some(all))
+    }
+
+    pub fn has(&self, binding: usize) -> bool {
+        self.0
+            .as_ref()
+            .is_none_or(|r| u32::try_from(binding).is_ok_and(|b| r.contains(&b)))
+    }
+}
+
 /// Records, for each of `bindings`, the barrier its declared use (`access`: a compute dispatch's
 /// or a draw's) needs on what `binds` give it.
-fn record_uses(cmd: &mut Cmd, bindings: &[Binding], binds: &Binds, access: fn(BindKind) -> Access) {
-    for b in bindings {
+///
+/// It also declares what the bindings move to the profiler's traffic count ([`Traffic`]): each
+/// bound image or buffer once in full, read, written or both as its binding says.
+fn record_uses(
+    cmd: &mut Cmd,
+    bindings: &[Binding],
+    binds: &Binds,
+    access: fn(BindKind) -> Access,
+    referenced: &Referenced,
+) {
+    let mut t = Traffic::default();
+    for (i, b) in bindings.iter().enumerate() {
         let access = access(b.kind);
-        match binds.get(b.name) {
-            Some(Bound::Image(i) | Bound::Sampled(i, _)) => cmd.use_image(i, access),
-            Some(Bound::Buffer(x)) => cmd.use_buffer(x, access),
-            Some(Bound::Set(_)) | None => {}
-        }
+        let bytes = match binds.get(b.name) {
+            Some(Bound::Image(i) | Bound::Sampled(i, _)) => {
+                cmd.use_image(i, access);
+                i.traffic_bytes()
+            }
+            Some(Bound::Buffer(x)) => {
+                cmd.use_buffer(x, access);
+                x.size()
+            }
+            Some(Bound::Set(_)) | None => 0,
+        };
+        let bytes = if referenced.has(i) { bytes } else { 0 };
+        let (read, write) = match b.kind {
+            BindKind::Sampled(_) | BindKind::Uniform => (true, false),
+            BindKind::StorageImage(u) | BindKind::StorageBuffer(u) => {
+                (u != Use::Write, u != Use::Read)
+            }
+        };
+        t.bytes_read += if read { bytes } else { 0 };
+        t.bytes_written += if write { bytes } else { 0 };
     }
+    cmd.add_traffic(&t);
 }
 
 /// Whether `r` is the shared set named `name`.

@@ -82,9 +82,12 @@ pub fn add_timings(all: &mut Vec<PassTiming>, new: Vec<PassTiming>) {
             Some(a) => {
                 a.gpu_ms += t.gpu_ms;
                 if let (Some(s), Some(n)) = (a.stats.as_mut(), t.stats) {
+                    s.vertex_invocations += n.vertex_invocations;
+                    s.clipping_primitives += n.clipping_primitives;
                     s.fragment_invocations += n.fragment_invocations;
                     s.compute_invocations += n.compute_invocations;
                 }
+                a.traffic.add(&t.traffic);
             }
             None => all.push(t),
         }

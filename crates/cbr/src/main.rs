@@ -4,6 +4,7 @@
 
 mod bench;
 mod compare;
+mod gpu_stats;
 mod info;
 mod montage;
 mod render;
@@ -51,6 +52,10 @@ enum Command {
     /// A sweep as a Slurm job array of `cbr bench --shard K/N` tasks sharing one frame cache,
     /// and a job that merges them into one bench.json and report.html (docs/cluster.md).
     Slurm(slurm::SlurmArgs),
+    /// Every pipeline of the specs compiled for AMD GPU families by their real compiler (RADV's
+    /// null device, no GPU needed): ISA statistics per pass and a static cost model
+    /// (gpu-stats.json, gpu-stats.csv, docs/gpu-isa.md).
+    GpuStats(gpu_stats::GpuStatsArgs),
     /// Side-by-side strips of images (optionally one cropped window, enlarged) as one PNG.
     Montage(montage::MontageArgs),
 }
@@ -110,6 +115,7 @@ fn main() -> ExitCode {
         Command::Report(a) => report::run(&a),
         Command::Montage(a) => montage::run(&a),
         Command::Slurm(a) => slurm::run(&a),
+        Command::GpuStats(a) => gpu_stats::run(&a),
         Command::Compare(a) => {
             return match compare::run(&a) {
                 Ok(true) => ExitCode::SUCCESS,

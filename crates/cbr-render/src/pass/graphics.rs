@@ -5,8 +5,8 @@
 //! record time the checked binds, their barriers and the attachments by name.
 
 use super::{
-    BTreeMap, BindKind, Binding, Binds, Bound, PushConstants, PushField, SetDecl, SetRef,
-    check_binds, check_sets, declaration, make_set, record_uses, samplers, set_defines,
+    BTreeMap, BindKind, Binding, Binds, Bound, PushConstants, PushField, Referenced, SetDecl,
+    SetRef, check_binds, check_sets, declaration, make_set, record_uses, samplers, set_defines,
     set_layouts,
 };
 use cbr_gpu::{Cmd, Gpu, GraphicsDesc, Image, Pipeline, Result, Sampler, SetLayout, Shaders, vk};
@@ -221,11 +221,19 @@ impl GraphicsDecl {
             },
         )?;
         let samplers = samplers(gpu, &self.name, &self.bindings)?;
+        let own = self
+            .sets
+            .iter()
+            .position(|r| *r == SetRef::Own)
+            .unwrap_or(0) as u32;
+        let mut modules = vec![vs.as_slice(), fs.as_slice()];
+        modules.extend(gs.as_ref().map(|g| g.as_slice()));
         Ok(GraphicsPass {
             decl: self.clone(),
             layouts,
             pipeline,
             samplers,
+            referenced: Referenced::of(&modules, own),
         })
     }
 }
@@ -236,6 +244,7 @@ pub struct GraphicsPass {
     layouts: Vec<SetLayout>,
     pipeline: Pipeline,
     samplers: BTreeMap<u8, Sampler>,
+    referenced: Referenced,
 }
 
 impl GraphicsPass {
@@ -281,7 +290,13 @@ impl GraphicsPass {
         }
         let own = binds.own_only(&self.decl.bindings);
         check_binds(&self.decl.name, &self.decl.bindings, &own)?;
-        record_uses(cmd, &self.decl.bindings, &own, BindKind::graphics_access);
+        record_uses(
+            cmd,
+            &self.decl.bindings,
+            &own,
+            BindKind::graphics_access,
+            &self.referenced,
+        );
         Ok(())
     }
 
