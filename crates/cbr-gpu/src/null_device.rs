@@ -60,10 +60,18 @@ pub const FAMILIES: &[&str] = &[
     "gfx1103_r2",
 ];
 
+/// Where RADV's ICD manifest is looked for: `$CBR_RADEON_ICD` (a Mesa installed elsewhere), else
+/// [`RADEON_ICD`].
+pub fn radeon_icd_path() -> PathBuf {
+    std::env::var_os("CBR_RADEON_ICD")
+        .filter(|p| !p.is_empty())
+        .map_or_else(|| PathBuf::from(RADEON_ICD), PathBuf::from)
+}
+
 /// RADV's ICD manifest, when installed.
 pub fn radeon_icd() -> Option<PathBuf> {
-    let p = Path::new(RADEON_ICD);
-    p.is_file().then(|| p.to_path_buf())
+    let p = radeon_icd_path();
+    Path::new(&p).is_file().then_some(p)
 }
 
 /// `Ok` when Mesa knows `family` (case-insensitive), else the error naming the known ones.
@@ -88,7 +96,9 @@ pub fn env(family: &str) -> Result<Vec<(&'static str, String)>> {
     check_family(family)?;
     let icd = radeon_icd().ok_or_else(|| {
         GpuError::Other(format!(
-            "RADV's ICD {RADEON_ICD} is not installed (Debian: `apt-get install mesa-vulkan-drivers`)"
+            "RADV's ICD {} is not installed (Debian: `apt-get install mesa-vulkan-drivers`; \
+             elsewhere: CBR_RADEON_ICD=PATH)",
+            radeon_icd_path().display()
         ))
     })?;
     Ok(vec![

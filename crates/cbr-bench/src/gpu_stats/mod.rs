@@ -468,7 +468,8 @@ pub fn child(a: &ChildArgs) -> Result<()> {
 }
 
 /// The traced pass a pipeline ran in: its name with `.mat<N>` (material variant) segments
-/// dropped, exactly, else the longest traced name it extends at a `.`.
+/// dropped, exactly, else the longest traced name it extends at a `.` or `_`
+/// (`analytic.albedo_plan` runs in `analytic.albedo`).
 pub fn scope_of<'a>(pipeline: &str, passes: &'a [PassTiming]) -> Option<&'a PassTiming> {
     let plain: Vec<&str> = pipeline
         .split('.')
@@ -486,6 +487,59 @@ pub fn scope_of<'a>(pipeline: &str, passes: &'a [PassTiming]) -> Option<&'a Pass
     passes
         .iter()
         .filter(usable)
-        .filter(|p| plain.starts_with(&format!("{}.", p.name)))
+        .filter(|p| {
+            plain
+                .strip_prefix(p.name.as_str())
+                .is_some_and(|rest| rest.starts_with(['.', '_']))
+        })
         .max_by_key(|p| p.name.len())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pass(name: &str) -> PassTiming {
+        PassTiming {
+            name: name.into(),
+            gpu_ms: 0.0,
+            stats: None,
+            traffic: Default::default(),
+        }
+    }
+
+    #[test]
+    fn pipelines_find_the_pass_they_ran_in() {
+        let traced: Vec<PassTiming> = [
+            "native.raster.depth",
+            "native.raster",
+            "resolve",
+            "analytic.albedo",
+            "readback",
+        ]
+        .map(pass)
+        .into();
+        let of = |p: &str| scope_of(p, &traced).map(|t| t.name.clone());
+        // Material variants run in their pass; the depth pre-pass's variants in its own.
+        assert_eq!(of("native.raster.mat3").as_deref(), Some("native.raster"));
+        assert_eq!(
+            of("native.raster.mat3.depth").as_deref(),
+            Some("native.raster.depth")
+        );
+        assert_eq!(
+            of("native.raster.mat0.late").as_deref(),
+            Some("native.raster")
+        );
+        assert_eq!(of("resolve").as_deref(), Some("resolve"));
+        assert_eq!(
+            of("analytic.albedo.order").as_deref(),
+            Some("analytic.albedo")
+        );
+        // A name that merely starts like a pass is not in it; readbacks are nobody's scope.
+        assert_eq!(of("resolved"), None);
+        assert_eq!(of("readback.post"), None);
+        assert_eq!(of("taa"), None);
+        // "material" is not a variant segment.
+        assert_eq!(of("native.raster.material"), Some("native.raster".into()));
+    }
 }
