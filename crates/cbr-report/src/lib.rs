@@ -8,7 +8,8 @@
 //!
 //! Modules by what they draw: `provenance`, `summary` (the sortable table), `chart` (speed
 //! against error; axis ticks in `ticks`), `viewer` (panels, wipe, colour bar), `crops`,
-//! `timing` (per-pass bars), `curves` (per-frame error); `bench` reads bench.json, `files`
+//! `timing` (per-pass bars), `gpu_isa` (the static cost model of `cbr gpu-stats` beside the
+//! lavapipe medians, where the folder has a gpu-stats.json), `curves` (per-frame error); `bench` reads bench.json, `files`
 //! embeds images and links raw files, `util` holds the shared helpers.
 #![forbid(unsafe_code)]
 
@@ -21,6 +22,7 @@ mod chart;
 mod crops;
 mod curves;
 mod files;
+mod gpu_isa;
 mod provenance;
 mod summary;
 #[cfg(test)]
@@ -87,6 +89,7 @@ fn scene_section(
     attribution::attribution(html, &g.rows, g.reference);
     html.push_str("<h3>GPU time per pass (medians)</h3>\n");
     timing::timing_bars(html, &g.rows);
+    gpu_isa::gpu_isa(html, &b.dir, &g.rows, (*w, *h))?;
     let _ = writeln!(html, "<h3>FLIP per frame vs {}</h3>", esc(g.reference));
     curves::error_curves(html, &g.rows, g.reference);
     files::raw_files(ctx, html, b, g);

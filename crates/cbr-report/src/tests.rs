@@ -589,3 +589,53 @@ fn rows_placed_on_a_supersampling_ladder_show_its_n_and_the_speedup() {
             .all(|(k, _)| !k.starts_with("equal_ssaa"))
     );
 }
+
+#[test]
+fn a_gpu_stats_file_beside_bench_json_adds_the_model_beside_lavapipe() {
+    use serde_json::json;
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path().join("a");
+    std::fs::create_dir_all(&dir).unwrap();
+    let b = write_fixture(&dir, &fixture_json(true, "native"));
+    let frame = |family: &str, gpu: &str, us: f64| {
+        json!({"family": family, "spec": "checkerboard:rotated:ours", "wave": 64, "gpu": gpu,
+               "width": 16, "height": 12, "alu_us": us, "memory_us": 1.0, "predicted_us": us + 2.0,
+               "passes": [
+                   {"pass": "native.raster", "alu_us": 2.0, "memory_us": 1.0, "predicted_us": 2.0, "bound": "alu"},
+                   {"pass": "resolve", "alu_us": 0.5, "memory_us": us, "predicted_us": us, "bound": "memory"}],
+               "unmodelled": []})
+    };
+    let study = json!({
+        "version": 1, "width": 16, "height": 12,
+        "families": [{"family": "vega10", "gpu": "Radeon RX Vega 56"},
+                     {"family": "navi21", "gpu": "Radeon RX 6800 XT"}],
+        "frames": [frame("vega10", "Radeon RX Vega 56", 12.25), frame("navi21", "Radeon RX 6800 XT", 7.5)],
+    });
+    std::fs::write(dir.join("gpu-stats.json"), study.to_string()).unwrap();
+    let html = render(&[b], &options(&d.path().join("report.html"), None)).unwrap();
+    assert_eq!(
+        html.matches("Static GPU cost model").count(),
+        2,
+        "both groups"
+    );
+    // The 8x6 group: the file models another size.
+    assert!(
+        html.contains("gpu-stats.json models 16x12, not this group's 8x6"),
+        "{html}"
+    );
+    // The 16x12 group: ours' resolve, lavapipe median 0.3 ms, beside both GPUs.
+    for s in [
+        "<th>Radeon RX Vega 56 (vega10) us</th>",
+        "<td>checkerboard:rotated:ours</td><td>resolve</td><td>0.300</td><td>12.2 m</td><td>7.5 m</td>",
+        "<td>frame (these passes)</td><td>1.300</td><td>14.2</td><td>9.5</td>",
+    ] {
+        assert!(html.contains(s), "{s}");
+    }
+    // Configurations the file does not model get no row.
+    assert!(!html.contains("<td>upscale:bilinear</td><td>resolve</td>"));
+    // A broken file is an error naming it.
+    std::fs::write(dir.join("gpu-stats.json"), "{").unwrap();
+    let b = BenchDir::load(&dir).unwrap();
+    let err = render(&[b], &options(&d.path().join("report.html"), None)).unwrap_err();
+    assert!(err.to_string().contains("gpu-stats.json"), "{err}");
+}
