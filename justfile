@@ -99,6 +99,12 @@ resolve-cost:
 resolve-jit-cost: setup
     python3 scripts/resolve-jit-cost.py checkerboard:rotated:ours checkerboard:rotated:pq4k checkerboard:rotated:ours:pixel checkerboard:rotated:pq4k:pixel
 
+# GPU evidence without a GPU (docs/gpu-isa.md): every pipeline compiled by ACO on RADV's null
+# device for AMD families, the cost model's check against the Stadia write-up, the resolve
+# matrix, modelled frames and the every-technique run, into out/gpu-isa (about 10 min on 2 cores).
+gpu-isa: setup
+    scripts/gpu-isa.sh {{out}}/gpu-isa
+
 # The hard-case gallery (docs/hard-cases.md): every technique on every built-in hard case
 # (`cbr info` lists them) at 320x180 against ssaa:16 (cached in out/cache; ~25 min cold on 2
 # cores), strips by `cbr montage` into docs/images/hard-cases/.

@@ -42,6 +42,9 @@ pub struct PipelineStats {
 pub struct Traffic {
     pub bytes_read: u64,
     pub bytes_written: u64,
+    /// Of `bytes_written`, those written to host-visible memory: cbr's readbacks for its own
+    /// analysis, not part of a GPU frame.
+    pub host_bytes_written: u64,
     /// Invocations of direct dispatches (groups x local size).
     pub compute_invocations: u64,
     pub dispatches: u32,
@@ -55,6 +58,7 @@ impl Traffic {
     pub fn add(&mut self, o: &Traffic) {
         self.bytes_read += o.bytes_read;
         self.bytes_written += o.bytes_written;
+        self.host_bytes_written += o.host_bytes_written;
         self.compute_invocations += o.compute_invocations;
         self.dispatches += o.dispatches;
         self.indirect_dispatches += o.indirect_dispatches;

@@ -131,6 +131,13 @@ impl Buffer {
     pub fn raw(&self) -> vk::Buffer {
         self.raw
     }
+    /// Host-visible (mapped) memory: a readback or upload buffer.
+    pub fn host_visible(&self) -> bool {
+        self.alloc
+            .as_ref()
+            .is_some_and(|a| a.mapped_ptr().is_some())
+    }
+
     pub fn size(&self) -> u64 {
         self.size
     }

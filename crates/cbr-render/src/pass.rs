@@ -620,7 +620,7 @@ impl ComputeDecl {
             layouts,
             pipeline,
             samplers,
-            referenced: Referenced::of(&[cs.as_slice()], 0),
+            referenced: Referenced::of(&self.name, &[cs.as_slice()], 0),
         })
     }
 }
@@ -977,24 +977,36 @@ impl ComputePass {
 /// (cbr_gpu::referenced_bindings): only those count in its traffic. A binding the shaders do
 /// not reference in this variant (a debug output, another mode's history) moves nothing.
 #[derive(Clone, Debug, Default)]
-pub struct Referenced(Option<std::collections::BTreeSet<u32>>);
+pub struct Referenced {
+    /// The pass's name (the `cbr::traffic` debug log names each binding's bytes under it).
+    pass: String,
+    bindings: Option<std::collections::BTreeSet<u32>>,
+}
 
 impl Referenced {
     /// From the shaders' SPIR-V, for the own set at index `set`; unknown (every binding
     /// counts) where a module does not say.
-    pub fn of(modules: &[&[u32]], set: u32) -> Referenced {
+    pub fn of(pass: &str, modules: &[&[u32]], set: u32) -> Referenced {
         let mut all = std::collections::BTreeSet::new();
         for m in modules {
             match cbr_gpu::referenced_bindings(m) {
                 Some(r) => all.extend(r.into_iter().filter(|p| p.0 == set).map(|p| p.1)),
-                None => return Referenced(None),
+                None => {
+                    return Referenced {
+                        pass: pass.into(),
+                        bindings: None,
+                    };
+                }
             }
         }
-        Referenced(Some(all))
+        Referenced {
+            pass: pass.into(),
+            bindings: Some(all),
+        }
     }
 
     pub fn has(&self, binding: usize) -> bool {
-        self.0
+        self.bindings
             .as_ref()
             .is_none_or(|r| u32::try_from(binding).is_ok_and(|b| r.contains(&b)))
     }
@@ -1015,16 +1027,16 @@ fn record_uses(
     let mut t = Traffic::default();
     for (i, b) in bindings.iter().enumerate() {
         let access = access(b.kind);
-        let bytes = match binds.get(b.name) {
+        let (bytes, host) = match binds.get(b.name) {
             Some(Bound::Image(i) | Bound::Sampled(i, _)) => {
                 cmd.use_image(i, access);
-                i.traffic_bytes()
+                (i.traffic_bytes(), false)
             }
             Some(Bound::Buffer(x)) => {
                 cmd.use_buffer(x, access);
-                x.size()
+                (x.size(), x.host_visible())
             }
-            Some(Bound::Set(_)) | None => 0,
+            Some(Bound::Set(_)) | None => (0, false),
         };
         let bytes = if referenced.has(i) { bytes } else { 0 };
         let (read, write) = match b.kind {
@@ -1033,8 +1045,19 @@ fn record_uses(
                 (u != Use::Write, u != Use::Read)
             }
         };
+        if bytes > 0 {
+            tracing::debug!(
+                target: "cbr::traffic",
+                "{}: `{}` {bytes} bytes{}{}",
+                referenced.pass,
+                b.name,
+                if read { " read" } else { "" },
+                if write { " written" } else { "" }
+            );
+        }
         t.bytes_read += if read { bytes } else { 0 };
         t.bytes_written += if write { bytes } else { 0 };
+        t.host_bytes_written += if write && host { bytes } else { 0 };
     }
     cmd.add_traffic(&t);
 }

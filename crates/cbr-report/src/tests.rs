@@ -603,7 +603,7 @@ fn a_gpu_stats_file_beside_bench_json_adds_the_model_beside_lavapipe() {
                "passes": [
                    {"pass": "native.raster", "alu_us": 2.0, "memory_us": 1.0, "predicted_us": 2.0, "bound": "alu"},
                    {"pass": "resolve", "alu_us": 0.5, "memory_us": us, "predicted_us": us, "bound": "memory"}],
-               "unmodelled": []})
+               "unmodelled": [], "excluded": []})
     };
     let study = json!({
         "version": 1, "width": 16, "height": 12,

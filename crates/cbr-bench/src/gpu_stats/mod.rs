@@ -93,6 +93,9 @@ pub struct ChildOutput {
 pub struct Traced {
     pub spec: String,
     pub passes: Vec<PassTiming>,
+    /// Why the tracing device could not run it (its pipelines are still compiled and listed,
+    /// without a model): lavapipe has no 2x MSAA, for one.
+    pub error: Option<String>,
 }
 
 /// The specs to study: the given ones (each checked against the registries), or every
@@ -319,13 +322,33 @@ fn trace(
     for text in specs {
         let spec = Spec::parse(text).map_err(anyhow::Error::msg)?;
         let settings = RenderSettings::new(w, h, spec);
-        let mut r = Renderer::new(&gpu, &shaders, scene, settings)
-            .with_context(|| format!("tracing `{text}` on {}", gpu.info().name))?;
-        r.render(scene, 0)?;
-        let f = r.render(scene, 1)?;
-        out.push(Traced {
-            spec: text.clone(),
-            passes: f.timings,
+        // A spec the tracing device cannot run (an unsupported layout, memory) is said in its
+        // rows; anything else is an error.
+        let traced = Renderer::check(&gpu, scene, &settings)
+            .map_err(|e| e.to_string())
+            .and_then(|_| {
+                let mut r =
+                    Renderer::new(&gpu, &shaders, scene, settings).map_err(|e| e.to_string())?;
+                r.render(scene, 0).map_err(|e| e.to_string())?;
+                r.render(scene, 1).map_err(|e| e.to_string())
+            });
+        out.push(match traced {
+            Ok(f) => Traced {
+                spec: text.clone(),
+                passes: f.timings,
+                error: None,
+            },
+            Err(e) => {
+                tracing::warn!("`{text}` cannot be traced on {}: {e}", gpu.info().name);
+                Traced {
+                    spec: text.clone(),
+                    passes: Vec::new(),
+                    error: Some(format!(
+                        "the tracing device {} cannot run it: {e}",
+                        gpu.info().name
+                    )),
+                }
+            }
         });
     }
     Ok(out)

@@ -65,6 +65,9 @@ pub struct FrameModel {
     pub passes: Vec<PassModel>,
     /// Pipelines of the frame without a model, and why (the frame's figure leaves them out).
     pub unmodelled: Vec<String>,
+    /// Passes left out of the frame: they write only host-visible memory (cbr's readbacks for
+    /// its own analysis, such as the raw checkerboard frame), which a GPU frame does not do.
+    pub excluded: Vec<String>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -212,7 +215,10 @@ impl Study {
                             "the model names no GPU of the {} family",
                             child.family
                         )),
-                        (_, None) => Err("it did not run in the traced frame".to_string()),
+                        (_, None) => Err(t
+                            .error
+                            .clone()
+                            .unwrap_or_else(|| "it did not run in the traced frame".to_string())),
                         (Some(g), Some(p)) => inputs(c, p, model_only).and_then(|(n, b)| {
                             row.invocations = Some(n);
                             row.bytes = Some(b);
@@ -233,7 +239,7 @@ impl Study {
                     }
                     rows.push(row);
                 }
-                if let Some(g) = gpu.filter(|_| !model_only) {
+                if let Some(g) = gpu.filter(|_| !model_only && t.error.is_none()) {
                     frames.extend(frame_models(g, size, t, &rows[first..]));
                 }
             }
@@ -301,7 +307,16 @@ fn frame_models(g: &GpuModel, size: (u32, u32), t: &Traced, rows: &[Row]) -> Vec
         .map(|wave| {
             let of_wave = |r: &&Row| is_graphics(r) || r.wave == wave;
             let mut passes = Vec::new();
+            let mut excluded = Vec::new();
             for p in &t.passes {
+                let w = &p.traffic;
+                if w.bytes_written > 0 && w.host_bytes_written == w.bytes_written {
+                    excluded.push(format!(
+                        "{}: writes only host-visible memory (a readback for cbr's analysis)",
+                        p.name
+                    ));
+                    continue;
+                }
                 let mine: Vec<&Row> = rows
                     .iter()
                     .filter(of_wave)
@@ -359,6 +374,7 @@ fn frame_models(g: &GpuModel, size: (u32, u32), t: &Traced, rows: &[Row]) -> Vec
                             .map(|w| format!("{} ({}): {w}", r.pass, r.stage))
                     })
                     .collect(),
+                excluded,
             }
         })
         .collect()
@@ -539,11 +555,14 @@ pub fn table(study: &Study) -> String {
                 f.predicted_us,
                 f.alu_us,
                 f.memory_us,
-                if f.unmodelled.is_empty() {
-                    String::new()
-                } else {
-                    format!(", {} pipeline(s) unmodelled", f.unmodelled.len())
-                }
+                [
+                    (f.unmodelled.len(), "pipeline(s) unmodelled"),
+                    (f.excluded.len(), "readback pass(es) left out"),
+                ]
+                .iter()
+                .filter(|(n, _)| *n > 0)
+                .map(|(n, what)| format!(", {n} {what}"))
+                .collect::<String>()
             );
         }
     }

@@ -233,7 +233,7 @@ impl GraphicsDecl {
             layouts,
             pipeline,
             samplers,
-            referenced: Referenced::of(&modules, own),
+            referenced: Referenced::of(&self.name, &modules, own),
         })
     }
 }
