@@ -151,10 +151,12 @@ fn gpu_stats_compiles_every_pass_per_family_and_models_it() {
     );
 
     // --model-only: no scene raster; compute rows keep their figures, raster rows say why not.
+    // (--families given twice adds up: vega10,navi21,vega10 compiles each family once.)
     let (m, _) = study(
         &tmp.path().join("m"),
         &["--model-only", "--families", "vega10"],
     );
+    assert_eq!(m["families"].as_array().map(Vec::len), Some(2));
     let key = |r: &Value| {
         format!(
             "{} {} {} {} {}",

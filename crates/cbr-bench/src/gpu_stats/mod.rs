@@ -128,8 +128,13 @@ pub fn run(a: &GpuStatsOptions) -> Result<String> {
             DEFAULT_FAMILIES.join(",")
         );
     }
+    let mut families: Vec<String> = Vec::new();
     for f in &a.families {
         null_device::env(f).with_context(|| format!("--families {f}"))?;
+        let f = f.trim().to_lowercase();
+        if !families.contains(&f) {
+            families.push(f);
+        }
     }
     let mut scene = cbr_scene::load(&a.scene, &Default::default())?;
     let s = &mut scene.settings;
@@ -142,8 +147,7 @@ pub fn run(a: &GpuStatsOptions) -> Result<String> {
         .with_context(|| format!("cannot create the output folder {}", a.out.display()))?;
 
     // The families compile in their own processes while this one traces.
-    let children = a
-        .families
+    let children = families
         .iter()
         .map(|f| spawn_child(a, f, &specs, size, &materials, &[]))
         .collect::<Result<Vec<_>>>()?;

@@ -42,26 +42,21 @@ pub struct Row {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct PassModel {
     pub pass: String,
-    pub alu_us: f64,
-    pub memory_us: f64,
-    pub predicted_us: f64,
-    pub bound: String,
+    #[serde(flatten)]
+    pub model: Prediction,
 }
 
 /// A spec's frame on one family by the model: the sum over its traced passes of each pass's
-/// prediction (a pass's ALU time: per stage, the costliest pipeline that ran in it).
+/// prediction (a pass's ALU time: per stage, the costliest pipeline that ran in it). Its
+/// `bound` says which sum is the larger.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct FrameModel {
     pub family: String,
     pub spec: String,
     /// The compute wave size (raster stages run as the driver chose).
     pub wave: u32,
-    pub gpu: String,
-    pub width: u32,
-    pub height: u32,
-    pub alu_us: f64,
-    pub memory_us: f64,
-    pub predicted_us: f64,
+    #[serde(flatten)]
+    pub total: Prediction,
     pub passes: Vec<PassModel>,
     /// Pipelines of the frame without a model, and why (the frame's figure leaves them out).
     pub unmodelled: Vec<String>,
@@ -341,28 +336,20 @@ fn frame_models(g: &GpuModel, size: (u32, u32), t: &Traced, rows: &[Row]) -> Vec
                     })
                     .sum();
                 let memory = models[0].1.memory_us;
-                let m = model::predict(g, size, alu, memory);
                 passes.push(PassModel {
                     pass: p.name.clone(),
-                    alu_us: m.alu_us,
-                    memory_us: m.memory_us,
-                    predicted_us: m.predicted_us,
-                    bound: m.bound,
+                    model: model::predict(g, size, alu, memory),
                 });
             }
-            let sum = |f: fn(&PassModel) -> f64| {
-                (passes.iter().map(f).sum::<f64>() * 100.0).round() / 100.0
-            };
+            let sum = |f: fn(&Prediction) -> f64| passes.iter().map(|p| f(&p.model)).sum::<f64>();
+            let mut total = model::predict(g, size, sum(|p| p.alu_us), sum(|p| p.memory_us));
+            // A frame's passes are each bound by one or the other: its time is their sum.
+            total.predicted_us = (sum(|p| p.predicted_us) * 100.0).round() / 100.0;
             FrameModel {
                 family: first.family.clone(),
                 spec: t.spec.clone(),
                 wave,
-                gpu: g.name.to_string(),
-                width: size.0,
-                height: size.1,
-                alu_us: sum(|p| p.alu_us),
-                memory_us: sum(|p| p.memory_us),
-                predicted_us: sum(|p| p.predicted_us),
+                total,
                 passes,
                 unmodelled: rows
                     .iter()
@@ -551,10 +538,10 @@ pub fn table(study: &Study) -> String {
                 f.family,
                 f.spec,
                 f.wave,
-                f.gpu,
-                f.predicted_us,
-                f.alu_us,
-                f.memory_us,
+                f.total.gpu,
+                f.total.predicted_us,
+                f.total.alu_us,
+                f.total.memory_us,
                 [
                     (f.unmodelled.len(), "pipeline(s) unmodelled"),
                     (f.excluded.len(), "readback pass(es) left out"),
