@@ -217,9 +217,13 @@ impl Study {
                         (Some(g), Some(p)) => inputs(c, p, model_only).and_then(|(n, b)| {
                             row.invocations = Some(n);
                             row.bytes = Some(b);
-                            let thr = stat(&c.stats, INVERSE_THROUGHPUT).ok_or_else(|| {
-                                format!("the driver reports no `{INVERSE_THROUGHPUT}`")
-                            })?;
+                            // RADV 22.3 reports 0 for some large programs (gfx1100's wave64
+                            // `analytic.resolve`): no estimate, not a free program.
+                            let thr = stat(&c.stats, INVERSE_THROUGHPUT)
+                                .filter(|t| *t > 0.0)
+                                .ok_or_else(|| {
+                                    format!("the driver reports no `{INVERSE_THROUGHPUT}` (or 0)")
+                                })?;
                             Ok(model::predict(
                                 g,
                                 size,
