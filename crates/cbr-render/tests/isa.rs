@@ -125,11 +125,12 @@ fn child_vega10() {
 
 /// Every registered technique (its bare name and the specs below: every layout, msaa2x with and
 /// without sample locations, every resolve mode, every post pass) compiles on the null devices
-/// of vega10 (GCN) and navi21 (RDNA 2) through the declarations rendering uses, with validation
-/// on and no message: what lavapipe accepts and a GPU driver would not. Where a family lacks a
-/// feature a spec needs (navi21: sample locations), the registration's refusal names it.
+/// of polaris10 (GCN 4), vega10 (GCN 5), navi21 (RDNA 2) and gfx1100 (RDNA 3) through the
+/// declarations rendering uses, with validation on and no message: what lavapipe accepts and a
+/// GPU driver would not. Where a family lacks a feature a spec needs (RDNA: sample locations),
+/// the registration's refusal names it.
 #[test]
-fn every_registered_pass_compiles_on_vega10_and_navi21() {
+fn every_registered_pass_compiles_on_four_families() {
     if null_device::radeon_icd().is_none() {
         eprintln!(
             "skipped: RADV's ICD {} is not installed",
@@ -137,8 +138,8 @@ fn every_registered_pass_compiles_on_vega10_and_navi21() {
         );
         return;
     }
-    // One child per family (the driver reads the family once per process), both at once.
-    let children: Vec<_> = ["vega10", "navi21"]
+    // One child per family (the driver reads the family once per process), all at once.
+    let children: Vec<_> = ["polaris10", "vega10", "navi21", "gfx1100"]
         .into_iter()
         .map(|family| (family, spawn("child_every_pass", family, family)))
         .collect();
@@ -148,7 +149,7 @@ fn every_registered_pass_compiles_on_vega10_and_navi21() {
 }
 
 #[test]
-#[ignore = "run by every_registered_pass_compiles_on_vega10_and_navi21"]
+#[ignore = "run by every_registered_pass_compiles_on_four_families"]
 fn child_every_pass() {
     let Ok(family) = std::env::var(CHILD) else {
         return;
@@ -228,9 +229,9 @@ fn child_every_pass() {
     for r in &refused {
         println!("{family}: refused {r}");
     }
-    // navi21 has no sample locations: the locations variant is the one refusal there.
+    // RDNA has no sample locations: the locations variant is the one refusal there.
     let expected: &[&str] = match family.as_str() {
-        "navi21" => &["checkerboard:msaa2x:ours:locations"],
+        "navi21" | "gfx1100" => &["checkerboard:msaa2x:ours:locations"],
         _ => &[],
     };
     assert_eq!(

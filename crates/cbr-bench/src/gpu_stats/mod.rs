@@ -151,10 +151,20 @@ pub fn run(a: &GpuStatsOptions) -> Result<String> {
         .iter()
         .map(|f| spawn_child(a, f, &specs, size, &materials, &[]))
         .collect::<Result<Vec<_>>>()?;
+    let started = std::time::Instant::now();
     let traced = trace(a, &mut scene, &specs)?;
+    tracing::info!(
+        "traced {} spec(s) in {:.1} s",
+        specs.len(),
+        started.elapsed().as_secs_f64()
+    );
     let mut outputs = Vec::new();
     for (family, child, file) in children {
         outputs.push(answer(a, &family, child, &file, &specs, size, &materials)?);
+        tracing::info!(
+            "{family} compiled after {:.1} s",
+            started.elapsed().as_secs_f64()
+        );
     }
     let study = output::Study::join(&scene.source, size, a.model_only, &outputs, &traced);
     write_outputs(&a.out, &study, &outputs, &traced, a.disassembly)?;
