@@ -406,6 +406,42 @@ real3 clamp_to_box(real3 h, Sample n[4], inout uint dbg) {
     return h;
 }
 
+// `ours`' test of candidate ck (a neighbour's surface; with the prepass the pixel's own, moving
+// as ck): more than half of the bilinear footprint at q - v on history texels showing its object
+// at a depth inside the span of the neighbours showing it (or within the tolerance). On success
+// the result takes its depth, ID and velocity and `valid` the footprint's valid taps; `why`
+// collects the reasons of rejected taps either way.
+bool try_candidate(vec2 q, Sample ck, Sample n[4], bool own, uint own_id, float own_d, bool multi,
+                   bool use_ids, bool use_depth, bool use_v, inout Result r, inout uint valid,
+                   inout uint why) {
+    vec2 v = use_v ? ck.v : vec2(0.0);
+    uint id = own ? own_id : ck.ids.x;
+    float d = own ? own_d : ck.d;
+    // The depth span of the neighbours showing this object (with the prepass, the pixel's own
+    // depth).
+    float lo = d;
+    float hi = d;
+    if (multi) {
+        for (int i = 0; i < 4; i++) {
+            if (n[i].ids.x == id) {
+                lo = min(lo, n[i].d);
+                hi = max(hi, n[i].d);
+            }
+        }
+    }
+    uint tap_valid;
+    uvec2 g0;
+    float wsum = history_weight(q - v, id, lo, hi, use_ids, use_depth, tap_valid, why, g0);
+    if (wsum > 0.5) {
+        r.d = d;
+        r.id = id;
+        r.v = v;
+        valid = tap_valid;
+        return true;
+    }
+    return false;
+}
+
 Result resolve_missing(ivec2 p, Sample n[4]) {
     Result r;
     r.dbg = DBG_MISSING;
@@ -551,17 +587,18 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
     bool found = false;
     uint why = 0u;
     real3 h = real3(0.0);
-    // The hypotheses are tested in one loop, so that a SIMD machine that predicates branches
-    // (llvmpipe runs both sides of every `if`, but leaves a loop once no lane goes on) fetches
-    // history only in the iterations some lane needs:
+    // The hypotheses, in order, each tested only where every earlier one failed:
     // - First, where the neighbourhood is still (every neighbour below the static threshold): the
     //   history at p, if it did not move either (with the prepass: if it shows the pixel's own
     //   object). Nothing can have covered or uncovered p, so its history stands as it is. This
     //   keeps thin features that no neighbour shows; a disoccluded pixel's history moved, so it is
-    //   not taken. Its fetch is tap 0 of the footprint at p's centre.
+    //   not taken. One geometry fetch at p (the footprint at p's centre is that texel alone).
     // - Then the candidates: the first with more than half of its bilinear footprint at q - v
-    //   valid wins.
-    // The winner's history is resampled once, after the loop.
+    //   valid wins. Candidates showing an object an earlier candidate already showed are skipped.
+    // The winner's history is resampled once, afterwards. Written as a fixed sequence of `if`s
+    // (at most the still hypothesis and 4 candidates), not a loop over a per-lane index: each
+    // candidate's fields are then registers, not a per-lane selection among the four, and a SIMD
+    // machine skips a block no lane of its vector needs, as it leaves a loop no lane continues.
     bool still = false;
     if (!reset && use_v) {
         still = true;
@@ -570,65 +607,37 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
     bool covered = false;
     bool still_won = false;
     uint win_valid = 0u;
-    // Candidates showing an object an earlier candidate already showed are skipped, when k
-    // advances, so that no iteration is spent on them.
     bool dup1 = c[1].ids.x == c[0].ids.x;
     bool dup2 = c[2].ids.x == c[0].ids.x || c[2].ids.x == c[1].ids.x;
     bool dup3 = c[3].ids.x == c[0].ids.x || c[3].ids.x == c[1].ids.x || c[3].ids.x == c[2].ids.x;
-    int k = still ? -1 : 0;  // this lane's hypothesis: -1 the still one, then candidate k
-    // The exit test is the body's last statement: llvmpipe checks whether any lane goes on only
-    // at the end of an iteration, so a test at the top would run one more iteration, every fetch
-    // in it, with no lane active.
-    for (int it = 0; it < 5 && !reset; it++) {
-        Sample ck = c[0];
-        if (k == 1) ck = c[1];
-        if (k == 2) ck = c[2];
-        if (k == 3) ck = c[3];
-        bool is_still = k < 0;
-        vec2 v = use_v && !is_still ? ck.v : vec2(0.0);
-        uint id = own ? own_id : ck.ids.x;
-        float d = own ? own_d : ck.d;
-        // The depth span of the neighbours showing this object (with the prepass, the pixel's
-        // own depth).
-        float lo = d;
-        float hi = d;
-        if (multi) {
-            for (int i = 0; i < 4; i++) {
-                if (n[i].ids.x == id) {
-                    lo = min(lo, n[i].d);
-                    hi = max(hi, n[i].d);
-                }
+    if (still) {
+        uvec2 g0 = texelFetch(hist_geom, p, 0).xy;
+        if ((g0.x & ID_MOVED) == 0u && (!own || g0.x == own_id)) {
+            covered = true;
+            still_won = true;
+            r.d = uintBitsToFloat(g0.y);
+            r.id = g0.x;
+            r.v = vec2(0.0);
+            r.dbg |= DBG_STILL;
+            win_valid = 1u;
+        }
+    }
+    if (!reset && !covered) {
+        covered = try_candidate(q, c[0], n, own, own_id, own_d, multi, use_ids, use_depth, use_v,
+                                r, win_valid, why);
+        if (multi && !covered) {
+            if (!dup1)
+                covered = try_candidate(q, c[1], n, own, own_id, own_d, multi, use_ids, use_depth,
+                                        use_v, r, win_valid, why);
+            if (!covered) {
+                if (!dup2)
+                    covered = try_candidate(q, c[2], n, own, own_id, own_d, multi, use_ids,
+                                            use_depth, use_v, r, win_valid, why);
+                if (!covered && !dup3)
+                    covered = try_candidate(q, c[3], n, own, own_id, own_d, multi, use_ids,
+                                            use_depth, use_v, r, win_valid, why);
             }
         }
-        uint valid;
-        uint tap_why = 0u;
-        uvec2 g0;
-        float wsum = history_weight(q - v, id, lo, hi, use_ids, use_depth, valid, tap_why, g0);
-        if (is_still) {
-            if ((g0.x & ID_MOVED) == 0u && (!own || g0.x == own_id)) {
-                covered = true;
-                still_won = true;
-                r.d = uintBitsToFloat(g0.y);
-                r.id = g0.x;
-                r.v = vec2(0.0);
-                r.dbg |= DBG_STILL;
-                win_valid = 1u;
-            }
-        } else {
-            why |= tap_why;
-            if (wsum > 0.5) {
-                covered = true;
-                r.d = d;
-                r.id = id;
-                r.v = v;
-                win_valid = valid;
-            }
-        }
-        k++;
-        if (k == 1 && dup1) k++;
-        if (k == 2 && dup2) k++;
-        if (k == 3 && dup3) k++;
-        if (covered || k > 3 || (k > 0 && !multi)) break;
     }
     if (covered) {
         found = true;
