@@ -73,14 +73,30 @@ ivec2 mirror(ivec2 q) {
     return min(q, 2 * s - 2 - q);
 }
 
-Sample load_sample(ivec2 q) {
-    ivec4 a = cb_address(mirror(q), pc.size_parity_side.z, pc.size_parity_side.w);
+// One coordinate reflected as mirror() does, for a coordinate at most one step off [0, n).
+int mirror1(int x, int n) {
+    x = abs(x);
+    return min(x, 2 * n - 2 - x);
+}
+
+// The sample at q, a pixel on the screen (no reflection).
+Sample load_on_screen(ivec2 q) {
+    ivec4 a = cb_address(q, pc.size_parity_side.z, pc.size_parity_side.w);
     Sample s;
     s.c = real3(cb_fetch(cur_color, a).rgb);
     s.v = cb_fetch(cur_velocity, a).xy;
     s.d = cb_fetch(cur_depth, a).x;
     s.ids = cb_fetch(cur_ids, a).xy;
     return s;
+}
+Sample load_sample(ivec2 q) { return load_on_screen(mirror(q)); }
+// The sample one step from p, a pixel on the screen, along x (`horizontal`) or y: only that
+// coordinate can leave the screen, so only it is reflected (the same pixel as mirror()).
+Sample load_step(ivec2 p, int step, bool horizontal) {
+    ivec2 q = p;
+    if (horizontal) q.x = mirror1(p.x + step, size().x);
+    else q.y = mirror1(p.y + step, size().y);
+    return load_on_screen(q);
 }
 
 const vec3 LUMA = vec3(0.2126, 0.7152, 0.0722);
@@ -210,7 +226,8 @@ float history_weight(vec2 q, uint id, float lo, float hi, bool use_ids, bool use
 // History at q once accepted: bilinear over the valid taps (history_weight's `valid`),
 // renormalised; with `exact`, the texel q lies in, as it is (the still rule). Kept apart from the
 // test so that `ours` tests its candidates first and resamples once, for the winner: on a SIMD
-// machine a resample inside the candidate loop runs for every candidate on which any lane stops.
+// machine a resample inside the candidates' tests runs for every candidate on which any lane
+// stops.
 //
 // hist_color's sampler is bilinear, clamp to edge, in texel units (resolve/mod.rs), and every case
 // is five taps of it, each at a per-lane position with a per-lane weight, so that a SIMD machine
@@ -314,7 +331,7 @@ real3 history_plain(vec2 q) {
 
 // Neighbours: 0 left, 1 right, 2 up, 3 down. Ordered by depth, nearest (largest reverse-Z)
 // first, ties in neighbour order; with `pref`, the samples showing object `pid` before all others
-// (`ours`' pair preference, below). The order is kept as its six pairwise verdicts (bef[i][j]: i
+// (`ours`' pair preference, below). The order is kept as its six pairwise verdicts (Order.bij: i
 // comes before j), not as a sorted copy: the neighbour of rank k is picked where it is needed
 // (`ranked`), so only the ranks a pixel uses cost selections, and on a GPU the verdicts and ranks
 // are lane masks (scalar instructions). Each comparison is one unsigned compare of a key: the
@@ -701,8 +718,12 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
     //   valid wins. Candidates showing an object an earlier candidate already showed are skipped.
     // The winner's history is resampled once, afterwards. Written as a fixed sequence of `if`s
     // (at most the still hypothesis and 4 candidates), not a loop over a per-lane index: each
-    // candidate's fields are then registers, not a per-lane selection among the four, and a SIMD
-    // machine skips a block no lane of its vector needs, as it leaves a loop no lane continues.
+    // candidate's fields are then registers, not a per-lane selection among the four, and a GPU
+    // skips a block no lane of its wave takes, as it leaves a loop no lane continues (AMD's
+    // compiler also counts a loop's body 8 times in its estimates: docs/resolve.md, "GCN ISA").
+    // llvmpipe does not skip an `if` (its lanes are masks): there every candidate's gathers run,
+    // where the loop ran only the iterations some lane of a vector needed (the cost on lavapipe
+    // rose by about a fifth; same section).
     bool still = false;
     if (!reset && use_v) {
         still = true;
@@ -803,7 +824,6 @@ Result pass_through(Sample s) {
     return r;
 }
 
-const ivec2 NEIGHBOUR[4] = ivec2[4](ivec2(-1, 0), ivec2(1, 0), ivec2(0, -1), ivec2(0, 1));
 
 #if FUSED
 const ivec2 DIAGONAL[4] = ivec2[4](ivec2(-1, -1), ivec2(1, -1), ivec2(-1, 1), ivec2(1, 1));
@@ -877,11 +897,14 @@ void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (p.x >= size().x || p.y >= size().y) return;
     if (rendered(p)) {
-        write_result(p, rendered_result(p, load_sample(p)));
+        write_result(p, rendered_result(p, load_on_screen(p)));
         return;
     }
     Sample n[4];
-    for (int i = 0; i < 4; i++) n[i] = load_sample(p + NEIGHBOUR[i]);
+    n[0] = load_step(p, -1, true);
+    n[1] = load_step(p, 1, true);
+    n[2] = load_step(p, -1, false);
+    n[3] = load_step(p, 1, false);
     write_result(p, resolve_missing(p, n));
 }
 #else
@@ -895,8 +918,8 @@ void resolve_in_quad(ivec2 p, Sample h_in, Sample v_in) {
     // left; likewise the bottom row and the vertical one.
     bool right = (p.x & 1) == 1;
     bool below = (p.y & 1) == 1;
-    Sample h_out = load_sample(p + ivec2(right ? 1 : -1, 0));
-    Sample v_out = load_sample(p + ivec2(0, below ? 1 : -1));
+    Sample h_out = load_step(p, right ? 1 : -1, true);
+    Sample v_out = load_step(p, below ? 1 : -1, false);
     Sample n[4];
     n[0] = right ? h_in : h_out;
     n[1] = right ? h_out : h_in;
