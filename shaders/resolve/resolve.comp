@@ -1,5 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 // The checkerboard resolve (docs/resolve.md). One output pixel per invocation (MAPPING 0) or one
 // 2x2 quad per invocation (MAPPING 1); both call the same per-pixel functions with the same
 // inputs, so they write identical images. The CPU reference is crates/cbr-render/src/resolve/
@@ -50,6 +51,7 @@ layout(set = 0, binding = BINDING_DEBUG_VELOCITY, rg32f) uniform writeonly image
 PUSH_CONSTANTS
 
 ivec2 size() { return pc.size_parity_side.xy; }
+vec2 inv_size() { return pc.inv_size.xy; }
 // Every flag but F_RESET is fixed for the pass's lifetime and compiled in (STATIC_FLAGS, the same
 // bits the push constant carries), so the paths a configuration does not use are not in its
 // pipeline: on a SIMD machine that predicates branches they would cost even when no lane takes
@@ -71,14 +73,30 @@ ivec2 mirror(ivec2 q) {
     return min(q, 2 * s - 2 - q);
 }
 
-Sample load_sample(ivec2 q) {
-    ivec4 a = cb_address(mirror(q), pc.size_parity_side.z, pc.size_parity_side.w);
+// One coordinate reflected as mirror() does, for a coordinate at most one step off [0, n).
+int mirror1(int x, int n) {
+    x = abs(x);
+    return min(x, 2 * n - 2 - x);
+}
+
+// The sample at q, a pixel on the screen (no reflection).
+Sample load_on_screen(ivec2 q) {
+    ivec4 a = cb_address(q, pc.size_parity_side.z, pc.size_parity_side.w);
     Sample s;
     s.c = real3(cb_fetch(cur_color, a).rgb);
     s.v = cb_fetch(cur_velocity, a).xy;
     s.d = cb_fetch(cur_depth, a).x;
     s.ids = cb_fetch(cur_ids, a).xy;
     return s;
+}
+Sample load_sample(ivec2 q) { return load_on_screen(mirror(q)); }
+// The sample one step from p, a pixel on the screen, along x (`horizontal`) or y: only that
+// coordinate can leave the screen, so only it is reflected (the same pixel as mirror()).
+Sample load_step(ivec2 p, int step, bool horizontal) {
+    ivec2 q = p;
+    if (horizontal) q.x = mirror1(p.x + step, size().x);
+    else q.y = mirror1(p.y + step, size().y);
+    return load_on_screen(q);
 }
 
 const vec3 LUMA = vec3(0.2126, 0.7152, 0.0722);
@@ -116,10 +134,19 @@ void bilinear_taps(vec2 q, out ivec2 base, out float w[4]) {
 const ivec2 TAP[4] = ivec2[4](ivec2(0, 0), ivec2(1, 0), ivec2(0, 1), ivec2(1, 1));
 
 // Whether history depth hd shows the surface whose samples around the pixel span reverse-Z
-// depths [lo, hi]: inside the span, or within the relative tolerance of either end.
+// depths [lo, hi]: inside the span, or within the relative tolerance tol of either end
+// (|z1 - z2| / max(z1, z2) of the linear depths z = near / d). Below the span that is
+// (lo - hd) / lo <= tol, above it (hd - hi) / hd <= tol, so with keep = 1 - tol:
+// lo * keep <= hd and hd * keep <= hi, which also holds inside the span. Two products, no
+// division (an fp32 division is a reciprocal and a product on a GPU, with the driver's
+// precision); keep is at most 1, so a negative tolerance leaves the span alone.
+// keep = min(1 - tol, 1), computed on the CPU (ResolveSettings::params).
+float depth_keep() { return pc.params.w; }
 bool depth_agrees(float hd, float lo, float hi) {
-    return (hd >= lo && hd <= hi) || depth_rel_diff(hd, lo) <= pc.params.x ||
-           depth_rel_diff(hd, hi) <= pc.params.x;
+    float keep = depth_keep();
+    bool above_lo = hd >= lo * keep;
+    bool below_hi = hd * keep <= hi;
+    return above_lo && below_hi;
 }
 
 // Catmull-Rom weights of the taps at -1, 0, 1, 2 for fractional position f.
@@ -149,31 +176,49 @@ uint tap_reasons(ivec2 t, uint id, float lo, float hi, bool use_ids, bool use_de
 // (the texel containing q when q is a texel centre; zero if that tap has no weight or lies off
 // the screen).
 float history_weight(vec2 q, uint id, float lo, float hi, bool use_ids, bool use_depth,
-                     out uint valid, inout uint why, out uvec2 g0) {
+                     out bvec4 valid, inout uint why, out uvec2 g0) {
     ivec2 base;
     float w[4];
     bilinear_taps(q, base, w);
     // The footprint's 2 x 2 texels in two gathers (IDs, depth bits), at the point between their
     // centres: a coordinate half a texel from any centre, which the normalisation's rounding
     // cannot move to another footprint. Gather order: (0,1), (1,1), (1,0), (0,0).
-    vec2 uv = vec2(base + 1) / vec2(size());
+    vec2 uv = (floor(q - 0.5) + 1.0) * inv_size();
     uvec4 gi = textureGather(hist_geom, uv, 0);
     uvec4 gd = textureGather(hist_geom, uv, 1);
     uvec2 gt[4] = uvec2[4](uvec2(gi.w, gd.w), uvec2(gi.z, gd.z), uvec2(gi.x, gd.x),
                            uvec2(gi.y, gd.y));
+    // Which taps lie on the screen: tap x is base.x or base.x + 1, each tested as unsigned.
+    bool x0 = uint(base.x) < uint(size().x);
+    bool x1 = uint(base.x + 1) < uint(size().x);
+    bool y0 = uint(base.y) < uint(size().y);
+    bool y1 = uint(base.y + 1) < uint(size().y);
+    bool on[4] = bool[4](x0 && y0, x1 && y0, x0 && y1, x1 && y1);
+    float keep = depth_keep();
+    float lo_keep = lo * keep;
     float ws = 0.0;
-    valid = 0u;
-    g0 = w[0] > 0.0 && inside(base) ? gt[0] : uvec2(0u);
+    g0 = w[0] > 0.0 && on[0] ? gt[0] : uvec2(0u);
+    // Every tap is tested without a branch (each part a select): a SIMD machine runs the four
+    // taps once whatever its lanes' verdicts. A tap without weight adds nothing to the sum
+    // whatever its verdict, so it is not tested for weight here; `valid` may then hold such a
+    // tap, which history_resampled, the only reader, ignores. The reasons are only kept for the
+    // debug bits (of taps with weight, on the screen).
     for (int k = 0; k < 4; k++) {
-        ivec2 t = base + TAP[k];
-        if (w[k] <= 0.0 || !inside(t)) continue;
-        uint rn = geom_reasons(gt[k], id, lo, hi, use_ids, use_depth);
-        if (rn == 0u) {
-            ws += w[k];
-            valid |= 1u << k;
-        } else {
-            why |= rn;
-        }
+        bool id_ok = (gt[k].x & ID_MASK) == id;
+        id_ok = id_ok || !use_ids;
+        float hd = uintBitsToFloat(gt[k].y);
+        bool above_lo = hd >= lo_keep;
+        bool below_hi = hd * keep <= hi;
+        bool depth_ok = above_lo && below_hi;
+        depth_ok = depth_ok || !use_depth;
+        bool ok = on[k] && id_ok;
+        ok = ok && depth_ok;
+        ws += ok ? w[k] : 0.0;
+        valid[k] = ok;
+#if DEBUG
+        uint rn = (id_ok ? 0u : DBG_REJECT_ID) | (depth_ok ? 0u : DBG_REJECT_DEPTH);
+        why |= w[k] > 0.0 && on[k] ? rn : 0u;
+#endif
     }
     return ws;
 }
@@ -181,7 +226,8 @@ float history_weight(vec2 q, uint id, float lo, float hi, bool use_ids, bool use
 // History at q once accepted: bilinear over the valid taps (history_weight's `valid`),
 // renormalised; with `exact`, the texel q lies in, as it is (the still rule). Kept apart from the
 // test so that `ours` tests its candidates first and resamples once, for the winner: on a SIMD
-// machine a resample inside the candidate loop runs for every candidate on which any lane stops.
+// machine a resample inside the candidates' tests runs for every candidate on which any lane
+// stops.
 //
 // hist_color's sampler is bilinear, clamp to edge, in texel units (resolve/mod.rs), and every case
 // is five taps of it, each at a per-lane position with a per-lane weight, so that a SIMD machine
@@ -197,24 +243,20 @@ float history_weight(vec2 q, uint id, float lo, float hi, bool use_ids, bool use
 // - some taps invalid: the valid ones, each a tap at its texel's centre (a bilinear tap there is
 //   that texel exactly: its fractions are 0).
 // - `exact`: one tap at the centre of the texel q lies in.
-real3 history_resampled(vec2 q, uint valid, bool exact) {
+real3 history_resampled(vec2 q, bvec4 valid, bool exact) {
     ivec2 base;
     float w[4];
     bilinear_taps(q, base, w);
     vec2 b = vec2(base) + 0.5;  // tap 0's texel centre
-    bool all_ok = true;
-    for (int k = 0; k < 4; k++) all_ok = all_ok && (w[k] <= 0.0 || (valid & (1u << k)) != 0u);
+    // `exact` is the bilinear case with tap 0 alone valid: q is then a texel centre (the still
+    // rule's v = 0), so tap 0 has weight 1 and the others 0.
+    bool all_ok = !exact;
+    for (int k = 0; k < 4; k++) all_ok = all_ok && (w[k] <= 0.0 || valid[k]);
     vec2 pos[5];
     float wt[5];
-    if (exact || !all_ok) {
-        for (int k = 0; k < 4; k++) {
-            pos[k] = b + vec2(TAP[k]);
-            wt[k] = exact ? (k == 0 ? 1.0 : 0.0)
-                          : (w[k] > 0.0 && (valid & (1u << k)) != 0u ? w[k] : 0.0);
-        }
-        pos[4] = b;
-        wt[4] = 0.0;
-    } else {
+    // A branch, not a select of both cases' positions and weights: a SIMD vector whose lanes
+    // agree runs one case.
+    [[dont_flatten]] if (all_ok) {
         vec2 f = (q - 0.5) - vec2(base);
         vec4 wx = catmull_rom(f.x);
         vec4 wy = catmull_rom(f.y);
@@ -231,6 +273,13 @@ real3 history_resampled(vec2 q, uint valid, bool exact) {
         wt[3] = wy.x * sx;
         pos[4] = vec2(c.x, b.y + 2.0);
         wt[4] = wy.w * sx;
+    } else {
+        for (int k = 0; k < 4; k++) {
+            pos[k] = b + vec2(TAP[k]);
+            wt[k] = w[k] > 0.0 && valid[k] ? w[k] : 0.0;
+        }
+        pos[4] = b;
+        wt[4] = 0.0;
     }
     real3 acc = real3(0.0);
     float ws = 0.0;
@@ -242,7 +291,7 @@ real3 history_resampled(vec2 q, uint valid, bool exact) {
         }
     }
     real3 h = acc / real(ws);
-    return exact || !all_ok ? h : max(h, real3(0.0));
+    return all_ok ? max(h, real3(0.0)) : h;
 }
 
 // History at q validated against object `id` and reverse-Z depths [lo, hi] (`fused`): the texel
@@ -254,12 +303,12 @@ bool history_validated(vec2 q, uint id, float lo, float hi, bool use_ids, bool u
     h = real3(0.0);
     ivec2 near = ivec2(floor(q));
     if (!inside(near)) return false;
-    uint valid;
+    bvec4 valid;
     uint tap_why = 0u;
     uvec2 g0;
     history_weight(q, id, lo, hi, use_ids, use_depth, valid, tap_why, g0);
     ivec2 k = near - ivec2(floor(q - 0.5));
-    if ((valid & (1u << (k.x + 2 * k.y))) == 0u) {
+    if (!valid[k.x + 2 * k.y]) {
         why |= tap_reasons(near, id, lo, hi, use_ids, use_depth);
         return false;
     }
@@ -280,30 +329,101 @@ real3 history_plain(vec2 q) {
     return acc;
 }
 
-// Neighbours: 0 left, 1 right, 2 up, 3 down. Sorted by depth, nearest (largest reverse-Z)
+// Neighbours: 0 left, 1 right, 2 up, 3 down. Ordered by depth, nearest (largest reverse-Z)
 // first, ties in neighbour order; with `pref`, the samples showing object `pid` before all others
-// (`ours`' pair preference, below). A five-comparator network on a total order (so it equals a
-// stable sort) with constant indices, which keeps the samples in registers.
-void cswap(inout Sample a, inout int ia, inout Sample b, inout int ib, bool pref, uint pid) {
-    bool pa = pref && a.ids.x == pid;
-    bool pb = pref && b.ids.x == pid;
-    if (pa != pb ? pb : (a.d < b.d || (a.d == b.d && ia > ib))) {
-        Sample t = a;
-        a = b;
-        b = t;
-        int ti = ia;
-        ia = ib;
-        ib = ti;
+// (`ours`' pair preference, below). The order is kept as its six pairwise verdicts (Order.bij: i
+// comes before j), not as a sorted copy: the neighbour of rank k is picked where it is needed
+// (`ranked`), so only the ranks a pixel uses cost selections, and on a GPU the verdicts and ranks
+// are lane masks (scalar instructions). Each comparison is one unsigned compare of a key: the
+// depth's bits (a depth is in [0, 1], below 2^30 as bits, ordered as the floats; the sign masked
+// off, so -0 is 0) shifted left by 2 over 3 - the neighbour index. A total order, so the same as
+// the stable sort it replaces. Without `by_depth`, neighbour order.
+struct Order {
+    bool b01, b02, b03, b12, b13, b23;  // bij: neighbour i comes before neighbour j
+};
+bool key_before(uint ki, bool pi, uint kj, bool pj) { return pi != pj ? pi : ki > kj; }
+Order neighbour_order(Sample n[4], bool pref, uint pid, bool by_depth) {
+    Order o = Order(true, true, true, true, true, true);
+    if (by_depth) {
+        uint key[4];
+        bool pr[4];
+        for (int i = 0; i < 4; i++) {
+            key[i] = ((floatBitsToUint(n[i].d) & 0x7fffffffu) << 2) | uint(3 - i);
+            pr[i] = pref && n[i].ids.x == pid;
+        }
+        o.b01 = key_before(key[0], pr[0], key[1], pr[1]);
+        o.b02 = key_before(key[0], pr[0], key[2], pr[2]);
+        o.b03 = key_before(key[0], pr[0], key[3], pr[3]);
+        o.b12 = key_before(key[1], pr[1], key[2], pr[2]);
+        o.b13 = key_before(key[1], pr[1], key[3], pr[3]);
+        o.b23 = key_before(key[2], pr[2], key[3], pr[3]);
     }
+    return o;
 }
-void depth_sorted(Sample n[4], bool pref, uint pid, out Sample s[4]) {
-    s = n;
-    int o[4] = int[4](0, 1, 2, 3);
-    cswap(s[0], o[0], s[1], o[1], pref, pid);
-    cswap(s[2], o[2], s[3], o[3], pref, pid);
-    cswap(s[0], o[0], s[2], o[2], pref, pid);
-    cswap(s[1], o[1], s[3], o[3], pref, pid);
-    cswap(s[1], o[1], s[2], o[2], pref, pid);
+
+// Which of the other three neighbours come before neighbour i (i a constant).
+bvec3 before_it(Order o, int i) {
+    if (i == 0) return bvec3(!o.b01, !o.b02, !o.b03);
+    if (i == 1) return bvec3(o.b01, !o.b12, !o.b13);
+    if (i == 2) return bvec3(o.b02, o.b12, !o.b23);
+    return bvec3(o.b03, o.b13, o.b23);
+}
+
+// Whether neighbour i has rank k: exactly k of the other three come before it.
+bool has_rank(Order o, int i, int k) {
+    bvec3 e = before_it(o, i);
+    if (k == 0) return !any(e);
+    if (k == 3) return all(e);
+    if (k == 1) return e.x ? !e.y && !e.z : e.y != e.z;
+    return e.x ? e.y != e.z : e.y && e.z;
+}
+
+// The neighbour of rank k (colour and primitive ID not carried: the resolve reads only the
+// velocity, depth and object ID of a ranked sample).
+Sample ranked(Sample n[4], Order o, int k) {
+    Sample s;
+    s.c = real3(0.0);
+    s.v = n[3].v;
+    s.d = n[3].d;
+    s.ids = uvec2(n[3].ids.x, 0u);
+    if (has_rank(o, 2, k)) {
+        s.v = n[2].v;
+        s.d = n[2].d;
+        s.ids.x = n[2].ids.x;
+    }
+    if (has_rank(o, 1, k)) {
+        s.v = n[1].v;
+        s.d = n[1].d;
+        s.ids.x = n[1].ids.x;
+    }
+    if (has_rank(o, 0, k)) {
+        s.v = n[0].v;
+        s.d = n[0].d;
+        s.ids.x = n[0].ids.x;
+    }
+    return s;
+}
+
+// Whether neighbour i shows an object a neighbour before it shows.
+bool repeats(Sample n[4], Order o, int i) {
+    bvec3 e = before_it(o, i);
+    int j0 = i == 0 ? 1 : 0;
+    int j1 = i <= 1 ? 2 : 1;
+    int j2 = i <= 2 ? 3 : 2;
+    uint id = n[i].ids.x;
+    bool r0 = e.x && n[j0].ids.x == id;
+    bool r1 = e.y && n[j1].ids.x == id;
+    bool r2 = e.z && n[j2].ids.x == id;
+    return r0 || r1 || r2;
+}
+
+// Whether the neighbour of rank k shows an object a neighbour of lower rank shows.
+bool rank_repeats(Sample n[4], Order o, int k) {
+    bool r0 = has_rank(o, 0, k) && repeats(n, o, 0);
+    bool r1 = has_rank(o, 1, k) && repeats(n, o, 1);
+    bool r2 = has_rank(o, 2, k) && repeats(n, o, 2);
+    bool r3 = has_rank(o, 3, k) && repeats(n, o, 3);
+    return r0 || r1 || r2 || r3;
 }
 
 // Weights of the differential blend: 1 / (BLEND_EPS + luminance difference of the pair), in
@@ -406,6 +526,42 @@ real3 clamp_to_box(real3 h, Sample n[4], inout uint dbg) {
     return h;
 }
 
+// `ours`' test of candidate ck (a neighbour's surface; with the prepass the pixel's own, moving
+// as ck): more than half of the bilinear footprint at q - v on history texels showing its object
+// at a depth inside the span of the neighbours showing it (or within the tolerance). On success
+// the result takes its depth, ID and velocity and `valid` the footprint's valid taps; `why`
+// collects the reasons of rejected taps either way.
+bool try_candidate(vec2 q, Sample ck, Sample n[4], bool own, uint own_id, float own_d, bool multi,
+                   bool use_ids, bool use_depth, bool use_v, inout Result r, inout bvec4 valid,
+                   inout uint why) {
+    vec2 v = use_v ? ck.v : vec2(0.0);
+    uint id = own ? own_id : ck.ids.x;
+    float d = own ? own_d : ck.d;
+    // The depth span of the neighbours showing this object (with the prepass, the pixel's own
+    // depth).
+    float lo = d;
+    float hi = d;
+    if (multi) {
+        // A neighbour showing another object contributes d itself, which the span holds.
+        for (int i = 0; i < 4; i++) {
+            float di = n[i].ids.x == id ? n[i].d : d;
+            lo = min(lo, di);
+            hi = max(hi, di);
+        }
+    }
+    bvec4 tap_valid;
+    uvec2 g0;
+    float wsum = history_weight(q - v, id, lo, hi, use_ids, use_depth, tap_valid, why, g0);
+    if (wsum > 0.5) {
+        r.d = d;
+        r.id = id;
+        r.v = v;
+        valid = tap_valid;
+        return true;
+    }
+    return false;
+}
+
 Result resolve_missing(ivec2 p, Sample n[4]) {
     Result r;
     r.dbg = DBG_MISSING;
@@ -431,9 +587,8 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
         pid = hp ? n[0].ids.x : n[2].ids.x;
     }
 #endif
-    Sample sorted[4];
-    depth_sorted(n, pref, pid, sorted);
-    Sample near = sorted[0];
+    Order bef = neighbour_order(n, pref, pid, true);
+    Sample near = ranked(n, bef, 0);
     uint ref_id = own ? own_id : near.ids.x;
 #if MODE == MODE_PQ4K
     Sample partner = n[quad_partner(p)];
@@ -523,12 +678,14 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
     // Without depth they come in neighbour order; without IDs and depth, only the quad partner.
     // c: the candidates in order; with IDs and without the prepass every distinct object
     // among them is tried, else only c[0].
-    Sample c[4] = use_depth ? sorted : n;
+    // cbef: the candidates' order (ranked(n, cbef, k) is c[k]).
+    Order cbef = neighbour_order(n, pref, pid, use_depth);
+    Sample c0 = ranked(n, cbef, 0);
     bool multi = use_ids && !own;
     // The surface a pixel takes when every hypothesis fails: the preferred pair's object, else
     // the farthest neighbour's (the nearer surfaces' histories would have been valid had they
     // covered p: a failure is a disocclusion).
-    Sample fb = pref ? sorted[0] : sorted[3];
+    Sample fb = pref ? near : ranked(n, bef, 3);
     if (own) {
         Sample best = n[0];
         float best_diff = abs(n[0].d - own_d);
@@ -541,27 +698,32 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
                 best_diff = dd;
             }
         }
-        c[0] = best;
+        c0 = best;
     } else if (!use_ids && !use_depth) {
-        c[0] = quad_partner(p) == 1 ? n[1] : n[0];
+        c0 = quad_partner(p) == 1 ? n[1] : n[0];
     }
-    r.d = own ? own_d : c[0].d;
-    r.id = own ? own_id : c[0].ids.x;
-    r.v = use_v ? c[0].v : vec2(0.0);
+    r.d = own ? own_d : c0.d;
+    r.id = own ? own_id : c0.ids.x;
+    r.v = use_v ? c0.v : vec2(0.0);
     bool found = false;
     uint why = 0u;
     real3 h = real3(0.0);
-    // The hypotheses are tested in one loop, so that a SIMD machine that predicates branches
-    // (llvmpipe runs both sides of every `if`, but leaves a loop once no lane goes on) fetches
-    // history only in the iterations some lane needs:
+    // The hypotheses, in order, each tested only where every earlier one failed:
     // - First, where the neighbourhood is still (every neighbour below the static threshold): the
     //   history at p, if it did not move either (with the prepass: if it shows the pixel's own
     //   object). Nothing can have covered or uncovered p, so its history stands as it is. This
     //   keeps thin features that no neighbour shows; a disoccluded pixel's history moved, so it is
-    //   not taken. Its fetch is tap 0 of the footprint at p's centre.
+    //   not taken. One geometry fetch at p (the footprint at p's centre is that texel alone).
     // - Then the candidates: the first with more than half of its bilinear footprint at q - v
-    //   valid wins.
-    // The winner's history is resampled once, after the loop.
+    //   valid wins. Candidates showing an object an earlier candidate already showed are skipped.
+    // The winner's history is resampled once, afterwards. Written as a fixed sequence of `if`s
+    // (at most the still hypothesis and 4 candidates), not a loop over a per-lane index: each
+    // candidate's fields are then registers, not a per-lane selection among the four, and a GPU
+    // skips a block no lane of its wave takes, as it leaves a loop no lane continues (AMD's
+    // compiler also counts a loop's body 8 times in its estimates: docs/resolve.md, "GCN ISA").
+    // llvmpipe does not skip an `if` (its lanes are masks): there every candidate's gathers run,
+    // where the loop ran only the iterations some lane of a vector needed (the cost on lavapipe
+    // rose by about a fifth; same section).
     bool still = false;
     if (!reset && use_v) {
         still = true;
@@ -569,66 +731,36 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
     }
     bool covered = false;
     bool still_won = false;
-    uint win_valid = 0u;
-    // Candidates showing an object an earlier candidate already showed are skipped, when k
-    // advances, so that no iteration is spent on them.
-    bool dup1 = c[1].ids.x == c[0].ids.x;
-    bool dup2 = c[2].ids.x == c[0].ids.x || c[2].ids.x == c[1].ids.x;
-    bool dup3 = c[3].ids.x == c[0].ids.x || c[3].ids.x == c[1].ids.x || c[3].ids.x == c[2].ids.x;
-    int k = still ? -1 : 0;  // this lane's hypothesis: -1 the still one, then candidate k
-    // The exit test is the body's last statement: llvmpipe checks whether any lane goes on only
-    // at the end of an iteration, so a test at the top would run one more iteration, every fetch
-    // in it, with no lane active.
-    for (int it = 0; it < 5 && !reset; it++) {
-        Sample ck = c[0];
-        if (k == 1) ck = c[1];
-        if (k == 2) ck = c[2];
-        if (k == 3) ck = c[3];
-        bool is_still = k < 0;
-        vec2 v = use_v && !is_still ? ck.v : vec2(0.0);
-        uint id = own ? own_id : ck.ids.x;
-        float d = own ? own_d : ck.d;
-        // The depth span of the neighbours showing this object (with the prepass, the pixel's
-        // own depth).
-        float lo = d;
-        float hi = d;
-        if (multi) {
-            for (int i = 0; i < 4; i++) {
-                if (n[i].ids.x == id) {
-                    lo = min(lo, n[i].d);
-                    hi = max(hi, n[i].d);
-                }
+    bvec4 win_valid = bvec4(false);
+    if (still) {
+        uvec2 g0 = texelFetch(hist_geom, p, 0).xy;
+        if ((g0.x & ID_MOVED) == 0u && (!own || g0.x == own_id)) {
+            covered = true;
+            still_won = true;
+            r.d = uintBitsToFloat(g0.y);
+            r.id = g0.x;
+            r.v = vec2(0.0);
+            r.dbg |= DBG_STILL;
+            win_valid = bvec4(true, false, false, false);
+        }
+    }
+    if (!reset && !covered) {
+        covered = try_candidate(q, c0, n, own, own_id, own_d, multi, use_ids, use_depth, use_v,
+                                r, win_valid, why);
+        if (multi && !covered) {
+            // The later candidates, each picked (and checked for a repeated object) only here.
+            if (!rank_repeats(n, cbef, 1))
+                covered = try_candidate(q, ranked(n, cbef, 1), n, own, own_id, own_d, multi,
+                                        use_ids, use_depth, use_v, r, win_valid, why);
+            if (!covered) {
+                if (!rank_repeats(n, cbef, 2))
+                    covered = try_candidate(q, ranked(n, cbef, 2), n, own, own_id, own_d, multi,
+                                            use_ids, use_depth, use_v, r, win_valid, why);
+                if (!covered && !rank_repeats(n, cbef, 3))
+                    covered = try_candidate(q, ranked(n, cbef, 3), n, own, own_id, own_d, multi,
+                                            use_ids, use_depth, use_v, r, win_valid, why);
             }
         }
-        uint valid;
-        uint tap_why = 0u;
-        uvec2 g0;
-        float wsum = history_weight(q - v, id, lo, hi, use_ids, use_depth, valid, tap_why, g0);
-        if (is_still) {
-            if ((g0.x & ID_MOVED) == 0u && (!own || g0.x == own_id)) {
-                covered = true;
-                still_won = true;
-                r.d = uintBitsToFloat(g0.y);
-                r.id = g0.x;
-                r.v = vec2(0.0);
-                r.dbg |= DBG_STILL;
-                win_valid = 1u;
-            }
-        } else {
-            why |= tap_why;
-            if (wsum > 0.5) {
-                covered = true;
-                r.d = d;
-                r.id = id;
-                r.v = v;
-                win_valid = valid;
-            }
-        }
-        k++;
-        if (k == 1 && dup1) k++;
-        if (k == 2 && dup2) k++;
-        if (k == 3 && dup3) k++;
-        if (covered || k > 3 || (k > 0 && !multi)) break;
     }
     if (covered) {
         found = true;
@@ -646,17 +778,20 @@ Result resolve_missing(ivec2 p, Sample n[4]) {
         r.v = use_v ? fb.v : vec2(0.0);
     }
     real3 sp = real3(0.0);
-    real3 t[4];
-    real l[4];
-    toned(n, t, l);
+    real share = real(0.0);
     if (!found || blend) {
+        // Only here: a pixel that takes its history as it is needs no neighbour tonemapped.
+        real3 t[4];
+        real l[4];
+        toned(n, t, l);
         sp = spatial_fill(n, t, l, found || (multi && !reset) ? r.id : ref_id, use_ids, own);
+        share = history_share(l);
     }
     if (found) {
         r.dbg |= DBG_REPROJECTED;
         if (blend) {
             h = clamp_to_box(h, n, r.dbg);
-            h = mix(sp, h, history_share(l));
+            h = mix(sp, h, share);
         }
         r.c = h;
     } else {
@@ -689,7 +824,6 @@ Result pass_through(Sample s) {
     return r;
 }
 
-const ivec2 NEIGHBOUR[4] = ivec2[4](ivec2(-1, 0), ivec2(1, 0), ivec2(0, -1), ivec2(0, 1));
 
 #if FUSED
 const ivec2 DIAGONAL[4] = ivec2[4](ivec2(-1, -1), ivec2(1, -1), ivec2(-1, 1), ivec2(1, 1));
@@ -763,11 +897,14 @@ void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (p.x >= size().x || p.y >= size().y) return;
     if (rendered(p)) {
-        write_result(p, rendered_result(p, load_sample(p)));
+        write_result(p, rendered_result(p, load_on_screen(p)));
         return;
     }
     Sample n[4];
-    for (int i = 0; i < 4; i++) n[i] = load_sample(p + NEIGHBOUR[i]);
+    n[0] = load_step(p, -1, true);
+    n[1] = load_step(p, 1, true);
+    n[2] = load_step(p, -1, false);
+    n[3] = load_step(p, 1, false);
     write_result(p, resolve_missing(p, n));
 }
 #else
@@ -781,8 +918,8 @@ void resolve_in_quad(ivec2 p, Sample h_in, Sample v_in) {
     // left; likewise the bottom row and the vertical one.
     bool right = (p.x & 1) == 1;
     bool below = (p.y & 1) == 1;
-    Sample h_out = load_sample(p + ivec2(right ? 1 : -1, 0));
-    Sample v_out = load_sample(p + ivec2(0, below ? 1 : -1));
+    Sample h_out = load_step(p, right ? 1 : -1, true);
+    Sample v_out = load_step(p, below ? 1 : -1, false);
     Sample n[4];
     n[0] = right ? h_in : h_out;
     n[1] = right ? h_out : h_in;

@@ -225,12 +225,15 @@ impl ResolveSettings {
         f
     }
 
+    /// resolve.comp's `params`: depth tolerance, static threshold, pq4k motion threshold, and
+    /// the depth test's factor min(1 - tolerance, 1) (resolve.comp `depth_agrees`; the CPU
+    /// reference computes it the same way, in f32).
     pub fn params(&self) -> [f32; 4] {
         [
             self.depth_tolerance,
             self.static_threshold,
             self.motion_threshold,
-            0.0,
+            (1.0 - self.depth_tolerance).min(1.0),
         ]
     }
 
@@ -252,14 +255,17 @@ impl ResolveSettings {
 }
 
 crate::push_constants! {
-    /// The push constants of resolve.comp (112 bytes).
+    /// The push constants of resolve.comp (128 bytes).
     pub struct ResolvePush {
         /// W, H, parity, tangram side.
         size_parity_side: [i32; 4],
         /// x: the F_* flags.
         flags: [u32; 4],
-        /// x: depth tolerance, y: static threshold (px), z: pq4k motion threshold (px), w: 0.
+        /// x: depth tolerance, y: static threshold (px), z: pq4k motion threshold (px), w: the
+        /// depth test's factor ([`ResolveSettings::params`]).
         params: [f32; 4],
+        /// 1 / W, 1 / H, 0, 0: the history geometry's gathers take normalised coordinates.
+        inv_size: [f32; 4],
         /// Column-major: previous clip from current (NDC x, NDC y, depth, 1).
         reproj: [[f32; 4]; 4],
     }
@@ -510,6 +516,7 @@ impl ResolvePass {
             ],
             flags: [self.settings.flags(frame.reset, self.has_prepass), 0, 0, 0],
             params: self.settings.params(),
+            inv_size: [1.0 / self.width as f32, 1.0 / self.height as f32, 0.0, 0.0],
             reproj: [
                 [r[0], r[1], r[2], r[3]],
                 [r[4], r[5], r[6], r[7]],

@@ -147,9 +147,13 @@ impl Ctx<'_> {
         )
     }
 
+    /// Inside [lo, hi] or within the tolerance tol of either end (relative linear depth, as
+    /// `depth_rel_diff`): below the span (lo - hd) / lo <= tol, above it (hd - hi) / hd <= tol,
+    /// that is lo * keep <= hd and hd * keep <= hi with keep = min(1 - tol, 1), which also holds
+    /// inside the span (resolve.comp's `depth_agrees`: two products, no division).
     fn depth_agrees(&self, hd: f32, lo: f32, hi: f32) -> bool {
-        let tol = self.s.depth_tolerance;
-        (hd >= lo && hd <= hi) || depth_rel_diff(hd, lo) <= tol || depth_rel_diff(hd, hi) <= tol
+        let keep = (1.0 - self.s.depth_tolerance).min(1.0);
+        hd >= lo * keep && hd * keep <= hi
     }
 
     fn tap_reasons(&self, i: usize, t: &Test) -> u32 {
