@@ -40,10 +40,12 @@ ivec4 cb_address(ivec2 p, int parity, int tangram_side) {
     // are exact (the numerators are even). For p on the W x H screen and L = tangram_side(W, H)
     // (L >= max(W, H) / 2 and L >= min(W, H)), i lies in [-L, L) and j in [0, 2L), so one
     // conditional add or subtract is the modulo: integer division has no SIMD instruction on
-    // x86, and llvmpipe would run one scalar division per lane and per modulo.
+    // x86, and llvmpipe would run one scalar division per lane and per modulo. The halving is an
+    // arithmetic shift: equal to the division on even numerators, negative ones included, where
+    // a signed division by 2 costs a GPU its sign fix-up (ACO, docs/gpu-isa.md).
     int l = tangram_side;
-    int i = (p.x - p.y - parity) / 2;
-    int j = (p.x + p.y - parity) / 2;
+    int i = (p.x - p.y - parity) >> 1;
+    int j = (p.x + p.y - parity) >> 1;
     return ivec4(i < 0 ? i + l : i, j >= l ? j - l : j, 0, 0);
 #else
     return ivec4(p, 0, 0);
