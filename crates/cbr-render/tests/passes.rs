@@ -88,7 +88,7 @@ fn declared_passes_build_without_allocating() {
                 .unwrap_or_else(|e| panic!("{}: {e}", d.name))
         })
         .collect();
-    assert_eq!(built.len(), 55);
+    assert_eq!(built.len(), 57);
     assert_eq!(
         gpu.allocations_made(),
         before,
