@@ -1,20 +1,17 @@
 #version 460
-// The `upscale` baseline: a frame rendered at W/sqrt(2) x H/sqrt(2) (the checkerboard's pixel
-// count) brought to W x H. FILTER 0: bilinear; 1: bicubic (Catmull-Rom, 4x4 taps, negative
-// lobes' undershoot clamped at 0). Depth, velocity and IDs take the nearest low-resolution
-// sample; velocity is rescaled to full-resolution pixels. Taps clamp to the image edge.
+// The `upscale` baseline: a frame rendered at SCALE W x SCALE H (default SCALE 1/sqrt(2): the
+// checkerboard's pixel count) brought to W x H. FILTER 0: bilinear; 1: bicubic (Catmull-Rom,
+// 4x4 taps, negative lobes' undershoot clamped at 0). Depth, velocity and IDs take the nearest
+// low-resolution sample, velocity rescaled (geometry.glsl). Taps clamp to the image edge.
+// FSR 1 (`upscale:fsr1`) is easu.comp then rcas.comp.
 layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 
 layout(set = 0, binding = BINDING_COLOR) uniform sampler2D low_color;
-layout(set = 0, binding = BINDING_VELOCITY) uniform sampler2D low_velocity;
-layout(set = 0, binding = BINDING_IDS) uniform usampler2D low_ids;
-layout(set = 0, binding = BINDING_DEPTH) uniform sampler2D low_depth;
 layout(set = 0, binding = BINDING_OUT_COLOR, rgba16f) uniform writeonly image2D out_color;
-layout(set = 0, binding = BINDING_OUT_VELOCITY, rg32f) uniform writeonly image2D out_velocity;
-layout(set = 0, binding = BINDING_OUT_IDS, rg32ui) uniform writeonly uimage2D out_ids;
-layout(set = 0, binding = BINDING_OUT_DEPTH, r32f) uniform writeonly image2D out_depth;
 
-PUSH_CONSTANTS  // sizes: W, H, w, h
+PUSH_CONSTANTS  // sizes: W, H, w, h (params: FSR 1's)
+
+#include "geometry.glsl"
 
 vec3 texel(ivec2 t) {
     ivec2 lo = pc.sizes.zw;
@@ -54,9 +51,6 @@ void main() {
     }
     c = max(c, vec3(0.0));
 #endif
-    ivec2 n = clamp(ivec2(floor(q)), ivec2(0), pc.sizes.zw - 1);
     imageStore(out_color, p, vec4(c, 1.0));
-    imageStore(out_velocity, p, vec4(texelFetch(low_velocity, n, 0).xy / scale, 0.0, 0.0));
-    imageStore(out_ids, p, texelFetch(low_ids, n, 0));
-    imageStore(out_depth, p, vec4(texelFetch(low_depth, n, 0).x));
+    write_geometry(p, scale);
 }

@@ -54,7 +54,7 @@ pub struct BenchOptions {
     /// `scenes`.
     pub scene: String,
     /// Configurations, comma-separated technique specs (`cbr info` lists the registered ones):
-    /// native, ssaa:N, msaa:N[:sample][:hdr], upscale:bilinear|bicubic,
+    /// native, ssaa:N, msaa:N[:sample][:hdr], upscale[:bilinear|bicubic|fsr1][:SCALE],
     /// checkerboard:LAYOUT[:MODE][:pixel|quad][:8|16][:fp16][:prepass][:locations] (MODE: ours,
     /// pq4k, intel, spatial, temporal; default ours, quad, 8), each with post passes (+sharpen).
     /// The reference and native are always run.

@@ -192,6 +192,7 @@ fn child_every_pass() {
             "interleaved:3x2:vpls=48:implicit",
             "interlaced:debug",
             "upscale:bicubic",
+            "upscale:fsr1:0.5",
             "native+taa+sharpen",
             "native+taa:inside+fxaa",
         ]

@@ -42,11 +42,12 @@ fn declared() -> Vec<ComputeDecl> {
         }
     }
     d.push(resolve::copy_floor_decl("resolve.copy_floor"));
-    // The unpack of every portable layout, upscale's two filters, msaa's two resolves.
+    // The unpack of every portable layout, upscale's filters (FSR 1's two passes), msaa's two
+    // resolves.
     for layout in [Layout::Masked, Layout::Split, Layout::Rotated] {
         d.push(unpack::decl(&LayoutPlan::new(layout, 64, 36, 1)));
     }
-    d.extend([UpscaleFilter::Bilinear, UpscaleFilter::Bicubic].map(upscale::decl));
+    d.extend(UpscaleFilter::ALL.into_iter().flat_map(upscale::decls));
     for debug in [false, true] {
         d.push(interlaced::resolve::decl(&InterlacedSettings {
             debug,
@@ -87,7 +88,7 @@ fn declared_passes_build_without_allocating() {
                 .unwrap_or_else(|e| panic!("{}: {e}", d.name))
         })
         .collect();
-    assert_eq!(built.len(), 55);
+    assert_eq!(built.len(), 57);
     assert_eq!(
         gpu.allocations_made(),
         before,
@@ -323,6 +324,7 @@ fn the_compile_only_list_is_what_rendering_builds() {
         "checkerboard:masked:none",
         "checkerboard:rotated:ours:pixel:16+taa",
         "upscale:bicubic+fxaa",
+        "upscale:fsr1:0.77+taa",
         "interlaced:debug",
         "deferred",
         "deferred:vpls=64",

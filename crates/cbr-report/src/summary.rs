@@ -7,9 +7,14 @@ use serde_json::Value;
 use crate::bench::{BenchDir, Group};
 use crate::util::{esc, fmt, num};
 
-/// The main technique pass of a row: the resolve or the upscale.
+/// The main technique pass of a row: the resolve or the upscale (`upscale:fsr1`: EASU + RCAS,
+/// the sum of their medians).
 fn recon_ms(r: &Value) -> Option<f64> {
-    num(&r["passes"]["resolve"]["median"]).or_else(|| num(&r["passes"]["upscale"]["median"]))
+    let p = &r["passes"];
+    let median = |name: &str| num(&p[name]["median"]);
+    median("resolve")
+        .or_else(|| median("upscale"))
+        .or_else(|| Some(median("upscale.easu")? + median("upscale.rcas")?))
 }
 
 fn raster_ms(r: &Value) -> Option<f64> {
@@ -326,4 +331,25 @@ fn table(html: &mut String, reference: &str, groups: &[Group], first: bool) {
         }
     }
     html.push_str("</tbody></table>\n");
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_reconstruction_time_is_the_resolve_the_upscale_or_fsr1s_two_passes() {
+        let row = |passes: serde_json::Value| serde_json::json!({ "passes": passes });
+        let m = |v: f64| serde_json::json!({ "median": v });
+        assert_eq!(
+            super::recon_ms(&row(serde_json::json!({ "resolve": m(2.0) }))),
+            Some(2.0)
+        );
+        assert_eq!(
+            super::recon_ms(&row(serde_json::json!({ "upscale": m(1.5) }))),
+            Some(1.5)
+        );
+        let fsr = serde_json::json!({ "upscale.easu": m(1.0), "upscale.rcas": m(0.25) });
+        assert_eq!(super::recon_ms(&row(fsr)), Some(1.25));
+        let half = serde_json::json!({ "upscale.easu": m(1.0) });
+        assert_eq!(super::recon_ms(&row(half)), None);
+    }
 }

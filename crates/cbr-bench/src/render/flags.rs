@@ -24,6 +24,8 @@ pub enum FilterArg {
     Bilinear,
     /// Catmull-Rom.
     Bicubic,
+    /// AMD FSR 1: EASU then RCAS.
+    Fsr1,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -179,6 +181,7 @@ impl Shorthand {
             self.filter.map(|f| match f {
                 FilterArg::Bilinear => upscale::UpscaleFilter::Bilinear,
                 FilterArg::Bicubic => upscale::UpscaleFilter::Bicubic,
+                FilterArg::Fsr1 => upscale::UpscaleFilter::Fsr1,
             }),
         )?;
         let without: Vec<String> = self.taa_without.iter().map(lower).collect();
@@ -260,6 +263,7 @@ mod tests {
             ),
             ("upscale", &[], "upscale:bilinear"),
             ("upscale", &["--filter", "bicubic"], "upscale:bicubic"),
+            ("upscale:0.5", &["--filter", "fsr1"], "upscale:fsr1:0.5"),
             ("msaa:4", &["--sample-shading"], "msaa:4:sample"),
             (
                 "native+taa",
