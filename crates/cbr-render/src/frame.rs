@@ -316,3 +316,16 @@ pub struct Geometry<'a> {
     pub ids: &'a Image,
     pub packed: bool,
 }
+
+impl<'a> Geometry<'a> {
+    /// The geometry of a pass that writes colour, depth, velocity and IDs as four full-resolution
+    /// layers, in that order (`upscale`, `interlaced`).
+    pub fn of_layers([_, depth, velocity, ids]: [&'a Image; 4]) -> Geometry<'a> {
+        Geometry {
+            velocity,
+            depth,
+            ids,
+            packed: false,
+        }
+    }
+}

@@ -7,44 +7,18 @@
 
 mod common;
 
-use std::process::Command;
-
-use cbr_gpu::{CompileSettings, Gpu, GpuOptions, null_device};
+use cbr_gpu::{CompileSettings, Gpu, GpuOptions};
+use common::null_child;
 
 const CHILD: &str = "CBR_ISA_CHILD";
 
 #[test]
 fn declared_passes_compile_on_vega10_with_their_statistics() {
-    if null_device::radeon_icd().is_none() {
-        eprintln!(
-            "skipped: RADV's ICD {} is not installed",
-            null_device::RADEON_ICD
-        );
+    if null_child::no_radv() {
         return;
     }
-    let child = spawn("child_vega10", "vega10", "1");
-    expect_pass("vega10", child);
-}
-
-/// Runs the ignored test `test` of this binary in a child process on `family`'s null device
-/// (`CHILD` set to `value`), its output piped.
-fn spawn(test: &str, family: &str, value: &str) -> std::process::Child {
-    let mut c = Command::new(std::env::current_exe().expect("test binary"));
-    c.args([test, "--exact", "--ignored", "--nocapture"]);
-    null_device::set_env(&mut c, family).expect(family);
-    c.env(CHILD, value);
-    c.stdout(std::process::Stdio::piped());
-    c.stderr(std::process::Stdio::piped());
-    c.spawn().expect("run the test binary")
-}
-
-/// The child passed its one test.
-fn expect_pass(family: &str, child: std::process::Child) {
-    let out = child.wait_with_output().expect("the child's output");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    eprintln!("{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
-    assert!(out.status.success(), "{family}: {:?}", out.status);
-    assert!(stdout.contains("1 passed"), "{family}: {stdout}");
+    let child = null_child::spawn("child_vega10", "vega10", CHILD, "1");
+    null_child::expect_pass("vega10", child);
 }
 
 #[test]
@@ -53,17 +27,13 @@ fn child_vega10() {
     if std::env::var(CHILD).is_err() {
         return;
     }
-    let gpu = Gpu::new(&GpuOptions {
-        device: None,
-        validation: true,
-    })
-    .expect("vega10's null device");
-    assert_eq!(gpu.info().name, "Null hardware (RADV VEGA10)");
-    gpu.set_compile_settings(CompileSettings {
-        statistics: true,
-        ..Default::default()
-    })
-    .expect("capture");
+    let gpu = null_child::gpu(
+        "Null hardware (RADV VEGA10)",
+        CompileSettings {
+            statistics: true,
+            ..Default::default()
+        },
+    );
     let shaders = cbr_render::shader_library();
     let scene = common::demo(64, 36);
     let materials = cbr_render::gpu_scene::material_features(&scene);
@@ -131,20 +101,21 @@ fn child_vega10() {
 /// the registration's refusal names it.
 #[test]
 fn every_registered_pass_compiles_on_four_families() {
-    if null_device::radeon_icd().is_none() {
-        eprintln!(
-            "skipped: RADV's ICD {} is not installed",
-            null_device::RADEON_ICD
-        );
+    if null_child::no_radv() {
         return;
     }
     // One child per family (the driver reads the family once per process), all at once.
     let children: Vec<_> = ["polaris10", "vega10", "navi21", "gfx1100"]
         .into_iter()
-        .map(|family| (family, spawn("child_every_pass", family, family)))
+        .map(|family| {
+            (
+                family,
+                null_child::spawn("child_every_pass", family, CHILD, family),
+            )
+        })
         .collect();
     for (family, child) in children {
-        expect_pass(family, child);
+        null_child::expect_pass(family, child);
     }
 }
 

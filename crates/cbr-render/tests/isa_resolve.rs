@@ -11,9 +11,8 @@
 
 mod common;
 
-use std::process::Command;
-
-use cbr_gpu::{CompileSettings, Gpu, GpuOptions, null_device};
+use cbr_gpu::CompileSettings;
+use common::null_child;
 
 const CHILD: &str = "CBR_ISA_RESOLVE_CHILD";
 
@@ -30,22 +29,11 @@ const OURS_BOUNDS: &[(&str, u32, bool, f64, f64, f64)] = &[
 
 #[test]
 fn resolve_isa_on_vega10() {
-    if null_device::radeon_icd().is_none() {
-        eprintln!(
-            "skipped: RADV's ICD {} is not installed",
-            null_device::RADEON_ICD
-        );
+    if null_child::no_radv() {
         return;
     }
-    let mut c = Command::new(std::env::current_exe().expect("test binary"));
-    c.args(["child_resolve_isa", "--exact", "--ignored", "--nocapture"]);
-    null_device::set_env(&mut c, "vega10").expect("vega10");
-    c.env(CHILD, "1");
-    let out = c.output().expect("run the test binary");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    eprintln!("{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
-    assert!(out.status.success(), "vega10: {:?}", out.status);
-    assert!(stdout.contains("1 passed"), "vega10: {stdout}");
+    let child = null_child::spawn("child_resolve_isa", "vega10", CHILD, "1");
+    null_child::expect_pass("vega10", child);
 }
 
 /// One compiled variant's figures.
@@ -80,18 +68,14 @@ fn child_resolve_isa() {
         return;
     }
     let dump = std::env::var_os("CBR_ISA_DUMP").map(std::path::PathBuf::from);
-    let gpu = Gpu::new(&GpuOptions {
-        device: None,
-        validation: true,
-    })
-    .expect("vega10's null device");
-    assert_eq!(gpu.info().name, "Null hardware (RADV VEGA10)");
-    gpu.set_compile_settings(CompileSettings {
-        statistics: true,
-        representations: dump.is_some(),
-        ..Default::default()
-    })
-    .expect("capture");
+    let gpu = null_child::gpu(
+        "Null hardware (RADV VEGA10)",
+        CompileSettings {
+            statistics: true,
+            representations: dump.is_some(),
+            ..Default::default()
+        },
+    );
     if let Some(dir) = &dump {
         std::fs::create_dir_all(dir).expect("CBR_ISA_DUMP directory");
     }

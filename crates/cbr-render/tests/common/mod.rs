@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 pub mod lighting;
+pub mod null_child;
 
 use cbr_gpu::{Gpu, GpuOptions};
 

@@ -192,13 +192,10 @@ impl Technique for Interlaced {
     }
 
     fn geometry(&self, frame: u32) -> Option<Geometry<'_>> {
-        let [_, depth, velocity, ids] = self.resolve.layers((frame % 2) as usize).ok()?;
-        Some(Geometry {
-            velocity,
-            depth,
-            ids,
-            packed: false,
-        })
+        self.resolve
+            .layers((frame % 2) as usize)
+            .ok()
+            .map(Geometry::of_layers)
     }
 
     fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput> {

@@ -288,13 +288,7 @@ impl Technique for Upscale {
 
     /// The upscale's full-resolution layers: nearest low-resolution sample, velocity rescaled.
     fn geometry(&self, _frame: u32) -> Option<Geometry<'_>> {
-        let [_, depth, velocity, ids] = self.up.layers().ok()?;
-        Some(Geometry {
-            velocity,
-            depth,
-            ids,
-            packed: false,
-        })
+        self.up.layers().ok().map(Geometry::of_layers)
     }
 
     fn output(&self, ctx: &FrameCtx) -> Result<FrameOutput> {
