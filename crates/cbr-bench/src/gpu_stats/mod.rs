@@ -572,6 +572,11 @@ mod tests {
             of("analytic.albedo.order").as_deref(),
             Some("analytic.albedo")
         );
+        // Dispatches of one scope named after it (`analytic.albedo_plan` in `analytic.albedo`).
+        assert_eq!(
+            of("analytic.albedo_plan").as_deref(),
+            Some("analytic.albedo")
+        );
         // A name that merely starts like a pass is not in it; readbacks are nobody's scope.
         assert_eq!(of("resolved"), None);
         assert_eq!(of("readback.post"), None);
