@@ -7,7 +7,7 @@
 // 1/4 - 1/16, times 2^-sharpness. Edges clamp. No denoise variant.
 layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 
-layout(set = 0, binding = BINDING_EASU) uniform sampler2D easu;
+layout(set = 0, binding = BINDING_RCAS_IN) uniform sampler2D rcas_in;  // EASU's output, taau's accumulation
 layout(set = 0, binding = BINDING_OUT_COLOR, rgba16f) uniform writeonly image2D out_color;
 
 PUSH_CONSTANTS  // sizes: W, H, w, h; params: x exposure scale, y 2^-sharpness
@@ -19,7 +19,7 @@ const float RCAS_EPS = 1.0 / 65536.0;  // guards the limits' divisions
 
 vec3 at(ivec2 q) {
     q = clamp(q, ivec2(0), pc.sizes.xy - 1);
-    return fsr_encode(texelFetch(easu, q, 0).rgb, pc.params.x);
+    return fsr_encode(texelFetch(rcas_in, q, 0).rgb, pc.params.x);
 }
 
 void main() {

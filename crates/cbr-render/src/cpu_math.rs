@@ -43,3 +43,45 @@ pub fn catmull_rom(f: f32) -> [f32; 4] {
         0.5 * f3 - 0.5 * f2,
     ]
 }
+
+/// Rec. 709 luminance weights (inc/perceptual.glsl's `LUMA_709`).
+pub const LUMA_709: V3 = [0.2126, 0.7152, 0.0722];
+
+fn dot3(a: V3, b: V3) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// inc/perceptual.glsl's `perceptual`: linear HDR exposure-scaled, Reinhard on luminance, YCoCg.
+pub fn perceptual(c: V3, exposure: f32) -> V3 {
+    let x = c.map(|v| v * exposure);
+    let k = 1.0 + dot3(x, LUMA_709).max(0.0);
+    let t = x.map(|v| v / k);
+    [
+        0.25 * t[0] + 0.5 * t[1] + 0.25 * t[2],
+        0.5 * t[0] - 0.5 * t[2],
+        -0.25 * t[0] + 0.5 * t[1] - 0.25 * t[2],
+    ]
+}
+
+/// inc/perceptual.glsl's `linear_from_perceptual`: the inverse of [`perceptual`], negative RGB
+/// (clipping in YCoCg can leave the gamut) clamped to 0.
+pub fn linear_from_perceptual(y: V3, exposure: f32) -> V3 {
+    let t = [y[0] + y[1] - y[2], y[0] + y[2], y[0] - y[1] - y[2]].map(|v| v.max(0.0));
+    let k = (1.0 - dot3(t, LUMA_709)).max(1e-3);
+    t.map(|v| v / k / exposure)
+}
+
+/// inc/perceptual.glsl's `clip_towards`: moves h towards p until it lies in [lo, hi].
+pub fn clip_towards(p: V3, h: V3, lo: V3, hi: V3) -> V3 {
+    let r: V3 = std::array::from_fn(|i| h[i] - p[i]);
+    let mut t = 1.0f32;
+    for i in 0..3 {
+        if r[i] > 1e-7 {
+            t = t.min((hi[i] - p[i]) / r[i]);
+        } else if r[i] < -1e-7 {
+            t = t.min((lo[i] - p[i]) / r[i]);
+        }
+    }
+    let t = t.max(0.0);
+    std::array::from_fn(|i| p[i] + r[i] * t)
+}

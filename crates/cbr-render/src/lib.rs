@@ -32,6 +32,7 @@ pub use techniques::Coverage;
 pub use techniques::analytic::AnalyticLayers;
 pub use techniques::checkerboard::{self, CheckerboardConfig, LodMode};
 pub use techniques::interleaved::InterleavedLayers;
+pub use techniques::taau;
 pub use techniques::upscale;
 
 mod embedded {

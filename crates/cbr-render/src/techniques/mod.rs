@@ -17,6 +17,7 @@ techniques!(
     msaa,
     checkerboard,
     upscale,
+    taau,
     interlaced,
     analytic,
     deferred,

@@ -48,8 +48,11 @@ pub const REGISTRATION: Registration = Registration {
     },
 };
 
+/// RCAS's push constants (those of every upscale pass).
+pub type RcasPush = Push;
+
 crate::push_constants! {
-    struct Push {
+    pub struct Push {
         /// W, H, w, h: the output and the low resolution.
         sizes: [i32; 4],
         /// FSR 1: exposure scale (2^stops, before the encoding), RCAS's 2^-sharpness, 0, 0.
@@ -89,8 +92,14 @@ pub fn decl(filter: UpscaleFilter) -> ComputeDecl {
 
 /// FSR 1's RCAS (shaders/upscale/rcas.comp): EASU's output sharpened into the output colour.
 pub fn rcas_decl() -> ComputeDecl {
-    ComputeDecl::new("upscale.rcas", "upscale/rcas.comp")
-        .bind(Binding::sampled("easu"))
+    rcas_decl_named("upscale.rcas")
+}
+
+/// RCAS as pass `name`: `rcas_in` sharpened into `out_color` (taau's last pass too), with
+/// [`RcasPush`]'s constants.
+pub fn rcas_decl_named(name: &str) -> ComputeDecl {
+    ComputeDecl::new(name, "upscale/rcas.comp")
+        .bind(Binding::sampled("rcas_in"))
         .bind(Binding::image("out_color", Use::Write))
         .push::<Push>()
 }
@@ -198,6 +207,7 @@ impl UpscalePass {
         self.pass
             .dispatch_2d(cmd, profiler, &binds.only(&self.pass), &push, size)?;
         if let Some(rcas) = &self.rcas {
+            let binds = binds.clone().image("rcas_in", self.res.image("easu")?);
             rcas.dispatch_2d(cmd, profiler, &binds.only(rcas), &push, size)?;
         }
         Ok(())

@@ -1,0 +1,418 @@
+//! The CPU reference of taau's passes (shaders/taau/), operation for operation, in f32: each
+//! function takes what its pass reads and returns what it writes. Images are rows top to bottom.
+
+use super::config::Kernel;
+use crate::cpu_math::{V3, clip_towards, linear_from_perceptual, perceptual};
+
+/// What every pass reads from its push constants.
+#[derive(Clone, Copy, Debug)]
+pub struct Params {
+    /// Output size.
+    pub out: (usize, usize),
+    /// Render size.
+    pub size: (usize, usize),
+    /// The frame's jitter (render pixels).
+    pub jitter: [f32; 2],
+    /// W / w, H / h.
+    pub ratio: [f32; 2],
+    /// 2^exposure stops.
+    pub exposure: f32,
+    pub depth_tolerance: f32,
+    pub gamma: f32,
+    /// The kernel's bias where the history is kept (W / w capped at 1.99).
+    pub bias_max: f32,
+    /// History weight cap still, moving, the speed of the moving cap, a lock's decay per frame.
+    pub accum: [f32; 4],
+    pub reset: bool,
+    pub kernel: Kernel,
+    pub stability: bool,
+}
+
+pub(crate) const OFF: [[i32; 2]; 9] = [
+    [-1, -1],
+    [0, -1],
+    [1, -1],
+    [-1, 0],
+    [0, 0],
+    [1, 0],
+    [-1, 1],
+    [0, 1],
+    [1, 1],
+];
+
+fn inside(t: [i32; 2], (w, h): (usize, usize)) -> bool {
+    t[0] >= 0 && t[1] >= 0 && (t[0] as usize) < w && (t[1] as usize) < h
+}
+
+fn clamp_at(t: [i32; 2], (w, h): (usize, usize)) -> usize {
+    let x = t[0].clamp(0, w as i32 - 1) as usize;
+    let y = t[1].clamp(0, h as i32 - 1) as usize;
+    y * w + x
+}
+
+fn finite(c: V3) -> bool {
+    c.iter().all(|v| v.is_finite())
+}
+
+/// common.glsl's `kernel_weight`.
+pub fn kernel_weight(kernel: Kernel, x: f32) -> f32 {
+    match kernel {
+        Kernel::Bilinear => (1.0 - x).max(0.0),
+        Kernel::Catmull if x < 1.0 => (1.5 * x - 2.5) * x * x + 1.0,
+        Kernel::Catmull if x < 2.0 => ((-0.5 * x + 2.5) * x - 4.0) * x + 2.0,
+        Kernel::Catmull => 0.0,
+        Kernel::Lanczos if x >= 2.0 => 0.0,
+        Kernel::Lanczos if x < 1e-4 => 1.0,
+        Kernel::Lanczos => {
+            let a = std::f32::consts::PI * x;
+            2.0 * a.sin() * (0.5 * a).sin() / (a * a)
+        }
+    }
+}
+
+/// dilate.comp: per render pixel (velocity x, y, depth, 0) of the nearest 3x3 texel, and with
+/// `recon` the reconstructed previous depth (reverse-Z bits, atomic max; 0 where nothing lands).
+pub fn dilate(
+    p: &Params,
+    depth: &[f32],
+    velocity: &[[f32; 2]],
+    recon: bool,
+) -> (Vec<[f32; 4]>, Vec<u32>) {
+    let (w, h) = p.size;
+    let mut dilated = vec![[0.0f32; 4]; w * h];
+    let mut rec = vec![0u32; w * h];
+    for y in 0..h as i32 {
+        for x in 0..w as i32 {
+            let (mut best, mut at) = (-1.0f32, clamp_at([x, y], p.size));
+            for o in OFF {
+                let t = clamp_at([x + o[0], y + o[1]], p.size);
+                if depth[t] > best {
+                    best = depth[t];
+                    at = t;
+                }
+            }
+            let v = velocity[at];
+            dilated[y as usize * w + x as usize] = [v[0], v[1], best, 0.0];
+            if recon {
+                let g = [x as f32 + 0.5 - v[0] - 0.5, y as f32 + 0.5 - v[1] - 0.5];
+                let b = [g[0].floor() as i32, g[1].floor() as i32];
+                for k in 0..4 {
+                    let t = [b[0] + (k & 1), b[1] + (k >> 1)];
+                    if inside(t, p.size) {
+                        let i = t[1] as usize * w + t[0] as usize;
+                        rec[i] = rec[i].max(best.to_bits());
+                    }
+                }
+            }
+        }
+    }
+    (dilated, rec)
+}
+
+/// depth_clip.comp: per render pixel the disocclusion in [0, 1].
+pub fn depth_clip(p: &Params, dilated: &[[f32; 4]], recon: &[u32]) -> Vec<f32> {
+    let (w, h) = p.size;
+    let mut out = vec![0.0f32; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let g = dilated[y * w + x];
+            let d = g[2];
+            if d <= 0.0 {
+                continue;
+            }
+            let q = [x as f32 + 0.5 - g[0], y as f32 + 0.5 - g[1]];
+            if q[0] < 0.0 || q[1] < 0.0 || q[0] >= w as f32 || q[1] >= h as f32 {
+                out[y * w + x] = 1.0;
+                continue;
+            }
+            let gq = [q[0] - 0.5, q[1] - 0.5];
+            let b = [gq[0].floor() as i32, gq[1].floor() as i32];
+            let f = [gq[0] - b[0] as f32, gq[1] - b[1] as f32];
+            let (mut keep, mut ws) = (0.0f32, 0.0f32);
+            for k in 0..4 {
+                let o = [k & 1, k >> 1];
+                let t = [b[0] + o[0], b[1] + o[1]];
+                let wx = if o[0] == 1 { f[0] } else { 1.0 - f[0] };
+                let wy = if o[1] == 1 { f[1] } else { 1.0 - f[1] };
+                let wt = wx * wy;
+                if !inside(t, p.size) || wt <= 0.0 {
+                    continue;
+                }
+                let pd = f32::from_bits(recon[t[1] as usize * w + t[0] as usize]);
+                let mut kept = 1.0f32;
+                if pd > d {
+                    let z = 1.0 / d;
+                    let diff = z - 1.0 / pd;
+                    let sep = p.depth_tolerance * z;
+                    if diff > sep {
+                        kept = sep / diff;
+                    }
+                }
+                keep += wt * kept;
+                ws += wt;
+            }
+            out[y * w + x] = if ws > 0.0 { 1.0 - keep / ws } else { 0.0 };
+        }
+    }
+    out
+}
+
+/// lock.comp's similarity ratio.
+pub const SIMILAR: f32 = 1.05;
+
+/// lock.comp: the output pixels locked this frame (1), from the render frame's thin features.
+pub fn lock(p: &Params, color: &[V3]) -> Vec<u32> {
+    let (w, h) = p.size;
+    let (ow, oh) = p.out;
+    let luma = |t: [i32; 2]| {
+        let c = color[clamp_at(t, p.size)];
+        if finite(c) {
+            perceptual(c, p.exposure)[0]
+        } else {
+            0.0
+        }
+    };
+    let similar = |a: f32, b: f32| {
+        let (lo, hi) = (a.min(b), a.max(b));
+        hi <= 0.0 || (lo > 0.0 && hi < SIMILAR * lo)
+    };
+    let mut locks = vec![0u32; ow * oh];
+    for y in 0..h as i32 {
+        for x in 0..w as i32 {
+            let n = luma([x, y]);
+            let mut sim = [false; 9];
+            let (mut lo, mut hi) = (1e30f32, -1e30f32);
+            for (k, o) in OFF.iter().enumerate() {
+                let a = luma([x + o[0], y + o[1]]);
+                sim[k] = k == 4 || similar(a, n);
+                if !sim[k] {
+                    lo = lo.min(a);
+                    hi = hi.max(a);
+                }
+            }
+            if !(n > hi || n < lo) {
+                continue;
+            }
+            if (sim[0] && sim[1] && sim[3])
+                || (sim[1] && sim[2] && sim[5])
+                || (sim[3] && sim[6] && sim[7])
+                || (sim[5] && sim[7] && sim[8])
+            {
+                continue;
+            }
+            let px = ((x as f32 + 0.5 - p.jitter[0]) * p.ratio[0]).floor() as i32;
+            let py = ((y as f32 + 0.5 - p.jitter[1]) * p.ratio[1]).floor() as i32;
+            locks[clamp_at([px, py], p.out)] = 1;
+        }
+    }
+    locks
+}
+
+/// What accumulate.comp writes.
+pub struct Accumulated {
+    /// Perceptual colour and the history weight.
+    pub history: Vec<[f32; 4]>,
+    /// Lock strength, the current sample's luma, its change, 0.
+    pub aux: Vec<[f32; 4]>,
+    /// Linear HDR (before RCAS).
+    pub color: Vec<V3>,
+    /// Disocclusion, lock, sample weight, history weight.
+    pub debug: Vec<[f32; 4]>,
+}
+
+/// What accumulate.comp reads.
+pub struct AccumulateInputs<'a> {
+    pub color: &'a [V3],
+    pub dilated: &'a [[f32; 4]],
+    /// `None`: without the depth clip.
+    pub disocclusion: Option<&'a [f32]>,
+    /// `None`: without locks.
+    pub new_locks: Option<&'a [u32]>,
+    pub history: &'a [[f32; 4]],
+    pub aux: &'a [[f32; 4]],
+}
+
+const STILL: f32 = 1.0 / 64.0;
+
+fn history_at(p: &Params, hist: &[[f32; 4]], q: [f32; 2]) -> V3 {
+    let texel = |t: [i32; 2]| {
+        let h = hist[clamp_at(t, p.out)];
+        [h[0], h[1], h[2]]
+    };
+    let g = [q[0] - 0.5, q[1] - 0.5];
+    let b = [g[0].floor() as i32, g[1].floor() as i32];
+    let f = [g[0] - b[0] as f32, g[1] - b[1] as f32];
+    let (mut mn, mut mx) = ([1e30f32; 3], [-1e30f32; 3]);
+    for k in 0..4 {
+        let c = texel([b[0] + (k & 1), b[1] + (k >> 1)]);
+        for i in 0..3 {
+            mn[i] = mn[i].min(c[i]);
+            mx[i] = mx[i].max(c[i]);
+        }
+    }
+    let mix = |a: V3, b: V3, t: f32| -> V3 { std::array::from_fn(|i| a[i] * (1.0 - t) + b[i] * t) };
+    if p.kernel == Kernel::Bilinear {
+        let a = mix(texel(b), texel([b[0] + 1, b[1]]), f[0]);
+        let c = mix(texel([b[0], b[1] + 1]), texel([b[0] + 1, b[1] + 1]), f[0]);
+        return mix(a, c, f[1]);
+    }
+    let wx: [f32; 4] = std::array::from_fn(|k| kernel_weight(p.kernel, (k as f32 - 1.0 - f[0]).abs()));
+    let wy: [f32; 4] = std::array::from_fn(|k| kernel_weight(p.kernel, (k as f32 - 1.0 - f[1]).abs()));
+    let (mut acc, mut ws) = ([0.0f32; 3], 0.0f32);
+    for (y, wyv) in wy.iter().enumerate() {
+        for (x, wxv) in wx.iter().enumerate() {
+            let w = wxv * wyv;
+            let c = texel([b[0] + x as i32 - 1, b[1] + y as i32 - 1]);
+            for i in 0..3 {
+                acc[i] += w * c[i];
+            }
+            ws += w;
+        }
+    }
+    std::array::from_fn(|i| (acc[i] / ws).clamp(mn[i], mx[i]))
+}
+
+/// accumulate.comp: the new history, its auxiliary data, the output colour and the debug views.
+pub fn accumulate(p: &Params, i: &AccumulateInputs) -> Accumulated {
+    let (ow, oh) = p.out;
+    let e = p.exposure;
+    let n_out = ow * oh;
+    let mut out = Accumulated {
+        history: Vec::with_capacity(n_out),
+        aux: Vec::with_capacity(n_out),
+        color: Vec::with_capacity(n_out),
+        debug: Vec::with_capacity(n_out),
+    };
+    for py in 0..oh {
+        for px in 0..ow {
+            let src = [
+                (px as f32 + 0.5) / p.ratio[0],
+                (py as f32 + 0.5) / p.ratio[1],
+            ];
+            let under = clamp_at([src[0].floor() as i32, src[1].floor() as i32], p.size);
+            let g = i.dilated[under];
+            let v = [g[0] * p.ratio[0], g[1] * p.ratio[1]];
+            let speed = (v[0] * v[0] + v[1] * v[1]).sqrt();
+            let dis = i.disocclusion.map_or(0.0, |d| d[under]);
+
+            let q = [px as f32 + 0.5 - v[0], py as f32 + 0.5 - v[1]];
+            let mut use_h = !p.reset
+                && q[0] >= 0.0
+                && q[1] >= 0.0
+                && q[0] < ow as f32
+                && q[1] < oh as f32;
+            let (mut h, mut hw, mut aux) = ([0.0f32; 3], 0.0f32, [0.0f32; 4]);
+            if use_h {
+                let n = clamp_at([q[0].floor() as i32, q[1].floor() as i32], p.out);
+                hw = i.history[n][3];
+                aux = i.aux[n];
+                h = history_at(p, i.history, q);
+                use_h = finite(h) && finite([aux[0], aux[1], aux[2]]) && hw.is_finite();
+            }
+            let keep = if use_h { 1.0 - dis } else { 0.0 };
+
+            let bias = match p.kernel {
+                Kernel::Bilinear => 1.0,
+                _ => 1.0 * (1.0 - keep) + p.bias_max * keep,
+            };
+            let c0 = [
+                (src[0] + p.jitter[0]).floor() as i32,
+                (src[1] + p.jitter[1]).floor() as i32,
+            ];
+            let c0 = [
+                c0[0].clamp(0, p.size.0 as i32 - 1),
+                c0[1].clamp(0, p.size.1 as i32 - 1),
+            ];
+            let (mut acc, mut m1, mut m2) = ([0.0f32; 3], [0.0f32; 3], [0.0f32; 3]);
+            let (mut mn, mut mx) = ([1e30f32; 3], [-1e30f32; 3]);
+            let (mut wsum, mut count, mut ws) = (0.0f32, 0.0f32, 0.0f32);
+            let mut nearest = [0.0f32; 3];
+            for (k, o) in OFF.iter().enumerate() {
+                let t = [c0[0] + o[0], c0[1] + o[1]];
+                if !inside(t, p.size) {
+                    continue;
+                }
+                let c = i.color[t[1] as usize * p.size.0 + t[0] as usize];
+                if !finite(c) {
+                    continue;
+                }
+                let d = [
+                    t[0] as f32 + 0.5 - p.jitter[0] - src[0],
+                    t[1] as f32 + 0.5 - p.jitter[1] - src[1],
+                ];
+                let w = match p.kernel {
+                    Kernel::Bilinear => (1.0 - d[0].abs()).max(0.0) * (1.0 - d[1].abs()).max(0.0),
+                    k => kernel_weight(k, (d[0] * d[0] + d[1] * d[1]).sqrt() * bias),
+                };
+                let y = perceptual(c, e);
+                for j in 0..3 {
+                    acc[j] += w * y[j];
+                    m1[j] += y[j];
+                    m2[j] += y[j] * y[j];
+                    mn[j] = mn[j].min(y[j]);
+                    mx[j] = mx[j].max(y[j]);
+                }
+                wsum += w;
+                count += 1.0;
+                if k == 4 {
+                    ws = w.max(0.0);
+                    nearest = y;
+                }
+            }
+            let cur: V3 = if wsum > 1e-4 {
+                std::array::from_fn(|j| (acc[j] / wsum).clamp(mn[j], mx[j]))
+            } else {
+                nearest
+            };
+
+            let mut life = if use_h {
+                (aux[0] - p.accum[3]).max(0.0)
+            } else {
+                0.0
+            };
+            match i.new_locks {
+                Some(l) => {
+                    if l[py * ow + px] != 0 {
+                        life = 1.0;
+                    }
+                    if dis > 0.5 {
+                        life = 0.0;
+                    }
+                }
+                None => life = 0.0,
+            }
+
+            let (mut change, mut result, mut weight) = (0.0f32, cur, ws);
+            if use_h {
+                let still = speed <= STILL && dis == 0.0;
+                if !still && count > 0.0 {
+                    let mu: V3 = std::array::from_fn(|j| m1[j] / count);
+                    let sigma: V3 =
+                        std::array::from_fn(|j| (m2[j] / count - mu[j] * mu[j]).max(0.0).sqrt());
+                    let lo: V3 = std::array::from_fn(|j| mu[j] - p.gamma * sigma[j]);
+                    let hi: V3 = std::array::from_fn(|j| mu[j] + p.gamma * sigma[j]);
+                    let clipped = clip_towards(mu, h, lo, hi);
+                    h = std::array::from_fn(|j| clipped[j] * (1.0 - life) + h[j] * life);
+                }
+                change = cur[0] - aux[1];
+                if p.stability && change * aux[2] < 0.0 {
+                    let (a, b) = (change.abs(), aux[2].abs());
+                    ws *= 1.0 - 0.5 * a.min(b) / a.max(b);
+                }
+                let t = (speed / p.accum[2]).min(1.0);
+                let cap = p.accum[0] * (1.0 - t) + p.accum[1] * t;
+                let hk = (hw * keep).min(cap);
+                let total = hk + ws;
+                if total > 0.0 {
+                    result = std::array::from_fn(|j| (hk * h[j] + ws * cur[j]) / total);
+                }
+                weight = total;
+            }
+            out.history.push([result[0], result[1], result[2], weight]);
+            out.aux.push([life, cur[0], change, 0.0]);
+            out.color.push(linear_from_perceptual(result, e));
+            out.debug.push([dis, life, ws, weight]);
+        }
+    }
+    out
+}

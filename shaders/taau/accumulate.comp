@@ -1,0 +1,202 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// taau pass 4 (FSR 2's "reproject and accumulate"; docs/upsampling.md; CPU reference
+// `accumulate`), one output pixel per invocation, in the perceptual space (inc/perceptual.glsl):
+//
+// 1. The current frame at the output pixel's centre: the 3x3 render samples around it, each at
+//    its unjittered position i + 1/2 - jitter, weighted by the kernel at the distance times the
+//    kernel bias (Lanczos-2 and Catmull-Rom: the ratio W / w capped at 1.99, so the kernel spans
+//    about 2 output pixels; falling to 1, the widest, where the history is dropped), clamped to
+//    the samples' range (deringing). The sample weight is the kernel's weight of the nearest
+//    sample: 1 on the pixel centre, less farther off.
+// 2. The history at p + 1/2 - velocity (the dilated velocity of the render pixel under p, scaled
+//    to output pixels), 4x4 separable Lanczos-2 / Catmull-Rom or 2x2 bilinear, deringed by its
+//    2x2; its weight and the lock from the nearest texel. Dropped on reset, off screen, or in
+//    proportion to the disocclusion (the depth clip).
+// 3. Locks: a lock decays by 1 / phases per frame, is renewed where the lock pass found a thin
+//    feature this frame, and dies with a disocclusion over 1/2.
+// 4. Rectification, unless the pixel is still (no motion, no disocclusion; then the history is
+//    the running mean of the jittered samples and converges): the history clipped towards the
+//    mean into mean +- gamma sigma of the 3x3 samples, then mixed back towards the unclipped
+//    history by the lock's strength.
+// 5. Luminance stability: where the current luma's change reverses the previous frame's
+//    (oscillation), the sample weight drops by half of min / max of the two changes.
+// 6. Accumulation: history weight capped at mix(accum still, accum moving, min(speed / SPEED,
+//    1)); out = (H h + w c) / (H + w); the weight stored is H + w.
+// NaN and Inf never enter the history: non-finite samples take no part, a non-finite history is
+// dropped.
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
+
+layout(set = 0, binding = BINDING_COLOR) uniform sampler2D color;
+layout(set = 0, binding = BINDING_DILATED) uniform sampler2D dilated;
+#ifdef BINDING_DISOCCLUSION
+layout(set = 0, binding = BINDING_DISOCCLUSION) uniform sampler2D disocclusion;
+#endif
+#ifdef BINDING_NEW_LOCKS
+layout(set = 0, binding = BINDING_NEW_LOCKS) readonly buffer Locks { uint new_locks[]; };
+#endif
+layout(set = 0, binding = BINDING_HIST) uniform sampler2D hist;
+layout(set = 0, binding = BINDING_HIST_AUX) uniform sampler2D hist_aux;
+layout(set = 0, binding = BINDING_OUT_HIST, rgba32f) uniform writeonly image2D out_hist;
+layout(set = 0, binding = BINDING_OUT_AUX, rgba32f) uniform writeonly image2D out_aux;
+layout(set = 0, binding = BINDING_ACCUMULATED, rgba16f) uniform writeonly image2D accumulated;
+#ifdef BINDING_DEBUG
+layout(set = 0, binding = BINDING_DEBUG, rgba32f) uniform writeonly image2D debug;
+#endif
+
+#include "common.glsl"
+#include "../inc/perceptual.glsl"
+#include "../upscale/geometry.glsl"
+
+const float STILL = 1.0 / 64.0;
+
+vec4 hist_texel(ivec2 t) { return texelFetch(hist, clamp(t, ivec2(0), pc.sizes.xy - 1), 0); }
+
+// The history's colour at continuous output position q (deringed by its 2x2).
+vec3 history_at(vec2 q) {
+    vec2 g = q - 0.5;
+    ivec2 b = ivec2(floor(g));
+    vec2 f = g - vec2(b);
+    vec3 mn = vec3(1e30), mx = vec3(-1e30);
+    for (int k = 0; k < 4; k++) {
+        vec3 c = hist_texel(b + ivec2(k & 1, k >> 1)).rgb;
+        mn = min(mn, c);
+        mx = max(mx, c);
+    }
+#if KERNEL == 0
+    vec3 a = mix(hist_texel(b).rgb, hist_texel(b + ivec2(1, 0)).rgb, f.x);
+    vec3 c = mix(hist_texel(b + ivec2(0, 1)).rgb, hist_texel(b + ivec2(1, 1)).rgb, f.x);
+    return mix(a, c, f.y);
+#else
+    float wx[4], wy[4];
+    for (int k = 0; k < 4; k++) {
+        wx[k] = kernel_weight(abs(float(k - 1) - f.x));
+        wy[k] = kernel_weight(abs(float(k - 1) - f.y));
+    }
+    vec3 acc = vec3(0.0);
+    float ws = 0.0;
+    for (int y = 0; y < 4; y++) {
+        for (int x = 0; x < 4; x++) {
+            float w = wx[x] * wy[y];
+            acc += w * hist_texel(b + ivec2(x - 1, y - 1)).rgb;
+            ws += w;
+        }
+    }
+    return clamp(acc / ws, mn, mx);
+#endif
+}
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 out_size = pc.sizes.xy, size = pc.sizes.zw;
+    if (!inside(p, out_size)) return;
+    vec2 ratio = pc.jitter_ratio.zw, jit = pc.jitter_ratio.xy;
+    float e = pc.params.x;
+    vec2 src = (vec2(p) + 0.5) / ratio;
+    ivec2 under = clamp(ivec2(floor(src)), ivec2(0), size - 1);
+    vec4 g = texelFetch(dilated, under, 0);
+    vec2 v = g.xy * ratio;
+    float speed = length(v);
+#ifdef BINDING_DISOCCLUSION
+    float dis = texelFetch(disocclusion, under, 0).r;
+#else
+    float dis = 0.0;
+#endif
+
+    // 2. The history (step 1 needs to know whether there is one).
+    vec2 q = vec2(p) + 0.5 - v;
+    bool use = (pc.flags.x & F_RESET) == 0u && all(greaterThanEqual(q, vec2(0.0))) &&
+               all(lessThan(q, vec2(out_size)));
+    vec3 h = vec3(0.0);
+    float hw = 0.0;
+    vec4 aux = vec4(0.0);
+    if (use) {
+        ivec2 n = ivec2(floor(q));
+        hw = texelFetch(hist, n, 0).w;
+        aux = texelFetch(hist_aux, n, 0);
+        h = history_at(q);
+        use = finite3(h) && finite3(aux.xyz) && !isnan(hw) && !isinf(hw);
+    }
+    float keep = use ? 1.0 - dis : 0.0;
+
+    // 1. The current frame at the pixel centre.
+#if KERNEL == 0
+    float bias = 1.0;
+#else
+    float bias = mix(1.0, pc.params.w, keep);
+#endif
+    ivec2 c0 = clamp(ivec2(floor(src + jit)), ivec2(0), size - 1);
+    vec3 acc = vec3(0.0), m1 = vec3(0.0), m2 = vec3(0.0);
+    vec3 mn = vec3(1e30), mx = vec3(-1e30);
+    float wsum = 0.0, count = 0.0, ws = 0.0;
+    vec3 nearest = vec3(0.0);
+    for (int k = 0; k < 9; k++) {
+        ivec2 t = c0 + OFF[k];
+        if (!inside(t, size)) continue;
+        vec3 c = texelFetch(color, t, 0).rgb;
+        if (!finite3(c)) continue;
+        vec2 d = vec2(t) + 0.5 - jit - src;
+#if KERNEL == 0
+        float w = max(1.0 - abs(d.x), 0.0) * max(1.0 - abs(d.y), 0.0);
+#else
+        float w = kernel_weight(length(d) * bias);
+#endif
+        vec3 y = perceptual(c, e);
+        acc += w * y;
+        wsum += w;
+        m1 += y;
+        m2 += y * y;
+        mn = min(mn, y);
+        mx = max(mx, y);
+        count += 1.0;
+        if (k == 4) {
+            ws = max(w, 0.0);
+            nearest = y;
+        }
+    }
+    vec3 cur = wsum > 1e-4 ? clamp(acc / wsum, mn, mx) : nearest;
+
+    // 3. Locks.
+    float life = use ? max(aux.x - pc.accum.w, 0.0) : 0.0;
+#ifdef BINDING_NEW_LOCKS
+    if (new_locks[p.y * out_size.x + p.x] != 0u) life = 1.0;
+    if (dis > 0.5) life = 0.0;
+#else
+    life = 0.0;
+#endif
+
+    float change = 0.0;
+    vec3 result = cur;
+    float weight = ws;
+    if (use) {
+        // 4. Rectification.
+        bool still = speed <= STILL && dis == 0.0;
+        if (!still && count > 0.0) {
+            vec3 mu = m1 / count;
+            vec3 sigma = sqrt(max(m2 / count - mu * mu, vec3(0.0)));
+            vec3 clipped = clip_towards(mu, h, mu - pc.params.z * sigma, mu + pc.params.z * sigma);
+            h = mix(clipped, h, life);
+        }
+        // 5. Luminance stability.
+        change = cur.x - aux.y;
+#if STABILITY
+        if (change * aux.z < 0.0) {
+            float a = abs(change), b = abs(aux.z);
+            ws *= 1.0 - 0.5 * min(a, b) / max(a, b);
+        }
+#endif
+        // 6. Accumulation.
+        float cap = mix(pc.accum.x, pc.accum.y, min(speed / pc.accum.z, 1.0));
+        float hk = min(hw * keep, cap);
+        float total = hk + ws;
+        if (total > 0.0) result = (hk * h + ws * cur) / total;
+        weight = total;
+    }
+    imageStore(out_hist, p, vec4(result, weight));
+    imageStore(out_aux, p, vec4(life, cur.x, change, 0.0));
+    imageStore(accumulated, p, vec4(linear_from_perceptual(result, e), 1.0));
+#ifdef BINDING_DEBUG
+    imageStore(debug, p, vec4(dis, life, ws, weight));
+#endif
+    write_geometry(p, 1.0 / ratio);
+}

@@ -1,0 +1,43 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// taau pass 1 (FSR 2's "reconstruct and dilate"; docs/upsampling.md; CPU reference `dilate` in
+// crates/cbr-render/src/techniques/taau/reference.rs), one render pixel per invocation: the
+// velocity and depth of the nearest (largest reverse-Z) texel of the 3x3, and, with the depth
+// clip, the reconstructed previous depth: the dilated depth scattered (atomic max: the nearest
+// wins, in any order) into the 2x2 texels around where the pixel was last frame.
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
+
+layout(set = 0, binding = BINDING_DEPTH) uniform sampler2D depth;
+layout(set = 0, binding = BINDING_VELOCITY) uniform sampler2D velocity;
+layout(set = 0, binding = BINDING_DILATED, rgba32f) uniform writeonly image2D dilated;
+#ifdef BINDING_RECON
+layout(set = 0, binding = BINDING_RECON) buffer Recon { uint recon[]; };
+#endif
+
+#include "common.glsl"
+
+void main() {
+    ivec2 i = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 size = pc.sizes.zw;
+    if (!inside(i, size)) return;
+    float best = -1.0;
+    ivec2 at = i;
+    for (int k = 0; k < 9; k++) {
+        ivec2 t = clamp(i + OFF[k], ivec2(0), size - 1);
+        float d = texelFetch(depth, t, 0).r;
+        if (d > best) {
+            best = d;
+            at = t;
+        }
+    }
+    vec2 v = texelFetch(velocity, at, 0).xy;
+    imageStore(dilated, i, vec4(v, best, 0.0));
+#ifdef BINDING_RECON
+    vec2 g = vec2(i) + 0.5 - v - 0.5;
+    ivec2 b = ivec2(floor(g));
+    for (int k = 0; k < 4; k++) {
+        ivec2 t = b + ivec2(k & 1, k >> 1);
+        if (inside(t, size)) atomicMax(recon[t.y * size.x + t.x], floatBitsToUint(best));
+    }
+#endif
+}

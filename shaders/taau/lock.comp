@@ -1,0 +1,51 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// taau pass 3 (FSR 2's "create locks"; docs/upsampling.md; CPU reference `lock`), one render
+// pixel per invocation: a thin feature is a pixel whose perceptual luma is a ridge (above or
+// below every neighbour not similar to it; similar: ratio under 1.05) with no 2x2 quad around it
+// of similar pixels. Its lock is set at the output pixel its (unjittered) sample falls in; the
+// accumulation keeps a locked history from rectification.
+layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
+
+layout(set = 0, binding = BINDING_COLOR) uniform sampler2D color;
+layout(set = 0, binding = BINDING_NEW_LOCKS) writeonly buffer Locks { uint new_locks[]; };
+
+#include "common.glsl"
+#include "../inc/perceptual.glsl"
+
+const float SIMILAR = 1.05;
+
+float luma_at(ivec2 t) {
+    vec3 c = texelFetch(color, clamp(t, ivec2(0), pc.sizes.zw - 1), 0).rgb;
+    return finite3(c) ? perceptual(c, pc.params.x).x : 0.0;
+}
+
+bool similar(float a, float b) {
+    float lo = min(a, b), hi = max(a, b);
+    return hi <= 0.0 || (lo > 0.0 && hi < SIMILAR * lo);
+}
+
+void main() {
+    ivec2 i = ivec2(gl_GlobalInvocationID.xy);
+    if (!inside(i, pc.sizes.zw)) return;
+    float n = luma_at(i);
+    bool sim[9];
+    float lo = 1e30, hi = -1e30;
+    for (int k = 0; k < 9; k++) {
+        float a = luma_at(i + OFF[k]);
+        sim[k] = k == 4 || similar(a, n);
+        if (!sim[k]) {
+            lo = min(lo, a);
+            hi = max(hi, a);
+        }
+    }
+    if (!(n > hi || n < lo)) return;
+    // The four 2x2 quads holding the centre (3x3 indices).
+    if (sim[0] && sim[1] && sim[3]) return;
+    if (sim[1] && sim[2] && sim[5]) return;
+    if (sim[3] && sim[6] && sim[7]) return;
+    if (sim[5] && sim[7] && sim[8]) return;
+    ivec2 p = ivec2(floor((vec2(i) + 0.5 - pc.jitter_ratio.xy) * pc.jitter_ratio.zw));
+    p = clamp(p, ivec2(0), pc.sizes.xy - 1);
+    new_locks[p.y * pc.sizes.x + p.x] = 1u;
+}
