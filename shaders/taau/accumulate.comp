@@ -17,7 +17,8 @@
 //    feature this frame, and dies with a disocclusion over 1/2.
 // 4. Rectification, unless the pixel is still (no motion, no disocclusion; then the history is
 //    the running mean of the jittered samples and converges): the history clipped towards the
-//    mean into mean +- gamma sigma of the 3x3 samples, then mixed back towards the unclipped
+//    mean into mean +- gamma sigma of the 3x3 samples, each weighted exp(-2.3 d^2) by its
+//    distance d (render pixels) from the output pixel (FSR 2's rectification box), then mixed back towards the unclipped
 //    history by the lock's strength.
 // 5. Luminance stability: where the current luma's change reverses the previous frame's
 //    (oscillation), the sample weight drops by half of min / max of the two changes.
@@ -49,6 +50,7 @@ layout(set = 0, binding = BINDING_DEBUG, rgba32f) uniform writeonly image2D debu
 #include "../upscale/geometry.glsl"
 
 const float STILL = 1.0 / 64.0;
+const float BOX_CURVE = 2.3;
 
 vec4 hist_texel(ivec2 t) { return texelFetch(hist, clamp(t, ivec2(0), pc.sizes.xy - 1), 0); }
 
@@ -144,11 +146,14 @@ void main() {
         vec3 y = perceptual(c, e);
         acc += w * y;
         wsum += w;
-        m1 += y;
-        m2 += y * y;
+        // The rectification box's moments, each sample weighted by its distance (FSR 2's
+        // exp(-2.3 d^2), d in render pixels): the box is the output pixel's, not the 3x3's.
+        float b = exp(-BOX_CURVE * dot(d, d));
+        m1 += b * y;
+        m2 += b * y * y;
         mn = min(mn, y);
         mx = max(mx, y);
-        count += 1.0;
+        count += b;
         if (k == 4) {
             ws = max(w, 0.0);
             nearest = y;

@@ -54,6 +54,7 @@ fn nan_and_inf_are_counted_and_never_spread() {
         "native+taa",
         "native+taa:inside",
         "checkerboard:rotated:ours+taa",
+        "taau",
         "checkerboard:split:ours+sharpen",
     ] {
         let a = render(&gpu, &bad, spec, &frames);
@@ -414,7 +415,7 @@ fn ulps(a: half::f16, b: half::f16) -> u32 {
 
 /// A static scene through the resolve and TAA: after convergence every frame is within one fp16
 /// ulp of the converged frame at the same phase of the jitter and parity cycle (16 frames covers
-/// the checkerboard's 2, TAA's 8 and 16). `CBR_DRIFT_FRAMES` (default 320) sets the length; the
+/// the checkerboard's 2, TAA's 8 and 16, taau's 16 at 64x36). `CBR_DRIFT_FRAMES` (default 320) sets the length; the
 /// first half (rounded to the cycle) settles (checkerboard + TAA needs about 140 frames to be
 /// exactly periodic).
 #[test]
@@ -432,7 +433,7 @@ fn drift_a_static_scene_stays_within_one_ulp() {
     let verbose = std::env::var("CBR_DRIFT_VERBOSE").is_ok();
     let specs = std::env::var("CBR_DRIFT_SPECS").unwrap_or_else(|_| {
         "checkerboard:rotated:ours,checkerboard:split:ours,native+taa,checkerboard:rotated:ours+taa,\
-         checkerboard:rotated:fused"
+         checkerboard:rotated:fused,taau"
             .into()
     });
     for spec in specs.split(',') {

@@ -2,7 +2,12 @@
 //! once with its default; parameters in any order, each at most once.
 
 use crate::techniques::upscale::config::DEFAULT_SCALE;
-use crate::techniques::upscale::config::{DEFAULT_SHARPNESS, MAX_SHARPNESS};
+use crate::techniques::upscale::config::MAX_SHARPNESS;
+
+/// RCAS sharpness in stops: 1, RCAS's lobe at half strength (`upscale:fsr1`'s 0.2 keeps 87%):
+/// sharpening an accumulated frame also sharpens what is left of the jitter's noise (measured
+/// in docs/upsampling.md; FSR 2 makes its sharpening optional).
+pub const DEFAULT_SHARPNESS: f32 = 1.0;
 
 /// The reconstruction kernel of the current frame's samples and of the history.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -77,7 +82,7 @@ impl Default for TaauConfig {
             stability: true,
             sharpness: DEFAULT_SHARPNESS,
             accumulation: 8.0,
-            moving_accumulation: 1.0,
+            moving_accumulation: 0.5,
             gamma: 1.0,
             depth_tolerance: 0.05,
             lod_bias: None,

@@ -57,7 +57,7 @@ pub const REGISTRATION: Registration = Registration {
     outputs: Outputs {
         layers: &LAYERS,
         stats: &[],
-        pngs: None,
+        pngs: Some(debug_pngs),
         settings: None,
     },
     check: |p| parse(p).map(|_| ()),
@@ -214,6 +214,38 @@ fn resources(out: (u32, u32), size: (u32, u32), c: &TaauConfig) -> Vec<ResourceD
         r.push(ResourceDecl::readback("taau_debug", vk::Format::R32G32B32A32_SFLOAT, ow, oh));
     }
     r
+}
+
+/// `debug`: the debug layer's channels as grey PNGs (`taau_disocclusion`, `taau_lock`,
+/// `taau_sample_weight`; `taau_history_weight` over the largest weight in the frame), over the
+/// displayed frame darkened to a quarter where the channel is 0.
+fn debug_pngs(out: &FrameOutput, display: &[u8]) -> Vec<crate::frame::DebugPng> {
+    let mut pngs = Vec::new();
+    for c in DEBUG_LAYER.channels {
+        let Some(v) = out.channel::<f32>(DEBUG_LAYER.name, c) else {
+            continue;
+        };
+        let top = match *c {
+            "history_weight" => v.iter().fold(1e-6f32, |a, &b| a.max(b)),
+            _ => 1.0,
+        };
+        let rgba = v
+            .iter()
+            .zip(display.chunks(4))
+            .flat_map(|(&x, d)| {
+                let t = (x / top).clamp(0.0, 1.0);
+                let g = |k: usize| (f32::from(d[k]) * 0.25 * (1.0 - t) + 255.0 * t).round() as u8;
+                [g(0), g(1), g(2), 255]
+            })
+            .collect();
+        pngs.push(crate::frame::DebugPng {
+            name: format!("taau_{c}"),
+            width: out.width,
+            height: out.height,
+            rgba,
+        });
+    }
+    pngs
 }
 
 /// One frame's view of the passes: which history slot, reset, jitter.

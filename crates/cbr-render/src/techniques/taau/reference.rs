@@ -233,6 +233,8 @@ pub struct AccumulateInputs<'a> {
 }
 
 const STILL: f32 = 1.0 / 64.0;
+/// The rectification box's weight exp(-BOX_CURVE d^2) (FSR 2's).
+const BOX_CURVE: f32 = 2.3;
 
 fn history_at(p: &Params, hist: &[[f32; 4]], q: [f32; 2]) -> V3 {
     let texel = |t: [i32; 2]| {
@@ -345,15 +347,16 @@ pub fn accumulate(p: &Params, i: &AccumulateInputs) -> Accumulated {
                     k => kernel_weight(k, (d[0] * d[0] + d[1] * d[1]).sqrt() * bias),
                 };
                 let y = perceptual(c, e);
+                let b = (-BOX_CURVE * (d[0] * d[0] + d[1] * d[1])).exp();
                 for j in 0..3 {
                     acc[j] += w * y[j];
-                    m1[j] += y[j];
-                    m2[j] += y[j] * y[j];
+                    m1[j] += b * y[j];
+                    m2[j] += b * y[j] * y[j];
                     mn[j] = mn[j].min(y[j]);
                     mx[j] = mx[j].max(y[j]);
                 }
                 wsum += w;
-                count += 1.0;
+                count += b;
                 if k == 4 {
                     ws = w.max(0.0);
                     nearest = y;
