@@ -164,6 +164,7 @@ fn child_every_pass() {
             "interlaced:debug",
             "upscale:bicubic",
             "upscale:fsr1:0.5",
+            "taau",
             "native+taa+sharpen",
             "native+taa:inside+fxaa",
         ]

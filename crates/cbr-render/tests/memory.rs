@@ -40,6 +40,8 @@ const SPECS: &[&str] = &[
     "upscale:fsr1",
     "upscale:fsr1:0.5:sharpness=1",
     "upscale:0.77",
+    "taau",
+    "taau:0.5:without-locks:without-depth-clip:without-rcas:debug",
     "interlaced",
     "interlaced:debug",
     "analytic",

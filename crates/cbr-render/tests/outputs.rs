@@ -60,6 +60,8 @@ fn frames_carry_the_layers_and_statistics_their_registrations_declare() {
     let cases: &[(&str, &[&str])] = &[
         ("native", &[]),
         ("upscale", &[]),
+        ("taau", &[]),
+        ("taau:debug", &["taau"]),
         ("msaa:4", &[]),
         ("ssaa:2", &["coverage"]),
         ("checkerboard:split:none", &["mask"]),

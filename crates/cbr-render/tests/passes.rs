@@ -15,6 +15,7 @@ use cbr_render::techniques::deferred;
 use cbr_render::techniques::interlaced::{self, InterlacedSettings};
 use cbr_render::techniques::msaa::{self, MsaaConfig};
 use cbr_render::techniques::ssaa;
+use cbr_render::taau;
 use cbr_render::upscale::{self, UpscaleFilter};
 
 /// Every pass declared through crate::pass so far, with every variant its parameters select.
@@ -48,6 +49,9 @@ fn declared() -> Vec<ComputeDecl> {
         d.push(unpack::decl(&LayoutPlan::new(layout, 64, 36, 1)));
     }
     d.extend(UpscaleFilter::ALL.into_iter().flat_map(upscale::decls));
+    for spec in [&[][..], &["bilinear", "without-stability", "debug"], &["catmull"]] {
+        d.extend(taau::decls(&taau::parse(spec).expect("taau")));
+    }
     for debug in [false, true] {
         d.push(interlaced::resolve::decl(&InterlacedSettings {
             debug,
@@ -88,7 +92,7 @@ fn declared_passes_build_without_allocating() {
                 .unwrap_or_else(|e| panic!("{}: {e}", d.name))
         })
         .collect();
-    assert_eq!(built.len(), 57);
+    assert_eq!(built.len(), 72);
     assert_eq!(
         gpu.allocations_made(),
         before,
@@ -325,6 +329,9 @@ fn the_compile_only_list_is_what_rendering_builds() {
         "checkerboard:rotated:ours:pixel:16+taa",
         "upscale:bicubic+fxaa",
         "upscale:fsr1:0.77+taa",
+        "taau",
+        "taau:0.5:bilinear:without-locks:without-depth-clip:without-rcas:debug",
+        "taau:catmull:without-stability+fxaa",
         "interlaced:debug",
         "deferred",
         "deferred:vpls=64",
