@@ -11,7 +11,7 @@
 //    sample: 1 on the pixel centre, less farther off.
 // 2. The history at p + 1/2 - velocity (the dilated velocity of the render pixel under p, scaled
 //    to output pixels), 4x4 separable Lanczos-2 / Catmull-Rom or 2x2 bilinear, deringed by its
-//    2x2; its weight and the lock from the nearest texel. Dropped on reset, off screen, or in
+//    2x2; its weight and the lock from the nearest of that 2x2. Dropped on reset, off screen, or in
 //    proportion to the disocclusion (the depth clip).
 // 3. Locks: a lock decays by 1 / phases per frame, is renewed where the lock pass found a thin
 //    feature this frame, and dies with a disocclusion over 1/2.
@@ -28,7 +28,7 @@
 // dropped.
 layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 
-layout(set = 0, binding = BINDING_COLOR) uniform sampler2D color;
+layout(set = 0, binding = BINDING_PREPARED) uniform sampler2D prepared;
 layout(set = 0, binding = BINDING_DILATED) uniform sampler2D dilated;
 #ifdef BINDING_DISOCCLUSION
 layout(set = 0, binding = BINDING_DISOCCLUSION) uniform sampler2D disocclusion;
@@ -54,38 +54,41 @@ const float BOX_CURVE = 2.3;
 
 vec4 hist_texel(ivec2 t) { return texelFetch(hist, clamp(t, ivec2(0), pc.sizes.xy - 1), 0); }
 
-// The history's colour at continuous output position q (deringed by its 2x2).
-vec3 history_at(vec2 q) {
-    vec2 g = q - 0.5;
-    ivec2 b = ivec2(floor(g));
-    vec2 f = g - vec2(b);
+// The history at continuous output position b + 1/2 + f (b the texel below and left of it, f
+// in [0, 1)): its colour (deringed by its 2x2), and in w the weight of the texel `nearest`, one
+// of the inner 2x2, from one pass over the taps.
+vec4 history_at(ivec2 b, vec2 f, ivec2 nearest) {
     vec3 mn = vec3(1e30), mx = vec3(-1e30);
-    for (int k = 0; k < 4; k++) {
-        vec3 c = hist_texel(b + ivec2(k & 1, k >> 1)).rgb;
-        mn = min(mn, c);
-        mx = max(mx, c);
-    }
+    float hw = 0.0;
 #if KERNEL == 0
-    vec3 a = mix(hist_texel(b).rgb, hist_texel(b + ivec2(1, 0)).rgb, f.x);
-    vec3 c = mix(hist_texel(b + ivec2(0, 1)).rgb, hist_texel(b + ivec2(1, 1)).rgb, f.x);
-    return mix(a, c, f.y);
+    const int LO = 0, HI = 1;
+    vec2 wx = vec2(1.0 - f.x, f.x), wy = vec2(1.0 - f.y, f.y);
 #else
+    const int LO = -1, HI = 2;
     float wx[4], wy[4];
     for (int k = 0; k < 4; k++) {
-        wx[k] = kernel_weight(abs(float(k - 1) - f.x));
-        wy[k] = kernel_weight(abs(float(k - 1) - f.y));
+        float dx = float(k - 1) - f.x, dy = float(k - 1) - f.y;
+        wx[k] = kernel_weight_sq(dx * dx);
+        wy[k] = kernel_weight_sq(dy * dy);
     }
+#endif
     vec3 acc = vec3(0.0);
     float ws = 0.0;
-    for (int y = 0; y < 4; y++) {
-        for (int x = 0; x < 4; x++) {
-            float w = wx[x] * wy[y];
-            acc += w * hist_texel(b + ivec2(x - 1, y - 1)).rgb;
+    for (int y = LO; y <= HI; y++) {
+        for (int x = LO; x <= HI; x++) {
+            ivec2 o = ivec2(x, y);
+            vec4 t = hist_texel(b + o);
+            float w = wx[x - LO] * wy[y - LO];
+            acc += w * t.rgb;
             ws += w;
+            if (x >= 0 && x <= 1 && y >= 0 && y <= 1) {
+                mn = min(mn, t.rgb);
+                mx = max(mx, t.rgb);
+                if (b + o == nearest) hw = t.w;
+            }
         }
     }
-    return clamp(acc / ws, mn, mx);
-#endif
+    return vec4(clamp(acc / ws, mn, mx), hw);
 }
 
 void main() {
@@ -113,10 +116,14 @@ void main() {
     float hw = 0.0;
     vec4 aux = vec4(0.0);
     if (use) {
-        ivec2 n = ivec2(floor(q));
-        hw = texelFetch(hist, n, 0).w;
-        aux = texelFetch(hist_aux, n, 0);
-        h = history_at(q);
+        vec2 gq = q - 0.5;
+        ivec2 b = ivec2(floor(gq));
+        vec2 f = gq - vec2(b);
+        ivec2 nearest = b + ivec2(step(vec2(0.5), f));
+        vec4 hc = history_at(b, f, nearest);
+        h = hc.rgb;
+        hw = hc.w;
+        aux = texelFetch(hist_aux, clamp(nearest, ivec2(0), out_size - 1), 0);
         use = finite3(h) && finite3(aux.xyz) && !isnan(hw) && !isinf(hw);
     }
     float keep = use ? 1.0 - dis : 0.0;
@@ -135,15 +142,15 @@ void main() {
     for (int k = 0; k < 9; k++) {
         ivec2 t = c0 + OFF[k];
         if (!inside(t, size)) continue;
-        vec3 c = texelFetch(color, t, 0).rgb;
-        if (!finite3(c)) continue;
+        vec4 pre = texelFetch(prepared, t, 0);
+        if (pre.w == 0.0) continue;
+        vec3 y = pre.xyz;
         vec2 d = vec2(t) + 0.5 - jit - src;
 #if KERNEL == 0
         float w = max(1.0 - abs(d.x), 0.0) * max(1.0 - abs(d.y), 0.0);
 #else
-        float w = kernel_weight(length(d) * bias);
+        float w = kernel_weight_sq(dot(d, d) * bias * bias);
 #endif
-        vec3 y = perceptual(c, e);
         acc += w * y;
         wsum += w;
         // The rectification box's moments, each sample weighted by its distance (FSR 2's

@@ -13,20 +13,21 @@ const ivec2 OFF[9] = ivec2[9](ivec2(-1, -1), ivec2(0, -1), ivec2(1, -1), ivec2(-
 
 bool inside(ivec2 t, ivec2 size) { return all(greaterThanEqual(t, ivec2(0))) && all(lessThan(t, size)); }
 
-const float PI = 3.14159265358979;
-
-// The kernel at distance x (already scaled): KERNEL 0 tent (radius 1), 1 Catmull-Rom, 2 Lanczos-2.
-float kernel_weight(float x) {
+// The kernel at squared distance x2 (already scaled): KERNEL 0 tent (radius 1), 1 Catmull-Rom,
+// 2 Lanczos-2 by FSR 2's polynomial approximation in x^2 (exact at 0, 1 and 2; no sine):
+// (25/16 (2/5 x^2 - 1)^2 - 9/16) (1/4 x^2 - 1)^2.
+float kernel_weight_sq(float x2) {
 #if KERNEL == 0
-    return max(1.0 - x, 0.0);
+    return max(1.0 - sqrt(x2), 0.0);
 #elif KERNEL == 1
-    if (x < 1.0) return (1.5 * x - 2.5) * x * x + 1.0;
+    float x = sqrt(x2);
+    if (x < 1.0) return (1.5 * x - 2.5) * x2 + 1.0;
     if (x < 2.0) return ((-0.5 * x + 2.5) * x - 4.0) * x + 2.0;
     return 0.0;
 #else
-    if (x >= 2.0) return 0.0;
-    if (x < 1e-4) return 1.0;
-    float a = PI * x;
-    return 2.0 * sin(a) * sin(0.5 * a) / (a * a);
+    if (x2 >= 4.0) return 0.0;
+    float a = 0.4 * x2 - 1.0;
+    float b = 0.25 * x2 - 1.0;
+    return (1.5625 * a * a - 0.5625) * b * b;
 #endif
 }

@@ -4,17 +4,22 @@
 // crates/cbr-render/src/techniques/taau/reference.rs), one render pixel per invocation: the
 // velocity and depth of the nearest (largest reverse-Z) texel of the 3x3, and, with the depth
 // clip, the reconstructed previous depth: the dilated depth scattered (atomic max: the nearest
-// wins, in any order) into the 2x2 texels around where the pixel was last frame.
+// wins, in any order) into the 2x2 texels around where the pixel was last frame; and the
+// prepared colour the later passes read (FSR 2 prepares it in its depth-clip pass): the
+// perceptual colour (inc/perceptual.glsl), w 1, or 0 where the colour is not finite.
 layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 
 layout(set = 0, binding = BINDING_DEPTH) uniform sampler2D depth;
 layout(set = 0, binding = BINDING_VELOCITY) uniform sampler2D velocity;
+layout(set = 0, binding = BINDING_COLOR) uniform sampler2D color;
 layout(set = 0, binding = BINDING_DILATED, rgba32f) uniform writeonly image2D dilated;
+layout(set = 0, binding = BINDING_PREPARED, rgba16f) uniform writeonly image2D prepared;
 #ifdef BINDING_RECON
 layout(set = 0, binding = BINDING_RECON) buffer Recon { uint recon[]; };
 #endif
 
 #include "common.glsl"
+#include "../inc/perceptual.glsl"
 
 void main() {
     ivec2 i = ivec2(gl_GlobalInvocationID.xy);
@@ -32,6 +37,8 @@ void main() {
     }
     vec2 v = texelFetch(velocity, at, 0).xy;
     imageStore(dilated, i, vec4(v, best, 0.0));
+    vec3 c = texelFetch(color, i, 0).rgb;
+    imageStore(prepared, i, finite3(c) ? vec4(perceptual(c, pc.params.x), 1.0) : vec4(0.0));
 #ifdef BINDING_RECON
     vec2 g = vec2(i) + 0.5 - v - 0.5;
     ivec2 b = ivec2(floor(g));

@@ -7,18 +7,15 @@
 // accumulation keeps a locked history from rectification.
 layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 
-layout(set = 0, binding = BINDING_COLOR) uniform sampler2D color;
+layout(set = 0, binding = BINDING_PREPARED) uniform sampler2D prepared;
 layout(set = 0, binding = BINDING_NEW_LOCKS) writeonly buffer Locks { uint new_locks[]; };
 
 #include "common.glsl"
-#include "../inc/perceptual.glsl"
 
 const float SIMILAR = 1.05;
 
-float luma_at(ivec2 t) {
-    vec3 c = texelFetch(color, clamp(t, ivec2(0), pc.sizes.zw - 1), 0).rgb;
-    return finite3(c) ? perceptual(c, pc.params.x).x : 0.0;
-}
+// The prepared colour's luma (0 where the colour was not finite).
+float luma_at(ivec2 t) { return texelFetch(prepared, clamp(t, ivec2(0), pc.sizes.zw - 1), 0).x; }
 
 bool similar(float a, float b) {
     float lo = min(a, b), hi = max(a, b);

@@ -10,12 +10,12 @@ use cbr_render::layouts::LayoutPlan;
 use cbr_render::pass::{Binding, Binds, ComputeDecl, ResourceDecl, Resources, Use};
 use cbr_render::post::{fxaa, sharpen, taa};
 use cbr_render::resolve::{self, Mapping, ResolveMode, ResolveSettings};
+use cbr_render::taau;
 use cbr_render::techniques::analytic;
 use cbr_render::techniques::deferred;
 use cbr_render::techniques::interlaced::{self, InterlacedSettings};
 use cbr_render::techniques::msaa::{self, MsaaConfig};
 use cbr_render::techniques::ssaa;
-use cbr_render::taau;
 use cbr_render::upscale::{self, UpscaleFilter};
 
 /// Every pass declared through crate::pass so far, with every variant its parameters select.
@@ -49,7 +49,11 @@ fn declared() -> Vec<ComputeDecl> {
         d.push(unpack::decl(&LayoutPlan::new(layout, 64, 36, 1)));
     }
     d.extend(UpscaleFilter::ALL.into_iter().flat_map(upscale::decls));
-    for spec in [&[][..], &["bilinear", "without-stability", "debug"], &["catmull"]] {
+    for spec in [
+        &[][..],
+        &["bilinear", "without-stability", "debug"],
+        &["catmull"],
+    ] {
         d.extend(taau::decls(&taau::parse(spec).expect("taau")));
     }
     for debug in [false, true] {

@@ -110,7 +110,7 @@ fn off(got: &[f32], want: &[f32], abs: f32, rel: f32) -> (usize, f32) {
     let mut worst = 0.0f32;
     for (g, w) in got.iter().zip(want) {
         let d = (g - w).abs();
-        if !(d <= abs + rel * w.abs()) {
+        if d.is_nan() || d > abs + rel * w.abs() {
             n += 1;
             worst = worst.max(if d.is_nan() { f32::INFINITY } else { d });
         }
@@ -125,6 +125,7 @@ fn flat<const N: usize>(v: &[[f32; N]]) -> Vec<f32> {
 /// What one frame's passes wrote, read back.
 struct Got {
     dilated: Vec<V4>,
+    prepared: Vec<V4>,
     recon: Option<Vec<u32>>,
     disocclusion: Option<Vec<f32>>,
     locks: Option<Vec<u32>>,
@@ -145,6 +146,7 @@ fn run_frame(gpu: &Gpu, p: &TaauPasses, t: &FrameTargets, f: &TaauFrame) -> Got 
     };
     let (hist, aux) = p.history(f.frame).expect("history");
     let dilated = rb("t.dilated", res.image("dilated").expect("dilated"));
+    let prepared = rb("t.prepared", res.image("prepared").expect("prepared"));
     let dis = res.image("disocclusion").ok().map(|i| rb("t.dis", i));
     let (recon, locks) = (rbb("recon"), rbb("new_locks"));
     let (h_rb, a_rb) = (rb("t.hist", hist), rb("t.aux", aux));
@@ -156,6 +158,7 @@ fn run_frame(gpu: &Gpu, p: &TaauPasses, t: &FrameTargets, f: &TaauFrame) -> Got 
     gpu.submit("t.taau", |cmd| {
         p.record(cmd, &mut profiler, t, f)?;
         cmd.read_image(res.image("dilated")?, &dilated);
+        cmd.read_image(res.image("prepared")?, &prepared);
         if let Some(d) = &dis {
             cmd.read_image(res.image("disocclusion")?, d);
         }
@@ -174,6 +177,12 @@ fn run_frame(gpu: &Gpu, p: &TaauPasses, t: &FrameTargets, f: &TaauFrame) -> Got 
     .expect("submit");
     Got {
         dilated: f32s(&dilated),
+        prepared: {
+            let h: Vec<f16> = f32s(&prepared);
+            h.chunks(4)
+                .map(|c| [0, 1, 2, 3].map(|k| c[k].to_f32()))
+                .collect()
+        },
         recon: recon.as_ref().map(f32s),
         disocclusion: dis.as_ref().map(f32s),
         locks: locks.as_ref().map(f32s),
@@ -222,6 +231,17 @@ fn every_pass_matches_its_cpu_reference_over_frames() {
             if let Some(r) = &got.recon {
                 assert_eq!(r, &rec, "{what}: reconstructed previous depth");
             }
+            // The prepared colour: within one f16 step (the f32 perceptual value may round
+            // either way); the non-finite pixels flagged.
+            let pre = reference::prepare(&p, &s.color);
+            let (n, worst) = off(&flat(&got.prepared), &flat(&pre), 1e-4, 1e-3);
+            assert_eq!(n, 0, "{what}: prepared colour, worst {worst}");
+            let flagged = got.prepared.iter().filter(|v| v[3] == 0.0).count();
+            assert_eq!(
+                flagged,
+                if frame == 2 { 2 } else { 0 },
+                "{what}: non-finite flags"
+            );
             // 2. Depth clip on the GPU's dilated frame and reconstruction.
             if let (Some(d), Some(r)) = (&got.disocclusion, &got.recon) {
                 let want = reference::depth_clip(&p, &got.dilated, r);
@@ -231,13 +251,13 @@ fn every_pass_matches_its_cpu_reference_over_frames() {
             }
             // 3. Locks on the uploaded colour.
             if let Some(l) = &got.locks {
-                assert_eq!(l, &reference::lock(&p, &s.color), "{what}: locks");
+                assert_eq!(l, &reference::lock(&p, &got.prepared), "{what}: locks");
                 locked += l.iter().filter(|&&v| v != 0).count();
             }
             // 4. Accumulate on the GPU's inputs and its previous history.
             let blank = vec![[0.0f32; 4]; (out.0 * out.1) as usize];
             let inputs = AccumulateInputs {
-                color: &s.color,
+                prepared: &got.prepared,
                 dilated: &got.dilated,
                 disocclusion: got.disocclusion.as_deref(),
                 new_locks: got.locks.as_deref(),
@@ -285,7 +305,10 @@ fn every_pass_matches_its_cpu_reference_over_frames() {
         if c.locks {
             assert!(locked > 10, "{spec:?}: {locked} locks");
         }
-        assert!(clipped_or_blended > 500, "{spec:?}: {clipped_or_blended} blended");
+        assert!(
+            clipped_or_blended > 500,
+            "{spec:?}: {clipped_or_blended} blended"
+        );
     }
     assert_clean(&gpu);
 }
@@ -344,7 +367,10 @@ fn taau_renders_the_demo_with_every_option() {
             assert!(frac(lock, 0.0) > 0.001, "{spec}: nothing locked");
             assert!(frac(hw, 1.0) > 0.3, "{spec}: no history accumulated");
         } else {
-            assert!(last.layer("taau").is_none(), "{spec}: a debug layer without debug");
+            assert!(
+                last.layer("taau").is_none(),
+                "{spec}: a debug layer without debug"
+            );
         }
         // The same scene at the same render scale gives the same IDs whatever the options.
         if spec.starts_with("taau:accum") || spec == "taau:debug" {
@@ -374,7 +400,10 @@ fn a_camera_cut_resets_taau() {
     let spec = "taau";
     let outs = render_settings(&gpu, &s, settings(w, h, spec), &(0..6).collect::<Vec<_>>());
     let alone = |f: u32| render_settings(&gpu, &s, settings(w, h, spec), &[f]).remove(0);
-    assert!(outs[4].color == alone(4).color, "frame 4 (the cut) kept history");
+    assert!(
+        outs[4].color == alone(4).color,
+        "frame 4 (the cut) kept history"
+    );
     assert!(outs[3].color != alone(3).color, "frame 3 blends history");
     assert!(outs[5].color != alone(5).color, "frame 5 blends again");
     assert_clean(&gpu);
@@ -398,7 +427,9 @@ fn nan_and_inf_never_enter_the_taau_history() {
     for spec in ["taau", "taau:catmull:without-locks"] {
         let mut r = Renderer::new(&gpu, &shaders, &s, settings(w, h, spec)).expect("renderer");
         for f in 0..6 {
-            let o = r.render(if f == 3 { &poisoned } else { &s }, f).expect("frame");
+            let o = r
+                .render(if f == 3 { &poisoned } else { &s }, f)
+                .expect("frame");
             assert_eq!(nonfinite(&o), 0, "{spec} frame {f}");
             if f == 3 {
                 assert!(o.nonfinite_fragments.unwrap_or(0) > 0, "no injection");
@@ -437,6 +468,9 @@ fn taau_converges_on_a_static_scene() {
     };
     let (full, one) = (change("taau"), change("taau:accum=1"));
     eprintln!("taau on a static scene, frame-to-frame change: {full:.5}; accum=1: {one:.5}");
-    assert!(full < 0.25 * one, "change {full} vs {one} without accumulation");
+    assert!(
+        full < 0.25 * one,
+        "change {full} vs {one} without accumulation"
+    );
     assert_clean(&gpu);
 }

@@ -2,8 +2,9 @@
 //! FSR 2 and Karis' "High Quality Temporal Supersampling". The scene renders at SCALE per axis
 //! with a Halton(2, 3) jitter of 8 (W / w)^2 phases, then four compute passes (shaders/taau/):
 //!
-//! 1. `taau.dilate` (render resolution): closest-depth velocity and depth, and the reconstructed
-//!    previous depth (the dilated depth scattered to where each pixel was last frame);
+//! 1. `taau.dilate` (render resolution): closest-depth velocity and depth, the reconstructed
+//!    previous depth (the dilated depth scattered to where each pixel was last frame) and the
+//!    prepared colour (perceptual YCoCg, once per render pixel);
 //! 2. `taau.depth_clip` (render resolution): the disocclusion that depth shows;
 //! 3. `taau.lock` (render resolution): thin features, locked at the output pixel they fall in;
 //! 4. `taau.accumulate` (output resolution): the current samples reconstructed at the output
@@ -104,7 +105,9 @@ pub fn dilate_decl(c: &TaauConfig) -> ComputeDecl {
         .define("KERNEL", c.kernel as u32)
         .bind(Binding::sampled("depth"))
         .bind(Binding::sampled("velocity"))
-        .bind(Binding::image("dilated", Use::Write));
+        .bind(Binding::sampled("color"))
+        .bind(Binding::image("dilated", Use::Write))
+        .bind(Binding::image("prepared", Use::Write));
     if c.depth_clip {
         d = d.bind(Binding::buffer("recon", Use::ReadWrite));
     }
@@ -123,7 +126,7 @@ pub fn depth_clip_decl(c: &TaauConfig) -> ComputeDecl {
 pub fn lock_decl(c: &TaauConfig) -> ComputeDecl {
     ComputeDecl::new("taau.lock", "taau/lock.comp")
         .define("KERNEL", c.kernel as u32)
-        .bind(Binding::sampled("color"))
+        .bind(Binding::sampled("prepared"))
         .bind(Binding::buffer("new_locks", Use::Write))
         .push::<Push>()
 }
@@ -133,7 +136,7 @@ pub fn accumulate_decl(c: &TaauConfig) -> ComputeDecl {
         .define("KERNEL", c.kernel as u32)
         .define("STABILITY", u32::from(c.stability))
         .constants(&[("F_RESET", F_RESET)])
-        .bind(Binding::sampled("color"))
+        .bind(Binding::sampled("prepared"))
         .bind(Binding::sampled("dilated"));
     if c.depth_clip {
         d = d.bind(Binding::sampled("disocclusion"));
@@ -187,11 +190,15 @@ pub fn decls(c: &TaauConfig) -> Vec<ComputeDecl> {
 /// reference compares exactly).
 const HISTORY_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
+/// The prepared colour (perceptual, finite flag): half floats, as the colour it comes from.
+const PREPARED_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+
 /// Everything the passes own for a W x H output rendered at w x h.
 fn resources(out: (u32, u32), size: (u32, u32), c: &TaauConfig) -> Vec<ResourceDecl> {
     let ((ow, oh), (w, h)) = (out, size);
     let mut r = vec![
         ResourceDecl::image("dilated", vk::Format::R32G32B32A32_SFLOAT, w, h),
+        ResourceDecl::image("prepared", PREPARED_FORMAT, w, h),
         ResourceDecl::image("history", HISTORY_FORMAT, ow, oh).history(),
         ResourceDecl::image("history_aux", HISTORY_FORMAT, ow, oh).history(),
         ResourceDecl::image("accumulated", COLOR_FORMAT, ow, oh),
