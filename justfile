@@ -111,6 +111,13 @@ gpu-isa: setup
 hard-cases: setup
     CBR_CACHE_DIR={{out}}/cache python3 scripts/hard-cases.py --cbr ./target/release/cbr -o {{out}}/hard-cases --docs docs
 
+# Checkerboard against temporal upsampling (`taau`) and FSR 1 at equal shading
+# (docs/upsampling.md): the demo, Šibenik and foliage (still and moving cameras) and the moving
+# hard cases at 320x180 against ssaa:16 (cached in out/cache), strips and charts into
+# docs/images/upsampling/, and the 1280x720 cost run.
+bench-upsampling: setup
+    CBR_CACHE_DIR={{out}}/cache python3 scripts/bench-upsampling.py --cbr ./target/release/cbr -o {{out}}/bench/upsampling --docs docs
+
 # The stability figures of docs/hard-cases.md (far from the origin, reverse-Z, 1000-frame drift).
 stability:
     cargo test --release -p cbr-render --test stability -- --nocapture --test-threads 1

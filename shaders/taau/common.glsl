@@ -11,11 +11,13 @@ PUSH_CONSTANTS
 const ivec2 OFF[9] = ivec2[9](ivec2(-1, -1), ivec2(0, -1), ivec2(1, -1), ivec2(-1, 0), ivec2(0, 0),
                               ivec2(1, 0), ivec2(-1, 1), ivec2(0, 1), ivec2(1, 1));
 
+const float PI = 3.14159265358979;
+
 bool inside(ivec2 t, ivec2 size) { return all(greaterThanEqual(t, ivec2(0))) && all(lessThan(t, size)); }
 
 // The kernel at squared distance x2 (already scaled): KERNEL 0 tent (radius 1), 1 Catmull-Rom,
-// 2 Lanczos-2 by FSR 2's polynomial approximation in x^2 (exact at 0, 1 and 2; no sine):
-// (25/16 (2/5 x^2 - 1)^2 - 9/16) (1/4 x^2 - 1)^2.
+// 2 Lanczos-2, sinc(x) sinc(x / 2). (FSR 2's polynomial approximation in x^2 saves the sines but
+// is off by up to 0.049: on the moving demo it raised FLIP by 2.4%; docs/upsampling.md.)
 float kernel_weight_sq(float x2) {
 #if KERNEL == 0
     return max(1.0 - sqrt(x2), 0.0);
@@ -26,8 +28,8 @@ float kernel_weight_sq(float x2) {
     return 0.0;
 #else
     if (x2 >= 4.0) return 0.0;
-    float a = 0.4 * x2 - 1.0;
-    float b = 0.25 * x2 - 1.0;
-    return (1.5625 * a * a - 0.5625) * b * b;
+    if (x2 < 1e-8) return 1.0;
+    float a = PI * sqrt(x2);
+    return 2.0 * sin(a) * sin(0.5 * a) / (a * a);
 #endif
 }

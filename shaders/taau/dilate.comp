@@ -13,7 +13,7 @@ layout(set = 0, binding = BINDING_DEPTH) uniform sampler2D depth;
 layout(set = 0, binding = BINDING_VELOCITY) uniform sampler2D velocity;
 layout(set = 0, binding = BINDING_COLOR) uniform sampler2D color;
 layout(set = 0, binding = BINDING_DILATED, rgba32f) uniform writeonly image2D dilated;
-layout(set = 0, binding = BINDING_PREPARED, rgba16f) uniform writeonly image2D prepared;
+layout(set = 0, binding = BINDING_PREPARED, rgba32f) uniform writeonly image2D prepared;
 #ifdef BINDING_RECON
 layout(set = 0, binding = BINDING_RECON) buffer Recon { uint recon[]; };
 #endif
