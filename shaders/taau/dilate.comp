@@ -4,7 +4,8 @@
 // crates/cbr-render/src/techniques/taau/reference.rs), one render pixel per invocation: the
 // velocity and depth of the nearest (largest reverse-Z) texel of the 3x3, and, with the depth
 // clip, the reconstructed previous depth: the dilated depth scattered (atomic max: the nearest
-// wins, in any order) into the 2x2 texels around where the pixel was last frame; and the
+// wins, in any order) into those of the 2x2 texels around where the pixel was last frame whose
+// bilinear weight there exceeds 0.05; and the
 // prepared colour the later passes read (FSR 2 prepares it in its depth-clip pass): the
 // perceptual colour (inc/perceptual.glsl), w 1, or 0 where the colour is not finite.
 layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
@@ -19,6 +20,8 @@ layout(set = 0, binding = BINDING_RECON) buffer Recon { uint recon[]; };
 #endif
 
 #include "common.glsl"
+
+const float RECON_WEIGHT = 0.05;
 #include "../inc/perceptual.glsl"
 
 void main() {
@@ -42,9 +45,14 @@ void main() {
 #ifdef BINDING_RECON
     vec2 g = vec2(i) + 0.5 - v - 0.5;
     ivec2 b = ivec2(floor(g));
+    vec2 f = g - vec2(b);
     for (int k = 0; k < 4; k++) {
-        ivec2 t = b + ivec2(k & 1, k >> 1);
-        if (inside(t, size)) atomicMax(recon[t.y * size.x + t.x], floatBitsToUint(best));
+        ivec2 o = ivec2(k & 1, k >> 1);
+        ivec2 t = b + o;
+        // Only the texels the bilinear read gives weight (FSR 2's threshold 0.05): a still
+        // pixel lands on its own texel alone, not on its neighbours'.
+        float w = (o.x == 1 ? f.x : 1.0 - f.x) * (o.y == 1 ? f.y : 1.0 - f.y);
+        if (inside(t, size) && w > RECON_WEIGHT) atomicMax(recon[t.y * size.x + t.x], floatBitsToUint(best));
     }
 #endif
 }

@@ -102,6 +102,10 @@ pub fn prepare(p: &Params, color: &[V3]) -> Vec<[f32; 4]> {
         .collect()
 }
 
+/// dilate.comp's threshold: the reconstructed depth lands only where the bilinear weight
+/// exceeds it (FSR 2's).
+pub const RECON_WEIGHT: f32 = 0.05;
+
 /// dilate.comp: per render pixel (velocity x, y, depth, 0) of the nearest 3x3 texel, and with
 /// `recon` the reconstructed previous depth (reverse-Z bits, atomic max; 0 where nothing lands).
 pub fn dilate(
@@ -128,9 +132,13 @@ pub fn dilate(
             if recon {
                 let g = [x as f32 + 0.5 - v[0] - 0.5, y as f32 + 0.5 - v[1] - 0.5];
                 let b = [g[0].floor() as i32, g[1].floor() as i32];
+                let f = [g[0] - b[0] as f32, g[1] - b[1] as f32];
                 for k in 0..4 {
-                    let t = [b[0] + (k & 1), b[1] + (k >> 1)];
-                    if inside(t, p.size) {
+                    let o = [k & 1, k >> 1];
+                    let t = [b[0] + o[0], b[1] + o[1]];
+                    let wx = if o[0] == 1 { f[0] } else { 1.0 - f[0] };
+                    let wy = if o[1] == 1 { f[1] } else { 1.0 - f[1] };
+                    if inside(t, p.size) && wx * wy > RECON_WEIGHT {
                         let i = t[1] as usize * w + t[0] as usize;
                         rec[i] = rec[i].max(best.to_bits());
                     }

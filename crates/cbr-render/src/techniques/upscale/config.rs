@@ -1,5 +1,6 @@
-//! `upscale[:bilinear|bicubic|fsr1][:SCALE][:sharpness=S]`: the filter, the low resolution's
-//! size per axis, and FSR 1's RCAS sharpness, each read once with its default; parameters in any
+//! `upscale[:bilinear|bicubic|fsr1][:SCALE][:sharpness=S][:lod=B]`: the filter, the low
+//! resolution's size per axis, FSR 1's RCAS sharpness and the texture LOD bias, each read once
+//! with its default; parameters in any
 //! order, each at most once.
 
 /// The scale per axis when none is given: 1/sqrt(2), the checkerboard's pixel count.
@@ -50,6 +51,10 @@ pub struct UpscaleConfig {
     pub scale: f64,
     /// RCAS sharpness in stops (fsr1 only).
     pub sharpness: f32,
+    /// The texture LOD bias (`lod=B`); `None`: log2(SCALE) for fsr1 (AMD's FSR 1 guide: the
+    /// output's mip levels, detail for RCAS to keep), 0 for bilinear and bicubic (the low
+    /// resolution's own levels). docs/upscale.md measures both.
+    pub lod_bias: Option<f32>,
 }
 
 impl Default for UpscaleConfig {
@@ -58,6 +63,7 @@ impl Default for UpscaleConfig {
             filter: UpscaleFilter::Bilinear,
             scale: DEFAULT_SCALE,
             sharpness: DEFAULT_SHARPNESS,
+            lod_bias: None,
         }
     }
 }
@@ -69,17 +75,26 @@ impl UpscaleConfig {
         (f(width), f(height))
     }
 
+    /// The texture LOD bias: `lod=B`, else log2(SCALE) for fsr1 and 0 for the others.
+    pub fn lod_bias(&self) -> f32 {
+        self.lod_bias.unwrap_or(match self.filter {
+            UpscaleFilter::Fsr1 => self.scale.log2() as f32,
+            _ => 0.0,
+        })
+    }
+
     /// RCAS's weight scale: 2^-sharpness.
     pub fn sharpness_linear(&self) -> f32 {
         (-self.sharpness).exp2()
     }
 }
 
-const EXPECTED: &str = "a filter (bilinear, bicubic, fsr1), a scale in (0, 1] or sharpness=S";
+const EXPECTED: &str =
+    "a filter (bilinear, bicubic, fsr1), a scale in (0, 1], sharpness=S or lod=B";
 
 pub fn parse(params: &[&str]) -> std::result::Result<UpscaleConfig, String> {
     let mut c = UpscaleConfig::default();
-    let (mut filter, mut scale, mut sharpness) = (None, None, None);
+    let (mut filter, mut scale, mut sharpness, mut lod) = (None, None, None, None);
     let once = |slot: bool, p: &str, what: &str| match slot {
         true => Err(format!("`{p}`: upscale takes one {what}")),
         false => Ok(()),
@@ -98,6 +113,12 @@ pub fn parse(params: &[&str]) -> std::result::Result<UpscaleConfig, String> {
                     ));
                 }
             });
+        } else if let Some(s) = p.strip_prefix("lod=") {
+            once(lod.is_some(), p, "lod")?;
+            lod = Some(match s.parse::<f32>() {
+                Ok(v) if (-4.0..=4.0).contains(&v) => v,
+                _ => return Err(format!("lod `{s}` (a texture LOD bias from -4 to 4)")),
+            });
         } else if p.starts_with(|ch: char| ch.is_ascii_digit() || ch == '.' || ch == '-') {
             once(scale.is_some(), p, "scale")?;
             scale = Some(match p.parse::<f64>() {
@@ -114,6 +135,7 @@ pub fn parse(params: &[&str]) -> std::result::Result<UpscaleConfig, String> {
     }
     c.filter = filter.unwrap_or(c.filter);
     c.scale = scale.unwrap_or(c.scale);
+    c.lod_bias = lod.or(c.lod_bias);
     if let Some(s) = sharpness {
         if c.filter != UpscaleFilter::Fsr1 {
             return Err(format!(
@@ -184,6 +206,11 @@ mod tests {
         let c = parse(&["fsr1", "0.5", "sharpness=1"]).expect("spec");
         assert_eq!((c.filter, c.scale, c.sharpness), (UpscaleFilter::Fsr1, 0.5, 1.0));
         assert_eq!(parse(&["sharpness=0", "0.77", "fsr1"]).expect("spec").scale, 0.77);
+        assert_eq!(parse(&["fsr1", "lod=0.25"]).expect("lod").lod_bias(), 0.25);
+        assert_eq!(parse(&[]).expect("default").lod_bias(), 0.0);
+        assert_eq!(parse(&["bicubic", "0.5"]).expect("bicubic").lod_bias(), 0.0);
+        assert_eq!(parse(&["fsr1", "0.5"]).expect("fsr1").lod_bias(), -1.0);
+        assert!((parse(&["fsr1"]).expect("fsr1").lod_bias() + 0.5).abs() < 1e-6);
         assert_eq!(c.low_resolution(320, 180), (160, 90));
         let b = parse(&["0.77"]).expect("bare scale");
         assert_eq!((b.filter, b.low_resolution(320, 180)), (UpscaleFilter::Bilinear, (246, 139)));
@@ -208,6 +235,8 @@ mod tests {
             (&["fsr1", "bicubic"], "one filter"),
             (&["fsr1", "sharpness=1", "sharpness=1"], "one sharpness"),
             (&["lanczos"], "`lanczos` is not a parameter of upscale"),
+            (&["lod=-9"], "lod `-9`"),
+            (&["lod=0", "lod=1"], "one lod"),
         ] {
             let e = parse(params).expect_err(needle);
             assert!(e.contains(needle), "{params:?}: {e}");

@@ -21,7 +21,7 @@ use crate::technique::{BuildCtx, FrameCtx, Geometry, Registration, Technique};
 
 pub const REGISTRATION: Registration = Registration {
     name: "upscale",
-    grammar: "upscale[:bilinear|bicubic|fsr1][:SCALE][:sharpness=S]",
+    grammar: "upscale[:bilinear|bicubic|fsr1][:SCALE][:sharpness=S][:lod=B]",
     about: "render at SCALE per axis (default 1/sqrt(2): the checkerboard's pixel count; \
             e.g. 0.5, 0.77), then upscale; fsr1: AMD FSR 1's EASU then RCAS, sharpness in \
             stops (0 sharpest, default 0.2): the baseline checkerboard must beat",
@@ -222,6 +222,7 @@ pub struct Upscale {
     up: UpscalePass,
     readbacks: LayerReadbacks,
     low: (u32, u32),
+    lod_bias: f32,
 }
 
 impl Upscale {
@@ -264,6 +265,7 @@ impl Upscale {
             up,
             readbacks,
             low: (lw, lh),
+            lod_bias: c.lod_bias(),
         })
     }
 }
@@ -308,5 +310,9 @@ impl Technique for Upscale {
 
     fn target_bytes(&self) -> u64 {
         self.targets.bytes()
+    }
+
+    fn default_lod_bias(&self) -> f32 {
+        self.lod_bias
     }
 }
