@@ -89,21 +89,11 @@ bench-interleaved: setup
     @echo "[bench-interleaved] the sweep's report: $(realpath {{out}}/bench/interleaved/sweep/report.html)"
 
 # Issue 57: `interleaved:4x4:vpls=1024` against `deferred:vpls=1024` on four scenes of different
-# edge density (the demo, Sibenik, foliage, and the gallery's `specular` under a sun and 24 point
-# lights), at 320x180 and 1280x720, with the lighting pass attributed by part (`parts=`) and by
-# pixel class (`:debug`), and the code before the change in the same run (`fallback=inline`,
-# `window=fetch`, `cull=0`); the tables (scripts/interleaved-table.py) follow. `uptime` beside each
-# run: lavapipe's times are only comparable within a run.
-bench-interleaved-cost: setup
-    for s in builtin:demo scenes/sibenik.toml scenes/foliage.toml scenes/specular-sun.toml; do \
-        n=$(basename "$s" .toml | sed 's/builtin://'); \
-        for r in 320x180 1280x720; do \
-            uptime; \
-            CBR_CACHE_DIR={{out}}/cache ./target/release/cbr bench "$s" --width ${r%x*} --height ${r#*x} --warmup 1 --frames 2 --reference deferred:vpls=1024 --techniques deferred:vpls=1024,interleaved:4x4:vpls=1024,interleaved:4x4:vpls=1024:fallback=inline:window=fetch:cull=0,interleaved:4x4:vpls=1024:exact-edges,interleaved:4x4:vpls=1024:parts=base,interleaved:4x4:vpls=1024:parts=lights,interleaved:4x4:vpls=1024:parts=filter,interleaved:4x4:vpls=1024:debug -o {{out}}/bench/interleaved-cost/$n-$r || exit 1; \
-            uptime; \
-        done; \
-    done
-    python3 scripts/interleaved-table.py {{out}}/bench/interleaved-cost/*/bench.json
+# edge density at 320x180 and 1280x720, with the lighting pass attributed by part and pixel class
+# and the code before the change in the same run (scripts/interleaved-cost.sh); then the tables.
+bench-interleaved-cost tag="1": setup
+    scripts/interleaved-cost.sh {{tag}} {{out}}
+    python3 scripts/interleaved-table.py {{out}}/bench/ic-{{tag}}/*/bench.json
 
 # Instructions per resolved pixel of each resolve mode's CPU reference under callgrind: a cost
 # figure that does not move with the machine's load (docs/resolve.md).

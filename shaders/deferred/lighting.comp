@@ -1,6 +1,8 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_vote : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_ballot : require
 // `deferred`'s lighting pass: per pixel, the G-buffer's surface (written by the forward fragment
 // shader with GBUFFER: the same position, shading normal and albedo bits it would shade) through
 // the forward pass's `shade` (shaders/inc/shading.glsl), then the extra point lights
@@ -64,14 +66,26 @@ bool reaches(vec3 p, LightData light) {
 #ifdef FALLBACK_PAIRS
 #include "../interleaved/fallback_list.glsl"
 
-// `fallback=pairs`: lists pixel px (colour c before the VPL term, found sum `sum`) and its missing
-// window slots' subsets for the fallback passes; false where the lists are full (the caller then
-// shades them inline). The pairs are written whether or not the entry fits: the fallback pass
-// shades every pair below the end of the written ones.
+// `fallback=pairs`: lists pixel px (colour c before the VPL term, found sum `sum`, `missing` its
+// missing window slots, none where it needs no fallback) and its missing slots' subsets for the
+// fallback passes; false where it needs none or the lists are full (the caller then shades them
+// inline). Every active lane of the SIMD group calls it: the group takes its pairs and entries
+// with one atomic each (a subgroup scan gives each lane its place), so that the lists cost a few
+// atomics a group, not five a pixel. A lane whose pairs straddle the pairs' capacity fills the
+// slots below it with its first pair, so that every pair below min(pairs, capacity), the
+// fallback pass's range, is a real one (the straddling pixel itself takes the inline loop).
 bool defer_fallback(ivec2 px, vec3 c, uvec2 missing, vec3 sum) {
     uint count = uint(bitCount(missing.x) + bitCount(missing.y));
-    uint first = atomicAdd(f_pairs, count);
-    if (first + count > f_pair_cap) return false;
+    uint total = subgroupAdd(count);
+    if (total == 0u) return false;
+    uint base = 0u;
+    if (subgroupElect()) {
+        base = atomicAdd(f_pairs, total);
+        uint end = min(base + total, f_pair_cap);
+        if (end > base) atomicMax(f_pair_groups[0], (end + FALLBACK_GROUP - 1u) / FALLBACK_GROUP);
+    }
+    uint first = subgroupBroadcastFirst(base) + subgroupExclusiveAdd(count);
+    bool fits = count > 0u && first + count <= f_pair_cap;
     uint j = first;
     while (missing.x != 0u || missing.y != 0u) {
         uint word = missing.x != 0u ? 0u : 1u;
@@ -80,16 +94,27 @@ bool defer_fallback(ivec2 px, vec3 c, uvec2 missing, vec3 sum) {
         t += 32u * word;
         ivec2 o = ivec2(int(t % uint(TILE_M)) - (TILE_M - 1) / 2,
                         int(t / uint(TILE_M)) - (TILE_N - 1) / 2);
-        f_pair[j] = pack_pair(px, subset_of(px + o));
+        uint pair = pack_pair(px, subset_of(px + o));
+        if (fits) {
+            f_pair[j] = pair;
+        } else if (j == first) {
+            // Straddling the capacity: fill up to it with this (real) pair.
+            for (uint k = first; k < f_pair_cap; ++k) f_pair[k] = pair;
+        }
         j += 1u;
     }
-    atomicMax(f_pairs_end, first + count);
-    atomicMax(f_pair_groups[0], (first + count + FALLBACK_GROUP - 1u) / FALLBACK_GROUP);
-    uint e = atomicAdd(f_entries, 1u);
-    if (e >= f_entry_cap) return false;
+    uint entries = subgroupAdd(fits ? 1u : 0u);
+    if (entries == 0u) return false;
+    uint e0 = 0u;
+    if (subgroupElect()) {
+        e0 = atomicAdd(f_entries, entries);
+        uint end = min(e0 + entries, f_entry_cap);
+        if (end > e0) atomicMax(f_entry_groups[0], (end + FALLBACK_GROUP - 1u) / FALLBACK_GROUP);
+    }
+    uint e = subgroupBroadcastFirst(e0) + subgroupExclusiveAdd(fits ? 1u : 0u);
+    if (!fits || e >= f_entry_cap) return false;
     f_entry[e] = FallbackEntry(uvec4(uint(px.x) | (uint(px.y) << 16), first, count, 0u),
                                vec4(c, 0.0), vec4(sum, 0.0));
-    atomicMax(f_entry_groups[0], e / FALLBACK_GROUP + 1u);
     return true;
 }
 #endif
@@ -147,8 +172,11 @@ void main() {
         vec3 spec;
         vec3 irradiance = interleaved_irradiance(px, object, p, n, m.ks.w, bits, spec);
 #ifdef FALLBACK_PAIRS
+        // Every lane takes part in the lists' scans (defer_fallback), those without a fallback
+        // with nothing to list.
+        bool listed = defer_fallback(px, c, g_pending, g_pending_sum);
         if (g_pending != uvec2(0u)) {
-            if (defer_fallback(px, c, g_pending, g_pending_sum)) {
+            if (listed) {
                 // interleaved.finish writes the pixel.
 #ifdef DEBUG
                 if ((int(texelFetch(g_irradiance, px, 0).a) & 1) != 0) bits |= DBG_ROUNDTRIP;

@@ -32,7 +32,7 @@ PUSH_CONSTANTS
 void main() {
     uint i = gl_GlobalInvocationID.x;
 #ifndef FINISH
-    if (i >= f_pairs_end) return;
+    if (i >= min(f_pairs, f_pair_cap)) return;
     uint pair = f_pair[i];
     ivec2 px = pair_pixel(pair);
     vec3 p = texelFetch(g_position, px, 0).xyz;

@@ -8,9 +8,9 @@
 // loop's (filter.glsl, shade_missing). A pixel whose pairs or entry do not fit the buffers takes
 // the inline loop.
 //
-// The counters and both indirect dispatches (split.rs resets them each frame): entries and pairs
-// allocated, the end of the pairs written, the fallback's and the finish's group counts, and the
-// buffers' capacities.
+// The counters and both indirect dispatches (lighting.rs resets them each frame): entries and pairs
+// allocated (beyond the capacities where they overflowed), a word unused, the fallback's and the
+// finish's group counts, and the buffers' capacities.
 // The fallback passes' work groups (lighting.rs, `FALLBACK_GROUP`).
 const uint FALLBACK_GROUP = 64u;
 
@@ -24,7 +24,7 @@ struct FallbackEntry {
 layout(std430, set = 0, binding = BINDING_FALLBACK_ARGS) buffer FallbackArgs {
     uint f_entries;
     uint f_pairs;
-    uint f_pairs_end;
+    uint f_unused;
     uint f_pad;
     uint f_pair_groups[3];
     uint f_entry_groups[3];

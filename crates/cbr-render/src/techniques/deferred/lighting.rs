@@ -101,7 +101,7 @@ const ENTRY_BYTES: u64 = 48;
 const PAIR_BYTES: u64 = 4;
 const RESULT_BYTES: u64 = 12;
 /// The fallback's counters and indirect dispatches (fallback_list.glsl's FallbackArgs), u32s:
-/// entries, pairs, end of the written pairs, padding, the fallback's groups (x, y, z), the
+/// entries, pairs, two unused, the fallback's groups (x, y, z), the
 /// finish's groups, the entry and pair capacities.
 const ARGS_WORDS: usize = 12;
 /// Byte offsets of the two indirect dispatches in the counters.
