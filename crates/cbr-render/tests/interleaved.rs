@@ -777,7 +777,7 @@ fn implicit_equals_the_split() {
 /// a tile in shared memory (`window=tile`); both give the frame of the inline loop with per-window
 /// fetches bit for bit: the same values, the same sums in the same order. With the debug views,
 /// the same debug layers; on `nan`, the same non-finite count. The 8x8 `exact-edges=3` case lists
-/// more pairs than the buffers hold (up to 64 a pixel against a capacity of 2 a pixel), so its
+/// more pairs than the buffers hold (up to 64 a pixel against a capacity of 4 a pixel), so its
 /// overflowing pixels take the inline loop in the same pass.
 #[test]
 fn the_fallback_passes_and_the_window_tile_change_no_bit() {

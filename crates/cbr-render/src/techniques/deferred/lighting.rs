@@ -110,12 +110,13 @@ const ENTRY_DISPATCH: u64 = 28;
 /// The largest side `fallback=pairs` takes: a pair holds x and y in 13 bits each.
 pub const MAX_PAIRS_SIDE: u32 = 8191;
 
-/// The fallback lists' capacities at W x H: entries for half the pixels, pairs for two a pixel
-/// (the demo at 1280x720 lists 0.17 entries and 0.98 pairs a visible pixel; Šibenik at 320x180
-/// 0.48 and 3.1). Pixels beyond them take the inline loop.
+/// The fallback lists' capacities at W x H: entries for three quarters of the pixels, pairs for
+/// four a pixel (at 320x180 the demo lists 0.34 entries and 2.3 pairs a visible pixel, foliage 0.44
+/// and 3.0, Šibenik 0.51 and 3.2; fewer at 1280x720). 16 bytes a pair, 48 an entry: 92 MB at
+/// 1280x720. Pixels beyond them take the inline loop (the same frame).
 pub fn fallback_caps(width: u32, height: u32) -> (u32, u32) {
     let px = width * height;
-    (px.div_ceil(2).max(FALLBACK_GROUP), (2 * px).max(FALLBACK_GROUP))
+    ((3 * px).div_ceil(4).max(FALLBACK_GROUP), (4 * px).max(FALLBACK_GROUP))
 }
 
 /// The fallback lists' buffers at W x H.
