@@ -88,6 +88,13 @@ bench-interleaved: setup
     python3 scripts/interleaved-table.py {{out}}/bench/interleaved/demo/bench.json {{out}}/bench/interleaved/sibenik/bench.json {{out}}/bench/interleaved/sweep/bench.json
     @echo "[bench-interleaved] the sweep's report: $(realpath {{out}}/bench/interleaved/sweep/report.html)"
 
+# Issue 57: `interleaved:4x4:vpls=1024` against `deferred:vpls=1024` on four scenes of different
+# edge density at 320x180 and 1280x720, with the lighting pass attributed by part and pixel class
+# and the code before the change in the same run (scripts/interleaved-cost.sh); then the tables.
+bench-interleaved-cost tag="1": setup
+    scripts/interleaved-cost.sh {{tag}} {{out}}
+    python3 scripts/interleaved-table.py {{out}}/bench/ic-{{tag}}/*/bench.json
+
 # Instructions per resolved pixel of each resolve mode's CPU reference under callgrind: a cost
 # figure that does not move with the machine's load (docs/resolve.md).
 resolve-cost:

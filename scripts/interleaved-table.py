@@ -14,7 +14,8 @@ in its heading: ratios are taken within a run, never across runs.
 import json
 import sys
 
-VPL_PASSES = ("split", "shade", "gather", "implicit", "seed_blur_h", "seed_blur_v")
+VPL_PASSES = ("split", "shade", "gather", "implicit", "seed_blur_h", "seed_blur_v", "fallback",
+              "finish")
 
 
 def med(row, name):
@@ -29,6 +30,44 @@ def lighting(row):
         if k.endswith(".lighting"):
             return v["median"]
     return None
+
+
+CLASSES = ("interior", "edge_found", "fallback_1_4", "fallback_5_8", "fallback_9_16",
+           "fallback_17_plus")
+
+
+def attribution(rows):
+    """The lighting pass by part (bench.json's `interleaved_parts`, from the `parts=` rows) and the
+    per-pixel classes (`interleaved_attribution`, from `:debug` rows)."""
+    parts = [(c, r["interleaved_parts"]) for c, r in rows.items() if r.get("interleaved_parts")]
+    if parts:
+        print("\n| spec | lighting ms | base | point lights | filter | fallback (in the pass) | "
+              "`interleaved.fallback` | `interleaved.finish` |")
+        print("|---|---|---|---|---|---|---|---|")
+        for c, p in parts:
+            r = rows[c]
+            print(f"| `{c}` | {f(p['lighting_ms'], 1)} | {f(p['base_ms'], 1)} | "
+                  f"{f(p['lights_ms'], 1)} | {f(p['filter_ms'], 1)} | {f(p['fallback_ms'], 1)} | "
+                  f"{f(med(r, 'fallback'), 1)} | {f(med(r, 'finish'), 1)} |")
+    for c, r in rows.items():
+        a = (r.get("error") or {}).get("interleaved_attribution")
+        if not a:
+            continue
+        v, e = a["visible"], a["edge"]
+        print(f"\n`{c}`: subsets shaded in the fallback per visible pixel "
+              f"{v['subsets_per_pixel']:.3f}, per reference edge pixel {e['subsets_per_pixel']:.2f}; "
+              f"lane use of the inline loop (8-pixel row groups, model) {f(a['lane_use'], 2)}, "
+              f"listed apart {f(a['lane_use_compacted'], 2)}\n")
+        print("| class | visible pixels | their fallback subsets | error share | mean FLIP | "
+              "reference edge pixels | error share there | mean FLIP there |")
+        print("|---|---|---|---|---|---|---|---|")
+        for k in CLASSES:
+            x, y = v[k], e[k]
+            if x["pixels"] == 0 and y["pixels"] == 0:
+                continue
+            print(f"| {k} | {x['pixels']:.3f} | {x['subsets']:.3f} | {x['error']:.3f} | "
+                  f"{f(x['flip_mean'])} | {y['pixels']:.3f} | {y['error']:.3f} | "
+                  f"{f(y['flip_mean'])} |")
 
 
 def vpl_work(row, base_lighting):
@@ -79,6 +118,7 @@ def table(path):
         if copy:
             sg = (med(r, "split") or 0.0) + (med(r, "gather") or 0.0)
             floors.append((cfg, sg, copy))
+    attribution(rows)
     for cfg, sg, copy in floors:
         print(f"\n`{cfg}`: split + gather {sg:.2f} ms, their copy kernel (48 bytes read and 48 "
               f"written a pixel) {copy:.2f} ms: **{sg / copy:.2f}x** the floor.")

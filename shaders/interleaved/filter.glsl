@@ -38,10 +38,86 @@ bool on_screen(ivec2 q) {
     return q.x >= 0 && q.y >= 0 && q.x < int(pc.counts.z) && q.y < int(pc.counts.w);
 }
 
+// WINDOW_TILE (`ours` without `search`; `window=fetch` turns it off): the workgroup's pixels and
+// the apron their windows (and `exact-edges`' squares) reach are fetched once into shared memory
+// (window_load, at the start of the pass, before any invocation returns), and the filter reads
+// them there: each texel is fetched once per workgroup instead of once per window that holds it
+// (16 for 4x4). The same bits, so the same frame.
+#if defined(WINDOW_TILE) && FILTER == 2 && SEARCH == 0
+const int APRON_X0 = max((TILE_M - 1) / 2, EXACT_EDGES);
+const int APRON_X1 = max(TILE_M / 2, EXACT_EDGES);
+const int APRON_Y0 = max((TILE_N - 1) / 2, EXACT_EDGES);
+const int APRON_Y1 = max(TILE_N / 2, EXACT_EDGES);
+const int WIN_W = LOCAL_SIZE_X + APRON_X0 + APRON_X1;
+const int WIN_H = LOCAL_SIZE_Y + APRON_Y0 + APRON_Y1;
+shared uint w_ids[WIN_W * WIN_H];
+shared vec3 w_position[WIN_W * WIN_H];
+shared vec3 w_normal[WIN_W * WIN_H];
+shared vec3 w_irradiance[WIN_W * WIN_H];
+#ifdef DIRECT
+shared vec3 w_specular[WIN_W * WIN_H];
+#endif
+
+ivec2 window_origin() {
+    return ivec2(gl_WorkGroupID.xy) * ivec2(LOCAL_SIZE_X, LOCAL_SIZE_Y) - ivec2(APRON_X0, APRON_Y0);
+}
+
+// Every invocation of the workgroup, before any returns: the tile into shared memory, then a
+// barrier. Texels off the screen get object 0 (never on a surface; the filter tests on_screen
+// first anyway).
+void window_load() {
+    ivec2 origin = window_origin();
+    for (uint t = gl_LocalInvocationIndex; t < uint(WIN_W * WIN_H);
+         t += uint(LOCAL_SIZE_X * LOCAL_SIZE_Y)) {
+        ivec2 q = origin + ivec2(int(t) % WIN_W, int(t) / WIN_W);
+        uint id = 0u;
+        vec3 pq = vec3(0.0), nq = vec3(0.0), eq = vec3(0.0), sq = vec3(0.0);
+        if (on_screen(q)) {
+            id = texelFetch(g_ids, q, 0).x;
+            pq = texelFetch(g_position, q, 0).xyz;
+            nq = texelFetch(g_normal, q, 0).xyz;
+            eq = texelFetch(g_irradiance, q, 0).rgb;
+#ifdef DIRECT
+            sq = texelFetch(g_specular, q, 0).rgb;
+#endif
+        }
+        w_ids[t] = id;
+        w_position[t] = pq;
+        w_normal[t] = nq;
+        w_irradiance[t] = eq;
+#ifdef DIRECT
+        w_specular[t] = sq;
+#endif
+    }
+    barrier();
+}
+
+int window_index(ivec2 q) {
+    ivec2 l = q - window_origin();
+    return l.y * WIN_W + l.x;
+}
+uint window_id(ivec2 q) { return w_ids[window_index(q)]; }
+vec3 window_position(ivec2 q) { return w_position[window_index(q)]; }
+vec3 window_normal(ivec2 q) { return w_normal[window_index(q)]; }
+vec3 window_irradiance(ivec2 q) { return w_irradiance[window_index(q)]; }
+#ifdef DIRECT
+vec3 window_specular(ivec2 q) { return w_specular[window_index(q)]; }
+#endif
+#else
+void window_load() {}
+uint window_id(ivec2 q) { return texelFetch(g_ids, q, 0).x; }
+vec3 window_position(ivec2 q) { return texelFetch(g_position, q, 0).xyz; }
+vec3 window_normal(ivec2 q) { return texelFetch(g_normal, q, 0).xyz; }
+vec3 window_irradiance(ivec2 q) { return texelFetch(g_irradiance, q, 0).rgb; }
+#ifdef DIRECT
+vec3 window_specular(ivec2 q) { return texelFetch(g_specular, q, 0).rgb; }
+#endif
+#endif
+
 bool same_surface(ivec2 q, uint object, vec3 p, vec3 n) {
-    if (texelFetch(g_ids, q, 0).x != object) return false;
-    vec3 nq = texelFetch(g_normal, q, 0).xyz;
-    vec3 pq = texelFetch(g_position, q, 0).xyz;
+    if (window_id(q) != object) return false;
+    vec3 nq = window_normal(q);
+    vec3 pq = window_position(q);
     return dot(n, nq) >= SAME_NORMAL_COS && abs(dot(n, pq - p)) <= PLANE_TOLERANCE * length(p);
 }
 
@@ -57,6 +133,38 @@ int candidate(int o, int period, int i) {
     if (o < 0) return i == 1 ? o + period : 1 << 20;
     return i == 1 ? -period : period;
 }
+
+// `ours`' fallback: p shades the subsets of the window slots in `missing` itself, each invocation
+// walking its own list (lowest slot first: a SIMD group or warp then pays for its longest list,
+// not for the union of its lanes' missing subsets, as a loop over every slot with a test would),
+// adds them to the found estimates' sums and returns the mean over the M N subsets (`specular`
+// the specular one). With `fallback=pairs` (FALLBACK_PAIRS) fallback.comp does the same sums in
+// the same order in passes of their own, and this runs only where their lists are full.
+vec3 shade_missing(ivec2 px, vec3 p, vec3 n, float ns, uvec2 missing, vec3 sum, vec3 sum_spec,
+                   out vec3 specular) {
+    while (missing.x != 0u || missing.y != 0u) {
+        uint word = missing.x != 0u ? 0u : 1u;
+        uint t = uint(findLSB(missing[word]));
+        missing[word] &= ~(1u << t);
+        t += 32u * word;
+        ivec2 o = ivec2(int(t % uint(TILE_M)) - (TILE_M - 1) / 2,
+                        int(t / uint(TILE_M)) - (TILE_N - 1) / 2);
+        uint k = subset_of(px + o);
+        sum += subset_irradiance(p, n, k, pc.counts.y, pc.params.x);
+#ifdef DIRECT
+        subset_direct(sum, sum_spec, p, n, ns, k, uvec3(frame.counts.xy, pc.counts.x));
+#endif
+    }
+    specular = sum_spec / float(SUBSETS);
+    return sum / float(SUBSETS);
+}
+
+#ifdef FALLBACK_PAIRS
+// What interleaved_irradiance leaves to the fallback passes: the missing window slots (none: it
+// returned the pixel's irradiance) and the found estimates' sum.
+uvec2 g_pending = uvec2(0u);
+vec3 g_pending_sum = vec3(0.0);
+#endif
 
 // The filtered irradiance; `bits` gets the debug bits (edge, fallback count), `specular` the
 // filtered specular estimate (DIRECT; 0 otherwise). ns: p's specular exponent.
@@ -133,9 +241,9 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, float ns, out
             }
 #endif
             if (use) {
-                sum += texelFetch(g_irradiance, q, 0).rgb;
+                sum += window_irradiance(q);
 #ifdef DIRECT
-                sum_spec += texelFetch(g_specular, q, 0).rgb;
+                sum_spec += window_specular(q);
 #endif
                 found += 1u;
             } else {
@@ -176,26 +284,18 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, float ns, out
         return sum / float(found);
     }
 #endif
-    // Otherwise p shades the missing subsets itself, each invocation walking its own list (lowest
-    // slot first): a SIMD group or warp then pays for its longest list, not for the union of its
-    // lanes' missing subsets, as a loop over every slot with a test would.
-    uint fallback = 0u;
-    while (missing.x != 0u || missing.y != 0u) {
-        uint word = missing.x != 0u ? 0u : 1u;
-        uint t = uint(findLSB(missing[word]));
-        missing[word] &= ~(1u << t);
-        t += 32u * word;
-        ivec2 o = ivec2(int(t % uint(TILE_M)) - (TILE_M - 1) / 2,
-                        int(t / uint(TILE_M)) - (TILE_N - 1) / 2);
-        uint k = subset_of(px + o);
-        sum += subset_irradiance(p, n, k, pc.counts.y, pc.params.x);
-#ifdef DIRECT
-        subset_direct(sum, sum_spec, p, n, ns, k, uvec3(frame.counts.xy, pc.counts.x));
+#if PARTS == 3
+    // `parts=filter`: the fallback left out (a timing attribution).
+    missing = uvec2(0u);
 #endif
-        fallback += 1u;
-    }
-    bits |= fallback << DBG_FALLBACK_SHIFT;
-    specular = sum_spec / float(SUBSETS);
-    return sum / float(SUBSETS);
+    bits |= uint(bitCount(missing.x) + bitCount(missing.y)) << DBG_FALLBACK_SHIFT;
+#ifdef FALLBACK_PAIRS
+    // `fallback=pairs`: the caller lists the missing subsets for the fallback passes
+    // (fallback.comp), which shade them and finish the pixel with the same sums in the same order.
+    g_pending = missing;
+    g_pending_sum = sum;
+    if (missing != uvec2(0u)) return vec3(0.0);
+#endif
+    return shade_missing(px, p, n, ns, missing, sum, sum_spec, specular);
 #endif
 }

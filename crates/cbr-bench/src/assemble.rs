@@ -94,6 +94,7 @@ pub fn row(
             "ref_change_mean": opt(mean(&m.ref_change)),
             "attribution": m.attribution.as_ref().map(|a| a.to_json()),
             "analytic_attribution": m.analytic_attribution.as_ref().map(|a| a.to_json()),
+            "interleaved_attribution": m.interleaved_attribution.as_ref().map(|a| a.to_json()),
             "per_frame": m.errors,
         })},
     })
@@ -162,6 +163,18 @@ pub fn finish(
             let crops = json!(pick_windows(w, h, &scores, 3));
             for &i in &idx {
                 rows[i]["crops"] = crops.clone();
+            }
+        }
+        // `interleaved` rows: their lighting pass by part, from the group's `parts=...` rows.
+        let parts: Vec<Option<Value>> = {
+            let group: Vec<&Value> = idx.iter().map(|&i| &rows[i]).collect();
+            idx.iter()
+                .map(|&i| crate::interleaved_attribution::parts_json(&rows[i], &group))
+                .collect()
+        };
+        for (&i, p) in idx.iter().zip(parts) {
+            if let Some(p) = p {
+                rows[i]["interleaved_parts"] = p;
             }
         }
         // The Pareto front: frame time median against FLIP mean, the reference left out.

@@ -17,6 +17,7 @@ pub mod config;
 pub mod equal_error;
 pub mod gpu_stats;
 pub mod help;
+pub mod interleaved_attribution;
 pub mod measure;
 pub mod merge;
 pub mod output;

@@ -7,7 +7,9 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use cbr_gpu::Gpu;
 use cbr_metrics::{CompareOptions, DisplayTransform, Metric, compare_images};
-use cbr_render::{AnalyticLayers, Coverage, FrameOutput, Renderer, ResolveOutput};
+use cbr_render::{
+    AnalyticLayers, Coverage, FrameOutput, InterleavedLayers, Renderer, ResolveOutput,
+};
 use cbr_scene::Scene;
 use indicatif::ProgressBar;
 use serde_json::json;
@@ -124,6 +126,8 @@ pub struct Measured {
     pub attribution: Option<crate::attribution::Attribution>,
     /// `analytic` frames: error by what the resolve composited per pixel.
     pub analytic_attribution: Option<crate::analytic_attribution::AnalyticAttribution>,
+    /// `interleaved:...:debug` frames: cost and error by what the filter did per pixel.
+    pub interleaved_attribution: Option<crate::interleaved_attribution::InterleavedAttribution>,
 }
 
 pub fn mean(v: &[f64]) -> Option<f64> {
@@ -365,6 +369,17 @@ fn compare_frame(
         m.analytic_attribution.get_or_insert_default().add(
             &layers,
             &cov.edge,
+            &pixel_error(),
+            &map.data,
+            &rf.edge,
+        );
+    }
+    if let (Some(layers), Some(map)) = (InterleavedLayers::from_frame(out), map.as_ref()) {
+        let drawn: Vec<bool> = out.ids.iter().map(|id| id[0] != 0).collect();
+        m.interleaved_attribution.get_or_insert_default().add(
+            &layers,
+            &drawn,
+            out.width as usize,
             &pixel_error(),
             &map.data,
             &rf.edge,

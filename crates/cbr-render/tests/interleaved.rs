@@ -771,6 +771,76 @@ fn implicit_equals_the_split() {
     assert_clean(&gpu);
 }
 
+/// The default `ours` (without `direct`) runs the fallback in passes of its own (`fallback=pairs`:
+/// the fallback's (pixel, subset) pairs listed by the lighting pass, shaded by
+/// `interleaved.fallback`, summed back by `interleaved.finish`) and reads the filter's window from
+/// a tile in shared memory (`window=tile`); both give the frame of the inline loop with per-window
+/// fetches bit for bit: the same values, the same sums in the same order. With the debug views,
+/// the same debug layers; on `nan`, the same non-finite count. The 8x8 `exact-edges=3` case lists
+/// more pairs than the buffers hold (up to 64 a pixel against a capacity of 4 a pixel), so its
+/// overflowing pixels take the inline loop in the same pass.
+#[test]
+fn the_fallback_passes_and_the_window_tile_change_no_bit() {
+    let gpu = gpu();
+    let shaders = cbr_render::shader_library();
+    let mut demo = cbr_scene::builtin("demo").expect("demo");
+    (demo.settings.width, demo.settings.height) = (67, 45);
+    let mut nan = cbr_scene::builtin("nan").expect("nan");
+    (nan.settings.width, nan.settings.height) = (64, 36);
+    for (s, base) in [
+        (&demo, "interleaved:4x4:vpls=256"),
+        (&demo, "interleaved:3x2:vpls=96:debug"),
+        (&demo, "interleaved:4x4:vpls=256:enough=8"),
+        (&demo, "interleaved:4x4:vpls=256:search=1"),
+        (&demo, "interleaved:4x4:vpls=256:exact-edges=2:debug"),
+        (&demo, "interleaved:8x8:vpls=256:exact-edges=3"),
+        (&demo, "interleaved:4x4:vpls=256:implicit"),
+        (&demo, "interleaved:4x4:vpls=256:direct"),
+        (&nan, "interleaved:4x4:vpls=256"),
+    ] {
+        let default = render(&gpu, &shaders, s, base);
+        let searching = base.contains("search=1");
+        let direct = base.contains("direct");
+        let variants: &[&str] = match (searching, direct) {
+            (true, _) => &["fallback=inline"],
+            (_, true) => &["window=fetch"],
+            _ => &[
+                "fallback=inline",
+                "window=fetch",
+                "fallback=inline:window=fetch",
+            ],
+        };
+        for v in variants {
+            let other = render(&gpu, &shaders, s, &format!("{base}:{v}"));
+            let diff = compare(base, &other, &default);
+            println!("{base}: the default against {v}: {diff:?}");
+            assert_eq!(diff.max_ulps, 0, "{base} against {v}: {diff:?}");
+            assert_eq!(
+                default.nonfinite_fragments, other.nonfinite_fragments,
+                "{base} against {v}: non-finite pixels"
+            );
+            let views = |o: &FrameOutput| {
+                InterleavedLayers::from_frame(o).map(|i| (i.subset, i.edge, i.fallback))
+            };
+            assert!(
+                views(&default) == views(&other),
+                "{base} against {v}: debug views"
+            );
+        }
+        if base.contains("debug") {
+            let i = InterleavedLayers::from_frame(&default).expect("debug layers");
+            let fallback: u64 = i.fallback.iter().map(|&f| u64::from(f)).sum();
+            assert!(fallback > 0, "{base}: no fallback to compare");
+        }
+    }
+    let bad = render(&gpu, &shaders, &nan, "interleaved:4x4:vpls=256");
+    assert!(
+        bad.nonfinite_fragments.unwrap_or(0) > 0,
+        "nan: no non-finite pixel counted"
+    );
+    assert_clean(&gpu);
+}
+
 /// `ours`' same-surface thresholds reach the filter: `normal=C` and `plane=T` at their defaults
 /// give the default's frame bit for bit; tighter ones make more pixels shade subsets themselves
 /// (the demo has curved and creased surfaces within one object), looser ones fewer.

@@ -28,6 +28,10 @@ pub struct DeferredConfig {
     /// The VPL clamp distance in metres (1/max(d^2, clamp^2)); `None`: the VPLs' mean spacing,
     /// sqrt(map area / N).
     pub clamp: Option<f32>,
+    /// The lighting pass skips a point light where no pixel of a SIMD group is within its range
+    /// (its term is exactly 0 there; shaders/deferred/lighting.comp). `cull=0` shades every
+    /// light at every pixel, as before 2026-11-28 (the same frame; for timing it).
+    pub cull: bool,
 }
 
 fn count(key: &str, value: &str, max: u32, what: &str) -> std::result::Result<u32, String> {
@@ -59,6 +63,7 @@ pub fn parse(params: &[&str]) -> std::result::Result<DeferredConfig, String> {
         rsm: DEFAULT_RSM,
         reach: DEFAULT_REACH,
         clamp: None,
+        cull: true,
     };
     for p in params {
         let (key, value) = p.split_once('=').unwrap_or((p, ""));
@@ -76,11 +81,18 @@ pub fn parse(params: &[&str]) -> std::result::Result<DeferredConfig, String> {
             }
             "clamp" => c.clamp = Some(metres(key, value)?),
             "reach" => c.reach = metres(key, value)?,
+            "cull" => {
+                c.cull = match value {
+                    "0" => false,
+                    "1" => true,
+                    _ => return Err(format!("deferred cull=`{value}`: cull=0 or cull=1")),
+                }
+            }
             _ => {
                 return Err(unknown_param(
                     "deferred",
                     p,
-                    "vpls=N, points=N, rsm=R, reach=D, clamp=D",
+                    "vpls=N, points=N, rsm=R, reach=D, clamp=D, cull=0|1",
                 ));
             }
         }

@@ -9,7 +9,8 @@ use super::config::DeferredConfig;
 use super::gbuffer::GBuffer;
 use super::vpl::SunView;
 use crate::gpu_scene::GpuScene;
-use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, Use};
+use crate::memory::MemoryEstimate;
+use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, ResourceDecl, Use};
 use crate::technique::{BuildCtx, FrameCtx};
 
 crate::push_constants! {
@@ -80,6 +81,99 @@ pub struct InterleavedLighting {
     pub direct: bool,
     /// `debug`: the pass writes its debug bits (the DEBUG define).
     pub debug: bool,
+    /// The PARTS define (`parts=...`, interleaved::Parts): 0 the whole pass, 1 base, 2 + the
+    /// per-pixel point lights, 3 + the filter without the fallback.
+    pub parts: u32,
+    /// `fallback=pairs` (FALLBACK_PAIRS; `ours` without `direct`): the lighting pass lists the
+    /// fallback's (pixel, subset) pairs and `interleaved.fallback` and `interleaved.finish` shade
+    /// them and finish those pixels (shaders/interleaved/fallback_list.glsl).
+    pub pairs: bool,
+    /// `window=tile` (WINDOW_TILE; `ours` without `search`, the default): the filter reads the
+    /// window's G-buffer texels and estimates from a tile fetched into shared memory once per
+    /// workgroup (shaders/interleaved/filter.glsl); `window=fetch` fetches each per window.
+    pub window_tile: bool,
+}
+
+/// The fallback passes' work groups (fallback_list.glsl's FALLBACK_GROUP).
+const FALLBACK_GROUP: u32 = 64;
+/// Bytes of a fallback entry (fallback_list.glsl's FallbackEntry), a pair and a pair's result.
+const ENTRY_BYTES: u64 = 48;
+const PAIR_BYTES: u64 = 4;
+const RESULT_BYTES: u64 = 12;
+/// The fallback's counters and indirect dispatches (fallback_list.glsl's FallbackArgs), u32s:
+/// entries, pairs, two unused, the fallback's groups (x, y, z), the
+/// finish's groups, the entry and pair capacities.
+const ARGS_WORDS: usize = 12;
+/// Byte offsets of the two indirect dispatches in the counters.
+const PAIR_DISPATCH: u64 = 16;
+const ENTRY_DISPATCH: u64 = 28;
+/// The largest side `fallback=pairs` takes: a pair holds x and y in 13 bits each.
+pub const MAX_PAIRS_SIDE: u32 = 8191;
+
+/// The fallback lists' capacities at W x H: entries for three quarters of the pixels, pairs for
+/// four a pixel (at 320x180 the demo lists 0.34 entries and 2.3 pairs a visible pixel, foliage 0.44
+/// and 3.0, Šibenik 0.51 and 3.2; fewer at 1280x720). 16 bytes a pair, 48 an entry: 92 MB at
+/// 1280x720. Pixels beyond them take the inline loop (the same frame).
+pub fn fallback_caps(width: u32, height: u32) -> (u32, u32) {
+    let px = width * height;
+    ((3 * px).div_ceil(4).max(FALLBACK_GROUP), (4 * px).max(FALLBACK_GROUP))
+}
+
+/// The fallback lists' buffers at W x H.
+fn fallback_resources(width: u32, height: u32) -> [ResourceDecl; 4] {
+    let (entries, pairs) = fallback_caps(width, height);
+    [
+        ResourceDecl::buffer("fallback_args", ARGS_WORDS as u64 * 4).indirect(),
+        ResourceDecl::buffer("fallback_entries", u64::from(entries) * ENTRY_BYTES),
+        ResourceDecl::buffer("fallback_pairs", u64::from(pairs) * PAIR_BYTES),
+        ResourceDecl::buffer("fallback_results", u64::from(pairs) * RESULT_BYTES),
+    ]
+}
+
+/// What [`LightingPass::new`] allocates for `interleaving` at W x H (the fallback lists).
+pub fn estimate(e: &mut MemoryEstimate, interleaving: &InterleavedLighting, w: u32, h: u32) {
+    if interleaving.pairs {
+        e.append(crate::pass::estimate(
+            &fallback_resources(w, h),
+            "interleaved",
+        ));
+    }
+}
+
+/// `fallback=pairs`: `interleaved.fallback` (one invocation per pair) or, `finish`,
+/// `interleaved.finish` (one per listed pixel).
+pub fn fallback_decl(i: &InterleavedLighting, finish: bool) -> ComputeDecl {
+    let name = match finish {
+        false => "interleaved.fallback",
+        true => "interleaved.finish",
+    };
+    let mut d = ComputeDecl::new(name, "interleaved/fallback.comp")
+        .define("TILE_M", i.m)
+        .define("TILE_N", i.n)
+        .bindings(&[
+            Binding::buffer("lights", Use::Read),
+            Binding::buffer("vpls", Use::Read),
+            Binding::buffer("fallback_args", Use::Read),
+        ])
+        .push::<LightingPush>()
+        .group(FALLBACK_GROUP, 1);
+    d = match finish {
+        false => d.bindings(&[
+            Binding::sampled("position"),
+            Binding::sampled("normal"),
+            Binding::buffer("fallback_pairs", Use::Read),
+            Binding::buffer("fallback_results", Use::Write),
+        ]),
+        true => d.define("FINISH", 1).bindings(&[
+            Binding::uniform("frame"),
+            Binding::buffer("counter", Use::ReadWrite),
+            Binding::sampled("albedo"),
+            Binding::image("out_color", Use::Write),
+            Binding::buffer("fallback_entries", Use::Read),
+            Binding::buffer("fallback_results", Use::Read),
+        ]),
+    };
+    d
 }
 
 /// `interleaved`'s VPL light: the M x N sub-images' estimates gathered back to full resolution.
@@ -103,6 +197,11 @@ pub struct LightSources<'a> {
 /// The lighting pass (shaders/deferred/lighting.comp): `deferred`'s, or with `interleaving`
 /// `interleaved`'s variant (the VPLs' light from the sub-image estimates).
 pub fn decl(interleaving: Option<&InterleavedLighting>) -> ComputeDecl {
+    decl_culled(interleaving, true)
+}
+
+/// [`decl`]; `cull` false (`cull=0`) shades every point light at every pixel (CULL_LIGHTS 0).
+pub fn decl_culled(interleaving: Option<&InterleavedLighting>, cull: bool) -> ComputeDecl {
     let name = match interleaving {
         None => "deferred.lighting",
         Some(_) => "interleaved.lighting",
@@ -123,6 +222,9 @@ pub fn decl(interleaving: Option<&InterleavedLighting>) -> ComputeDecl {
             Binding::image("out_color", Use::Write),
         ])
         .push::<LightingPush>();
+    if !cull {
+        d = d.define("CULL_LIGHTS", 0);
+    }
     if let Some(i) = interleaving {
         d = d
             .define("INTERLEAVED", 1)
@@ -135,6 +237,7 @@ pub fn decl(interleaving: Option<&InterleavedLighting>) -> ComputeDecl {
             // `{:?}` keeps the decimal point (0.9, 1.0, 1e-5): a GLSL float literal.
             .define("SAME_NORMAL_COS", format!("{:?}", i.same_normal_cos))
             .define("PLANE_TOLERANCE", format!("{:?}", i.plane_tolerance))
+            .define("PARTS", i.parts)
             // The gathered sub-image estimates of the VPLs' irradiance, and (`direct`) of the
             // point lights' specular: without `direct` the binding holds the irradiance, never
             // read.
@@ -151,20 +254,79 @@ pub fn decl(interleaving: Option<&InterleavedLighting>) -> ComputeDecl {
         if i.direct {
             d = d.define("DIRECT", 1);
         }
+        if i.window_tile {
+            d = d.define("WINDOW_TILE", 1);
+        }
+        if i.pairs {
+            d = d.define("FALLBACK_PAIRS", 1).bindings(&[
+                Binding::buffer("fallback_args", Use::ReadWrite),
+                Binding::buffer("fallback_entries", Use::Write),
+                Binding::buffer("fallback_pairs", Use::Write),
+            ]);
+        }
     }
     d
 }
 
+/// `fallback=pairs`: the fallback and finish passes and the lists they share with the lighting
+/// pass.
+struct FallbackPasses {
+    fallback: ComputePass,
+    finish: ComputePass,
+    args: Buffer,
+    entries: Buffer,
+    pairs: Buffer,
+    results: Buffer,
+    caps: (u32, u32),
+}
+
 pub struct LightingPass {
     pass: ComputePass,
+    fallback: Option<FallbackPasses>,
 }
 
 impl LightingPass {
     /// The pass; with `interleaving`, the VPLs' light comes from the sub-image estimates
     /// instead of every VPL at every pixel.
-    pub fn new(ctx: &BuildCtx, interleaving: Option<&InterleavedLighting>) -> Result<LightingPass> {
+    /// `cull`: [`DeferredConfig::cull`].
+    pub fn new(
+        ctx: &BuildCtx,
+        interleaving: Option<&InterleavedLighting>,
+        cull: bool,
+    ) -> Result<LightingPass> {
+        let fallback = match interleaving.filter(|i| i.pairs) {
+            Some(i) => {
+                let (w, h) = (ctx.width, ctx.height);
+                if w > MAX_PAIRS_SIDE || h > MAX_PAIRS_SIDE {
+                    return Err(cbr_gpu::GpuError::Other(format!(
+                        "interleaved fallback=pairs: at most {MAX_PAIRS_SIDE} pixels a side \
+                         (fallback=inline has no limit)"
+                    )));
+                }
+                let [args, entries, pairs, results] =
+                    fallback_resources(w, h).map(|d| d.make_buffer(ctx.gpu, "interleaved"));
+                Some(FallbackPasses {
+                    fallback: fallback_decl(i, false).build(ctx.gpu, ctx.shaders)?,
+                    finish: fallback_decl(i, true).build(ctx.gpu, ctx.shaders)?,
+                    args: args?,
+                    entries: entries?,
+                    pairs: pairs?,
+                    results: results?,
+                    caps: fallback_caps(w, h),
+                })
+            }
+            None => None,
+        };
         Ok(LightingPass {
-            pass: decl(interleaving).build(ctx.gpu, ctx.shaders)?,
+            pass: decl_culled(interleaving, cull).build(ctx.gpu, ctx.shaders)?,
+            fallback,
+        })
+    }
+
+    /// Bytes of the fallback lists (`fallback=pairs`).
+    pub fn bytes(&self) -> u64 {
+        self.fallback.as_ref().map_or(0, |f| {
+            f.args.size() + f.entries.size() + f.pairs.size() + f.results.size()
         })
     }
 
@@ -201,7 +363,37 @@ impl LightingPass {
                 binds = binds.image("debug_bits", d);
             }
         }
+        if let Some(f) = &self.fallback {
+            // No entries or pairs yet, no groups: the counters of fallback_list.glsl.
+            let (entry_cap, pair_cap) = f.caps;
+            let words: [u32; ARGS_WORDS] = [0, 0, 0, 0, 0, 1, 1, 0, 1, 1, entry_cap, pair_cap];
+            cmd.update_buffer(&f.args, &words);
+            binds = binds
+                .buffer("fallback_args", &f.args)
+                .buffer("fallback_entries", &f.entries)
+                .buffer("fallback_pairs", &f.pairs)
+                .buffer("fallback_results", &f.results);
+        }
         let [_, _, w, h] = push.counts;
-        self.pass.dispatch_2d(cmd, profiler, &binds, push, (w, h))
+        self.pass
+            .dispatch_2d(cmd, profiler, &binds.only(&self.pass), push, (w, h))?;
+        if let Some(f) = &self.fallback {
+            let args = |offset| (&f.args, offset);
+            f.fallback.dispatch_indirect(
+                cmd,
+                profiler,
+                &binds.only(&f.fallback),
+                push,
+                args(PAIR_DISPATCH),
+            )?;
+            f.finish.dispatch_indirect(
+                cmd,
+                profiler,
+                &binds.only(&f.finish),
+                push,
+                args(ENTRY_DISPATCH),
+            )?;
+        }
+        Ok(())
     }
 }

@@ -46,7 +46,7 @@ pub const REGISTRATION: Registration = Registration {
     estimate: |ctx, p| Ok(Deferred::estimate(&parse(p)?, ctx.width, ctx.height)),
     passes: |ctx, p| {
         let c = parse(p)?;
-        let mut compute = vec![lighting::decl(None)];
+        let mut compute = vec![lighting::decl_culled(None, c.cull)];
         if c.vpls > 0 {
             compute.push(rsm::vpl_decl());
         }
@@ -89,7 +89,7 @@ impl Deferred {
     pub fn new(ctx: &BuildCtx, config: DeferredConfig) -> Result<Deferred> {
         let lights = ManyLights::new(ctx, &config, "deferred")?;
         let (raster, gbuffer_pass, g) = gbuffer(ctx, "deferred")?;
-        let lighting = LightingPass::new(ctx, None)?;
+        let lighting = LightingPass::new(ctx, None, config.cull)?;
         let readbacks = LayerReadbacks::new(ctx.gpu, g.layers())?;
         Ok(Deferred {
             config,

@@ -1,5 +1,5 @@
 //! `interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D][:ours|seed|box|none]
-//! [:search=S][:enough=K][:exact-edges[=R]][:direct][:implicit][:debug][:floor]`: interleaved many-light
+//! [:search=S][:enough=K][:exact-edges[=R]][:direct][:implicit][:debug][:floor][:fallback=F][:window=W][:parts=P]`: interleaved many-light
 //! shading (Segovia et al. 2006; docs/interleaved.md) on `deferred`'s G-buffer and VPLs.
 //!
 //! Passes per frame, one submission: `interleaved.gbuffer` (deferred's G-buffer pass), the sun's
@@ -44,7 +44,7 @@ pub const REGISTRATION: Registration = Registration {
     name: "interleaved",
     grammar: "interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D]\
               [:ours|seed|box|none][:search=S][:enough=K][:exact-edges[=R]][:direct][:implicit][:debug]\
-              [:floor]",
+              [:floor][:fallback=pairs|inline][:window=tile|fetch][:parts=base|lights|filter]",
     about: "deferred's VPLs, interleaved: the G-buffer split into M x N sub-images, sub-image k \
             shaded with the k-th block of N / (M N) VPLs, gathered back, filtered (ours: \
             geometry-aware, missing subsets shaded at the pixel; seed: the seed's edge-skipping \
@@ -69,7 +69,15 @@ pub const REGISTRATION: Registration = Registration {
         if c.floor {
             compute.push(crate::resolve::copy_floor_decl("interleaved.copy_floor"));
         }
-        compute.push(super::deferred::lighting::decl(Some(&lighting_variant(&c))));
+        let variant = lighting_variant(&c);
+        compute.push(super::deferred::lighting::decl_culled(
+            Some(&variant),
+            c.lights.cull,
+        ));
+        if variant.pairs {
+            compute.push(super::deferred::lighting::fallback_decl(&variant, false));
+            compute.push(super::deferred::lighting::fallback_decl(&variant, true));
+        }
         Ok(crate::technique::PassList {
             compute,
             graphics: super::deferred::raster_decls(ctx, "interleaved", c.lights.vpls)?,
@@ -165,7 +173,47 @@ pub struct InterleavedConfig {
     /// j by the sub-image of subset j mod M N, times M N; their diffuse term joins the VPLs'
     /// estimate and their specular term is filtered beside it with the same choices.
     pub direct: bool,
+    /// `parts=base|lights|filter` (timing only; the frame is not the technique's): the lighting
+    /// pass stops after a part, so that one bench run attributes its time (docs/interleaved.md,
+    /// "Where the lighting pass's time goes"). [`Parts::All`] unless set.
+    pub parts: Parts,
+    /// `fallback=pairs|inline` (`ours`): where the fallback shades the missing subsets: in
+    /// passes of their own over a list of (pixel, subset) pairs (`pairs`, the default without
+    /// `direct`), or in the lighting pass, each pixel its own list (`inline`, the only one with
+    /// `direct`). The frames are the same (the same sums in the same order).
+    pub pairs: bool,
+    /// `window=tile|fetch` (`ours` without `search`): the filter's window read from a tile of
+    /// the workgroup's pixels and their apron fetched into shared memory once (`tile`, the
+    /// default), or each texel fetched by every window that holds it (`fetch`). The same frame.
+    pub window_tile: bool,
     pub lights: DeferredConfig,
+}
+
+/// How much of the lighting pass runs (the PARTS define of lighting.comp; `parts=...`, a timing
+/// attribution: every variant but `All` writes a frame that is not the technique's).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Parts {
+    /// Everything (the technique).
+    All = 0,
+    /// `parts=base`: the G-buffer's fetches, emission, ambient and the directional lights only.
+    Base = 1,
+    /// `parts=lights`: `base` and the point lights the pass shades per pixel (without `direct`,
+    /// the scene's point lights and `points=N`; with `direct`, none: it is `base`).
+    Lights = 2,
+    /// `parts=filter`: `lights` and the filter (the window's same-surface tests and fetches),
+    /// without `ours`' fallback (a missing subset is left out).
+    Filter = 3,
+}
+
+impl Parts {
+    pub fn name(self) -> &'static str {
+        match self {
+            Parts::All => "all",
+            Parts::Base => "base",
+            Parts::Lights => "lights",
+            Parts::Filter => "filter",
+        }
+    }
 }
 
 impl InterleavedConfig {
@@ -195,6 +243,9 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
     let mut filter = None;
     let (mut implicit, mut debug, mut floor, mut direct) = (false, false, false, false);
     let mut exact_edges = 0;
+    let mut parts = Parts::All;
+    let mut fallback = None;
+    let mut window = None;
     let mut search = DEFAULT_SEARCH;
     let mut enough = None;
     let mut same_normal_cos = DEFAULT_SAME_NORMAL_COS;
@@ -222,6 +273,41 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
             }
             "direct" => {
                 direct = true;
+                None
+            }
+            "fallback" => {
+                fallback = match p.split_once('=').map(|(_, v)| v) {
+                    Some("pairs") => Some(true),
+                    Some("inline") => Some(false),
+                    _ => {
+                        return Err(format!(
+                            "interleaved `{p}`: fallback=pairs or fallback=inline"
+                        ));
+                    }
+                };
+                None
+            }
+            "window" => {
+                window = match p.split_once('=').map(|(_, v)| v) {
+                    Some("tile") => Some(true),
+                    Some("fetch") => Some(false),
+                    _ => return Err(format!("interleaved `{p}`: window=tile or window=fetch")),
+                };
+                None
+            }
+            "parts" => {
+                parts = match p.split_once('=').map(|(_, v)| v) {
+                    Some("base") => Parts::Base,
+                    Some("lights") => Parts::Lights,
+                    Some("filter") => Parts::Filter,
+                    Some("all") => Parts::All,
+                    _ => {
+                        return Err(format!(
+                            "interleaved `{p}`: parts=base, parts=lights, parts=filter or \
+                             parts=all (a timing attribution of the lighting pass)"
+                        ));
+                    }
+                };
                 None
             }
             "exact-edges" => {
@@ -272,7 +358,7 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
                 surface_test = Some(*p);
                 None
             }
-            "vpls" | "points" | "rsm" | "reach" | "clamp" => {
+            "vpls" | "points" | "rsm" | "reach" | "clamp" | "cull" => {
                 light_params.push(*p);
                 None
             }
@@ -282,7 +368,8 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
                     p,
                     "vpls=N, points=N, rsm=R, reach=D, clamp=D, one filter of none (raw), box, \
                      ours, seed, and search=0|1, enough=K, exact-edges[=R], normal=C, plane=T, \
-                     direct, implicit, debug, floor",
+                     direct, implicit, debug, floor, fallback=pairs|inline, window=tile|fetch, \
+                     parts=base|lights|filter",
                 ));
             }
         };
@@ -318,6 +405,28 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
             filter.name()
         ));
     }
+    if fallback.is_some() && filter != Filter::Ours {
+        return Err(format!(
+            "interleaved: `fallback=...` places the fallback of the `ours` filter, which `{}` \
+             does not have",
+            filter.name()
+        ));
+    }
+    if fallback == Some(true) && direct {
+        return Err(
+            "interleaved: `fallback=pairs` lists the VPL subsets only; with `direct` the fallback \
+             is inline"
+                .into(),
+        );
+    }
+    let pairs = fallback.unwrap_or(filter == Filter::Ours && !direct);
+    if window.is_some() && (filter != Filter::Ours || search > 0) {
+        return Err(
+            "interleaved: `window=...` is how the `ours` filter without `search` reads its window"
+                .into(),
+        );
+    }
+    let window_tile = window.unwrap_or(filter == Filter::Ours && search == 0);
     if exact_edges > 0 && filter != Filter::Ours {
         return Err(format!(
             "interleaved: `exact-edges` is a variant of the `ours` filter, not of `{}`",
@@ -344,6 +453,9 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
         plane_tolerance,
         floor,
         direct,
+        parts,
+        pairs,
+        window_tile,
         lights,
     })
 }
@@ -382,6 +494,7 @@ impl Interleaved {
         let mut e = MemoryEstimate::new();
         deferred::estimate_gbuffer_and_lights(&mut e, "interleaved", &config.lights, w, h);
         SplitPasses::estimate(&mut e, config, w, h);
+        super::deferred::lighting::estimate(&mut e, &lighting_variant(config), w, h);
         if config.debug {
             let [bits, rb] = debug_resources(w, h);
             e.append(crate::pass::estimate(&[bits], "interleaved"));
@@ -402,7 +515,7 @@ impl Interleaved {
         } else {
             None
         };
-        let lighting = LightingPass::new(ctx, Some(&lighting_variant(&config)))?;
+        let lighting = LightingPass::new(ctx, Some(&lighting_variant(&config)), config.lights.cull)?;
         let readbacks = LayerReadbacks::new(ctx.gpu, g.layers())?;
         Ok(Interleaved {
             config,
@@ -458,6 +571,9 @@ pub fn lighting_variant(config: &InterleavedConfig) -> InterleavedLighting {
         box_rows: config.box_rows(),
         direct: config.direct,
         debug: config.debug,
+        parts: config.parts as u32,
+        pairs: config.pairs,
+        window_tile: config.window_tile,
     }
 }
 
@@ -545,7 +661,7 @@ impl Technique for Interleaved {
 
     fn target_bytes(&self) -> u64 {
         let (w, h) = self.size;
-        GBuffer::bytes(w, h) + self.lights.bytes() + self.split.bytes()
+        GBuffer::bytes(w, h) + self.lights.bytes() + self.split.bytes() + self.lighting.bytes()
     }
 }
 

@@ -1,0 +1,57 @@
+#!/usr/bin/env python3
+"""Issue 57's goal table from scripts/interleaved-cost.sh runs (docs/interleaved.md, "Where the
+lighting pass's time goes"): per scene and resolution, `interleaved:4x4:vpls=1024` (and the code
+before the change, and `exact-edges`) against `deferred:vpls=1024` of the same run: frame times,
+speed-up, FLIP, edge FLIP over interior FLIP, and the load average before and after the run
+(uptime-*.txt beside bench.json). Usage: interleaved-goals.py OUT/bench/ic-TAG/*/bench.json"""
+import json
+import os
+import sys
+
+B = "interleaved:4x4:vpls=1024"
+OLD = B + ":fallback=inline:window=fetch:cull=0"
+REF = "deferred:vpls=1024"
+
+
+def load(path):
+    d = os.path.dirname(path)
+    up = []
+    for n in ("uptime-before.txt", "uptime-after.txt"):
+        try:
+            up.append(open(os.path.join(d, n)).read().split("load average:")[1].split(",")[0].strip())
+        except (OSError, IndexError):
+            up.append("?")
+    return json.load(open(path)), up
+
+
+def main():
+    print("| scene | size | reference ms | `interleaved:4x4` ms | x faster | before the change: ms, x faster "
+          "| FLIP | edge / interior FLIP | `exact-edges`: x faster, FLIP, edge / interior | load avg (before, after) |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for p in sys.argv[1:]:
+        b, up = load(p)
+        rows = {r["config"]: r for r in b["rows"]}
+        ref = rows[REF]["frame_ms"]["median"]
+        scene = rows[REF]["scene"]
+        size = f"{rows[REF]['width']}x{rows[REF]['height']}"
+
+        def fig(cfg):
+            r = rows[cfg]
+            e = r.get("error") or {}
+            ms = r["frame_ms"]["median"]
+            ratio = e["flip_edge_mean"] / e["flip_interior_mean"] if e.get("flip_interior_mean") else float("nan")
+            return ms, ref / ms, e.get("flip_mean"), ratio
+
+        ms, x, flip, er = fig(B)
+        oms, ox, _, _ = fig(OLD)
+        _, ex, eflip, eer = fig(B + ":exact-edges")
+        print(f"| {scene} | {size} | {ref:.1f} | {ms:.1f} | **{x:.2f}** | {oms:.1f}, {ox:.2f} | {flip:.4f} | "
+              f"{er:.2f} | {ex:.2f}, {eflip:.4f}, {eer:.2f} | {up[0]}, {up[1]} |")
+        cull = rows.get(REF + ":cull=0")
+        if cull:
+            print(f"|  | (reference `cull=0`: {cull['frame_ms']['median']:.1f} ms; old interleaved "
+                  f"against it {cull['frame_ms']['median'] / oms:.2f}x) |||||||||")
+
+
+if __name__ == "__main__":
+    main()
