@@ -94,6 +94,7 @@ pub fn row(
             "ref_change_mean": opt(mean(&m.ref_change)),
             "attribution": m.attribution.as_ref().map(|a| a.to_json()),
             "analytic_attribution": m.analytic_attribution.as_ref().map(|a| a.to_json()),
+            "motion_attribution": m.motion_attribution.as_ref().map(|a| a.to_json()),
             "per_frame": m.errors,
         })},
     })

@@ -19,6 +19,7 @@ pub mod gpu_stats;
 pub mod help;
 pub mod measure;
 pub mod merge;
+pub mod motion_attribution;
 pub mod output;
 pub mod render;
 pub mod shard;
