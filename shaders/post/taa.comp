@@ -27,9 +27,12 @@ layout(set = 0, binding = BINDING_OUT_HIST, rgba16f) uniform writeonly image2D o
 layout(set = 0, binding = BINDING_OUT_GEOM, rg32ui) uniform writeonly uimage2D out_geom;
 
 // F_RESET, F_DILATION, F_CLIP, F_IDS, F_DEPTH, F_CATMULL, F_MEAN (blend weight 1 / (n + 1): the
-// running mean), F_FILTER (reconstruct the current sample at the pixel centre, Karis' filter):
-// the flag bits, and MOVED / ID_MASK (history geometry: x = object ID | MOVED where the pixel
-// moved more than the still threshold), are defines from crates/cbr-render/src/post/taa.rs.
+// running mean), F_FILTER (reconstruct the current sample at the pixel centre, Karis' filter),
+// F_COUNT (the current-frame weight is at least 1 / (m + 1), m the frames the pixel's history
+// holds), F_LUMA (Karis' luminance weights in the blend): the flag bits, and MOVED / ID_MASK
+// (the geometry the technique gives) and HIST_ID_MASK / COUNT_SHIFT / COUNT_MAX (history
+// geometry: x = object ID | count << COUNT_SHIFT | MOVED where the pixel moved more than the
+// still threshold), are defines from crates/cbr-render/src/post/taa.rs.
 
 // size: W, H (of the output and the geometry), 0, 0; flags: x: F_*, y: n (frames accumulated
 // since the reset); params: alpha (current-frame weight), gamma, depth tolerance, exposure
@@ -144,7 +147,8 @@ void main() {
     }
     // A non-finite centre is replaced by the mean of the finite neighbours (0 when none).
     vec3 c0 = ok[4] ? c[4] : (n_ok > 0.0 ? sum / n_ok : vec3(0.0));
-    if (has(F_FILTER)) {
+    vec3 cf = c0;
+    if (has(F_FILTER) || has(F_ADAPTIVE)) {
         // The current frame at the pixel centre: the 3x3's samples (at offset o - jitter from
         // it) weighted by a Gaussian fit of Blackman-Harris (Karis 2014), exp(-2.29 d^2).
         vec3 acc = vec3(0.0);
@@ -156,8 +160,11 @@ void main() {
             acc += w * c[k];
             ws += w;
         }
-        if (ws > 0.0) c0 = acc / ws;
+        if (ws > 0.0) cf = acc / ws;
     }
+    // F_FILTER: always the reconstruction; F_ADAPTIVE: the reconstruction in the proportion the
+    // current frame weighs in the output (below).
+    if (has(F_FILTER)) c0 = cf;
     vec3 y0 = to_p(c0);
 
     // Geometry: the nearest (largest reverse-Z) texel of the 3x3 gives the velocity (dilation);
@@ -192,7 +199,7 @@ void main() {
     if (use && !still && (has(F_IDS) || has(F_DEPTH))) {
         if (has(F_IDS)) {
             bool seen = false;
-            for (int k = 0; k < 9; k++) seen = seen || nid[k] == (g.x & ID_MASK);
+            for (int k = 0; k < 9; k++) seen = seen || nid[k] == (g.x & HIST_ID_MASK);
             use = use && seen;
         }
         if (has(F_DEPTH)) {
@@ -207,8 +214,13 @@ void main() {
         use = finite3(h);
     }
 
-    vec3 result = c0;
+    // A pixel without history is this frame alone: with F_ADAPTIVE, its reconstruction at the
+    // pixel centre rather than one jittered point sample.
+    vec3 result = has(F_ADAPTIVE) ? cf : c0;
+    // Frames the output holds: 1 (this one) unless a history is blended in.
+    uint count = 1u;
     if (use) {
+        count = min(((g.x >> COUNT_SHIFT) & COUNT_MAX) + 1u, COUNT_MAX);
 #if MODE == 0
         // Still pixels (this one and its history texel did not move) keep their history
         // unclipped: the jitter alone changes their 3x3, and clipping towards a box that moves
@@ -236,9 +248,21 @@ void main() {
             // the more the current frame weighs (alpha rises linearly to speed.x at speed.y px).
             float a = pc.params.x;
             if (pc.speed_jitter.y > 0.0) a = mix(a, pc.speed_jitter.x, min(length(v) / pc.speed_jitter.y, 1.0));
-            float wc = a / (1.0 + luma(c0 * pc.params.w));
-            float wh = (1.0 - a) / (1.0 + luma(h * pc.params.w));
-            result = (wc * c0 + wh * h) / (wc + wh);
+            // A history of m frames (m + 1 = count) takes the current frame with weight at least
+            // 1 / (m + 1): the running mean until the exponential window 1 / alpha is full, after
+            // a reset and after every rejection (a disoccluded pixel converges as fast as a
+            // fresh frame, instead of keeping its first sample at weight (1 - alpha)^k).
+            if (has(F_COUNT)) a = max(a, 1.0 / float(count));
+            // In a running mean of `count` frames this sample is 1 / count of the output: it is
+            // reconstructed at the pixel centre in that proportion (a fresh pixel: the filtered
+            // 3x3; a converged one: the jittered point sample that the accumulation box-filters).
+            vec3 cc = has(F_ADAPTIVE) ? mix(c0, cf, 1.0 / float(count)) : c0;
+            float wc = a, wh = 1.0 - a;
+            if (has(F_LUMA)) {
+                wc /= 1.0 + luma(cc * pc.params.w);
+                wh /= 1.0 + luma(h * pc.params.w);
+            }
+            result = (wc * cc + wh * h) / (wc + wh);
         }
 #else
         // INSIDE: rounded min-max (the 3x3 box averaged with the cross's), chroma shrunk around
@@ -273,5 +297,6 @@ void main() {
 #endif
     }
     imageStore(out_hist, p, vec4(result, 1.0));
-    imageStore(out_geom, p, uvec4(nid[4] | (moving ? MOVED : 0u), floatBitsToUint(geom_depth(p)), 0u, 0u));
+    uint gx = (nid[4] & HIST_ID_MASK) | (count << COUNT_SHIFT) | (moving ? MOVED : 0u);
+    imageStore(out_geom, p, uvec4(gx, floatBitsToUint(geom_depth(p)), 0u, 0u));
 }

@@ -95,6 +95,7 @@ pub fn row(
             "attribution": m.attribution.as_ref().map(|a| a.to_json()),
             "analytic_attribution": m.analytic_attribution.as_ref().map(|a| a.to_json()),
             "interleaved_attribution": m.interleaved_attribution.as_ref().map(|a| a.to_json()),
+            "motion_attribution": m.motion_attribution.as_ref().map(|a| a.to_json()),
             "per_frame": m.errors,
         })},
     })

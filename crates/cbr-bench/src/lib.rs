@@ -20,6 +20,7 @@ pub mod help;
 pub mod interleaved_attribution;
 pub mod measure;
 pub mod merge;
+pub mod motion_attribution;
 pub mod output;
 pub mod render;
 pub mod shard;

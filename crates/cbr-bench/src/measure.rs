@@ -128,6 +128,8 @@ pub struct Measured {
     pub analytic_attribution: Option<crate::analytic_attribution::AnalyticAttribution>,
     /// `interleaved:...:debug` frames: cost and error by what the filter did per pixel.
     pub interleaved_attribution: Option<crate::interleaved_attribution::InterleavedAttribution>,
+    /// Error by how far each pixel moved (techniques whose frames carry a velocity).
+    pub motion_attribution: Option<crate::motion_attribution::MotionAttribution>,
 }
 
 pub fn mean(v: &[f64]) -> Option<f64> {
@@ -360,6 +362,17 @@ fn compare_frame(
         m.attribution
             .get_or_insert_default()
             .add(&bits, &pixel_error(), &map.data, &rf.disocc);
+    }
+    if let Some(map) = map
+        .as_ref()
+        .filter(|_| out.velocity.len() == rf.disocc.len())
+    {
+        m.motion_attribution.get_or_insert_default().add(
+            &out.velocity,
+            &pixel_error(),
+            &map.data,
+            &rf.disocc,
+        );
     }
     if let (Some(layers), Some(cov), Some(map)) = (
         AnalyticLayers::from_frame(out),

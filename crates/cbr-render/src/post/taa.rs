@@ -10,8 +10,13 @@
 //!   1 / (1 + luma) (Karis); alpha rises with the pixel's speed (0.1 still, 0.5 from 2 px per
 //!   frame: every reprojection resamples and softens the history). Beyond the published: the
 //!   history is rejected where the object ID it shows is none of the current 3x3's, or its depth
-//!   is outside their span (the checkerboard resolve's tests); `without-X` switches one part off
-//!   (`dilation`, `clip`, `ids`, `depth`, `catmull`, `speed`).
+//!   is outside their span (the checkerboard resolve's tests). The current frame's weight is at
+//!   least 1 / (m + 1), m the frames the pixel's history holds (a count kept per pixel in the
+//!   history geometry, 1 after a reset or a rejection): a running mean until the exponential
+//!   window is full, so a disoccluded or reset pixel converges as fast as possible instead of
+//!   keeping its first jittered sample at weight (1 - alpha)^k (issue 55). `without-X` switches
+//!   one part off (`dilation`, `clip`, `ids`, `depth`, `catmull`, `speed`, `count`, `luma`);
+//!   `adaptive` reconstructs the current sample at the pixel centre in proportion 1 / m.
 //! - `+taa:inside` (Pedersen 2016, Playdead's INSIDE): Halton x16, 3x3 closest-depth dilation,
 //!   bilinear history, the rounded min-max box (3x3 averaged with the cross) with chroma shrunk to
 //!   1/8 of the luma extent around the centre's, clipped towards the clamped mean, feedback
@@ -33,10 +38,10 @@ use crate::targets::COLOR_FORMAT;
 
 pub const REGISTRATION: PostRegistration = PostRegistration {
     name: "taa",
-    grammar: "taa[:inside][:8|16][:alpha=A][:amax=A][:speed=V][:gamma=G][:tol=T][:lod=B][:mean][:filter][:without-X...]",
+    grammar: "taa[:inside][:8|16][:alpha=A][:amax=A][:speed=V][:gamma=G][:tol=T][:lod=B][:mean][:filter][:adaptive][:without-X...]",
     about: "temporal AA: Halton jitter, dilated velocity, Catmull-Rom history, YCoCg variance \
-            clipping, ID and depth rejection, speed-dependent weight (X: dilation, clip, ids, \
-            depth, catmull, speed); `inside`: Playdead's INSIDE TAA",
+            clipping, ID and depth rejection, speed-dependent weight, per-pixel frame count (X: \
+            dilation, clip, ids, depth, catmull, speed, count, luma); `inside`: Playdead's INSIDE TAA",
     check: |p| TaaConfig::parse(p).map(|_| ()),
     geometry: true,
     estimate: |ctx, _| crate::pass::estimate(&resources(ctx.width, ctx.height), "taa"),
@@ -48,7 +53,9 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
 };
 
 /// The parts `without-X` switches off.
-pub const ABLATIONS: [&str; 6] = ["dilation", "clip", "ids", "depth", "catmull", "speed"];
+pub const ABLATIONS: [&str; 8] = [
+    "dilation", "clip", "ids", "depth", "catmull", "speed", "count", "luma",
+];
 
 /// `cbr render --taa-without X,...`: adds `without-X` (X one of [`ABLATIONS`]) to the spec's
 /// `+taa`; a spec without `+taa`, or a result `+taa` refuses, is a
@@ -111,6 +118,17 @@ pub struct TaaConfig {
     /// Blackman-Harris fit). Off by default: on the moving demo it blurs texture more than it
     /// removes jitter (docs/post-aa.md).
     pub filter: bool,
+    /// The current frame's weight is at least 1 / (m + 1), m the frames the pixel's history
+    /// holds (kept per pixel in the history geometry): the running mean until the exponential
+    /// window is full, after a reset and after every rejection (`without-count`).
+    pub count: bool,
+    /// Karis' luminance weights 1 / (1 + luma) in the blend (`without-luma`).
+    pub luma: bool,
+    /// The current sample reconstructed at the pixel centre (the `filter` Gaussian) in the
+    /// proportion 1 / m of a history of m frames (all of it where there is no history), the
+    /// jittered point sample otherwise (`adaptive`; off by default: measured mixed on the
+    /// hard-case gallery, docs/post-aa.md; and with `mean` or `filter`).
+    pub adaptive: bool,
 }
 
 /// Below this motion (pixels) a pixel is still: when its history texel was still too, the ID
@@ -118,6 +136,16 @@ pub struct TaaConfig {
 pub const STILL_THRESHOLD: f32 = 1.0 / 64.0;
 /// History geometry's moved bit.
 pub const MOVED: u32 = 0x8000_0000;
+/// History geometry: the frames the history holds (1 after a reset or a rejection, at most
+/// [`COUNT_MAX`]) in bits 24-30, the object ID below.
+pub const COUNT_SHIFT: u32 = 24;
+pub const COUNT_MAX: u32 = 0x7f;
+pub const HIST_ID_MASK: u32 = (1 << COUNT_SHIFT) - 1;
+
+/// The history geometry's x: object ID, frames held, moved bit.
+pub fn hist_geom_x(id: u32, count: u32, moved: bool) -> u32 {
+    (id & HIST_ID_MASK) | (count.min(COUNT_MAX) << COUNT_SHIFT) | if moved { MOVED } else { 0 }
+}
 
 /// INSIDE's feedback range (the history's weight).
 pub const INSIDE_FEEDBACK: [f32; 2] = [0.88, 0.97];
@@ -139,6 +167,9 @@ impl TaaConfig {
         depth: true,
         catmull: true,
         filter: false,
+        count: true,
+        luma: true,
+        adaptive: false,
     };
 
     pub const INSIDE: TaaConfig = TaaConfig {
@@ -148,6 +179,9 @@ impl TaaConfig {
         depth: false,
         catmull: false,
         filter: false,
+        count: false,
+        luma: false,
+        adaptive: false,
         ..TaaConfig::OURS
     };
 
@@ -175,10 +209,18 @@ impl TaaConfig {
                 "inside" => {}
                 "8" => c.length = 8,
                 "16" => c.length = 16,
-                "mean" => c.mean = true,
+                "mean" => {
+                    c.mean = true;
+                    c.adaptive = false
+                }
                 "filter" => {
                     ours_only("current-sample filter")?;
-                    c.filter = true
+                    c.filter = true;
+                    c.adaptive = false
+                }
+                "adaptive" => {
+                    ours_only("adaptive current-sample filter")?;
+                    c.adaptive = !c.mean && !c.filter
                 }
                 "without-dilation" => c.dilation = false,
                 "without-clip" => c.clip = false,
@@ -193,6 +235,14 @@ impl TaaConfig {
                 "without-speed" => {
                     ours_only("speed-dependent weight")?;
                     c.speed = 0.0
+                }
+                "without-count" => {
+                    ours_only("per-pixel frame count")?;
+                    c.count = false
+                }
+                "without-luma" => {
+                    ours_only("luminance-weighted blend")?;
+                    c.luma = false
                 }
                 "without-catmull" => {
                     ours_only("Catmull-Rom history (it is bilinear)")?;
@@ -226,7 +276,7 @@ impl TaaConfig {
                             p,
                             "inside, 8, 16, alpha=A, amax=A, speed=V, gamma=G, tol=T, lod=B, mean, \
                              without-dilation, without-clip, without-ids, without-depth, \
-                             without-catmull, without-speed, filter",
+                             without-catmull, without-speed, without-count, without-luma, adaptive, filter",
                         ));
                     }
                 },
@@ -245,6 +295,9 @@ impl TaaConfig {
             (self.catmull, F_CATMULL),
             (self.mean, F_MEAN),
             (self.filter, F_FILTER),
+            (self.count, F_COUNT),
+            (self.luma, F_LUMA),
+            (self.adaptive, F_ADAPTIVE),
         ] {
             if on {
                 f |= bit;
@@ -262,6 +315,9 @@ pub const F_DEPTH: u32 = 16;
 pub const F_CATMULL: u32 = 32;
 pub const F_MEAN: u32 = 64;
 pub const F_FILTER: u32 = 128;
+pub const F_COUNT: u32 = 256;
+pub const F_LUMA: u32 = 512;
+pub const F_ADAPTIVE: u32 = 1024;
 
 /// The radical inverse of `i` in `base` (the Halton sequence's element i).
 pub fn halton(mut i: u32, base: u32) -> f32 {
@@ -311,8 +367,14 @@ pub fn decl(inside: bool, packed: bool) -> ComputeDecl {
             ("F_CATMULL", F_CATMULL),
             ("F_MEAN", F_MEAN),
             ("F_FILTER", F_FILTER),
+            ("F_COUNT", F_COUNT),
+            ("F_LUMA", F_LUMA),
+            ("F_ADAPTIVE", F_ADAPTIVE),
             ("MOVED", MOVED),
             ("ID_MASK", !MOVED),
+            ("HIST_ID_MASK", HIST_ID_MASK),
+            ("COUNT_SHIFT", COUNT_SHIFT),
+            ("COUNT_MAX", COUNT_MAX),
         ])
         .bindings(&[
             Binding::sampled("cur"),
@@ -560,7 +622,8 @@ pub fn reference(c: &TaaConfig, i: &RefInputs) -> (Vec<V3>, Vec<(u32, f32)>) {
                 [0.0; 3]
             };
             let mut c0 = c0;
-            if c.filter {
+            let mut cf = c0;
+            if c.filter || c.adaptive {
                 let (mut acc, mut ws) = ([0.0f32; 3], 0.0f32);
                 for k in 0..9 {
                     if !ok[k] {
@@ -575,8 +638,11 @@ pub fn reference(c: &TaaConfig, i: &RefInputs) -> (Vec<V3>, Vec<(u32, f32)>) {
                     ws += wt;
                 }
                 if ws > 0.0 {
-                    c0 = map3(acc, |a| a / ws);
+                    cf = map3(acc, |a| a / ws);
                 }
+            }
+            if c.filter {
+                c0 = cf;
             }
             let y0 = to_p(c0, e);
             // Geometry: nearest of the 3x3 (smallest linear depth), IDs, depth span.
@@ -596,7 +662,9 @@ pub fn reference(c: &TaaConfig, i: &RefInputs) -> (Vec<V3>, Vec<(u32, f32)>) {
             }
             let v = i.velocity[if c.dilation { best } else { at([x, y]) }];
             let q = [x as f32 + 0.5 - v[0], y as f32 + 0.5 - v[1]];
-            let mut result = c0;
+            let mut result = if c.adaptive { cf } else { c0 };
+            // Frames the output holds (see the shader).
+            let mut count = 1u32;
             if let Some((hist, hgeom)) = i.history {
                 let mut use_h = q[0] >= 0.0 && q[1] >= 0.0 && q[0] < w as f32 && q[1] < h as f32;
                 let (hid, hz) = match use_h {
@@ -604,9 +672,10 @@ pub fn reference(c: &TaaConfig, i: &RefInputs) -> (Vec<V3>, Vec<(u32, f32)>) {
                     false => (0, 0.0),
                 };
                 let still = !moving(v) && hid & MOVED == 0;
+                let held = (hid >> COUNT_SHIFT) & COUNT_MAX;
                 if use_h && !still && (c.ids || c.depth) {
                     if c.ids {
-                        use_h = use_h && nid.contains(&(hid & !MOVED));
+                        use_h = use_h && nid.contains(&(hid & HIST_ID_MASK));
                     }
                     if c.depth {
                         let tol = c.depth_tolerance;
@@ -663,6 +732,7 @@ pub fn reference(c: &TaaConfig, i: &RefInputs) -> (Vec<V3>, Vec<(u32, f32)>) {
                     use_h = finite(hc);
                 }
                 if use_h {
+                    count = (held + 1).min(COUNT_MAX);
                     let yk: Vec<V3> = (0..9)
                         .map(|k| if ok[k] { to_p(cs[k], e) } else { y0 })
                         .collect();
@@ -694,9 +764,19 @@ pub fn reference(c: &TaaConfig, i: &RefInputs) -> (Vec<V3>, Vec<(u32, f32)>) {
                                 let s = (v[0] * v[0] + v[1] * v[1]).sqrt() / c.speed;
                                 a += (c.alpha_max - a) * s.min(1.0);
                             }
-                            let wc = a / (1.0 + dot(map3(c0, |v| v * e), LUMA));
-                            let wh = (1.0 - a) / (1.0 + dot(map3(hc, |v| v * e), LUMA));
-                            zip3(c0, hc, |a, b| (wc * a + wh * b) / (wc + wh))
+                            if c.count {
+                                a = a.max(1.0 / count as f32);
+                            }
+                            let cc = match c.adaptive {
+                                true => zip3(c0, cf, |p, f| p + (f - p) * (1.0 / count as f32)),
+                                false => c0,
+                            };
+                            let (mut wc, mut wh) = (a, 1.0 - a);
+                            if c.luma {
+                                wc /= 1.0 + dot(map3(cc, |v| v * e), LUMA);
+                                wh /= 1.0 + dot(map3(hc, |v| v * e), LUMA);
+                            }
+                            zip3(cc, hc, |a, b| (wc * a + wh * b) / (wc + wh))
                         };
                     } else {
                         let (mut mn, mut mx, mut avg) = ([f32::MAX; 3], [f32::MIN; 3], [0.0f32; 3]);
@@ -737,8 +817,7 @@ pub fn reference(c: &TaaConfig, i: &RefInputs) -> (Vec<V3>, Vec<(u32, f32)>) {
             }
             out.push(result);
             let centre = at([x, y]);
-            let moved = if moving(v) { MOVED } else { 0 };
-            geom.push((i.ids[centre] | moved, i.depth[centre]));
+            geom.push((hist_geom_x(i.ids[centre], count, moving(v)), i.depth[centre]));
         }
     }
     (out, geom)
@@ -780,6 +859,10 @@ mod tests {
         assert!(TaaConfig::parse(&["inside", "without-ids"]).is_err());
         assert!(TaaConfig::parse(&["inside", "alpha=0.2"]).is_err());
         assert!(TaaConfig::parse(&["inside", "filter"]).is_err());
+        assert!(TaaConfig::parse(&["inside", "without-count"]).is_err());
+        let a = TaaConfig::parse(&["adaptive", "without-count", "without-luma"]).unwrap();
+        assert!(a.adaptive && !a.count && !a.luma && !TaaConfig::OURS.adaptive);
+        assert!(!TaaConfig::parse(&["mean", "adaptive"]).unwrap().adaptive);
         assert!(TaaConfig::parse(&["filter"]).unwrap().filter && !TaaConfig::OURS.filter);
         let s = TaaConfig::parse(&["speed=4", "amax=0.7", "lod=-2"]).unwrap();
         assert!(s.speed == 4.0 && s.alpha_max == 0.7 && s.lod_bias == -2.0);
@@ -834,10 +917,11 @@ mod tests {
             jitter: [0.0; 2],
         };
         let (o, g) = reference(&TaaConfig::OURS, &base);
-        assert!(o.iter().all(|c| *c == [1.0; 3]) && g.iter().all(|g| *g == (1, 2.0)));
+        assert!(o.iter().all(|c| *c == [1.0; 3]) && g.iter().all(|g| *g == (hist_geom_x(1, 1, false), 2.0)));
         // Mean weight, clipping off: 1/(n+1) of the current frame.
         let hist = flat(w, h, [3.0, 3.0, 3.0]);
-        let hg: Vec<(u32, f32)> = vec![(1, 2.0); w * h];
+        // Histories of 20 frames: past the running mean (1 / 21 < alpha).
+        let hg: Vec<(u32, f32)> = vec![(hist_geom_x(1, 20, false), 2.0); w * h];
         let c = TaaConfig {
             mean: true,
             clip: false,
@@ -852,7 +936,7 @@ mod tests {
         assert!(o.iter().all(|c| (c[0] - 2.5).abs() < 1e-6), "{:?}", o[0]);
         // Clipping on, history texel moved: a flat neighbourhood has a zero-width box, the
         // history clips to it.
-        let hg_moved: Vec<(u32, f32)> = vec![(1 | MOVED, 2.0); w * h];
+        let hg_moved: Vec<(u32, f32)> = vec![(hist_geom_x(1, 20, true), 2.0); w * h];
         let moved = RefInputs {
             history: Some((&hist, &hg_moved)),
             ..i
@@ -893,7 +977,7 @@ mod tests {
         // A history of object 7, seen nowhere in the 3x3: kept while everything is still (a
         // jittered sub-pixel feature), rejected once the pixel moves (a quarter pixel), and
         // when the history texel moved.
-        let hg7: Vec<(u32, f32)> = vec![(7, 2.0); w * h];
+        let hg7: Vec<(u32, f32)> = vec![(hist_geom_x(7, 20, false), 2.0); w * h];
         let i7 = RefInputs {
             history: Some((&hist, &hg7)),
             ..i
@@ -908,10 +992,10 @@ mod tests {
         let (o, g) = reference(&c, &i7m);
         assert!(o.iter().all(|c| *c == [1.0; 3]), "moving: rejected");
         assert!(
-            g.iter().all(|g| g.0 == 1 | MOVED),
+            g.iter().all(|g| g.0 == hist_geom_x(1, 1, true)),
             "moving pixels carry the bit"
         );
-        let hg7m: Vec<(u32, f32)> = vec![(7 | MOVED, 2.0); w * h];
+        let hg7m: Vec<(u32, f32)> = vec![(hist_geom_x(7, 20, true), 2.0); w * h];
         let (o, _) = reference(
             &c,
             &RefInputs {
@@ -924,7 +1008,7 @@ mod tests {
         let (o, _) = reference(&no_ids, &i7m);
         assert!((o[0][0] - want).abs() < 1e-5, "without-ids keeps it");
         // A history 50% farther than the neighbourhood: rejected by the depth test.
-        let hg_far: Vec<(u32, f32)> = vec![(1, 3.0); w * h];
+        let hg_far: Vec<(u32, f32)> = vec![(hist_geom_x(1, 20, false), 3.0); w * h];
         let far = RefInputs {
             velocity: &slow,
             history: Some((&hist, &hg_far)),
@@ -933,6 +1017,40 @@ mod tests {
         assert!(reference(&c, &far).0.iter().all(|c| *c == [1.0; 3]));
         let no_depth = TaaConfig { depth: false, ..c };
         assert!((reference(&no_depth, &far).0[0][0] - want).abs() < 1e-5);
+        // The frame count: a history of one frame takes the current one at weight 1/2 (the
+        // running mean; linear without the luminance weights), and the output holds two frames;
+        // rejected, it holds one; at COUNT_MAX it stays there.
+        let lin = TaaConfig { luma: false, ..c };
+        let hg1: Vec<(u32, f32)> = vec![(hist_geom_x(1, 1, false), 2.0); w * h];
+        let (o, g) = reference(
+            &lin,
+            &RefInputs {
+                history: Some((&hist, &hg1)),
+                ..i
+            },
+        );
+        assert!(o.iter().all(|c| (c[0] - 2.0).abs() < 1e-6), "{:?}", o[0]);
+        assert!(g.iter().all(|g| g.0 == hist_geom_x(1, 2, false)));
+        let no_count = TaaConfig { count: false, ..lin };
+        let (o, _) = reference(
+            &no_count,
+            &RefInputs {
+                history: Some((&hist, &hg1)),
+                ..i
+            },
+        );
+        assert!(o.iter().all(|c| (c[0] - 2.8).abs() < 1e-5), "alpha 0.1: {:?}", o[0]);
+        let hg_max: Vec<(u32, f32)> = vec![(hist_geom_x(1, COUNT_MAX, false), 2.0); w * h];
+        let (_, g) = reference(
+            &lin,
+            &RefInputs {
+                history: Some((&hist, &hg_max)),
+                ..i
+            },
+        );
+        assert!(g.iter().all(|g| g.0 == hist_geom_x(1, COUNT_MAX, false)));
+        let (_, g) = reference(&c, &i7m);
+        assert!(g.iter().all(|g| (g.0 >> COUNT_SHIFT) & COUNT_MAX == 1), "rejected: one frame");
         // A NaN in the current frame: replaced by its neighbours' mean, never output.
         let mut nan = cur.clone();
         nan[2 * w + 3] = [f32::NAN, 1.0, 1.0];
