@@ -45,20 +45,11 @@ bool has(uint f) { return (pc.flags.x & f) != 0u; }
 const vec3 LUMA = vec3(0.2126, 0.7152, 0.0722);
 float luma(vec3 c) { return dot(c, LUMA); }
 
-// Linear HDR -> perceptual YCoCg, and back.
-vec3 to_p(vec3 c) {
-    vec3 e = c * pc.params.w;
-    vec3 t = e / (1.0 + max(luma(e), 0.0));
-    return vec3(0.25 * t.r + 0.5 * t.g + 0.25 * t.b, 0.5 * t.r - 0.5 * t.b,
-                -0.25 * t.r + 0.5 * t.g - 0.25 * t.b);
-}
-// Clipping in YCoCg can leave the RGB gamut: negative components are clamped to 0.
-vec3 from_p(vec3 y) {
-    vec3 t = max(vec3(y.x + y.y - y.z, y.x + y.z, y.x - y.y - y.z), vec3(0.0));
-    return t / max(1.0 - luma(t), 1e-3) / pc.params.w;
-}
+#include "../inc/perceptual.glsl"
 
-bool finite3(vec3 c) { return !any(isnan(c)) && !any(isinf(c)); }
+// Linear HDR -> perceptual YCoCg at the frame's exposure, and back (taau's space too).
+vec3 to_p(vec3 c) { return perceptual(c, pc.params.w); }
+vec3 from_p(vec3 y) { return linear_from_perceptual(y, pc.params.w); }
 
 // The geometry texel's reverse-Z depth and object ID (PACKED: the checkerboard resolve's history
 // geometry, (object ID | moved bit, depth bits), in the IDs image).
@@ -113,17 +104,6 @@ vec3 history_catmull(vec2 q) {
 }
 
 vec3 history_bilinear(vec2 q) { return textureLod(hist, q / vec2(pc.size.xy), 0.0).rgb; }
-
-// Moves h towards p until it lies in the box [lo, hi] (p inside the box).
-vec3 clip_towards(vec3 p, vec3 h, vec3 lo, vec3 hi) {
-    vec3 r = h - p;
-    float t = 1.0;
-    for (int i = 0; i < 3; i++) {
-        if (r[i] > 1e-7) t = min(t, (hi[i] - p[i]) / r[i]);
-        else if (r[i] < -1e-7) t = min(t, (lo[i] - p[i]) / r[i]);
-    }
-    return p + r * max(t, 0.0);
-}
 
 const ivec2 OFF[9] = ivec2[9](ivec2(-1, -1), ivec2(0, -1), ivec2(1, -1), ivec2(-1, 0), ivec2(0, 0),
                               ivec2(1, 0), ivec2(-1, 1), ivec2(0, 1), ivec2(1, 1));

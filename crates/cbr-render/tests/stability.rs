@@ -440,7 +440,11 @@ fn drift_a_static_scene_stays_within_one_ulp() {
         // history's 8 (a sample far from the pixel): it takes about 400 frames to come within
         // one fp16 ulp of its cycle, so it runs 1000 (measured: 0 ulp from frame 512 on; at
         // 320 frames it is still 192 ulps away on a dark pixel).
-        let n = if spec.starts_with("taau") { n.max(1000) } else { n };
+        let n = if spec.starts_with("taau") {
+            n.max(1000)
+        } else {
+            n
+        };
         let settle = (n / 2).next_multiple_of(PERIOD) - PERIOD;
         let shaders = cbr_render::shader_library();
         let settings = RenderSettings::parse(w, h, spec).expect("spec");

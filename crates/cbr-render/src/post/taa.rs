@@ -545,36 +545,16 @@ fn zip3(a: V3, b: V3, f: impl Fn(f32, f32) -> f32) -> V3 {
     [f(a[0], b[0]), f(a[1], b[1]), f(a[2], b[2])]
 }
 
-/// Linear HDR to the perceptual YCoCg the shader compares in (`to_p`), and back (`from_p`).
+/// Linear HDR to the perceptual YCoCg the shader compares in (`to_p`), and back (`from_p`):
+/// inc/perceptual.glsl's maps (cpu_math), taau's space too.
 pub fn to_p(c: V3, e: f32) -> V3 {
-    let x = map3(c, |v| v * e);
-    let t = map3(x, |v| v / (1.0 + dot(x, LUMA).max(0.0)));
-    [
-        0.25 * t[0] + 0.5 * t[1] + 0.25 * t[2],
-        0.5 * t[0] - 0.5 * t[2],
-        -0.25 * t[0] + 0.5 * t[1] - 0.25 * t[2],
-    ]
+    crate::cpu_math::perceptual(c, e)
 }
 pub fn from_p(y: V3, e: f32) -> V3 {
-    let t = [y[0] + y[1] - y[2], y[0] + y[2], y[0] - y[1] - y[2]].map(|v| v.max(0.0));
-    let k = (1.0 - dot(t, LUMA)).max(1e-3);
-    map3(t, |v| v / k / e)
+    crate::cpu_math::linear_from_perceptual(y, e)
 }
 
-/// Moves h towards p until it lies in [lo, hi] (`clip_towards`).
-fn clip_towards(p: V3, h: V3, lo: V3, hi: V3) -> V3 {
-    let r = zip3(h, p, |a, b| a - b);
-    let mut t = 1.0f32;
-    for i in 0..3 {
-        if r[i] > 1e-7 {
-            t = t.min((hi[i] - p[i]) / r[i]);
-        } else if r[i] < -1e-7 {
-            t = t.min((lo[i] - p[i]) / r[i]);
-        }
-    }
-    let t = t.max(0.0);
-    zip3(p, r, |a, b| a + b * t)
-}
+use crate::cpu_math::clip_towards;
 
 /// |a - b| / max(a, b) (the shader's `depth_rel_diff`, here of linear depths).
 fn rel_diff(a: f32, b: f32) -> f32 {
