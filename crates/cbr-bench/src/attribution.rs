@@ -52,12 +52,14 @@ pub fn class_of(bits: u32) -> usize {
     }
 }
 
-/// Pixel counts and FLIP sums per class, summed over the measured frames.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Attribution {
-    pub pixels: [u64; CLASSES.len()],
-    pub error: [f64; CLASSES.len()],
-    pub flip: [f64; CLASSES.len()],
+/// Pixel counts, error and FLIP sums over N classes and the disoccluded pixels, summed over the
+/// measured frames: what every class attribution of bench.json holds (this one, the motion
+/// classes of crate::motion_attribution).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClassSums<const N: usize> {
+    pub pixels: [u64; N],
+    pub error: [f64; N],
+    pub flip: [f64; N],
     pub disocc_pixels: u64,
     pub disocc_error: f64,
     pub disocc_flip: f64,
@@ -65,12 +67,32 @@ pub struct Attribution {
     pub total_error: f64,
 }
 
-impl Attribution {
-    /// Adds one frame: its debug bits, per-pixel error, FLIP map and the reference's
+impl<const N: usize> Default for ClassSums<N> {
+    fn default() -> Self {
+        ClassSums {
+            pixels: [0; N],
+            error: [0.0; N],
+            flip: [0.0; N],
+            disocc_pixels: 0,
+            disocc_error: 0.0,
+            disocc_flip: 0.0,
+            total_pixels: 0,
+            total_error: 0.0,
+        }
+    }
+}
+
+impl<const N: usize> ClassSums<N> {
+    /// Adds one frame: each pixel's class, per-pixel error, FLIP map and the reference's
     /// disocclusion mask.
-    pub fn add(&mut self, bits: &[u32], error: &[f32], flip: &[f32], disocc: &[bool]) {
-        for (((&b, &e), &f), &d) in bits.iter().zip(error).zip(flip).zip(disocc) {
-            let c = class_of(b);
+    pub fn add_classes(
+        &mut self,
+        classes: impl Iterator<Item = usize>,
+        error: &[f32],
+        flip: &[f32],
+        disocc: &[bool],
+    ) {
+        for (((c, &e), &f), &d) in classes.zip(error).zip(flip).zip(disocc) {
             let (e, f) = (f64::from(e), f64::from(f));
             self.pixels[c] += 1;
             self.error[c] += e;
@@ -85,9 +107,10 @@ impl Attribution {
         }
     }
 
-    /// bench.json's `attribution`: per class `pixels` and `error` (shares of the frame's pixels
-    /// and of its error sum), `error_mean` and `flip_mean` (null for an empty class).
-    pub fn to_json(&self) -> serde_json::Value {
+    /// Per class (named by `names`) and `disoccluded`: `pixels` and `error` (shares of the
+    /// frame's pixels and of its error sum), `error_mean` and `flip_mean` (null for an empty
+    /// class).
+    pub fn to_json(&self, names: &[&str; N]) -> serde_json::Value {
         let entry = |n: u64, e: f64, f: f64| {
             let share = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
             let mean = |v: f64| {
@@ -105,7 +128,7 @@ impl Attribution {
             })
         };
         let mut m = serde_json::Map::new();
-        for (k, name) in CLASSES.iter().enumerate() {
+        for (k, name) in names.iter().enumerate() {
             m.insert(
                 (*name).into(),
                 entry(self.pixels[k], self.error[k], self.flip[k]),
@@ -116,6 +139,24 @@ impl Attribution {
             entry(self.disocc_pixels, self.disocc_error, self.disocc_flip),
         );
         serde_json::Value::Object(m)
+    }
+}
+
+/// The resolve's classes, summed over the measured frames.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Attribution(pub ClassSums<{ CLASSES.len() }>);
+
+impl Attribution {
+    /// Adds one frame: its debug bits, per-pixel error, FLIP map and the reference's
+    /// disocclusion mask.
+    pub fn add(&mut self, bits: &[u32], error: &[f32], flip: &[f32], disocc: &[bool]) {
+        self.0
+            .add_classes(bits.iter().map(|&b| class_of(b)), error, flip, disocc);
+    }
+
+    /// bench.json's `attribution` ([`ClassSums::to_json`] over [`CLASSES`]).
+    pub fn to_json(&self) -> serde_json::Value {
+        self.0.to_json(&CLASSES)
     }
 }
 

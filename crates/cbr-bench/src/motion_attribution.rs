@@ -15,8 +15,6 @@
 //! mean FLIP. Unlike a checkerboard's classes, these are regions (an object, a wall), so the
 //! mean FLIP of a class is meaningful and is what the docs compare between techniques.
 
-use serde_json::json;
-
 pub const CLASSES: [&str; 3] = ["still", "slow", "fast"];
 
 /// Up to this speed (pixels per frame) a pixel is still (cbr_render::post::taa's threshold).
@@ -36,70 +34,22 @@ pub fn class_of(v: [f32; 2]) -> usize {
     }
 }
 
-/// Pixel counts, error and FLIP sums per class, summed over the measured frames.
+/// The motion classes, summed over the measured frames.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct MotionAttribution {
-    pub pixels: [u64; CLASSES.len()],
-    pub error: [f64; CLASSES.len()],
-    pub flip: [f64; CLASSES.len()],
-    pub disocc_pixels: u64,
-    pub disocc_error: f64,
-    pub disocc_flip: f64,
-    pub total_pixels: u64,
-    pub total_error: f64,
-}
+pub struct MotionAttribution(pub crate::attribution::ClassSums<{ CLASSES.len() }>);
 
 impl MotionAttribution {
     /// Adds one frame: the technique's velocity, per-pixel error, FLIP map and the reference's
     /// disocclusion mask.
     pub fn add(&mut self, velocity: &[[f32; 2]], error: &[f32], flip: &[f32], disocc: &[bool]) {
-        for (((&v, &e), &f), &d) in velocity.iter().zip(error).zip(flip).zip(disocc) {
-            let c = class_of(v);
-            let (e, f) = (f64::from(e), f64::from(f));
-            self.pixels[c] += 1;
-            self.error[c] += e;
-            self.flip[c] += f;
-            if d {
-                self.disocc_pixels += 1;
-                self.disocc_error += e;
-                self.disocc_flip += f;
-            }
-            self.total_pixels += 1;
-            self.total_error += e;
-        }
+        self.0
+            .add_classes(velocity.iter().map(|&v| class_of(v)), error, flip, disocc);
     }
 
-    /// bench.json's `motion_attribution`: per class `pixels` and `error` (shares of the frame's
-    /// pixels and of its error sum), `error_mean` and `flip_mean` (null for an empty class).
+    /// bench.json's `motion_attribution` (the entries of crate::attribution's, over
+    /// [`CLASSES`]).
     pub fn to_json(&self) -> serde_json::Value {
-        let entry = |n: u64, e: f64, f: f64| {
-            let share = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
-            let mean = |v: f64| {
-                if n > 0 {
-                    json!(v / n as f64)
-                } else {
-                    json!(null)
-                }
-            };
-            json!({
-                "pixels": share(n as f64, self.total_pixels as f64),
-                "error": share(e, self.total_error),
-                "error_mean": mean(e),
-                "flip_mean": mean(f),
-            })
-        };
-        let mut m = serde_json::Map::new();
-        for (k, name) in CLASSES.iter().enumerate() {
-            m.insert(
-                (*name).into(),
-                entry(self.pixels[k], self.error[k], self.flip[k]),
-            );
-        }
-        m.insert(
-            "disoccluded".into(),
-            entry(self.disocc_pixels, self.disocc_error, self.disocc_flip),
-        );
-        serde_json::Value::Object(m)
+        self.0.to_json(&CLASSES)
     }
 }
 

@@ -44,6 +44,19 @@ pub fn catmull_rom(f: f32) -> [f32; 4] {
     ]
 }
 
+/// The 3x3 neighbourhood's offsets, row by row (the shaders' `OFF`).
+pub const OFF_3X3: [[i32; 2]; 9] = [
+    [-1, -1],
+    [0, -1],
+    [1, -1],
+    [-1, 0],
+    [0, 0],
+    [1, 0],
+    [-1, 1],
+    [0, 1],
+    [1, 1],
+];
+
 /// Rec. 709 luminance weights (inc/perceptual.glsl's `LUMA_709`).
 pub const LUMA_709: V3 = [0.2126, 0.7152, 0.0722];
 

@@ -79,6 +79,24 @@ pub struct FrameView {
     pub raster: RasterUniforms,
 }
 
+impl FrameView {
+    /// This view rendered at `width` x `height` (`upscale`, `taau`): the same projection (the
+    /// output's aspect), velocities and the raster's viewport in those pixels, the frame's raster
+    /// flags kept and no layout mapping.
+    pub fn at_size(&self, width: u32, height: u32) -> FrameView {
+        FrameView {
+            width,
+            height,
+            raster: RasterUniforms {
+                viewport: (width as f32, height as f32),
+                flags: self.raster.flags,
+                ..Default::default()
+            },
+            ..self.clone()
+        }
+    }
+}
+
 fn to_f32(m: DMat4) -> [f32; 16] {
     m.as_mat4().to_cols_array()
 }

@@ -306,14 +306,7 @@ fn nan_and_inf_never_enter_the_history() {
 fn a_camera_cut_resets_the_history() {
     let gpu = gpu();
     let (w, h) = (48u32, 27u32);
-    let mut s = demo(w, h);
-    let fps = s.settings.fps;
-    let mut cut = s.camera.keys[0].clone();
-    cut.time = 4.0 / fps;
-    cut.cut = true;
-    cut.position[0] += 3.0;
-    s.camera.keys.retain(|k| k.time < cut.time);
-    s.camera.keys.push(cut);
+    let s = common::demo_with_cut(w, h, 4);
     let taa = "native+taa";
     let outs = render(&gpu, &s, spec(w, h, taa), &(0..6).collect::<Vec<_>>());
     let native4 = jittered_native(&gpu, &s, w, h, 8, 4);

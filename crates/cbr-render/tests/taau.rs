@@ -383,14 +383,7 @@ fn taau_renders_the_demo_with_every_option() {
 fn a_camera_cut_resets_taau() {
     let gpu = common::gpu();
     let (w, h) = (48u32, 27u32);
-    let mut s = demo(w, h);
-    let fps = s.settings.fps;
-    let mut cut = s.camera.keys[0].clone();
-    cut.time = 4.0 / fps;
-    cut.cut = true;
-    cut.position[0] += 3.0;
-    s.camera.keys.retain(|k| k.time < cut.time);
-    s.camera.keys.push(cut);
+    let s = common::demo_with_cut(w, h, 4);
     let spec = "taau";
     let outs = render_settings(&gpu, &s, settings(w, h, spec), &(0..6).collect::<Vec<_>>());
     let alone = |f: u32| render_settings(&gpu, &s, settings(w, h, spec), &[f]).remove(0);

@@ -521,17 +521,7 @@ pub struct RefInputs<'a> {
 }
 
 const LUMA: [f32; 3] = [0.2126, 0.7152, 0.0722];
-const OFF: [[i32; 2]; 9] = [
-    [-1, -1],
-    [0, -1],
-    [1, -1],
-    [-1, 0],
-    [0, 0],
-    [1, 0],
-    [-1, 1],
-    [0, 1],
-    [1, 1],
-];
+use crate::cpu_math::OFF_3X3 as OFF;
 
 use crate::cpu_math::{V3, catmull_rom};
 

@@ -44,6 +44,19 @@ pub fn demo(w: u32, h: u32) -> cbr_scene::Scene {
 }
 
 /// The demo with a still camera (its first key) and nothing moving.
+/// The demo whose camera cuts at frame `at` (a key flagged `cut`, 3 m to the side): histories
+/// must reset there.
+pub fn demo_with_cut(w: u32, h: u32, at: u32) -> cbr_scene::Scene {
+    let mut s = demo(w, h);
+    let mut cut = s.camera.keys[0].clone();
+    cut.time = f64::from(at) / s.settings.fps;
+    cut.cut = true;
+    cut.position[0] += 3.0;
+    s.camera.keys.retain(|k| k.time < cut.time);
+    s.camera.keys.push(cut);
+    s
+}
+
 pub fn static_demo(w: u32, h: u32) -> cbr_scene::Scene {
     let mut s = demo(w, h);
     s.motions.clear();

@@ -25,7 +25,6 @@ pub use config::{Kernel, TaauConfig, parse};
 
 use super::LayerReadbacks;
 use crate::frame::{ExrType, FrameOutput, LayerDecl, SampleType};
-use crate::gpu_scene::RasterUniforms;
 use crate::memory::MemoryEstimate;
 use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, ResourceDecl, Resources, Use};
 use crate::scene_pass::{RasterConfig, ScenePass};
@@ -478,14 +477,8 @@ impl Technique for Taau {
     fn render(&mut self, ctx: &mut FrameCtx) -> Result<()> {
         let (w, h) = self.passes.render_size();
         let j = jitter(self.phases, ctx.frame);
-        let mut view = ctx.view.clone();
-        (view.width, view.height) = (w, h);
+        let mut view = ctx.view.at_size(w, h);
         view.screen_jitter = [view.screen_jitter[0] + j[0], view.screen_jitter[1] + j[1]];
-        view.raster = RasterUniforms {
-            viewport: (w as f32, h as f32),
-            flags: view.raster.flags,
-            ..Default::default()
-        };
         ctx.upload(&view)?;
         let f = TaauFrame {
             frame: ctx.frame,

@@ -28,17 +28,7 @@ pub struct Params {
     pub stability: bool,
 }
 
-pub(crate) const OFF: [[i32; 2]; 9] = [
-    [-1, -1],
-    [0, -1],
-    [1, -1],
-    [-1, 0],
-    [0, 0],
-    [1, 0],
-    [-1, 1],
-    [0, 1],
-    [1, 1],
-];
+use crate::cpu_math::OFF_3X3 as OFF;
 
 fn inside(t: [i32; 2], (w, h): (usize, usize)) -> bool {
     t[0] >= 0 && t[1] >= 0 && (t[0] as usize) < w && (t[1] as usize) < h

@@ -12,7 +12,6 @@ pub use config::{UpscaleConfig, UpscaleFilter, apply_shorthand, parse};
 
 use super::LayerReadbacks;
 use crate::frame::FrameOutput;
-use crate::gpu_scene::RasterUniforms;
 use crate::memory::MemoryEstimate;
 use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, ResourceDecl, Resources, Use};
 use crate::scene_pass::{RasterConfig, ScenePass};
@@ -272,13 +271,7 @@ impl Upscale {
 
 impl Technique for Upscale {
     fn render(&mut self, ctx: &mut FrameCtx) -> Result<()> {
-        let mut view = ctx.view.clone();
-        (view.width, view.height) = self.low;
-        view.raster = RasterUniforms {
-            viewport: (self.low.0 as f32, self.low.1 as f32),
-            flags: view.raster.flags,
-            ..Default::default()
-        };
+        let view = ctx.view.at_size(self.low.0, self.low.1);
         ctx.upload(&view)?;
         let counter = ctx.counter;
         let exposure = ctx.scene.settings.exposure;
