@@ -124,7 +124,7 @@ def table(b, specs, native):
         lines.append(
             f"| `{s}` | {mark}{f(e['flip_mean'])}{mark} | {f(e.get('flip_edge_mean'))} | "
             f"{f(e.get('flip_disocc_mean'))} | {f(e.get('flicker_mean'))} | "
-            f"{sh if sh is not None else '–'} ({f(sh / n_sh if sh and n_sh else None, 2)}) | "
+            f"{int(sh) if sh is not None else '–'} ({f(sh / n_sh if sh and n_sh else None, 2)}) | "
             f"{f(ms, 1)} ({f(ms / n_ms if ms and n_ms else None, 2)}) |")
     return "\n".join(lines)
 
