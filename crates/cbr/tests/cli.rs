@@ -462,6 +462,56 @@ fn resolve_and_upscale_write_their_layers_and_debug_views() {
     assert!(stderr(&o).contains("8 or 16"), "{}", stderr(&o));
 }
 
+/// `taau:debug` from the command line: validation clean, the frame complete, the `taau` layer in
+/// the EXR (disocclusion, lock, sample and history weight) and its four PNGs under debug/; a bad
+/// `taau` parameter is one line naming it, with nothing written.
+#[test]
+fn taau_writes_its_debug_layer_and_refuses_bad_parameters() {
+    let d = tempfile::tempdir().expect("tempdir");
+    let out = d.path().join("taau");
+    let run = common::render_demo(
+        &out,
+        (64, 36),
+        3,
+        &["--validation", "--technique", "taau:0.77:debug"],
+    )
+    .expect("render");
+    assert_eq!(run["validation"]["messages"], 0, "{}", run["validation"]);
+    assert_eq!(run["settings"]["technique"], "taau:0.77:debug");
+    let exr = out.join("frame_0002.exr");
+    let color = cbr_metrics::input::load(&exr, None, None).expect("color");
+    assert!(color.rgb.c[1].data.iter().all(|v| v.is_finite()));
+    let hw = cbr_metrics::input::load(&exr, Some("taau"), Some(&["history_weight".to_string()]))
+        .expect("taau layer");
+    assert!(
+        hw.rgb.c[0].data.iter().any(|&v| v > 1.0),
+        "frame 2 accumulated no history"
+    );
+    for c in ["disocclusion", "lock", "sample_weight", "history_weight"] {
+        let f = out.join(format!("debug/frame_0002_taau_{c}.png"));
+        assert!(f.is_file(), "{}", f.display());
+    }
+    let bad = d.path().join("bad");
+    let o = cbr(
+        &[
+            "render",
+            "builtin:demo",
+            "-o",
+            bad.to_str().expect("utf8"),
+            "--technique",
+            "taau:without-clip",
+        ],
+        &[],
+    );
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("taau can go without"), "{e}");
+    assert!(
+        !bad.join("frame_0000.exr").exists(),
+        "a refused spec wrote a frame"
+    );
+}
+
 /// bench.json's schema: the keys and types every consumer (the report, scripts) relies on.
 fn check_bench_schema(b: &serde_json::Value) {
     assert_eq!(b["schema"], "cbr.bench/1");
