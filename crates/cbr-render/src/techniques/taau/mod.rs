@@ -19,7 +19,7 @@
 pub mod config;
 pub mod reference;
 
-use cbr_gpu::{Access, Cmd, Gpu, Image, Profiler, Readback, Result, Shaders, vk};
+use cbr_gpu::{Access, Cmd, Gpu, Image, Profiler, Result, Shaders, vk};
 
 pub use config::{Kernel, TaauConfig, parse};
 
@@ -419,11 +419,6 @@ impl TaauPasses {
         let texels: &[[f32; 4]] = bytemuck::cast_slice(rb.bytes()?);
         let planes = (0..4).map(|c| texels.iter().map(|t| t[c]).collect()).collect();
         DEBUG_LAYER.layer(w, h, planes).map(Some)
-    }
-
-    /// The readback of an image (tests).
-    pub fn readback(gpu: &Gpu, name: &str, image: &Image) -> Result<Readback> {
-        Readback::for_image(gpu, name, image)
     }
 }
 
