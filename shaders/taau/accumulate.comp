@@ -49,6 +49,27 @@ layout(set = 0, binding = BINDING_DEBUG, rgba32f) uniform writeonly image2D debu
 #include "../inc/perceptual.glsl"
 #include "../upscale/geometry.glsl"
 
+const float PI = 3.14159265358979;
+
+// The kernel at squared distance x2 (already scaled): KERNEL 0 tent (radius 1), 1 Catmull-Rom,
+// 2 Lanczos-2, sinc(x) sinc(x / 2). (FSR 2's polynomial approximation in x^2 saves the sines but
+// is off by up to 0.049: on the moving demo it raised FLIP by 2.4%; docs/upsampling.md.)
+float kernel_weight_sq(float x2) {
+#if KERNEL == 0
+    return max(1.0 - sqrt(x2), 0.0);
+#elif KERNEL == 1
+    float x = sqrt(x2);
+    if (x < 1.0) return (1.5 * x - 2.5) * x2 + 1.0;
+    if (x < 2.0) return ((-0.5 * x + 2.5) * x - 4.0) * x + 2.0;
+    return 0.0;
+#else
+    if (x2 >= 4.0) return 0.0;
+    if (x2 < 1e-8) return 1.0;
+    float a = PI * sqrt(x2);
+    return 2.0 * sin(a) * sin(0.5 * a) / (a * a);
+#endif
+}
+
 const float STILL = 1.0 / 64.0;
 const float BOX_CURVE = 2.3;
 

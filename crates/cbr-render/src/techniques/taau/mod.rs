@@ -101,7 +101,6 @@ pub const MAX_BIAS: f32 = 1.99;
 
 pub fn dilate_decl(c: &TaauConfig) -> ComputeDecl {
     let mut d = ComputeDecl::new("taau.dilate", "taau/dilate.comp")
-        .define("KERNEL", c.kernel as u32)
         .bind(Binding::sampled("depth"))
         .bind(Binding::sampled("velocity"))
         .bind(Binding::sampled("color"))
@@ -113,18 +112,16 @@ pub fn dilate_decl(c: &TaauConfig) -> ComputeDecl {
     d.push::<Push>()
 }
 
-pub fn depth_clip_decl(c: &TaauConfig) -> ComputeDecl {
+pub fn depth_clip_decl() -> ComputeDecl {
     ComputeDecl::new("taau.depth_clip", "taau/depth_clip.comp")
-        .define("KERNEL", c.kernel as u32)
         .bind(Binding::sampled("dilated"))
         .bind(Binding::buffer("recon", Use::Read))
         .bind(Binding::image("disocclusion", Use::Write))
         .push::<Push>()
 }
 
-pub fn lock_decl(c: &TaauConfig) -> ComputeDecl {
+pub fn lock_decl() -> ComputeDecl {
     ComputeDecl::new("taau.lock", "taau/lock.comp")
-        .define("KERNEL", c.kernel as u32)
         .bind(Binding::sampled("prepared"))
         .bind(Binding::buffer("new_locks", Use::Write))
         .push::<Push>()
@@ -173,10 +170,10 @@ pub fn rcas_decl() -> ComputeDecl {
 pub fn decls(c: &TaauConfig) -> Vec<ComputeDecl> {
     let mut v = vec![dilate_decl(c)];
     if c.depth_clip {
-        v.push(depth_clip_decl(c));
+        v.push(depth_clip_decl());
     }
     if c.locks {
-        v.push(lock_decl(c));
+        v.push(lock_decl());
     }
     v.push(accumulate_decl(c));
     if c.rcas {
