@@ -19,6 +19,8 @@ import re
 import subprocess
 import sys
 
+from strips import worst_crop_strip
+
 ROWS = [
     "native", "native+taa", "checkerboard:rotated:ours", "checkerboard:rotated:ours+taa",
     "checkerboard:rotated:fused", "taau", "taau:0.5", "taau:0.77", "upscale:fsr1",
@@ -76,15 +78,9 @@ def strip(a, b, out, img_dir, name):
     rows = b["rows"]
     ref = next(r for r in rows if r.get("error") is None)
     techs = [r for r in rows if r.get("error") is not None and r["spec"] in ROWS]
-    cx, cy, cw, ch = ref["crops"][0]
-    x = min(max(cx + cw // 2 - CROP // 2, 0), a.width - CROP)
-    y = min(max(cy + ch // 2 - CROP // 2, 0), a.height - CROP)
-    imgs = [os.path.join(out, ref["images"]["image"])]
-    imgs += [os.path.join(out, r["images"]["image"]) for r in techs]
-    flips = ["-"] + [os.path.join(out, r["images"]["flip"]) for r in techs]
     png = os.path.join(img_dir, f"{name}.png")
-    run([a.cbr, "montage", *imgs, *flips, "--columns", str(len(imgs)), "--crop",
-         f"{x},{y},{CROP},{CROP}", "--scale", str(SCALE), "--gap", "3", "-o", png])
+    x, y = worst_crop_strip(a.cbr, out, ref, techs, (a.width, a.height), CROP, SCALE, png,
+                            "upsampling")
     return (f"![{name} strip](images/upsampling/{name}.png)\n\nLeft to right: `{ref['spec']}` "
             "(the reference), " + ", ".join(f"`{r['spec']}`" for r in techs)
             + f"; below each, its FLIP map against `{ref['spec']}`. Window {CROP}x{CROP} at "

@@ -17,6 +17,8 @@ import shutil
 import subprocess
 import sys
 
+from strips import worst_crop_strip
+
 TECHNIQUES = [
     "native", "msaa:4", "checkerboard:rotated:ours", "checkerboard:split:ours",
     "checkerboard:rotated:pq4k", "checkerboard:rotated:fused", "upscale:bilinear", "interlaced",
@@ -86,15 +88,9 @@ def main():
         res = f"{a.width}x{a.height}"
         # The strip: the window around the worst crop, reference then each technique, over the
         # FLIP maps (blank under the reference).
-        cx, cy, cw, ch = ref["crops"][0]
-        x = min(max(cx + cw // 2 - CROP // 2, 0), a.width - CROP)
-        y = min(max(cy + ch // 2 - CROP // 2, 0), a.height - CROP)
-        imgs = [os.path.join(out, ref["images"]["image"])]
-        imgs += [os.path.join(out, r["images"]["image"]) for r in techs]
-        flips = ["-"] + [os.path.join(out, r["images"]["flip"]) for r in techs]
         strip = os.path.join(img_dir, f"{name}.png")
-        run([a.cbr, "montage", *imgs, *flips, "--columns", str(len(imgs)), "--crop",
-             f"{x},{y},{CROP},{CROP}", "--scale", str(SCALE), "--gap", "3", "-o", strip])
+        x, y = worst_crop_strip(a.cbr, out, ref, techs, (a.width, a.height), CROP, SCALE, strip,
+                                "hard-cases")
         frame_png = os.path.join(img_dir, f"{name}-reference.png")
         shutil.copyfile(os.path.join(out, ref["images"]["image"]), frame_png)
         native_ms = next((med(r["frame_ms"]) for r in techs if r["spec"] == "native"), None)
