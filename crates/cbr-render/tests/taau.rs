@@ -396,8 +396,10 @@ fn a_camera_cut_resets_taau() {
     assert_clean(&gpu);
 }
 
-/// Infinite light intensity in frame 3 (its fragments NaN/Inf, written black by the scene
-/// pass): no non-finite pixel in any frame, and the history recovers.
+/// Infinite light intensity in frame 3: the scene pass counts the NaN/Inf fragments and writes
+/// them black, and no frame of `taau` has a non-finite pixel. (`taau`'s own guard against a
+/// non-finite render sample is held by `every_pass_matches_its_cpu_reference_over_frames`,
+/// whose frame 2 carries a NaN and an Inf: dropping the guard fails it there.)
 #[test]
 fn nan_and_inf_never_enter_the_taau_history() {
     let gpu = common::gpu();
