@@ -36,7 +36,9 @@ struct FrameConstants {
     uvec4 counts;       // x: directional lights, y: point lights, z: frame index, w: flags
     ivec4 tangram;      // x: side L, y: number of pieces
     vec4 screen_jitter; // xy: sub-pixel offset of the projection in output pixels, every layout
-                        // (+x right, +y down moves the geometry: `--jitter`, `+taa`); zw: 0
+                        // (+x right, +y down moves the geometry: `--jitter`, `+taa`); z: the
+                        // LOD bias a moving fragment sheds, w: 1 / the speed (pixels per frame)
+                        // at which it sheds all of it (0: none)
     ivec4 pieces[8];    // xy: the (m, n) translation of each tangram piece, in units of L
 };
 

@@ -25,18 +25,27 @@ layout(set = 0, binding = BINDING_HIST) uniform sampler2D hist;  // bilinear, cl
 layout(set = 0, binding = BINDING_HIST_GEOM) uniform usampler2D hist_geom;
 layout(set = 0, binding = BINDING_OUT_HIST, rgba16f) uniform writeonly image2D out_hist;
 layout(set = 0, binding = BINDING_OUT_GEOM, rg32ui) uniform writeonly uimage2D out_geom;
+// The still pixels' jitter cycle (F_CYCLE): rgb the mean of this cycle's samples so far, a their
+// count k (0: none); and the range of their perceptual luma, xy of the last complete cycle
+// (x > y: none), zw of this one.
+layout(set = 0, binding = BINDING_CYCLE) uniform sampler2D hist_cycle;
+layout(set = 0, binding = BINDING_RANGE) uniform sampler2D hist_range;
+layout(set = 0, binding = BINDING_OUT_CYCLE, rgba32f) uniform writeonly image2D out_cycle;
+layout(set = 0, binding = BINDING_OUT_RANGE, rgba16f) uniform writeonly image2D out_range;
 
 // F_RESET, F_DILATION, F_CLIP, F_IDS, F_DEPTH, F_CATMULL, F_MEAN (blend weight 1 / (n + 1): the
 // running mean), F_FILTER (reconstruct the current sample at the pixel centre, Karis' filter),
 // F_COUNT (the current-frame weight is at least 1 / (m + 1), m the frames the pixel's history
-// holds), F_LUMA (Karis' luminance weights in the blend): the flag bits, and MOVED / ID_MASK
+// holds), F_LUMA (Karis' luminance weights in the blend), F_CYCLE (a still pixel shows the mean
+// of its last complete jitter cycle): the flag bits, and MOVED / ID_MASK
 // (the geometry the technique gives) and HIST_ID_MASK / COUNT_SHIFT / COUNT_MAX (history
 // geometry: x = object ID | count << COUNT_SHIFT | MOVED where the pixel moved more than the
 // still threshold), are defines from crates/cbr-render/src/post/taa.rs.
 
 // size: W, H (of the output and the geometry), 0, 0; flags: x: F_*, y: n (frames accumulated
-// since the reset); params: alpha (current-frame weight), gamma, depth tolerance, exposure
-// scale; feedback_still: INSIDE feedback min, max, still threshold (pixels), 0; speed_jitter:
+// since the reset), z: the jitter cycle's length L; params: alpha (current-frame weight), gamma,
+// depth tolerance, exposure scale; feedback_still: INSIDE feedback min, max, still threshold
+// (pixels), the cycle's change tolerance (perceptual luma); speed_jitter:
 // x: current-frame weight at and above speed y (pixels per frame; 0: off), zw: the jitter.
 PUSH_CONSTANTS
 
@@ -176,6 +185,24 @@ void main() {
     uvec2 g = uvec2(0u);
     if (use) g = texelFetch(hist_geom, ivec2(floor(q)), 0).xy;
     bool still = !moving && (g.x & MOVED) == 0u;
+    // The jitter cycle of a still pixel (F_CYCLE): its jittered samples repeat every L frames
+    // while nothing changes, so a sample outside the luma range of the last complete cycle (by
+    // more than the tolerance) means the content changed (a shadow moved over it, a light
+    // changed): its history is rejected, as a disoccluded pixel's is, and its cycle restarts.
+    vec4 cyc = vec4(0.0);
+    vec4 rng = vec4(1.0, 0.0, 1.0, 0.0);
+    bool cycling = false;
+#if MODE == 0
+    if (has(F_CYCLE) && use && still) {
+        ivec2 t = ivec2(floor(q));
+        cyc = texelFetch(hist_cycle, t, 0);
+        rng = texelFetch(hist_range, t, 0);
+        float tol = pc.feedback_still.w;
+        bool changed = rng.x <= rng.y && (y0.x < rng.x - tol || y0.x > rng.y + tol);
+        use = !changed;
+        cycling = !changed;
+    }
+#endif
     if (use && !still && (has(F_IDS) || has(F_DEPTH))) {
         if (has(F_IDS)) {
             bool seen = false;
@@ -193,6 +220,7 @@ void main() {
         h = has(F_CATMULL) ? history_catmull(q) : history_bilinear(q);
         use = finite3(h);
     }
+    cycling = cycling && use;
 
     // A pixel without history is this frame alone: with F_ADAPTIVE, its reconstruction at the
     // pixel centre rather than one jittered point sample.
@@ -276,6 +304,40 @@ void main() {
         result = from_p(mix(y0, yh, feedback));
 #endif
     }
+    // The cycle's state (F_CYCLE): a moving pixel has none; a still pixel whose cycle did not go
+    // on (reset, rejected, changed, its history texel moved) starts one with this sample; one
+    // that goes on adds the sample to the cycle's mean and range. When the cycle is complete (L
+    // samples, each jitter phase once) its mean is the output and the range the one later
+    // samples are tested against; until the next is complete the output stays that mean. A
+    // static still pixel therefore shows the mean of its L jittered samples, bit for bit the same
+    // every frame (no flicker); a change the range test misses is gone within two cycles.
+    vec4 cyc_out = vec4(0.0);
+    vec4 rng_out = vec4(1.0, 0.0, 1.0, 0.0);
+#if MODE == 0
+    if (has(F_CYCLE) && !moving) {
+        float l = y0.x;
+        if (cycling && cyc.w > 0.0) {
+            float k = cyc.w + 1.0;
+            vec3 m = cyc.rgb + (c0 - cyc.rgb) / k;
+            vec2 cur = vec2(min(rng.z, l), max(rng.w, l));
+            if (k >= float(pc.flags.z)) {
+                result = m;
+                rng_out = vec4(cur, 1.0, 0.0);
+            } else {
+                if (rng.x <= rng.y) result = texelFetch(hist, ivec2(floor(q)), 0).rgb;
+                cyc_out = vec4(m, k);
+                rng_out = vec4(rng.xy, cur);
+            }
+        } else {
+            // The first sample of a cycle; one that follows a complete cycle keeps its range.
+            if (cycling && rng.x <= rng.y) result = texelFetch(hist, ivec2(floor(q)), 0).rgb;
+            cyc_out = vec4(c0, 1.0);
+            rng_out = vec4(cycling ? rng.xy : vec2(1.0, 0.0), l, l);
+        }
+    }
+#endif
+    imageStore(out_cycle, p, cyc_out);
+    imageStore(out_range, p, rng_out);
     imageStore(out_hist, p, vec4(result, 1.0));
     uint gx = (nid[4] & HIST_ID_MASK) | (count << COUNT_SHIFT) | (moving ? MOVED : 0u);
     imageStore(out_geom, p, uvec4(gx, floatBitsToUint(geom_depth(p)), 0u, 0u));

@@ -98,17 +98,27 @@ void screen_gradients(vec2 uv, out vec2 gx, out vec2 gy) {
 #endif
 }
 
+// The fragment's LOD bias: the frame's, less the part a moving fragment sheds (TAA's sharper
+// bias, withdrawn linearly up to screen_jitter.w's speed; its history averages too few jittered
+// samples for it). A speed that is not finite (a vertex behind the previous camera) sheds it all;
+// with screen_jitter.zw = 0 the bias is the frame's exactly.
+float lod_bias() {
+    float r = length(to_pixels(v_clip) - to_pixels(v_prev_clip)) * frame.screen_jitter.w;
+    r = (r >= 0.0 && r < 1.0) ? r : 1.0;
+    return frame.ambient.w - frame.screen_jitter.z * r;
+}
+
 vec4 tex(sampler2D t, vec2 uv) {
 #ifdef ID_ONLY
     // The prepass rasterises native's grid: native's footprint, whatever the checkerboard bias.
     return texture(t, uv);
 #endif
-    if (!lod_gradients()) return texture(t, uv, frame.ambient.w);
+    if (!lod_gradients()) return texture(t, uv, lod_bias());
     vec2 gx, gy;
     screen_gradients(uv, gx, gy);
     // A bias on top of the full-res footprint (0 unless --lod-bias or a temporal pass asks):
     // scaling both derivatives by 2^b adds b to the isotropic LOD.
-    float s = exp2(frame.ambient.w);
+    float s = exp2(lod_bias());
     return textureGrad(t, uv, s * gx, s * gy);
 }
 
@@ -116,7 +126,7 @@ vec4 tex(sampler2D t, vec2 uv) {
 float lod_of(sampler2D t, vec2 uv) {
     vec2 a = dFdx(uv);
     vec2 b = dFdy(uv);
-    float bias = frame.ambient.w;
+    float bias = lod_bias();
     if (lod_gradients()) screen_gradients(uv, a, b);
     vec2 size = vec2(textureSize(t, 0));
     return log2(max(length(a * size), length(b * size))) + bias;

@@ -72,6 +72,10 @@ pub struct FrameView {
     /// Projection aspect: the output's W/H (equal to width/height except for `upscale`).
     pub aspect: f64,
     pub lod_bias: f32,
+    /// (b, 1 / V): a fragment moving at speed s (pixels per frame) takes `lod_bias - b min(s /
+    /// V, 1)`: TAA's sharper bias is withdrawn from what moves (a moving pixel's history holds
+    /// few samples to average the sharper texture over). (0, 0): the bias everywhere.
+    pub lod_motion: [f32; 2],
     pub frame_index: u32,
     /// The projection's sub-pixel jitter in output pixels, every layout (RenderSettings::jitter
     /// plus a jittering post pass's).
@@ -507,7 +511,12 @@ impl GpuScene {
                 r.flags,
             ],
             tangram: [r.tangram as i32, r.pieces.len() as i32, 0, 0],
-            screen_jitter: [view.screen_jitter[0], view.screen_jitter[1], 0.0, 0.0],
+            screen_jitter: [
+                view.screen_jitter[0],
+                view.screen_jitter[1],
+                view.lod_motion[0],
+                view.lod_motion[1],
+            ],
             pieces,
         };
         self.frame.write(0, bytemuck::bytes_of(&constants))?;

@@ -26,6 +26,10 @@ pub struct RenderSettings {
     pub spec: Spec,
     /// Added to every texture lookup's LOD; `None`: the technique's default.
     pub lod_bias: Option<f32>,
+    /// With `lod_bias` set: (b, 1 / V), the part of it a moving fragment sheds, all of it at V
+    /// pixels per frame ([`FrameView::lod_motion`]); `None`: the bias applies everywhere (tests
+    /// render what `+taa` blends in with it).
+    pub lod_motion: Option<[f32; 2]>,
     /// Count shaded (non-helper) fragments with an atomic counter (tests, `--count-shaded`).
     pub count_shaded: bool,
     /// Write each sample's albedo level of detail to colour.r instead of radiance (tests, docs).
@@ -53,6 +57,7 @@ impl RenderSettings {
             height,
             spec,
             lod_bias: None,
+            lod_motion: None,
             count_shaded: false,
             debug_lod: false,
             instrument: false,
@@ -315,6 +320,22 @@ impl Renderer {
         })
     }
 
+    /// The part of the LOD bias a moving fragment sheds, and 1 / the speed (pixels per frame) at
+    /// which it is all shed ([`FrameView::lod_motion`]): a post pass's (TAA), unless the setting
+    /// `--lod-bias` fixes the bias.
+    pub fn lod_motion(&self) -> [f32; 2] {
+        if self.settings.lod_bias.is_some() {
+            return self.settings.lod_motion.unwrap_or([0.0; 2]);
+        }
+        self.post
+            .iter()
+            .find_map(|p| {
+                let v = p.lod_speed();
+                (v > 0.0).then(|| [p.lod_bias(), 1.0 / v])
+            })
+            .unwrap_or([0.0; 2])
+    }
+
     /// Bytes of the raster targets (what a technique costs in memory).
     pub fn target_bytes(&self) -> u64 {
         self.technique.target_bytes()
@@ -355,6 +376,7 @@ impl Renderer {
             height: s.height,
             aspect: f64::from(s.width) / f64::from(s.height),
             lod_bias: self.lod_bias(),
+            lod_motion: self.lod_motion(),
             frame_index: frame,
             screen_jitter: self.jitter(frame),
             raster: RasterUniforms {

@@ -50,9 +50,28 @@ fn jittered_cycle(
 
 /// Native frame `f` rendered with TAA's jitter for it (what `native+taa` blends in).
 fn jittered_native(gpu: &cbr_gpu::Gpu, s: &Scene, w: u32, h: u32, len: u32, f: u32) -> FrameOutput {
+    let c = TaaConfig {
+        length: len,
+        ..TaaConfig::OURS
+    };
+    jittered_native_for(gpu, s, w, h, &c, f)
+}
+
+/// The same for configuration `c`: its jitter, its LOD bias, withdrawn from moving fragments up
+/// to its speed unless `without-motionlod` (or INSIDE's mode).
+fn jittered_native_for(
+    gpu: &cbr_gpu::Gpu,
+    s: &Scene,
+    w: u32,
+    h: u32,
+    c: &TaaConfig,
+    f: u32,
+) -> FrameOutput {
+    let motion = c.motion_lod && c.speed > 0.0;
     let settings = RenderSettings {
-        jitter: taa::jitter(len, f),
-        lod_bias: Some(TaaConfig::OURS.lod_bias),
+        jitter: taa::jitter(c.length, f),
+        lod_bias: Some(c.lod_bias),
+        lod_motion: motion.then(|| [c.lod_bias, 1.0 / c.speed]),
         ..spec(w, h, "native")
     };
     render(gpu, s, settings, &[f]).remove(0)
@@ -68,16 +87,36 @@ fn jittered_native(gpu: &cbr_gpu::Gpu, s: &Scene, w: u32, h: u32, len: u32, f: u
 fn the_shader_matches_its_cpu_reference_on_a_moving_camera() {
     let gpu = gpu();
     let (w, h) = (64u32, 36u32);
-    let s = demo(w, h);
     let frames: Vec<u32> = (4..10).collect();
-    for params in [
+    let params = [
         "",
         "inside",
         "without-catmull:without-dilation",
         "gamma=1.5:alpha=0.2:filter",
         "without-count:without-luma",
         "adaptive",
-    ] {
+    ];
+    shader_matches_reference(&gpu, &demo(w, h), &frames, &params);
+    assert_clean(&gpu);
+}
+
+/// The same with the camera held and the spinner turning: still pixels go through their jitter
+/// cycles (complete at frames 11, 19 and 27 with 8 phases, 19 with 16), the spinner's
+/// pixels move, and the floor under its shadow and reflections changes (the cycle's range test).
+#[test]
+fn the_shader_matches_its_cpu_reference_with_the_camera_held() {
+    let gpu = gpu();
+    let (w, h) = (64u32, 36u32);
+    let mut s = demo(w, h);
+    s.camera.keys.truncate(1);
+    let frames: Vec<u32> = (4..30).collect();
+    shader_matches_reference(&gpu, &s, &frames, &["", "16:ctol=0.002", "without-cycle"]);
+    assert_clean(&gpu);
+}
+
+fn shader_matches_reference(gpu: &cbr_gpu::Gpu, s: &Scene, frames: &[u32], params: &[&str]) {
+    let (w, h) = (s.settings.width, s.settings.height);
+    for &params in params {
         let taa_spec = if params.is_empty() {
             "native+taa".to_string()
         } else {
@@ -85,11 +124,11 @@ fn the_shader_matches_its_cpu_reference_on_a_moving_camera() {
         };
         let p: Vec<&str> = params.split(':').filter(|p| !p.is_empty()).collect();
         let c = TaaConfig::parse(&p).expect("config");
-        let outs = render(&gpu, &s, spec(w, h, &taa_spec), &frames);
+        let outs = render(gpu, s, spec(w, h, &taa_spec), frames);
         let mut worst = (0.0f32, 0usize);
         let natives: Vec<FrameOutput> = frames
             .iter()
-            .map(|&f| jittered_native(&gpu, &s, w, h, c.length, f))
+            .map(|&f| jittered_native_for(gpu, s, w, h, &c, f))
             .collect();
         let inputs: Vec<(Vec<[f32; 3]>, Vec<u32>)> = natives
             .iter()
@@ -106,21 +145,24 @@ fn the_shader_matches_its_cpu_reference_on_a_moving_camera() {
             n: k as u32,
             exposure_scale: s.settings.exposure.exp2(),
             jitter: taa::jitter(c.length, frames[k]),
+            cycle: None,
         };
         // The history geometry the GPU wrote last frame: the first frame is a reset (it depends
         // on no history); after it, the reference's own (it carries the per-pixel frame count).
-        let mut hgeom = taa::reference(&c, &input(0)).1;
+        let (_, mut hgeom, mut cycle) = taa::reference_cycle(&c, &input(0));
         for k in 1..outs.len() {
             let f = frames[k];
             let hist = rgb(&outs[k - 1]);
-            let (want, next) = taa::reference(
+            let (want, next, next_cycle) = taa::reference_cycle(
                 &c,
                 &RefInputs {
                     history: Some((&hist, &hgeom)),
+                    cycle: Some(&cycle),
                     ..input(k)
                 },
             );
             hgeom = next;
+            cycle = next_cycle;
             let got = rgb(&outs[k]);
             let mut bad = 0;
             for (i, (g, r)) in got.iter().zip(&want).enumerate() {
@@ -157,7 +199,6 @@ fn the_shader_matches_its_cpu_reference_on_a_moving_camera() {
         }
         eprintln!("{taa_spec}: worst {:.3}x the bound", worst.0);
     }
-    assert_clean(&gpu);
 }
 
 /// Clipping off, weight 1 / (n + 1): frame n of a static scene is the mean of the n + 1 native
@@ -243,6 +284,171 @@ fn with_clipping_a_static_scene_converges() {
     assert!(
         taa_off < 0.75 * native_off,
         "no nearer the supersampled mean than one frame: {taa_off} vs {native_off}"
+    );
+    assert_clean(&gpu);
+}
+
+/// The jitter cycle (`+taa`'s default): on a static scene every pixel is still, so frame 7 (the
+/// first complete cycle of 8 phases) is the mean of the 8 jittered native frames, within one
+/// f16 rounding of the output and the f32 running mean's, and every later frame is frame 7 bit
+/// for bit: a converged still pixel does not flicker at all. `without-cycle` keeps moving by
+/// its weight 0.1 times each new sample's distance from the mean.
+#[test]
+fn a_still_pixel_shows_the_mean_of_its_last_jitter_cycle() {
+    let gpu = gpu();
+    let (w, h) = (48u32, 27u32);
+    let s = static_demo(w, h);
+    let frames: Vec<u32> = (0..20).collect();
+    let outs = render(&gpu, &s, spec(w, h, "native+taa"), &frames);
+    let (_, mean) = jittered_cycle(&gpu, &s, w, h);
+    let got = rgb(&outs[7]);
+    let mut worst = 0.0f32;
+    for (g, m) in got.iter().zip(&mean) {
+        for c in 0..3 {
+            worst = worst.max((g[c] - m[c]).abs() / (m[c].abs() * 2f32.powi(-10) + 1e-6));
+        }
+    }
+    assert!(
+        worst <= 1.0,
+        "frame 7: {worst:.2}x one f16 step off the 8-frame mean"
+    );
+    for f in 8..20 {
+        let same = outs[f].color == outs[7].color;
+        assert!(same, "frame {f} differs from frame 7");
+    }
+    // Before the cycle is complete the output is the running blend, and it differs.
+    assert!(outs[6].color != outs[7].color);
+    let old = render(&gpu, &s, spec(w, h, "native+taa:without-cycle"), &frames);
+    let changed = (8..20)
+        .filter(|&f| old[f].color != old[f - 1].color)
+        .count();
+    assert_eq!(changed, 12, "without-cycle: every frame still changes");
+    assert_clean(&gpu);
+}
+
+/// A still pixel whose shading changes leaves its cycle: the static demo held for 16 frames (two
+/// complete cycles), then every light dimmed to 30% from frame 16 on. Every sample of frame 16
+/// lit enough to leave the tolerance lies below the range of the last cycle, so its history is
+/// rejected and the output is the dimmed jittered frame; with a tolerance wider than the change
+/// (`ctol=1`) frame 16 would still show the old cycle's mean, bit for bit.
+#[test]
+fn a_still_pixel_whose_shading_changes_leaves_its_cycle() {
+    let gpu = gpu();
+    let (w, h) = (48u32, 27u32);
+    let s = static_demo(w, h);
+    let mut dim = s.clone();
+    for l in &mut dim.directional {
+        l.intensity *= 0.3;
+    }
+    for l in &mut dim.points {
+        l.intensity *= 0.3;
+    }
+    let run = |spec_: &str| -> Vec<FrameOutput> {
+        let shaders = cbr_render::shader_library();
+        let mut r = Renderer::new(&gpu, &shaders, &s, spec(w, h, spec_)).expect("renderer");
+        (0..18u32)
+            .map(|f| r.render(if f < 16 { &s } else { &dim }, f).expect("frame"))
+            .collect()
+    };
+    let ours = run("native+taa");
+    let held = run("native+taa:ctol=1");
+    assert!(
+        ours[15].color == ours[14].color,
+        "converged before the change"
+    );
+    assert!(
+        held[16].color == held[15].color,
+        "ctol=1: the old mean is held"
+    );
+    // Pixel by pixel: where the dimmed sample's perceptual luma leaves the range of the 8
+    // jittered samples of scene A by more than the tolerance (0.01; 1e-3 of margin for the
+    // range's f16 rounding), frame 16 is that sample, bit for bit (the history rejected); where
+    // it stays inside, frame 15's cycle mean, bit for bit (the sky, dark texels).
+    let dimmed = jittered_native(&gpu, &dim, w, h, 8, 16);
+    let (cycle_a, _) = jittered_cycle(&gpu, &s, w, h);
+    let e = s.settings.exposure.exp2();
+    let l = |c: [f32; 3]| taa::to_p(c, e)[0];
+    let px = |o: &FrameOutput, i: usize| o.color[4 * i..4 * i + 3].to_vec();
+    let fresh = rgb(&dimmed);
+    let (mut followed, mut kept) = (0, 0);
+    for i in 0..(w * h) as usize {
+        let lo = cycle_a.iter().map(|f| l(f[i])).fold(f32::MAX, f32::min);
+        let hi = cycle_a.iter().map(|f| l(f[i])).fold(f32::MIN, f32::max);
+        let lf = l(fresh[i]);
+        if lf < lo - 0.011 || lf > hi + 0.011 {
+            assert!(
+                px(&ours[16], i) == px(&dimmed, i),
+                "pixel {i} changed but kept its mean"
+            );
+            followed += 1;
+        } else if lf > lo - 0.009 && lf < hi + 0.009 {
+            assert!(
+                px(&ours[16], i) == px(&ours[15], i),
+                "pixel {i} did not change but left"
+            );
+            kept += 1;
+        }
+    }
+    eprintln!("frame 16: {followed} pixels left their cycle, {kept} kept it");
+    assert!(followed > 200 && kept > 200, "{followed} left, {kept} kept");
+    assert_clean(&gpu);
+}
+
+/// `+taa`'s LOD bias is withdrawn from moving fragments: the renderer asks the scene pass for
+/// bias -1 at rest and 0 from 2 px per frame (`without-motionlod`, INSIDE's mode and a fixed
+/// `--lod-bias` keep it everywhere), and on the moving demo each textured pixel's albedo LOD
+/// (`debug_lod`) rises over the fixed bias's by min(|v| / V, 1), v its own velocity (where both
+/// show the same triangle: the sharper mask moves alpha-tested edges).
+#[test]
+fn the_lod_bias_is_withdrawn_from_moving_fragments() {
+    let gpu = gpu();
+    let (w, h) = (64u32, 36u32);
+    let s = demo(w, h);
+    let shaders = cbr_render::shader_library();
+    let motion = |spec_: &str| {
+        Renderer::new(&gpu, &shaders, &s, spec(w, h, spec_))
+            .expect("renderer")
+            .lod_motion()
+    };
+    assert_eq!(motion("native+taa"), [-1.0, 0.5]);
+    assert_eq!(motion("native+taa:speed=4"), [-1.0, 0.25]);
+    for fixed in [
+        "native",
+        "native+taa:without-motionlod",
+        "native+taa:inside",
+        "native+taa:without-speed",
+    ] {
+        assert_eq!(motion(fixed), [0.0; 2], "{fixed}");
+    }
+    let lod = |m: Option<[f32; 2]>| {
+        let settings = RenderSettings {
+            debug_lod: true,
+            lod_bias: Some(-1.0),
+            lod_motion: m,
+            ..spec(w, h, "native")
+        };
+        render(&gpu, &s, settings, &[5]).remove(0)
+    };
+    // The demo's camera moves slowly at 64x36: all of the bias is shed from 1/4 px per frame.
+    let (fixed, moving) = (lod(None), lod(Some([-1.0, 4.0])));
+    let (mut worst, mut fast, mut still) = (0.0f32, 0, 0);
+    for (i, v) in fixed.velocity.iter().enumerate() {
+        let a = fixed.color[4 * i].to_f32();
+        // Textured, and the same triangle in both: a sharper mask moves alpha-tested edges.
+        if a <= -99.0 || fixed.ids[i] != moving.ids[i] {
+            continue;
+        }
+        let want = ((v[0] * v[0] + v[1] * v[1]).sqrt() * 4.0).min(1.0);
+        let got = moving.color[4 * i].to_f32() - a;
+        worst = worst.max((got - want).abs());
+        fast += usize::from(want == 1.0);
+        still += usize::from(want < 0.05);
+    }
+    eprintln!("LOD rise off min(4 |v|, 1) by at most {worst}; {fast} fast, {still} still pixels");
+    assert!(worst < 0.02, "the LOD rise is off by {worst}");
+    assert!(
+        fast > 50 && still > 50,
+        "{fast} fast and {still} still textured pixels"
     );
     assert_clean(&gpu);
 }

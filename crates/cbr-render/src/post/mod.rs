@@ -77,6 +77,12 @@ pub trait PostPass {
     fn lod_bias(&self) -> f32 {
         0.0
     }
+    /// The speed (pixels per frame) at which [`PostPass::lod_bias`] is withdrawn from a
+    /// fragment, linearly from none at rest (TAA: a fast pixel's history averages too few
+    /// jittered samples for the sharper texture); 0: the bias applies to every fragment.
+    fn lod_speed(&self) -> f32 {
+        0.0
+    }
 }
 
 /// A post pass's constructor: context and parameters.

@@ -53,8 +53,8 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
 };
 
 /// The parts `without-X` switches off.
-pub const ABLATIONS: [&str; 8] = [
-    "dilation", "clip", "ids", "depth", "catmull", "speed", "count", "luma",
+pub const ABLATIONS: [&str; 10] = [
+    "dilation", "clip", "ids", "depth", "catmull", "speed", "count", "luma", "cycle", "motionlod",
 ];
 
 /// `cbr render --taa-without X,...`: adds `without-X` (X one of [`ABLATIONS`]) to the spec's
@@ -129,6 +129,18 @@ pub struct TaaConfig {
     /// jittered point sample otherwise (`adaptive`; off by default: measured mixed on the
     /// hard-case gallery, docs/post-aa.md; and with `mean` or `filter`).
     pub adaptive: bool,
+    /// A still pixel shows the mean of its last complete jitter cycle (`length` samples, each
+    /// phase once), held until the next cycle is complete, and restarts its cycle when a
+    /// sample leaves the last cycle's luma range by more than `cycle_tolerance` (`without-cycle`;
+    /// off with `mean` and in INSIDE's mode).
+    pub cycle: bool,
+    /// The cycle's change test: how far (perceptual luma, 0..1) a sample may lie outside the
+    /// last complete cycle's range (`ctol=T`).
+    pub cycle_tolerance: f32,
+    /// The LOD bias is withdrawn from moving fragments, linearly up to `speed` pixels per frame
+    /// (the scene pass's per-fragment bias, [`PostPass::lod_speed`]): a pixel that moves keeps
+    /// few jittered samples to average a sharper texture over (`without-motionlod`).
+    pub motion_lod: bool,
 }
 
 /// Below this motion (pixels) a pixel is still: when its history texel was still too, the ID
@@ -170,6 +182,9 @@ impl TaaConfig {
         count: true,
         luma: true,
         adaptive: false,
+        cycle: true,
+        cycle_tolerance: 0.01,
+        motion_lod: true,
     };
 
     pub const INSIDE: TaaConfig = TaaConfig {
@@ -182,6 +197,8 @@ impl TaaConfig {
         count: false,
         luma: false,
         adaptive: false,
+        cycle: false,
+        motion_lod: false,
         ..TaaConfig::OURS
     };
 
@@ -211,7 +228,8 @@ impl TaaConfig {
                 "16" => c.length = 16,
                 "mean" => {
                     c.mean = true;
-                    c.adaptive = false
+                    c.adaptive = false;
+                    c.cycle = false
                 }
                 "filter" => {
                     ours_only("current-sample filter")?;
@@ -244,6 +262,14 @@ impl TaaConfig {
                     ours_only("luminance-weighted blend")?;
                     c.luma = false
                 }
+                "without-cycle" => {
+                    ours_only("still pixels' jitter cycle")?;
+                    c.cycle = false
+                }
+                "without-motionlod" => {
+                    ours_only("LOD bias withdrawn with motion")?;
+                    c.motion_lod = false
+                }
                 "without-catmull" => {
                     ours_only("Catmull-Rom history (it is bilinear)")?;
                     c.catmull = false
@@ -270,17 +296,25 @@ impl TaaConfig {
                         ours_only("depth test")?;
                         c.depth_tolerance = num(p, v, 0.0, 1.0)?
                     }
+                    Some(("ctol", v)) => {
+                        ours_only("still pixels' jitter cycle")?;
+                        c.cycle_tolerance = num(p, v, 0.0, 1.0)?
+                    }
                     _ => {
                         return Err(crate::technique::unknown_param(
                             "taa",
                             p,
-                            "inside, 8, 16, alpha=A, amax=A, speed=V, gamma=G, tol=T, lod=B, mean, \
-                             without-dilation, without-clip, without-ids, without-depth, \
-                             without-catmull, without-speed, without-count, without-luma, adaptive, filter",
+                            "inside, 8, 16, alpha=A, amax=A, speed=V, gamma=G, tol=T, ctol=T, lod=B, \
+                             mean, without-dilation, without-clip, without-ids, without-depth, \
+                             without-catmull, without-speed, without-count, without-luma, \
+                             without-cycle, without-motionlod, adaptive, filter",
                         ));
                     }
                 },
             }
+        }
+        if c.mean {
+            c.cycle = false;
         }
         Ok(c)
     }
@@ -298,6 +332,7 @@ impl TaaConfig {
             (self.count, F_COUNT),
             (self.luma, F_LUMA),
             (self.adaptive, F_ADAPTIVE),
+            (self.cycle, F_CYCLE),
         ] {
             if on {
                 f |= bit;
@@ -318,6 +353,7 @@ pub const F_FILTER: u32 = 128;
 pub const F_COUNT: u32 = 256;
 pub const F_LUMA: u32 = 512;
 pub const F_ADAPTIVE: u32 = 1024;
+pub const F_CYCLE: u32 = 2048;
 
 /// The radical inverse of `i` in `base` (the Halton sequence's element i).
 pub fn halton(mut i: u32, base: u32) -> f32 {
@@ -340,11 +376,11 @@ crate::push_constants! {
     struct Push {
         /// W, H (of the output and the geometry), 0, 0.
         size: [i32; 4],
-        /// x: F_*, y: n (frames accumulated since the reset).
+        /// x: F_*, y: n (frames accumulated since the reset), z: the jitter cycle's length.
         flags: [u32; 4],
         /// alpha (current-frame weight), gamma, depth tolerance, exposure scale.
         params: [f32; 4],
-        /// INSIDE feedback min, max; still threshold (pixels); 0.
+        /// INSIDE feedback min, max; still threshold (pixels); the cycle's change tolerance.
         feedback_still: [f32; 4],
         /// x: current-frame weight at and above speed y (pixels per frame; 0: off); zw: the
         /// frame's jitter (pixels).
@@ -370,6 +406,7 @@ pub fn decl(inside: bool, packed: bool) -> ComputeDecl {
             ("F_COUNT", F_COUNT),
             ("F_LUMA", F_LUMA),
             ("F_ADAPTIVE", F_ADAPTIVE),
+            ("F_CYCLE", F_CYCLE),
             ("MOVED", MOVED),
             ("ID_MASK", !MOVED),
             ("HIST_ID_MASK", HIST_ID_MASK),
@@ -385,15 +422,23 @@ pub fn decl(inside: bool, packed: bool) -> ComputeDecl {
             Binding::sampled("hist_geom"),
             Binding::image("out_hist", Use::Write),
             Binding::image("out_geom", Use::Write),
+            Binding::sampled("cycle"),
+            Binding::sampled("range"),
+            Binding::image("out_cycle", Use::Write),
+            Binding::image("out_range", Use::Write),
         ])
         .push::<Push>()
 }
 
-/// The history: colour (linear HDR) and geometry (object ID | [`MOVED`], depth bits).
+/// The history: colour (linear HDR), geometry (object ID | [`MOVED`], depth bits) and the still
+/// pixels' jitter cycle (its mean so far and sample count; the luma ranges of the last complete
+/// cycle and of this one).
 fn resources(w: u32, h: u32) -> Vec<ResourceDecl> {
     vec![
         ResourceDecl::image("history", COLOR_FORMAT, w, h).history(),
         ResourceDecl::image("history_geom", vk::Format::R32G32_UINT, w, h).history(),
+        ResourceDecl::image("history_cycle", vk::Format::R32G32B32A32_SFLOAT, w, h).history(),
+        ResourceDecl::image("history_range", vk::Format::R16G16B16A16_SFLOAT, w, h).history(),
     ]
 }
 
@@ -422,14 +467,19 @@ impl Taa {
         }
         let push = Push {
             size: [ctx.width as i32, ctx.height as i32, 0, 0],
-            flags: [c.flags(), 0, 0, 0],
+            flags: [c.flags(), 0, c.length, 0],
             params: [
                 c.alpha,
                 c.gamma,
                 c.depth_tolerance,
                 ctx.exposure_stops.exp2(),
             ],
-            feedback_still: [INSIDE_FEEDBACK[0], INSIDE_FEEDBACK[1], STILL_THRESHOLD, 0.0],
+            feedback_still: [
+                INSIDE_FEEDBACK[0],
+                INSIDE_FEEDBACK[1],
+                STILL_THRESHOLD,
+                c.cycle_tolerance,
+            ],
             speed_jitter: [c.alpha_max, c.speed, 0.0, 0.0],
         };
         Ok(Taa {
@@ -472,7 +522,9 @@ impl PostPass for Taa {
                 f,
                 "hist_geom",
                 "out_geom",
-            );
+            )
+            .history(self.res.history("history_cycle")?, f, "cycle", "out_cycle")
+            .history(self.res.history("history_range")?, f, "range", "out_range");
         let size = (push.size[0] as u32, push.size[1] as u32);
         self.pass.dispatch_2d(cmd, profiler, &binds, &push, size)
     }
@@ -488,6 +540,13 @@ impl PostPass for Taa {
 
     fn lod_bias(&self) -> f32 {
         self.config.lod_bias
+    }
+
+    fn lod_speed(&self) -> f32 {
+        match self.config.motion_lod {
+            true => self.config.speed,
+            false => 0.0,
+        }
     }
 }
 
@@ -518,6 +577,36 @@ pub struct RefInputs<'a> {
     pub exposure_scale: f32,
     /// The frame's jitter (pixels), for the current-sample filter.
     pub jitter: [f32; 2],
+    /// The previous frame's still-pixel cycles ([`reference_cycle`]'s third output); `None`:
+    /// none (every pixel starts its cycle).
+    pub cycle: Option<&'a [CycleState]>,
+}
+
+/// A pixel's jitter cycle (the `history_cycle` and `history_range` images).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CycleState {
+    /// The mean of this cycle's samples so far (linear HDR, f32).
+    pub mean: V3,
+    /// Samples in it (0: none).
+    pub k: u32,
+    /// Perceptual luma range: [lo, hi] of the last complete cycle (lo > hi: none) and of this
+    /// one, each rounded to f16 as the RGBA16F image stores it.
+    pub range: [f32; 4],
+}
+
+impl CycleState {
+    pub const NONE: CycleState = CycleState {
+        mean: [0.0; 3],
+        k: 0,
+        range: [1.0, 0.0, 1.0, 0.0],
+    };
+    fn complete(&self) -> bool {
+        self.range[0] <= self.range[1]
+    }
+}
+
+fn f16_round(v: f32) -> f32 {
+    half::f16::from_f32(v).to_f32()
 }
 
 const LUMA: [f32; 3] = [0.2126, 0.7152, 0.0722];
@@ -564,12 +653,22 @@ fn moving(v: [f32; 2]) -> bool {
 
 /// The CPU reference of shaders/post/taa.comp: (output colour, output geometry).
 pub fn reference(c: &TaaConfig, i: &RefInputs) -> (Vec<V3>, Vec<(u32, f32)>) {
+    let (o, g, _) = reference_cycle(c, i);
+    (o, g)
+}
+
+/// [`reference`] with the still pixels' cycles it writes (the next frame's [`RefInputs::cycle`]).
+pub fn reference_cycle(
+    c: &TaaConfig,
+    i: &RefInputs,
+) -> (Vec<V3>, Vec<(u32, f32)>, Vec<CycleState>) {
     let (w, h) = (i.width as i32, i.height as i32);
     let e = i.exposure_scale;
     let at = |p: [i32; 2]| (p[1].clamp(0, h - 1) * w + p[0].clamp(0, w - 1)) as usize;
     let finite = |v: V3| v.iter().all(|x| x.is_finite());
     let mut out = Vec::with_capacity(i.color.len());
     let mut geom = Vec::with_capacity(i.color.len());
+    let mut cycles = Vec::with_capacity(i.color.len());
     for y in 0..h {
         for x in 0..w {
             let cs: Vec<V3> = OFF
@@ -635,6 +734,9 @@ pub fn reference(c: &TaaConfig, i: &RefInputs) -> (Vec<V3>, Vec<(u32, f32)>) {
             let mut result = if c.adaptive { cf } else { c0 };
             // Frames the output holds (see the shader).
             let mut count = 1u32;
+            // The pixel's cycle goes on (see the shader), from this state at its history texel.
+            let (mut cycling, mut cyc) = (false, CycleState::NONE);
+            let mut hist_texel = [0.0f32; 3];
             if let Some((hist, hgeom)) = i.history {
                 let mut use_h = q[0] >= 0.0 && q[1] >= 0.0 && q[0] < w as f32 && q[1] < h as f32;
                 let (hid, hz) = match use_h {
@@ -642,6 +744,15 @@ pub fn reference(c: &TaaConfig, i: &RefInputs) -> (Vec<V3>, Vec<(u32, f32)>) {
                     false => (0, 0.0),
                 };
                 let still = !moving(v) && hid & MOVED == 0;
+                if c.cycle && !c.inside && use_h && still {
+                    let t = at([q[0].floor() as i32, q[1].floor() as i32]);
+                    cyc = i.cycle.map_or(CycleState::NONE, |s| s[t]);
+                    hist_texel = hist[t];
+                    let (r, tol) = (cyc.range, c.cycle_tolerance);
+                    let changed = cyc.complete() && (y0[0] < r[0] - tol || y0[0] > r[1] + tol);
+                    use_h = !changed;
+                    cycling = !changed;
+                }
                 let held = (hid >> COUNT_SHIFT) & COUNT_MAX;
                 if use_h && !still && (c.ids || c.depth) {
                     if c.ids {
@@ -701,6 +812,8 @@ pub fn reference(c: &TaaConfig, i: &RefInputs) -> (Vec<V3>, Vec<(u32, f32)>) {
                     };
                     use_h = finite(hc);
                 }
+                // The shader tests the history's finiteness before the cycle is read.
+                cycling = cycling && use_h;
                 if use_h {
                     count = (held + 1).min(COUNT_MAX);
                     let yk: Vec<V3> = (0..9)
@@ -785,12 +898,49 @@ pub fn reference(c: &TaaConfig, i: &RefInputs) -> (Vec<V3>, Vec<(u32, f32)>) {
                     }
                 }
             }
+            let mut next = CycleState::NONE;
+            if c.cycle && !c.inside && !moving(v) {
+                let l = y0[0];
+                if cycling && cyc.k > 0 {
+                    let k = cyc.k + 1;
+                    let m = zip3(cyc.mean, c0, |m, s| m + (s - m) / k as f32);
+                    let cur = [cyc.range[2].min(l), cyc.range[3].max(l)];
+                    if k >= c.length {
+                        result = m;
+                        next.range = [cur[0], cur[1], 1.0, 0.0];
+                    } else {
+                        if cyc.complete() {
+                            result = hist_texel;
+                        }
+                        next = CycleState {
+                            mean: m,
+                            k,
+                            range: [cyc.range[0], cyc.range[1], cur[0], cur[1]],
+                        };
+                    }
+                } else {
+                    let keep = cycling && cyc.complete();
+                    if keep {
+                        result = hist_texel;
+                    }
+                    next = CycleState {
+                        mean: c0,
+                        k: 1,
+                        range: match keep {
+                            true => [cyc.range[0], cyc.range[1], l, l],
+                            false => [1.0, 0.0, l, l],
+                        },
+                    };
+                }
+                next.range = next.range.map(f16_round);
+            }
+            cycles.push(next);
             out.push(result);
             let centre = at([x, y]);
             geom.push((hist_geom_x(i.ids[centre], count, moving(v)), i.depth[centre]));
         }
     }
-    (out, geom)
+    (out, geom, cycles)
 }
 
 #[cfg(test)]
@@ -864,6 +1014,72 @@ mod tests {
         vec![c; w * h]
     }
 
+    /// The jitter cycle on a 6x5 still frame whose colour alternates 1, 2 (what jitter does to
+    /// a pixel): frame 7 completes the first cycle and shows its mean 1.5, frames 8-11 hold it
+    /// bit for bit; frame 12's sample 5 lies outside the cycle's luma range, so the history is
+    /// rejected (the output is the sample, 5, one frame held) and its cycle restarts; with a
+    /// tolerance wider than the change it holds 1.5, and with `without-cycle` it blends.
+    #[test]
+    fn the_jitter_cycle_holds_its_mean_and_restarts_on_a_change() {
+        let (w, h) = (6, 5);
+        let vel = vec![[0.0f32; 2]; w * h];
+        let depth = vec![2.0f32; w * h];
+        let ids = vec![1u32; w * h];
+        let colour = |f: u32| match f {
+            12 => 5.0,
+            _ => 1.0 + (f % 2) as f32,
+        };
+        let run = |c: &TaaConfig| -> Vec<(V3, CycleState)> {
+            let mut state: Option<(Vec<V3>, Vec<(u32, f32)>, Vec<CycleState>)> = None;
+            let mut seen = Vec::new();
+            for f in 0..13u32 {
+                let cur = flat(w, h, [colour(f); 3]);
+                let i = RefInputs {
+                    width: w,
+                    height: h,
+                    color: &cur,
+                    velocity: &vel,
+                    depth: &depth,
+                    ids: &ids,
+                    history: state.as_ref().map(|(o, g, _)| (&o[..], &g[..])),
+                    n: f,
+                    exposure_scale: 1.0,
+                    jitter: [0.0; 2],
+                    cycle: state.as_ref().map(|(_, _, s)| &s[..]),
+                };
+                let next = reference_cycle(c, &i);
+                seen.push((next.0[0], next.2[0]));
+                state = Some(next);
+            }
+            seen
+        };
+        let ours = run(&TaaConfig::OURS);
+        assert_eq!(ours[7].0, [1.5; 3], "frame 7: the cycle's mean");
+        assert_eq!(ours[7].1.k, 0, "a complete cycle starts the next");
+        let l = |v: f32| f16_round(to_p([v; 3], 1.0)[0]);
+        assert_eq!(ours[7].1.range[..2], [l(1.0), l(2.0)], "its luma range");
+        for f in 8..12 {
+            assert_eq!(ours[f].0, [1.5; 3], "frame {f} holds the mean");
+            assert_eq!(ours[f].1.k, f as u32 - 7);
+        }
+        assert!((ours[6].0[0] - 1.5).abs() > 1e-3, "before: the blend");
+        assert!((ours[12].0[0] - 5.0).abs() < 1e-5, "changed: {:?}", ours[12].0);
+        assert_eq!(ours[12].1.k, 1, "the cycle restarts");
+        assert_eq!(ours[12].0, [5.0; 3], "the history is rejected");
+        assert!(!ours[12].1.complete());
+        let wide = TaaConfig {
+            cycle_tolerance: 1.0,
+            ..TaaConfig::OURS
+        };
+        assert_eq!(run(&wide)[12].0, [1.5; 3], "inside the tolerance: held");
+        let off = run(&TaaConfig {
+            cycle: false,
+            ..TaaConfig::OURS
+        });
+        assert!((off[11].0[0] - off[10].0[0]).abs() > 1e-3, "without-cycle blends");
+        assert!(off.iter().all(|(_, s)| *s == CycleState::NONE));
+    }
+
     /// Known answers on a 6x5 frame: a reset passes the current frame through; a static
     /// history is blended with weight alpha (luminance-weighted) or 1 / (n + 1) with `mean`;
     /// a history showing an object the neighbourhood does not is rejected; a NaN never leaves.
@@ -885,6 +1101,7 @@ mod tests {
             n: 0,
             exposure_scale: 1.0,
             jitter: [0.0; 2],
+            cycle: None,
         };
         let (o, g) = reference(&TaaConfig::OURS, &base);
         assert!(o.iter().all(|c| *c == [1.0; 3]) && g.iter().all(|g| *g == (hist_geom_x(1, 1, false), 2.0)));
