@@ -58,7 +58,7 @@ fn jittered_native(gpu: &cbr_gpu::Gpu, s: &Scene, w: u32, h: u32, len: u32, f: u
 }
 
 /// The same for configuration `c`: its jitter, its LOD bias, withdrawn from moving fragments up
-/// to its speed unless `without-motionlod` (or INSIDE's mode).
+/// to its speed with `motionlod`.
 fn jittered_native_for(
     gpu: &cbr_gpu::Gpu,
     s: &Scene,
@@ -95,6 +95,7 @@ fn the_shader_matches_its_cpu_reference_on_a_moving_camera() {
         "gamma=1.5:alpha=0.2:filter",
         "without-count:without-luma",
         "adaptive",
+        "motionlod",
     ];
     shader_matches_reference(&gpu, &demo(w, h), &frames, &params);
     assert_clean(&gpu);
@@ -394,9 +395,10 @@ fn a_still_pixel_whose_shading_changes_leaves_its_cycle() {
     assert_clean(&gpu);
 }
 
-/// `+taa`'s LOD bias is withdrawn from moving fragments: the renderer asks the scene pass for
-/// bias -1 at rest and 0 from 2 px per frame (`without-motionlod`, INSIDE's mode and a fixed
-/// `--lod-bias` keep it everywhere), and on the moving demo each textured pixel's albedo LOD
+/// `+taa:motionlod` withdraws the LOD bias from moving fragments: the renderer asks the scene
+/// pass for bias -1 at rest and 0 from 2 px per frame (by default, with `without-speed`, in
+/// INSIDE's mode and with a fixed `--lod-bias` it applies everywhere), and on the moving demo
+/// each textured pixel's albedo LOD
 /// (`debug_lod`) rises over the fixed bias's by min(|v| / V, 1), v its own velocity (where both
 /// show the same triangle: the sharper mask moves alpha-tested edges).
 #[test]
@@ -410,13 +412,13 @@ fn the_lod_bias_is_withdrawn_from_moving_fragments() {
             .expect("renderer")
             .lod_motion()
     };
-    assert_eq!(motion("native+taa"), [-1.0, 0.5]);
-    assert_eq!(motion("native+taa:speed=4"), [-1.0, 0.25]);
+    assert_eq!(motion("native+taa:motionlod"), [-1.0, 0.5]);
+    assert_eq!(motion("native+taa:motionlod:speed=4"), [-1.0, 0.25]);
     for fixed in [
         "native",
-        "native+taa:without-motionlod",
+        "native+taa",
         "native+taa:inside",
-        "native+taa:without-speed",
+        "native+taa:motionlod:without-speed",
     ] {
         assert_eq!(motion(fixed), [0.0; 2], "{fixed}");
     }

@@ -38,10 +38,11 @@ use crate::targets::COLOR_FORMAT;
 
 pub const REGISTRATION: PostRegistration = PostRegistration {
     name: "taa",
-    grammar: "taa[:inside][:8|16][:alpha=A][:amax=A][:speed=V][:gamma=G][:tol=T][:lod=B][:mean][:filter][:adaptive][:without-X...]",
+    grammar: "taa[:inside][:8|16][:alpha=A][:amax=A][:speed=V][:gamma=G][:tol=T][:ctol=T][:lod=B][:mean][:filter][:adaptive][:motionlod][:without-X...]",
     about: "temporal AA: Halton jitter, dilated velocity, Catmull-Rom history, YCoCg variance \
             clipping, ID and depth rejection, speed-dependent weight, per-pixel frame count (X: \
-            dilation, clip, ids, depth, catmull, speed, count, luma); `inside`: Playdead's INSIDE TAA",
+            dilation, clip, ids, depth, catmull, speed, count, luma, cycle: still pixels show the \
+            mean of their last jitter cycle); `inside`: Playdead's INSIDE TAA",
     check: |p| TaaConfig::parse(p).map(|_| ()),
     geometry: true,
     estimate: |ctx, _| crate::pass::estimate(&resources(ctx.width, ctx.height), "taa"),
@@ -53,8 +54,8 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
 };
 
 /// The parts `without-X` switches off.
-pub const ABLATIONS: [&str; 10] = [
-    "dilation", "clip", "ids", "depth", "catmull", "speed", "count", "luma", "cycle", "motionlod",
+pub const ABLATIONS: [&str; 9] = [
+    "dilation", "clip", "ids", "depth", "catmull", "speed", "count", "luma", "cycle",
 ];
 
 /// `cbr render --taa-without X,...`: adds `without-X` (X one of [`ABLATIONS`]) to the spec's
@@ -139,7 +140,9 @@ pub struct TaaConfig {
     pub cycle_tolerance: f32,
     /// The LOD bias is withdrawn from moving fragments, linearly up to `speed` pixels per frame
     /// (the scene pass's per-fragment bias, [`PostPass::lod_speed`]): a pixel that moves keeps
-    /// few jittered samples to average a sharper texture over (`without-motionlod`).
+    /// few jittered samples to average a sharper texture over (`motionlod`; off by default: on
+    /// the moving hard cases it helps `texture` and `spinner` and hurts `horizon`, `far` and
+    /// `foliage`, whose grazing surfaces want the sharper level even moving; docs/post-aa.md).
     pub motion_lod: bool,
 }
 
@@ -184,7 +187,7 @@ impl TaaConfig {
         adaptive: false,
         cycle: true,
         cycle_tolerance: 0.01,
-        motion_lod: true,
+        motion_lod: false,
     };
 
     pub const INSIDE: TaaConfig = TaaConfig {
@@ -198,7 +201,6 @@ impl TaaConfig {
         luma: false,
         adaptive: false,
         cycle: false,
-        motion_lod: false,
         ..TaaConfig::OURS
     };
 
@@ -266,9 +268,9 @@ impl TaaConfig {
                     ours_only("still pixels' jitter cycle")?;
                     c.cycle = false
                 }
-                "without-motionlod" => {
+                "motionlod" => {
                     ours_only("LOD bias withdrawn with motion")?;
-                    c.motion_lod = false
+                    c.motion_lod = true
                 }
                 "without-catmull" => {
                     ours_only("Catmull-Rom history (it is bilinear)")?;
@@ -307,7 +309,7 @@ impl TaaConfig {
                             "inside, 8, 16, alpha=A, amax=A, speed=V, gamma=G, tol=T, ctol=T, lod=B, \
                              mean, without-dilation, without-clip, without-ids, without-depth, \
                              without-catmull, without-speed, without-count, without-luma, \
-                             without-cycle, without-motionlod, adaptive, filter",
+                             without-cycle, motionlod, adaptive, filter",
                         ));
                     }
                 },
@@ -990,6 +992,17 @@ mod tests {
         assert!(TaaConfig::parse(&["gamma=-1"]).is_err());
         assert!(TaaConfig::parse(&["12"]).is_err());
         assert!(TaaConfig::parse(&["without-sharpness"]).is_err());
+        // The jitter cycle: ours by default, off with `mean`, in INSIDE's mode, with
+        // `without-cycle`; its tolerance; the LOD bias withdrawn with motion, opt-in.
+        assert!(TaaConfig::OURS.cycle && !TaaConfig::INSIDE.cycle);
+        assert!(!TaaConfig::parse(&["mean"]).unwrap().cycle);
+        assert!(!TaaConfig::parse(&["without-cycle"]).unwrap().cycle);
+        assert_eq!(TaaConfig::parse(&["ctol=0.05"]).unwrap().cycle_tolerance, 0.05);
+        assert!(TaaConfig::parse(&["ctol=2"]).is_err());
+        assert!(TaaConfig::parse(&["motionlod"]).unwrap().motion_lod && !TaaConfig::OURS.motion_lod);
+        for p in ["without-cycle", "ctol=0.1", "motionlod"] {
+            assert!(TaaConfig::parse(&["inside", p]).is_err(), "inside takes {p}");
+        }
     }
 
     #[test]
