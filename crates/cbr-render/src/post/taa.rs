@@ -659,11 +659,11 @@ pub fn reference(c: &TaaConfig, i: &RefInputs) -> (Vec<V3>, Vec<(u32, f32)>) {
     (o, g)
 }
 
+/// [`reference_cycle`]'s output: colour, history geometry, the still pixels' cycles.
+pub type RefOutput = (Vec<V3>, Vec<(u32, f32)>, Vec<CycleState>);
+
 /// [`reference`] with the still pixels' cycles it writes (the next frame's [`RefInputs::cycle`]).
-pub fn reference_cycle(
-    c: &TaaConfig,
-    i: &RefInputs,
-) -> (Vec<V3>, Vec<(u32, f32)>, Vec<CycleState>) {
+pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
     let (w, h) = (i.width as i32, i.height as i32);
     let e = i.exposure_scale;
     let at = |p: [i32; 2]| (p[1].clamp(0, h - 1) * w + p[0].clamp(0, w - 1)) as usize;
@@ -994,7 +994,7 @@ mod tests {
         assert!(TaaConfig::parse(&["without-sharpness"]).is_err());
         // The jitter cycle: ours by default, off with `mean`, in INSIDE's mode, with
         // `without-cycle`; its tolerance; the LOD bias withdrawn with motion, opt-in.
-        assert!(TaaConfig::OURS.cycle && !TaaConfig::INSIDE.cycle);
+        const { assert!(TaaConfig::OURS.cycle && !TaaConfig::INSIDE.cycle) };
         assert!(!TaaConfig::parse(&["mean"]).unwrap().cycle);
         assert!(!TaaConfig::parse(&["without-cycle"]).unwrap().cycle);
         assert_eq!(TaaConfig::parse(&["ctol=0.05"]).unwrap().cycle_tolerance, 0.05);
@@ -1043,7 +1043,7 @@ mod tests {
             _ => 1.0 + (f % 2) as f32,
         };
         let run = |c: &TaaConfig| -> Vec<(V3, CycleState)> {
-            let mut state: Option<(Vec<V3>, Vec<(u32, f32)>, Vec<CycleState>)> = None;
+            let mut state: Option<RefOutput> = None;
             let mut seen = Vec::new();
             for f in 0..13u32 {
                 let cur = flat(w, h, [colour(f); 3]);
@@ -1071,9 +1071,9 @@ mod tests {
         assert_eq!(ours[7].1.k, 0, "a complete cycle starts the next");
         let l = |v: f32| f16_round(to_p([v; 3], 1.0)[0]);
         assert_eq!(ours[7].1.range[..2], [l(1.0), l(2.0)], "its luma range");
-        for f in 8..12 {
-            assert_eq!(ours[f].0, [1.5; 3], "frame {f} holds the mean");
-            assert_eq!(ours[f].1.k, f as u32 - 7);
+        for (f, (o, s)) in ours.iter().enumerate().take(12).skip(8) {
+            assert_eq!(*o, [1.5; 3], "frame {f} holds the mean");
+            assert_eq!(s.k, f as u32 - 7);
         }
         assert!((ours[6].0[0] - 1.5).abs() > 1e-3, "before: the blend");
         assert!((ours[12].0[0] - 5.0).abs() < 1e-5, "changed: {:?}", ours[12].0);
