@@ -792,6 +792,10 @@ fn the_fallback_passes_and_the_window_tile_change_no_bit() {
         (&demo, "interleaved:3x2:vpls=96:debug"),
         (&demo, "interleaved:4x4:vpls=256:enough=8"),
         (&demo, "interleaved:4x4:vpls=256:search=1"),
+        (
+            &demo,
+            "interleaved:3x2:vpls=96:search=1:exact-edges=3:debug",
+        ),
         (&demo, "interleaved:4x4:vpls=256:exact-edges=2:debug"),
         (&demo, "interleaved:8x8:vpls=256:exact-edges=3"),
         (&demo, "interleaved:4x4:vpls=256:implicit"),
@@ -799,16 +803,15 @@ fn the_fallback_passes_and_the_window_tile_change_no_bit() {
         (&nan, "interleaved:4x4:vpls=256"),
     ] {
         let default = render(&gpu, &shaders, s, base);
-        let searching = base.contains("search=1");
-        let direct = base.contains("direct");
-        let variants: &[&str] = match (searching, direct) {
-            (true, _) => &["fallback=inline"],
-            (_, true) => &["window=fetch"],
-            _ => &[
+        // `search=1` reads its candidates from the tile too (since 2026-12-01).
+        let variants: &[&str] = if base.contains("direct") {
+            &["window=fetch"]
+        } else {
+            &[
                 "fallback=inline",
                 "window=fetch",
                 "fallback=inline:window=fetch",
-            ],
+            ]
         };
         for v in variants {
             let other = render(&gpu, &shaders, s, &format!("{base}:{v}"));

@@ -88,7 +88,7 @@ pub struct InterleavedLighting {
     /// fallback's (pixel, subset) pairs and `interleaved.fallback` and `interleaved.finish` shade
     /// them and finish those pixels (shaders/interleaved/fallback_list.glsl).
     pub pairs: bool,
-    /// `window=tile` (WINDOW_TILE; `ours` without `search`, the default): the filter reads the
+    /// `window=tile` (WINDOW_TILE; `ours`, the default): the filter reads the
     /// window's G-buffer texels and estimates from a tile fetched into shared memory once per
     /// workgroup (shaders/interleaved/filter.glsl); `window=fetch` fetches each per window.
     pub window_tile: bool,

@@ -182,9 +182,10 @@ pub struct InterleavedConfig {
     /// `direct`), or in the lighting pass, each pixel its own list (`inline`, the only one with
     /// `direct`). The frames are the same (the same sums in the same order).
     pub pairs: bool,
-    /// `window=tile|fetch` (`ours` without `search`): the filter's window read from a tile of
-    /// the workgroup's pixels and their apron fetched into shared memory once (`tile`, the
-    /// default), or each texel fetched by every window that holds it (`fetch`). The same frame.
+    /// `window=tile|fetch` (`ours`): the filter's window (and `search`'s candidates) read from a
+    /// tile of the workgroup's pixels and their apron fetched into shared memory once (`tile`,
+    /// the default; with `search=1` since 2026-12-01), or each texel fetched by every window that
+    /// holds it (`fetch`). The same frame.
     pub window_tile: bool,
     pub lights: DeferredConfig,
 }
@@ -420,13 +421,10 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
         );
     }
     let pairs = fallback.unwrap_or(filter == Filter::Ours && !direct);
-    if window.is_some() && (filter != Filter::Ours || search > 0) {
-        return Err(
-            "interleaved: `window=...` is how the `ours` filter without `search` reads its window"
-                .into(),
-        );
+    if window.is_some() && filter != Filter::Ours {
+        return Err("interleaved: `window=...` is how the `ours` filter reads its window".into());
     }
-    let window_tile = window.unwrap_or(filter == Filter::Ours && search == 0);
+    let window_tile = window.unwrap_or(filter == Filter::Ours);
     if exact_edges > 0 && filter != Filter::Ours {
         return Err(format!(
             "interleaved: `exact-edges` is a variant of the `ours` filter, not of `{}`",
