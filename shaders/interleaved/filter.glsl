@@ -16,7 +16,8 @@
 //     counts once, so on a smooth surface it is the box, and at an edge p never mixes in another
 //     surface's light; only where its surface holds no pixel of a subset nearby (thin features)
 //     does p pay for that subset. With EXACT_EDGES R > 0 (`exact-edges=R`), a pixel with a pixel
-//     off its surface within R (the square of side 2R+1) shades every subset at p.
+//     off its surface within R (the square of side 2R+1) shades every subset at p; with
+//     BAND_OBJECTS (`band=object`) only a pixel of another object or the background makes it.
 // With DIRECT (`direct`) the specular estimates of the point lights go through the same filter
 // with the same choices (the same pixels, weights and fallback subsets), into `specular`.
 layout(set = 0, binding = BINDING_IRRADIANCE) uniform sampler2D g_irradiance;
@@ -262,7 +263,12 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, float ns, out
     const int side = 2 * EXACT_EDGES + 1;
     for (int k = 0; k < side * side; ++k) {
         ivec2 q = px + ivec2(k % side - EXACT_EDGES, k / side - EXACT_EDGES);
+#ifdef BAND_OBJECTS
+        // `band=object`: only another object (or the background) makes the band.
+        if (on_screen(q) && window_id(q) != object) boundary = true;
+#else
         if (on_screen(q) && !same_surface(q, object, p, n)) boundary = true;
+#endif
     }
     if (boundary) {
         sum = vec3(0.0);

@@ -66,6 +66,9 @@ pub struct InterleavedLighting {
     /// The EXACT_EDGES define (`ours` only): R > 0 makes a pixel with a pixel off its surface
     /// within R (a square) shade every subset itself; 0 off.
     pub exact_edges: u32,
+    /// The BAND_OBJECTS define (`band=object`, with `exact-edges=R`): the band is the pixels with
+    /// a pixel of another object (or none) within R, not those with a pixel off their surface.
+    pub band_objects: bool,
     /// The ENOUGH define (`ours` only): found subsets that spare the fallback.
     pub enough: u32,
     /// The SAME_NORMAL_COS and PLANE_TOLERANCE defines (`ours` only): its same-surface test.
@@ -256,6 +259,9 @@ pub fn decl_culled(interleaving: Option<&InterleavedLighting>, cull: bool) -> Co
         }
         if i.window_tile {
             d = d.define("WINDOW_TILE", 1);
+        }
+        if i.band_objects {
+            d = d.define("BAND_OBJECTS", 1);
         }
         if i.pairs {
             d = d.define("FALLBACK_PAIRS", 1).bindings(&[
