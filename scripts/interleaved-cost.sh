@@ -4,7 +4,8 @@
 # foliage, and the gallery's `specular` under a sun and 24 point lights) at 320x180 and 1280x720.
 # Each run holds the reference (at 320x180 also without its light culling, `cull=0`), the default
 # `interleaved`, the code before 2026-11-28 (`fallback=inline:window=fetch:cull=0`, the same
-# frame), `exact-edges`, both interleaved variants' `parts=` rows (the lighting pass by part) and
+# frame), `exact-edges`, `search=1` and `exact-edges=2:band=object:search=1` (issue 57, part 2;
+# `interleaved-goals.py ... --spec` tabulates them), both interleaved variants' `parts=` rows (the lighting pass by part) and
 # a `:debug` row (the pixel classes). `uptime` is written beside each run: lavapipe's times are
 # only comparable within a run. Usage: scripts/interleaved-cost.sh TAG [OUT] (then
 # python3 scripts/interleaved-table.py OUT/bench/ic-TAG/*/bench.json).
@@ -13,7 +14,7 @@ tag=${1:?usage: interleaved-cost.sh TAG [OUT]}
 out=${2:-out}
 B=interleaved:4x4:vpls=1024
 OLD=$B:fallback=inline:window=fetch:cull=0
-T=$B,$OLD,$B:exact-edges,$B:parts=base,$B:parts=lights,$B:parts=filter,$OLD:parts=base,$OLD:parts=lights,$OLD:parts=filter,$B:debug
+T=$B,$OLD,$B:exact-edges,$B:search=1,$B:exact-edges=2:band=object:search=1,$B:parts=base,$B:parts=lights,$B:parts=filter,$OLD:parts=base,$OLD:parts=lights,$OLD:parts=filter,$B:debug
 for r in 320x180 1280x720; do
     # 320x180: 6 measured frames and the reference without its light culling too; 1280x720: 3.
     case $r in

@@ -3,7 +3,10 @@
 lighting pass's time goes"): per scene and resolution, `interleaved:4x4:vpls=1024` (and the code
 before the change, and `exact-edges`) against `deferred:vpls=1024` of the same run: frame times,
 speed-up, FLIP, edge FLIP over interior FLIP, and the load average before and after the run
-(uptime-*.txt beside bench.json). Usage: interleaved-goals.py OUT/bench/ic-TAG/*/bench.json"""
+(uptime-*.txt beside bench.json). Usage: interleaved-goals.py OUT/bench/ic-TAG/*/bench.json
+[--spec SPEC ...]: with --spec, one row per scene and spec instead (each spec's frame time,
+speed-up, FLIP, edge / interior FLIP and whether the three goals hold); rows a run lacks are
+skipped."""
 import json
 import os
 import sys
@@ -24,7 +27,34 @@ def load(path):
     return json.load(open(path)), up
 
 
+def specs_table(paths, specs):
+    print("| scene | size | spec | reference ms | ms | x faster | FLIP | edge / interior FLIP "
+          "| goals (6x, FLIP, edge) | load avg (before, after) |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for p in paths:
+        b, up = load(p)
+        rows = {r["config"]: r for r in b["rows"]}
+        ref = rows[REF]["frame_ms"]["median"]
+        size = f"{rows[REF]['width']}x{rows[REF]['height']}"
+        for spec in specs:
+            r = rows.get(spec)
+            if r is None:
+                continue
+            e = r.get("error") or {}
+            ms = r["frame_ms"]["median"]
+            x = ref / ms
+            er = e["flip_edge_mean"] / e["flip_interior_mean"] if e.get("flip_interior_mean") else float("nan")
+            flip = e.get("flip_mean")
+            ok = lambda c: "yes" if c else "no"
+            print(f"| {rows[REF]['scene']} | {size} | `{spec.replace(B, 'B')}` | {ref:.1f} | {ms:.1f} | "
+                  f"**{x:.2f}** | {flip:.4f} | {er:.2f} | {ok(x >= 6)}, {ok(flip <= 0.05)}, "
+                  f"{ok(er <= 1.5)} | {up[0]}, {up[1]} |")
+
+
 def main():
+    if "--spec" in sys.argv:
+        i = sys.argv.index("--spec")
+        return specs_table(sys.argv[1:i], sys.argv[i + 1:])
     print("| scene | size | reference ms | `interleaved:4x4` ms | x faster | before the change: ms, x faster "
           "| FLIP | edge / interior FLIP | `exact-edges`: x faster, FLIP, edge / interior | load avg (before, after) |")
     print("|---|---|---|---|---|---|---|---|---|---|")

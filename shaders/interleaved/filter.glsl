@@ -16,7 +16,8 @@
 //     counts once, so on a smooth surface it is the box, and at an edge p never mixes in another
 //     surface's light; only where its surface holds no pixel of a subset nearby (thin features)
 //     does p pay for that subset. With EXACT_EDGES R > 0 (`exact-edges=R`), a pixel with a pixel
-//     off its surface within R (the square of side 2R+1) shades every subset at p.
+//     off its surface within R (the square of side 2R+1) shades every subset at p; with
+//     BAND_OBJECTS (`band=object`) only a pixel of another object or the background makes it.
 // With DIRECT (`direct`) the specular estimates of the point lights go through the same filter
 // with the same choices (the same pixels, weights and fallback subsets), into `specular`.
 layout(set = 0, binding = BINDING_IRRADIANCE) uniform sampler2D g_irradiance;
@@ -38,16 +39,17 @@ bool on_screen(ivec2 q) {
     return q.x >= 0 && q.y >= 0 && q.x < int(pc.counts.z) && q.y < int(pc.counts.w);
 }
 
-// WINDOW_TILE (`ours` without `search`; `window=fetch` turns it off): the workgroup's pixels and
-// the apron their windows (and `exact-edges`' squares) reach are fetched once into shared memory
-// (window_load, at the start of the pass, before any invocation returns), and the filter reads
-// them there: each texel is fetched once per workgroup instead of once per window that holds it
-// (16 for 4x4). The same bits, so the same frame.
-#if defined(WINDOW_TILE) && FILTER == 2 && SEARCH == 0
-const int APRON_X0 = max((TILE_M - 1) / 2, EXACT_EDGES);
-const int APRON_X1 = max(TILE_M / 2, EXACT_EDGES);
-const int APRON_Y0 = max((TILE_N - 1) / 2, EXACT_EDGES);
-const int APRON_Y1 = max(TILE_N / 2, EXACT_EDGES);
+// WINDOW_TILE (`ours`; `window=fetch` turns it off): the workgroup's pixels and the apron their
+// windows (`search`'s candidates and `exact-edges`' squares) reach are fetched once into shared
+// memory (window_load, at the start of the pass, before any invocation returns), and the filter
+// reads them there: each texel is fetched once per workgroup instead of once per window that
+// holds it (16 for 4x4). The same bits, so the same frame. `search=1`'s candidates lie at most
+// one period from p (`candidate`: o -/+ P on the other side of p, or +-P for o = 0).
+#if defined(WINDOW_TILE) && FILTER == 2
+const int APRON_X0 = max(max((TILE_M - 1) / 2, SEARCH * TILE_M), EXACT_EDGES);
+const int APRON_X1 = max(max(TILE_M / 2, SEARCH * TILE_M), EXACT_EDGES);
+const int APRON_Y0 = max(max((TILE_N - 1) / 2, SEARCH * TILE_N), EXACT_EDGES);
+const int APRON_Y1 = max(max(TILE_N / 2, SEARCH * TILE_N), EXACT_EDGES);
 const int WIN_W = LOCAL_SIZE_X + APRON_X0 + APRON_X1;
 const int WIN_H = LOCAL_SIZE_Y + APRON_Y0 + APRON_Y1;
 shared uint w_ids[WIN_W * WIN_H];
@@ -261,7 +263,12 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, float ns, out
     const int side = 2 * EXACT_EDGES + 1;
     for (int k = 0; k < side * side; ++k) {
         ivec2 q = px + ivec2(k % side - EXACT_EDGES, k / side - EXACT_EDGES);
+#ifdef BAND_OBJECTS
+        // `band=object`: only another object (or the background) makes the band.
+        if (on_screen(q) && window_id(q) != object) boundary = true;
+#else
         if (on_screen(q) && !same_surface(q, object, p, n)) boundary = true;
+#endif
     }
     if (boundary) {
         sum = vec3(0.0);

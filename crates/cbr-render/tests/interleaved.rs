@@ -146,11 +146,13 @@ enum Mode {
     Box,
     /// `enough`: found subsets that spare the fallback (M N: always shade the missing ones);
     /// `exact_edges`: R > 0, a pixel with a pixel off its surface within R (a square) shades
-    /// every subset.
+    /// every subset; with `band_objects` (`band=object`) only a pixel of another object (or
+    /// none drawn) within R makes that band.
     Ours {
         search: bool,
         enough: usize,
         exact_edges: i64,
+        band_objects: bool,
     },
     Seed,
 }
@@ -167,6 +169,8 @@ struct Frame<'a> {
     drawn: &'a dyn Fn(Px) -> bool,
     /// q lies on p's surface (`ours`' test), both drawn.
     same: &'a dyn Fn(Px, Px) -> bool,
+    /// q shows p's object (drawn or not: `band=object`'s test).
+    same_object: &'a dyn Fn(Px, Px) -> bool,
     /// The seed's edge test at q (drawn).
     edge: &'a dyn Fn(Px) -> bool,
     /// The gathered estimate at q: M N x q's own subset at q's point (0 where nothing is drawn).
@@ -261,13 +265,22 @@ impl Frame<'_> {
                 }
             }
         }
-        if let Mode::Ours { exact_edges: r, .. } = mode
+        if let Mode::Ours {
+            exact_edges: r,
+            band_objects,
+            ..
+        } = mode
             && r > 0
         {
             let boundary = (-r..=r).any(|dy| {
                 (-r..=r).any(|dx| {
                     let q = (p.0 + dx, p.1 + dy);
-                    self.on(q) && !((self.drawn)(q) && (self.same)(p, q))
+                    self.on(q)
+                        && if band_objects {
+                            !(self.same_object)(p, q)
+                        } else {
+                            !((self.drawn)(q) && (self.same)(p, q))
+                        }
                 })
             });
             if boundary {
@@ -320,6 +333,7 @@ fn the_filters_match_their_cpu_model() {
                     search: false,
                     enough: subsets,
                     exact_edges: 0,
+                    band_objects: false,
                 },
                 "ours",
             ),
@@ -328,6 +342,7 @@ fn the_filters_match_their_cpu_model() {
                     search: true,
                     enough: subsets,
                     exact_edges: 0,
+                    band_objects: false,
                 },
                 "search=1",
             ),
@@ -336,6 +351,7 @@ fn the_filters_match_their_cpu_model() {
                     search: false,
                     enough: subsets / 2,
                     exact_edges: 0,
+                    band_objects: false,
                 },
                 "enough=HALF",
             ),
@@ -344,6 +360,7 @@ fn the_filters_match_their_cpu_model() {
                     search: false,
                     enough: subsets,
                     exact_edges: 1,
+                    band_objects: false,
                 },
                 "exact-edges",
             ),
@@ -352,8 +369,18 @@ fn the_filters_match_their_cpu_model() {
                     search: true,
                     enough: subsets,
                     exact_edges: 2,
+                    band_objects: false,
                 },
                 "exact-edges=2:search=1",
+            ),
+            (
+                Mode::Ours {
+                    search: true,
+                    enough: subsets,
+                    exact_edges: 2,
+                    band_objects: true,
+                },
+                "exact-edges=2:band=object:search=1",
             ),
             (Mode::Seed, "seed"),
         ] {
@@ -367,6 +394,7 @@ fn the_filters_match_their_cpu_model() {
             let surf = |q: Px| surface(&s, id(q), q.0 as u32, q.1 as u32);
             let drawn = |q: Px| id(q) != 0;
             let same = |p: Px, q: Px| id(p) == id(q);
+            let same_object = same;
             let gpu_edge = |(x, y): Px| layers.edge[(y * w + x) as usize] != 0;
             let estimate = |q: Px| {
                 let Some((pq, nq, _)) = surf(q) else {
@@ -386,6 +414,7 @@ fn the_filters_match_their_cpu_model() {
                 n,
                 drawn: &drawn,
                 same: &same,
+                same_object: &same_object,
                 edge: &gpu_edge,
                 estimate: &estimate,
                 at_p: &at_p,
@@ -515,6 +544,7 @@ fn direct_matches_its_cpu_model() {
             search: false,
             enough: subsets,
             exact_edges,
+            band_objects: false,
         };
         for (mode, param) in [
             (Mode::None, "none"),
@@ -534,6 +564,7 @@ fn direct_matches_its_cpu_model() {
             let ns = |q: Px| f64::from(SPECULAR[id(q) as usize - 1].1);
             let drawn = |q: Px| id(q) != 0;
             let same = |p: Px, q: Px| id(p) == id(q);
+            let same_object = same;
             let gpu_edge = |(x, y): Px| layers.edge[(y * w + x) as usize] != 0;
             // Subset k's terms at drawn pixel q: (VPLs + point diffuse, point specular).
             let terms = |q: Px, k: usize| {
@@ -557,6 +588,7 @@ fn direct_matches_its_cpu_model() {
                 n,
                 drawn: &drawn,
                 same: &same,
+                same_object: &same_object,
                 edge: &gpu_edge,
                 estimate: &diffuse,
                 at_p: &diffuse_at_p,
@@ -621,6 +653,7 @@ fn the_filters_are_the_identity_on_a_constant_image() {
     let c = 0.731;
     let drawn = |q: Px| id(q) != 0;
     let same = |p: Px, q: Px| id(p) == id(q);
+    let same_object = same;
     let edge = |(x, y): Px| edges[(y * w + x) as usize];
     let estimate = |q: Px| if drawn(q) { c } else { 0.0 };
     let at_p = |_: Px, _: usize| c;
@@ -632,6 +665,7 @@ fn the_filters_are_the_identity_on_a_constant_image() {
             n,
             drawn: &drawn,
             same: &same,
+            same_object: &same_object,
             edge: &edge,
             estimate: &estimate,
             at_p: &at_p,
@@ -643,26 +677,37 @@ fn the_filters_are_the_identity_on_a_constant_image() {
                 search: false,
                 enough: all,
                 exact_edges: 0,
+                band_objects: false,
             },
             Mode::Ours {
                 search: true,
                 enough: all,
                 exact_edges: 0,
+                band_objects: false,
             },
             Mode::Ours {
                 search: false,
                 enough: all.div_ceil(2),
                 exact_edges: 0,
+                band_objects: false,
             },
             Mode::Ours {
                 search: true,
                 enough: 1,
                 exact_edges: 0,
+                band_objects: false,
             },
             Mode::Ours {
                 search: false,
                 enough: all,
                 exact_edges: 1,
+                band_objects: false,
+            },
+            Mode::Ours {
+                search: true,
+                enough: all,
+                exact_edges: 2,
+                band_objects: true,
             },
             Mode::Seed,
         ] {
@@ -792,6 +837,10 @@ fn the_fallback_passes_and_the_window_tile_change_no_bit() {
         (&demo, "interleaved:3x2:vpls=96:debug"),
         (&demo, "interleaved:4x4:vpls=256:enough=8"),
         (&demo, "interleaved:4x4:vpls=256:search=1"),
+        (
+            &demo,
+            "interleaved:3x2:vpls=96:search=1:exact-edges=3:debug",
+        ),
         (&demo, "interleaved:4x4:vpls=256:exact-edges=2:debug"),
         (&demo, "interleaved:8x8:vpls=256:exact-edges=3"),
         (&demo, "interleaved:4x4:vpls=256:implicit"),
@@ -799,16 +848,15 @@ fn the_fallback_passes_and_the_window_tile_change_no_bit() {
         (&nan, "interleaved:4x4:vpls=256"),
     ] {
         let default = render(&gpu, &shaders, s, base);
-        let searching = base.contains("search=1");
-        let direct = base.contains("direct");
-        let variants: &[&str] = match (searching, direct) {
-            (true, _) => &["fallback=inline"],
-            (_, true) => &["window=fetch"],
-            _ => &[
+        // `search=1` reads its candidates from the tile too (since 2026-12-01).
+        let variants: &[&str] = if base.contains("direct") {
+            &["window=fetch"]
+        } else {
+            &[
                 "fallback=inline",
                 "window=fetch",
                 "fallback=inline:window=fetch",
-            ],
+            ]
         };
         for v in variants {
             let other = render(&gpu, &shaders, s, &format!("{base}:{v}"));
@@ -873,6 +921,79 @@ fn the_same_surface_thresholds_move_the_fallback() {
             if more { n > n0 } else { n < n0 },
             "{params}: {n} against {n0}"
         );
+    }
+    assert_clean(&gpu);
+}
+
+/// `exact-edges=R:band=object`: a pixel with another object (or the background) within R (a
+/// square) is the surface band's (`exact-edges=R`) pixel bit for bit, and shades all M N
+/// subsets; every other pixel is plain `ours`' bit for bit, with its fallback count. On the demo
+/// (96 x 54), whose objects have creases and curved parts that the surface band takes too, the
+/// object band shades strictly fewer subsets than the surface band and more than plain `ours`.
+#[test]
+fn the_object_band_is_exact_at_other_objects_and_ours_elsewhere() {
+    let gpu = gpu();
+    let shaders = cbr_render::shader_library();
+    let mut s = cbr_scene::builtin("demo").expect("demo");
+    let (w, h) = (96i64, 54i64);
+    (s.settings.width, s.settings.height) = (w as u32, h as u32);
+    let base = "interleaved:4x4:vpls=256:debug";
+    let fallback = |o: &FrameOutput| InterleavedLayers::from_frame(o).expect("debug").fallback;
+    let ours = render(&gpu, &shaders, &s, base);
+    for r in [1i64, 2] {
+        let surface = render(&gpu, &shaders, &s, &format!("{base}:exact-edges={r}"));
+        let object = render(
+            &gpu,
+            &shaders,
+            &s,
+            &format!("{base}:exact-edges={r}:band=object"),
+        );
+        let (fo, fs, fb) = (fallback(&ours), fallback(&surface), fallback(&object));
+        let id = |x: i64, y: i64| object.ids[(y * w + x) as usize][0];
+        let (mut band, mut rest) = (0, 0);
+        for y in 0..h {
+            for x in 0..w {
+                if id(x, y) == 0 {
+                    continue;
+                }
+                let i = (y * w + x) as usize;
+                let near_other = (-r..=r).any(|dy| {
+                    (-r..=r).any(|dx| {
+                        let (qx, qy) = (x + dx, y + dy);
+                        (0..w).contains(&qx) && (0..h).contains(&qy) && id(qx, qy) != id(x, y)
+                    })
+                });
+                let want = if near_other { &surface } else { &ours };
+                for c in 0..3 {
+                    assert_eq!(
+                        object.color[4 * i + c].to_bits(),
+                        want.color[4 * i + c].to_bits(),
+                        "exact-edges={r}:band=object at ({x}, {y}), channel {c} (near another \
+                         object: {near_other})"
+                    );
+                }
+                if near_other {
+                    assert_eq!(fb[i], 16, "exact-edges={r}:band=object at ({x}, {y})");
+                    band += 1;
+                } else {
+                    assert_eq!(fb[i], fo[i], "exact-edges={r}:band=object at ({x}, {y})");
+                    rest += 1;
+                }
+            }
+        }
+        let sum = |f: &[u8]| f.iter().map(|&v| u64::from(v)).sum::<u64>();
+        println!(
+            "exact-edges={r}: {band} pixels in the object band, {rest} outside; subsets shaded by \
+             their pixels: ours {}, object band {}, surface band {}",
+            sum(&fo),
+            sum(&fb),
+            sum(&fs)
+        );
+        assert!(
+            band > 100 && rest > 1000,
+            "{band} band pixels, {rest} others"
+        );
+        assert!(sum(&fo) < sum(&fb) && sum(&fb) < sum(&fs));
     }
     assert_clean(&gpu);
 }
@@ -964,6 +1085,11 @@ fn bad_tiles_and_counts_are_refused() {
         ("interleaved:4x4:sharp", "not a parameter of interleaved"),
         ("interleaved:4x4:box:seed", "one filter at a time"),
         ("interleaved:4x4:search=2", "search=0 or search=1"),
+        ("interleaved:4x4:band=object", "give `exact-edges` too"),
+        (
+            "interleaved:4x4:exact-edges:band=crease",
+            "band=surface or band=object",
+        ),
         ("interleaved:4x4:enough=17", "K from 1 to 16"),
         ("interleaved:2x2:enough=0", "K from 1 to 4"),
         ("interleaved:4x4:implicit:floor", "`implicit` does not have"),

@@ -66,6 +66,9 @@ pub struct InterleavedLighting {
     /// The EXACT_EDGES define (`ours` only): R > 0 makes a pixel with a pixel off its surface
     /// within R (a square) shade every subset itself; 0 off.
     pub exact_edges: u32,
+    /// The BAND_OBJECTS define (`band=object`, with `exact-edges=R`): the band is the pixels with
+    /// a pixel of another object (or none) within R, not those with a pixel off their surface.
+    pub band_objects: bool,
     /// The ENOUGH define (`ours` only): found subsets that spare the fallback.
     pub enough: u32,
     /// The SAME_NORMAL_COS and PLANE_TOLERANCE defines (`ours` only): its same-surface test.
@@ -88,7 +91,7 @@ pub struct InterleavedLighting {
     /// fallback's (pixel, subset) pairs and `interleaved.fallback` and `interleaved.finish` shade
     /// them and finish those pixels (shaders/interleaved/fallback_list.glsl).
     pub pairs: bool,
-    /// `window=tile` (WINDOW_TILE; `ours` without `search`, the default): the filter reads the
+    /// `window=tile` (WINDOW_TILE; `ours`, the default): the filter reads the
     /// window's G-buffer texels and estimates from a tile fetched into shared memory once per
     /// workgroup (shaders/interleaved/filter.glsl); `window=fetch` fetches each per window.
     pub window_tile: bool,
@@ -256,6 +259,9 @@ pub fn decl_culled(interleaving: Option<&InterleavedLighting>, cull: bool) -> Co
         }
         if i.window_tile {
             d = d.define("WINDOW_TILE", 1);
+        }
+        if i.band_objects {
+            d = d.define("BAND_OBJECTS", 1);
         }
         if i.pairs {
             d = d.define("FALLBACK_PAIRS", 1).bindings(&[

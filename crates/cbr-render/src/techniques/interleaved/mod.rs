@@ -1,5 +1,5 @@
 //! `interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D][:ours|seed|box|none]
-//! [:search=S][:enough=K][:exact-edges[=R]][:direct][:implicit][:debug][:floor][:fallback=F][:window=W][:parts=P]`: interleaved many-light
+//! [:search=S][:enough=K][:exact-edges[=R]][:band=B][:direct][:implicit][:debug][:floor][:fallback=F][:window=W][:parts=P]`: interleaved many-light
 //! shading (Segovia et al. 2006; docs/interleaved.md) on `deferred`'s G-buffer and VPLs.
 //!
 //! Passes per frame, one submission: `interleaved.gbuffer` (deferred's G-buffer pass), the sun's
@@ -43,7 +43,8 @@ const LAYERS: [LayerDecl; 3] = [
 pub const REGISTRATION: Registration = Registration {
     name: "interleaved",
     grammar: "interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D]\
-              [:ours|seed|box|none][:search=S][:enough=K][:exact-edges[=R]][:direct][:implicit][:debug]\
+              [:ours|seed|box|none][:search=S][:enough=K][:exact-edges[=R]][:band=surface|object]\
+              [:direct][:implicit][:debug]\
               [:floor][:fallback=pairs|inline][:window=tile|fetch][:parts=base|lights|filter]",
     about: "deferred's VPLs, interleaved: the G-buffer split into M x N sub-images, sub-image k \
             shaded with the k-th block of N / (M N) VPLs, gathered back, filtered (ours: \
@@ -160,6 +161,12 @@ pub struct InterleavedConfig {
     /// side 2R + 1, shades every subset itself: the reference's value in a band of R pixels
     /// along the boundaries, at the cost of M N subsets there.
     pub exact_edges: u32,
+    /// `band=surface|object` (with `exact-edges=R`): which pixels form the band: those with a
+    /// pixel off their surface within R (`surface`, the default: other objects, creases, depth
+    /// steps, the background), or only those with a pixel of another object or the background
+    /// within R (`object`: silhouettes and contacts, where FLIP's edge features magnify an error
+    /// most; a crease within an object keeps the ordinary filter and its fallback).
+    pub band_objects: bool,
     /// `normal=C` (`ours`): a window pixel is on p's surface only where the two normals' dot is
     /// at least C (default [`DEFAULT_SAME_NORMAL_COS`]).
     pub same_normal_cos: f32,
@@ -182,9 +189,10 @@ pub struct InterleavedConfig {
     /// `direct`), or in the lighting pass, each pixel its own list (`inline`, the only one with
     /// `direct`). The frames are the same (the same sums in the same order).
     pub pairs: bool,
-    /// `window=tile|fetch` (`ours` without `search`): the filter's window read from a tile of
-    /// the workgroup's pixels and their apron fetched into shared memory once (`tile`, the
-    /// default), or each texel fetched by every window that holds it (`fetch`). The same frame.
+    /// `window=tile|fetch` (`ours`): the filter's window (and `search`'s candidates) read from a
+    /// tile of the workgroup's pixels and their apron fetched into shared memory once (`tile`,
+    /// the default; with `search=1` since 2026-12-01), or each texel fetched by every window that
+    /// holds it (`fetch`). The same frame.
     pub window_tile: bool,
     pub lights: DeferredConfig,
 }
@@ -243,6 +251,7 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
     let mut filter = None;
     let (mut implicit, mut debug, mut floor, mut direct) = (false, false, false, false);
     let mut exact_edges = 0;
+    let mut band = None;
     let mut parts = Parts::All;
     let mut fallback = None;
     let mut window = None;
@@ -324,6 +333,14 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
                 };
                 None
             }
+            "band" => {
+                band = match p.split_once('=').map(|(_, v)| v) {
+                    Some("surface") => Some(false),
+                    Some("object") => Some(true),
+                    _ => return Err(format!("interleaved `{p}`: band=surface or band=object")),
+                };
+                None
+            }
             "search" => {
                 search = match p.split_once('=').map(|(_, v)| v) {
                     Some("0") => 0,
@@ -367,7 +384,8 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
                     "interleaved",
                     p,
                     "vpls=N, points=N, rsm=R, reach=D, clamp=D, one filter of none (raw), box, \
-                     ours, seed, and search=0|1, enough=K, exact-edges[=R], normal=C, plane=T, \
+                     ours, seed, and search=0|1, enough=K, exact-edges[=R], band=surface|object, \
+                     normal=C, plane=T, \
                      direct, implicit, debug, floor, fallback=pairs|inline, window=tile|fetch, \
                      parts=base|lights|filter",
                 ));
@@ -420,18 +438,22 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
         );
     }
     let pairs = fallback.unwrap_or(filter == Filter::Ours && !direct);
-    if window.is_some() && (filter != Filter::Ours || search > 0) {
-        return Err(
-            "interleaved: `window=...` is how the `ours` filter without `search` reads its window"
-                .into(),
-        );
+    if window.is_some() && filter != Filter::Ours {
+        return Err("interleaved: `window=...` is how the `ours` filter reads its window".into());
     }
-    let window_tile = window.unwrap_or(filter == Filter::Ours && search == 0);
+    let window_tile = window.unwrap_or(filter == Filter::Ours);
     if exact_edges > 0 && filter != Filter::Ours {
         return Err(format!(
             "interleaved: `exact-edges` is a variant of the `ours` filter, not of `{}`",
             filter.name()
         ));
+    }
+    if band.is_some() && exact_edges == 0 {
+        return Err(
+            "interleaved: `band=...` says which pixels `exact-edges=R` shades exactly; give \
+             `exact-edges` too"
+                .into(),
+        );
     }
     if implicit && floor {
         return Err(
@@ -449,6 +471,7 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
         search,
         enough: enough.unwrap_or(m * n),
         exact_edges,
+        band_objects: band.unwrap_or(false),
         same_normal_cos,
         plane_tolerance,
         floor,
@@ -565,6 +588,7 @@ pub fn lighting_variant(config: &InterleavedConfig) -> InterleavedLighting {
         search: config.search,
         enough: config.enough,
         exact_edges: config.exact_edges,
+        band_objects: config.band_objects,
         same_normal_cos: config.same_normal_cos,
         plane_tolerance: config.plane_tolerance,
         filter: config.filter as u32,
