@@ -192,13 +192,15 @@ void main() {
     vec4 cyc = vec4(0.0);
     vec4 rng = vec4(1.0, 0.0, 1.0, 0.0);
     bool cycling = false;
+    bool complete = false;  // the last cycle is complete: rng.xy is its range
 #if MODE == 0
     if (has(F_CYCLE) && use && still) {
         ivec2 t = ivec2(floor(q));
         cyc = texelFetch(hist_cycle, t, 0);
         rng = texelFetch(hist_range, t, 0);
+        complete = rng.x <= rng.y;
         float tol = pc.feedback_still.w;
-        bool changed = rng.x <= rng.y && (y0.x < rng.x - tol || y0.x > rng.y + tol);
+        bool changed = complete && (y0.x < rng.x - tol || y0.x > rng.y + tol);
         use = !changed;
         cycling = !changed;
     }
@@ -316,6 +318,8 @@ void main() {
 #if MODE == 0
     if (has(F_CYCLE) && !moving) {
         float l = y0.x;
+        // The mean the last complete cycle left in the history, shown until the next one is.
+        bool hold = cycling && complete;
         if (cycling && cyc.w > 0.0) {
             float k = cyc.w + 1.0;
             vec3 m = cyc.rgb + (c0 - cyc.rgb) / k;
@@ -324,15 +328,15 @@ void main() {
                 result = m;
                 rng_out = vec4(cur, 1.0, 0.0);
             } else {
-                if (rng.x <= rng.y) result = texelFetch(hist, ivec2(floor(q)), 0).rgb;
+                if (hold) result = texelFetch(hist, ivec2(floor(q)), 0).rgb;
                 cyc_out = vec4(m, k);
                 rng_out = vec4(rng.xy, cur);
             }
         } else {
             // The first sample of a cycle; one that follows a complete cycle keeps its range.
-            if (cycling && rng.x <= rng.y) result = texelFetch(hist, ivec2(floor(q)), 0).rgb;
+            if (hold) result = texelFetch(hist, ivec2(floor(q)), 0).rgb;
             cyc_out = vec4(c0, 1.0);
-            rng_out = vec4(cycling ? rng.xy : vec2(1.0, 0.0), l, l);
+            rng_out = vec4(hold ? rng.xy : vec2(1.0, 0.0), l, l);
         }
     }
 #endif
