@@ -17,7 +17,12 @@
 //     surface's light; only where its surface holds no pixel of a subset nearby (thin features)
 //     does p pay for that subset. With EXACT_EDGES R > 0 (`exact-edges=R`), a pixel with a pixel
 //     off its surface within R (the square of side 2R+1) shades every subset at p; with
-//     BAND_OBJECTS (`band=object`) only a pixel of another object or the background makes it.
+//     BAND_OBJECTS (`band=object`) only a pixel of another object or the background makes it;
+//     with BAND_CONTRAST T as well (`band=albedo:contrast=T`) only such a pixel whose tone
+//     (band_tone_fetch: the luminance of its albedo, or of the background's radiance) differs
+//     from p's by at least T of the brighter of the two (band_contrast); with BAND_DEPTH too
+//     (`band=depth`) the background, or such a pixel whose distance from the camera differs from
+//     p's by at least T of the farther.
 // With DIRECT (`direct`) the specular estimates of the point lights go through the same filter
 // with the same choices (the same pixels, weights and fallback subsets), into `specular`.
 layout(set = 0, binding = BINDING_IRRADIANCE) uniform sampler2D g_irradiance;
@@ -39,6 +44,21 @@ bool on_screen(ivec2 q) {
     return q.x >= 0 && q.y >= 0 && q.x < int(pc.counts.z) && q.y < int(pc.counts.w);
 }
 
+#ifdef BAND_CONTRAST
+// `band=albedo`'s tone of on-screen pixel q showing object `id`: the luminance (Rec. 709
+// weights) of its albedo, or of the background's radiance where nothing is drawn (id 0).
+float band_tone_fetch(ivec2 q, uint id) {
+    vec3 a = id == 0u ? pc.background.rgb : texelFetch(g_albedo, q, 0).rgb;
+    return dot(a, vec3(0.2126, 0.7152, 0.0722));
+}
+
+// Whether tones (or distances) a and b differ by at least BAND_CONTRAST of the larger (two
+// blacks never: the host sets BAND_CONTRAST above 0).
+bool band_contrast(float a, float b) {
+    return abs(a - b) >= BAND_CONTRAST * max(a, b);
+}
+#endif
+
 // WINDOW_TILE (`ours`; `window=fetch` turns it off): the workgroup's pixels and the apron their
 // windows (`search`'s candidates and `exact-edges`' squares) reach are fetched once into shared
 // memory (window_load, at the start of the pass, before any invocation returns), and the filter
@@ -59,6 +79,9 @@ shared vec3 w_irradiance[WIN_W * WIN_H];
 #ifdef DIRECT
 shared vec3 w_specular[WIN_W * WIN_H];
 #endif
+#if defined(BAND_CONTRAST) && !defined(BAND_DEPTH)
+shared float w_tone[WIN_W * WIN_H];
+#endif
 
 ivec2 window_origin() {
     return ivec2(gl_WorkGroupID.xy) * ivec2(LOCAL_SIZE_X, LOCAL_SIZE_Y) - ivec2(APRON_X0, APRON_Y0);
@@ -74,8 +97,14 @@ void window_load() {
         ivec2 q = origin + ivec2(int(t) % WIN_W, int(t) / WIN_W);
         uint id = 0u;
         vec3 pq = vec3(0.0), nq = vec3(0.0), eq = vec3(0.0), sq = vec3(0.0);
+#if defined(BAND_CONTRAST) && !defined(BAND_DEPTH)
+        float tq = 0.0;
+#endif
         if (on_screen(q)) {
             id = texelFetch(g_ids, q, 0).x;
+#if defined(BAND_CONTRAST) && !defined(BAND_DEPTH)
+            tq = band_tone_fetch(q, id);
+#endif
             pq = texelFetch(g_position, q, 0).xyz;
             nq = texelFetch(g_normal, q, 0).xyz;
             eq = texelFetch(g_irradiance, q, 0).rgb;
@@ -89,6 +118,9 @@ void window_load() {
         w_irradiance[t] = eq;
 #ifdef DIRECT
         w_specular[t] = sq;
+#endif
+#if defined(BAND_CONTRAST) && !defined(BAND_DEPTH)
+        w_tone[t] = tq;
 #endif
     }
     barrier();
@@ -105,6 +137,9 @@ vec3 window_irradiance(ivec2 q) { return w_irradiance[window_index(q)]; }
 #ifdef DIRECT
 vec3 window_specular(ivec2 q) { return w_specular[window_index(q)]; }
 #endif
+#if defined(BAND_CONTRAST) && !defined(BAND_DEPTH)
+float window_tone(ivec2 q) { return w_tone[window_index(q)]; }
+#endif
 #else
 void window_load() {}
 uint window_id(ivec2 q) { return texelFetch(g_ids, q, 0).x; }
@@ -113,6 +148,9 @@ vec3 window_normal(ivec2 q) { return texelFetch(g_normal, q, 0).xyz; }
 vec3 window_irradiance(ivec2 q) { return texelFetch(g_irradiance, q, 0).rgb; }
 #ifdef DIRECT
 vec3 window_specular(ivec2 q) { return texelFetch(g_specular, q, 0).rgb; }
+#endif
+#if defined(BAND_CONTRAST) && !defined(BAND_DEPTH)
+float window_tone(ivec2 q) { return band_tone_fetch(q, texelFetch(g_ids, q, 0).x); }
 #endif
 #endif
 
@@ -261,9 +299,39 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, float ns, out
     // every subset itself, the reference's value there.
     bool boundary = false;
     const int side = 2 * EXACT_EDGES + 1;
+#ifndef BAND_SIDE
+#define BAND_SIDE 0
+#endif
+#if defined(BAND_CONTRAST) && defined(BAND_DEPTH)
+    float tone = length(p);
+#elif defined(BAND_CONTRAST)
+    float tone = window_tone(px);
+#endif
     for (int k = 0; k < side * side; ++k) {
         ivec2 q = px + ivec2(k % side - EXACT_EDGES, k / side - EXACT_EDGES);
-#ifdef BAND_OBJECTS
+#if defined(BAND_CONTRAST) && defined(BAND_DEPTH)
+        // `band=depth`: only the background, or another object at another distance.
+#if BAND_SIDE == 0
+        if (on_screen(q) && window_id(q) != object &&
+            (window_id(q) == 0u || band_contrast(tone, length(window_position(q)))))
+            boundary = true;
+#elif BAND_SIDE == 1
+        // `side=near`: only p on the nearer side (q the background, or farther).
+        if (on_screen(q) && window_id(q) != object &&
+            (window_id(q) == 0u ||
+             length(window_position(q)) - tone >= BAND_CONTRAST * length(window_position(q))))
+            boundary = true;
+#else
+        // `side=far`: only p on the farther side (q nearer).
+        if (on_screen(q) && window_id(q) != object && window_id(q) != 0u &&
+            tone - length(window_position(q)) >= BAND_CONTRAST * tone)
+            boundary = true;
+#endif
+#elif defined(BAND_CONTRAST)
+        // `band=albedo`: only another object (or the background) of another tone.
+        if (on_screen(q) && window_id(q) != object && band_contrast(tone, window_tone(q)))
+            boundary = true;
+#elif defined(BAND_OBJECTS)
         // `band=object`: only another object (or the background) makes the band.
         if (on_screen(q) && window_id(q) != object) boundary = true;
 #else

@@ -16,7 +16,10 @@ use cbr_render::gpu_types::Vpl;
 use cbr_render::techniques::deferred;
 use cbr_render::{FrameOutput, InterleavedLayers, Spec};
 use cbr_scene::Scene;
-use common::lighting::{SUN, compare, direct, floor_and_wall, fp16_step, irradiance, surface};
+use common::lighting::{
+    FLOOR_ALBEDO, SUN, WALL_ALBEDO, compare, direct, floor_and_wall, fp16_step, hit, irradiance,
+    surface,
+};
 use common::{assert_clean, gpu};
 use glam::DVec3;
 
@@ -147,12 +150,20 @@ enum Mode {
     /// `enough`: found subsets that spare the fallback (M N: always shade the missing ones);
     /// `exact_edges`: R > 0, a pixel with a pixel off its surface within R (a square) shades
     /// every subset; with `band_objects` (`band=object`) only a pixel of another object (or
-    /// none drawn) within R makes that band.
+    /// none drawn) within R makes that band; with `band_contrast` T > 0 (`band=albedo`,
+    /// `contrast=T`) only such a pixel whose tone differs from p's by at least T of the
+    /// brighter of the two (`band=albedo`), or, with `band_depth` (`band=depth`), the
+    /// background or a pixel whose distance from the camera differs by at least T of the
+    /// farther; `band_side` (`side=`) 0 both sides of such a step, 1 p the nearer (the
+    /// background counts as farther), 2 p the farther.
     Ours {
         search: bool,
         enough: usize,
         exact_edges: i64,
         band_objects: bool,
+        band_contrast: f64,
+        band_depth: bool,
+        band_side: u8,
     },
     Seed,
 }
@@ -171,6 +182,11 @@ struct Frame<'a> {
     same: &'a dyn Fn(Px, Px) -> bool,
     /// q shows p's object (drawn or not: `band=object`'s test).
     same_object: &'a dyn Fn(Px, Px) -> bool,
+    /// `band=albedo`'s tone at q: the luminance of its albedo (drawn) or of the background's
+    /// radiance.
+    tone: &'a dyn Fn(Px) -> f64,
+    /// `band=depth`'s distance of drawn q from the camera.
+    distance: &'a dyn Fn(Px) -> f64,
     /// The seed's edge test at q (drawn).
     edge: &'a dyn Fn(Px) -> bool,
     /// The gathered estimate at q: M N x q's own subset at q's point (0 where nothing is drawn).
@@ -268,16 +284,34 @@ impl Frame<'_> {
         if let Mode::Ours {
             exact_edges: r,
             band_objects,
+            band_contrast,
+            band_depth,
+            band_side,
             ..
         } = mode
             && r > 0
         {
+            let differ = |a: f64, b: f64| (a - b).abs() >= band_contrast * a.max(b);
+            let contrasts = |q: Px| {
+                if band_contrast == 0.0 {
+                    true
+                } else if band_depth {
+                    let (a, b) = ((self.distance)(p), (self.distance)(q));
+                    match band_side {
+                        0 => !(self.drawn)(q) || differ(a, b),
+                        1 => !(self.drawn)(q) || b - a >= band_contrast * b,
+                        _ => (self.drawn)(q) && a - b >= band_contrast * a,
+                    }
+                } else {
+                    differ((self.tone)(p), (self.tone)(q))
+                }
+            };
             let boundary = (-r..=r).any(|dy| {
                 (-r..=r).any(|dx| {
                     let q = (p.0 + dx, p.1 + dy);
                     self.on(q)
                         && if band_objects {
-                            !(self.same_object)(p, q)
+                            !(self.same_object)(p, q) && contrasts(q)
                         } else {
                             !((self.drawn)(q) && (self.same)(p, q))
                         }
@@ -334,6 +368,9 @@ fn the_filters_match_their_cpu_model() {
                     enough: subsets,
                     exact_edges: 0,
                     band_objects: false,
+                    band_contrast: 0.0,
+                    band_depth: false,
+                    band_side: 0,
                 },
                 "ours",
             ),
@@ -343,6 +380,9 @@ fn the_filters_match_their_cpu_model() {
                     enough: subsets,
                     exact_edges: 0,
                     band_objects: false,
+                    band_contrast: 0.0,
+                    band_depth: false,
+                    band_side: 0,
                 },
                 "search=1",
             ),
@@ -352,6 +392,9 @@ fn the_filters_match_their_cpu_model() {
                     enough: subsets / 2,
                     exact_edges: 0,
                     band_objects: false,
+                    band_contrast: 0.0,
+                    band_depth: false,
+                    band_side: 0,
                 },
                 "enough=HALF",
             ),
@@ -361,6 +404,9 @@ fn the_filters_match_their_cpu_model() {
                     enough: subsets,
                     exact_edges: 1,
                     band_objects: false,
+                    band_contrast: 0.0,
+                    band_depth: false,
+                    band_side: 0,
                 },
                 "exact-edges",
             ),
@@ -370,6 +416,9 @@ fn the_filters_match_their_cpu_model() {
                     enough: subsets,
                     exact_edges: 2,
                     band_objects: false,
+                    band_contrast: 0.0,
+                    band_depth: false,
+                    band_side: 0,
                 },
                 "exact-edges=2:search=1",
             ),
@@ -379,8 +428,51 @@ fn the_filters_match_their_cpu_model() {
                     enough: subsets,
                     exact_edges: 2,
                     band_objects: true,
+                    band_contrast: 0.0,
+                    band_depth: false,
+                    band_side: 0,
                 },
                 "exact-edges=2:band=object:search=1",
+            ),
+            // The background (black) against the floor and the wall makes the band, the
+            // floor against the wall (tones 0.5 and 0.75: a contrast of 1/3) does not.
+            (
+                Mode::Ours {
+                    search: true,
+                    enough: subsets,
+                    exact_edges: 2,
+                    band_objects: true,
+                    band_contrast: 0.5,
+                    band_depth: false,
+                    band_side: 0,
+                },
+                "exact-edges=2:band=albedo:contrast=0.5:search=1",
+            ),
+            // The same band by distance: only the background is that far from the floor or
+            // the wall (their contact is within a few per cent).
+            (
+                Mode::Ours {
+                    search: true,
+                    enough: subsets,
+                    exact_edges: 2,
+                    band_objects: true,
+                    band_contrast: 0.1,
+                    band_depth: true,
+                    band_side: 0,
+                },
+                "exact-edges=2:band=depth:contrast=0.1:search=1",
+            ),
+            (
+                Mode::Ours {
+                    search: true,
+                    enough: subsets,
+                    exact_edges: 2,
+                    band_objects: true,
+                    band_contrast: 0.1,
+                    band_depth: true,
+                    band_side: 1,
+                },
+                "exact-edges=2:band=depth:contrast=0.1:side=near:search=1",
             ),
             (Mode::Seed, "seed"),
         ] {
@@ -395,6 +487,8 @@ fn the_filters_match_their_cpu_model() {
             let drawn = |q: Px| id(q) != 0;
             let same = |p: Px, q: Px| id(p) == id(q);
             let same_object = same;
+            let tone = |q: Px| surf(q).map_or(0.0, |(_, _, albedo)| albedo);
+            let distance = |q: Px| surf(q).map_or(0.0, |(p, _, _)| p.length());
             let gpu_edge = |(x, y): Px| layers.edge[(y * w + x) as usize] != 0;
             let estimate = |q: Px| {
                 let Some((pq, nq, _)) = surf(q) else {
@@ -415,6 +509,8 @@ fn the_filters_match_their_cpu_model() {
                 drawn: &drawn,
                 same: &same,
                 same_object: &same_object,
+                tone: &tone,
+                distance: &distance,
                 edge: &gpu_edge,
                 estimate: &estimate,
                 at_p: &at_p,
@@ -545,6 +641,9 @@ fn direct_matches_its_cpu_model() {
             enough: subsets,
             exact_edges,
             band_objects: false,
+            band_contrast: 0.0,
+            band_depth: false,
+            band_side: 0,
         };
         for (mode, param) in [
             (Mode::None, "none"),
@@ -565,6 +664,8 @@ fn direct_matches_its_cpu_model() {
             let drawn = |q: Px| id(q) != 0;
             let same = |p: Px, q: Px| id(p) == id(q);
             let same_object = same;
+            let tone = |q: Px| surf(q).map_or(0.0, |(_, _, albedo)| albedo);
+            let distance = |q: Px| surf(q).map_or(0.0, |(p, _, _)| p.length());
             let gpu_edge = |(x, y): Px| layers.edge[(y * w + x) as usize] != 0;
             // Subset k's terms at drawn pixel q: (VPLs + point diffuse, point specular).
             let terms = |q: Px, k: usize| {
@@ -589,6 +690,8 @@ fn direct_matches_its_cpu_model() {
                 drawn: &drawn,
                 same: &same,
                 same_object: &same_object,
+                tone: &tone,
+                distance: &distance,
                 edge: &gpu_edge,
                 estimate: &diffuse,
                 at_p: &diffuse_at_p,
@@ -654,6 +757,10 @@ fn the_filters_are_the_identity_on_a_constant_image() {
     let drawn = |q: Px| id(q) != 0;
     let same = |p: Px, q: Px| id(p) == id(q);
     let same_object = same;
+    let tones = [0.05, 0.6, 0.2, 0.9];
+    let tone = |q: Px| tones[id(q) as usize];
+    let distances = [0.0, 3.0, 1.0, 1.2];
+    let distance = |q: Px| distances[id(q) as usize];
     let edge = |(x, y): Px| edges[(y * w + x) as usize];
     let estimate = |q: Px| if drawn(q) { c } else { 0.0 };
     let at_p = |_: Px, _: usize| c;
@@ -666,6 +773,8 @@ fn the_filters_are_the_identity_on_a_constant_image() {
             drawn: &drawn,
             same: &same,
             same_object: &same_object,
+            tone: &tone,
+            distance: &distance,
             edge: &edge,
             estimate: &estimate,
             at_p: &at_p,
@@ -678,36 +787,90 @@ fn the_filters_are_the_identity_on_a_constant_image() {
                 enough: all,
                 exact_edges: 0,
                 band_objects: false,
+                band_contrast: 0.0,
+                band_depth: false,
+                band_side: 0,
             },
             Mode::Ours {
                 search: true,
                 enough: all,
                 exact_edges: 0,
                 band_objects: false,
+                band_contrast: 0.0,
+                band_depth: false,
+                band_side: 0,
             },
             Mode::Ours {
                 search: false,
                 enough: all.div_ceil(2),
                 exact_edges: 0,
                 band_objects: false,
+                band_contrast: 0.0,
+                band_depth: false,
+                band_side: 0,
             },
             Mode::Ours {
                 search: true,
                 enough: 1,
                 exact_edges: 0,
                 band_objects: false,
+                band_contrast: 0.0,
+                band_depth: false,
+                band_side: 0,
             },
             Mode::Ours {
                 search: false,
                 enough: all,
                 exact_edges: 1,
                 band_objects: false,
+                band_contrast: 0.0,
+                band_depth: false,
+                band_side: 0,
             },
             Mode::Ours {
                 search: true,
                 enough: all,
                 exact_edges: 2,
                 band_objects: true,
+                band_contrast: 0.0,
+                band_depth: false,
+                band_side: 0,
+            },
+            Mode::Ours {
+                search: true,
+                enough: all,
+                exact_edges: 2,
+                band_objects: true,
+                band_contrast: 0.5,
+                band_depth: false,
+                band_side: 0,
+            },
+            Mode::Ours {
+                search: true,
+                enough: all,
+                exact_edges: 2,
+                band_objects: true,
+                band_contrast: 0.5,
+                band_depth: true,
+                band_side: 0,
+            },
+            Mode::Ours {
+                search: false,
+                enough: all,
+                exact_edges: 1,
+                band_objects: true,
+                band_contrast: 0.2,
+                band_depth: true,
+                band_side: 1,
+            },
+            Mode::Ours {
+                search: true,
+                enough: all,
+                exact_edges: 3,
+                band_objects: true,
+                band_contrast: 0.2,
+                band_depth: true,
+                band_side: 2,
             },
             Mode::Seed,
         ] {
@@ -998,6 +1161,190 @@ fn the_object_band_is_exact_at_other_objects_and_ours_elsewhere() {
     assert_clean(&gpu);
 }
 
+/// The floor and wall with a card (object 3, albedo CARD_ALBEDO, x = 0.8 facing the camera like
+/// the wall, 0.6 m wide, from 0.4 to 1.0 m above the floor) in front of the wall under a dark
+/// grey background (0.1): the contrast bands' scene, with object boundaries of every kind: the
+/// wall on the floor (a contact: the same distance, tones 0.75 and 0.5), the card before the wall
+/// and over the floor (about half the distance; tones 0.6 against 0.75 and 0.5), and the
+/// background beside and above them.
+fn floor_wall_and_card(w: u32, h: u32) -> Scene {
+    let mut s = floor_and_wall(true, w, h);
+    s.settings.background = [0.1; 3];
+    let mut card = cbr_scene::Material::named("card");
+    card.kd = [CARD_ALBEDO as f32; 3];
+    s.materials.push(card);
+    let (x, z, y0, y1) = (0.8, 0.3, 0.4, 1.0);
+    s.objects.push(common::lighting::quad(
+        "card",
+        [[x, y0, z], [x, y0, -z], [x, y1, -z], [x, y1, z]],
+        [1.0, 0.0, 0.0],
+        2,
+    ));
+    s
+}
+const CARD_ALBEDO: f64 = 0.6;
+
+/// `exact-edges=R:band=albedo|depth:contrast=T`: a pixel with, within R (a square), the
+/// background or another object whose tone (`albedo`: its albedo's luminance, the background's
+/// radiance's) or distance from the camera (`depth`; the background always) differs from the
+/// pixel's by at least T of the larger is the object band's pixel bit for bit and shades all M N
+/// subsets; every other pixel is plain `ours`' bit for bit, with its fallback count. On
+/// `floor_wall_and_card` (64 x 48; tones: wall 0.75, floor 0.5, card 0.6, background 0.1):
+/// `albedo` with T = 0.15 is the object band, 0.25 leaves out the card against the wall and the
+/// floor, 0.5 the contact too, 0.85
+/// the floor's silhouette, 0.9 everything; `depth` with T = 0.05 leaves out the contact only and
+/// T = 1 keeps the background's boundaries only; `depth:side=near` keeps the nearer side of
+/// each depth step (the card's pixels before the wall, the floor's and the wall's before the
+/// background), `depth:side=far` the farther (the wall's and the floor's around the card), and
+/// the two together are both sides' band. A pixel with a pair of sides within 1e-3 of T
+/// is not judged (counted: none for `albedo`, a few for `depth`, whose distances vary).
+#[test]
+fn the_contrast_bands_are_exact_at_contrasting_objects_and_ours_elsewhere() {
+    let gpu = gpu();
+    let shaders = cbr_render::shader_library();
+    let (w, h) = (64i64, 48i64);
+    let s = floor_wall_and_card(w as u32, h as u32);
+    let base = "interleaved:4x4:vpls=96:rsm=64:debug";
+    let fallback = |o: &FrameOutput| InterleavedLayers::from_frame(o).expect("debug").fallback;
+    let sum = |f: &[u8]| f.iter().map(|&v| u64::from(v)).sum::<u64>();
+    let ours = render(&gpu, &shaders, &s, base);
+    let id = |x: i64, y: i64| ours.ids[(y * w + x) as usize][0];
+    let ids: std::collections::BTreeSet<u32> = ours.ids.iter().map(|i| i[0]).collect();
+    assert_eq!(
+        ids.len(),
+        4,
+        "wall, floor, card and background on screen: {ids:?}"
+    );
+    // Tone and distance of a pixel (`None`: the background).
+    let side = |x: i64, y: i64| -> Option<(f64, f64)> {
+        let (xu, yu) = (x as u32, y as u32);
+        match id(x, y) {
+            1 => Some((f64::from(WALL_ALBEDO), hit(&s, xu, yu, 0, -1.0).length())),
+            2 => Some((f64::from(FLOOR_ALBEDO), hit(&s, xu, yu, 1, 0.0).length())),
+            3 => Some((CARD_ALBEDO, hit(&s, xu, yu, 0, 0.8).length())),
+            _ => None,
+        }
+    };
+    for r in [1i64, 2] {
+        let object = render(
+            &gpu,
+            &shaders,
+            &s,
+            &format!("{base}:exact-edges={r}:band=object"),
+        );
+        let (fo, fb) = (fallback(&ours), fallback(&object));
+        let mut sides = Vec::new();
+        for (band, thresholds) in [
+            ("albedo", &[0.15, 0.25, 0.5, 0.85, 0.9][..]),
+            ("depth", &[0.05, 1.0][..]),
+            ("depth:side=near", &[0.05, 1.0][..]),
+            ("depth:side=far", &[0.05][..]),
+        ] {
+            let mut shaded = Vec::new();
+            for &t in thresholds {
+                let spec = format!("{base}:exact-edges={r}:band={band}:contrast={t}");
+                let contrast = render(&gpu, &shaders, &s, &spec);
+                let fc = fallback(&contrast);
+                let (mut inside, mut rest, mut close) = (0, 0, 0);
+                for y in 0..h {
+                    for x in 0..w {
+                        let Some(a) = side(x, y) else { continue };
+                        let i = (y * w + x) as usize;
+                        let (mut near, mut near_t) = (false, false);
+                        for (dx, dy) in (-r..=r).flat_map(|dy| (-r..=r).map(move |dx| (dx, dy))) {
+                            let (qx, qy) = (x + dx, y + dy);
+                            if !(0..w).contains(&qx)
+                                || !(0..h).contains(&qy)
+                                || id(qx, qy) == id(x, y)
+                            {
+                                continue;
+                            }
+                            // The share of the larger by which the sides differ (depth with a
+                            // side: signed, p nearer (`near`) or farther (`far`) than q).
+                            let share = match (side(qx, qy), band) {
+                                (Some(b), "albedo") => (a.0 - b.0).abs() / a.0.max(b.0),
+                                (None, "albedo") => (a.0 - 0.1f64).abs() / a.0.max(0.1),
+                                (Some(b), "depth") => (a.1 - b.1).abs() / a.1.max(b.1),
+                                (Some(b), "depth:side=near") => (b.1 - a.1) / b.1,
+                                (Some(b), _) => (a.1 - b.1) / a.1,
+                                (None, "depth:side=far") => f64::NEG_INFINITY,
+                                (None, _) => f64::INFINITY,
+                            };
+                            near |= share >= t;
+                            near_t |= (share - t).abs() < 1e-3;
+                        }
+                        if near_t {
+                            close += 1;
+                            continue;
+                        }
+                        let want = if near { &object } else { &ours };
+                        for c in 0..3 {
+                            assert_eq!(
+                                contrast.color[4 * i + c].to_bits(),
+                                want.color[4 * i + c].to_bits(),
+                                "{spec} at ({x}, {y}), channel {c} (near a contrasting side: \
+                                 {near})"
+                            );
+                        }
+                        if near {
+                            assert_eq!(fc[i], 16, "{spec} at ({x}, {y})");
+                            inside += 1;
+                        } else {
+                            assert_eq!(fc[i], fo[i], "{spec} at ({x}, {y})");
+                            rest += 1;
+                        }
+                    }
+                }
+                println!(
+                    "{spec}: {inside} pixels in the band, {rest} outside, {close} not judged; \
+                     subsets shaded by their pixels: ours {}, this band {}, object band {}",
+                    sum(&fo),
+                    sum(&fc),
+                    sum(&fb)
+                );
+                // The tones are constants; distances vary continuously (f32 on the GPU).
+                assert!(
+                    close <= if band == "albedo" { 0 } else { 20 },
+                    "{spec}: {close} pixels with a side within 1e-3 of T"
+                );
+                assert!(rest > 1000, "{spec}: {rest} pixels outside the band");
+                assert_eq!(inside == 0, t == 0.9, "{spec}: {inside} band pixels");
+                shaded.push(sum(&fc));
+            }
+            // Each threshold's band strictly inside the one before: from the object band (or
+            // less) down to plain `ours` (or more).
+            assert!(
+                shaded.windows(2).all(|p| p[0] > p[1]),
+                "exact-edges={r}:band={band}: subsets shaded {shaded:?}"
+            );
+            assert!(shaded[0] <= sum(&fb) && *shaded.last().unwrap() >= sum(&fo));
+            sides.push(shaded[0]);
+            if band == "albedo" {
+                assert_eq!(shaded[0], sum(&fb), "albedo T = 0.15 is the object band");
+                assert_eq!(shaded[4], sum(&fo), "albedo T = 0.9 is plain ours");
+            } else {
+                assert!(
+                    shaded[0] < sum(&fb),
+                    "{band} T = 0.05 leaves the contact out"
+                );
+            }
+        }
+        // At T = 0.05 each side of the depth steps takes part of both sides' band, and each
+        // band holds pixels the other lacks (both 0.05 bands above 0: `near` holds the card's
+        // and the background's boundaries, `far` the wall's and floor's behind the card).
+        let (both, near, far) = (
+            sides[1] - sum(&fo),
+            sides[2] - sum(&fo),
+            sides[3] - sum(&fo),
+        );
+        assert!(
+            near < both && far < both && near > 0 && far > 0 && near + far >= both,
+            "exact-edges={r}: extra subsets, both sides {both}, near {near}, far {far}"
+        );
+    }
+    assert_clean(&gpu);
+}
+
 /// Mean absolute difference of the colour channels, over all pixels and over `mask`.
 fn error(a: &FrameOutput, b: &FrameOutput, mask: &[bool]) -> (f64, f64) {
     let (mut all, mut masked, mut count) = (0.0, 0.0, 0usize);
@@ -1088,7 +1435,36 @@ fn bad_tiles_and_counts_are_refused() {
         ("interleaved:4x4:band=object", "give `exact-edges` too"),
         (
             "interleaved:4x4:exact-edges:band=crease",
-            "band=surface or band=object",
+            "band=surface, band=object, band=albedo or band=depth",
+        ),
+        (
+            "interleaved:4x4:exact-edges:contrast=0.5",
+            "the threshold of a contrast band",
+        ),
+        (
+            "interleaved:4x4:exact-edges:band=object:contrast=0.5",
+            "the threshold of a contrast band",
+        ),
+        ("interleaved:4x4:band=depth", "give `exact-edges` too"),
+        (
+            "interleaved:4x4:exact-edges:band=albedo:side=near",
+            "give `band=depth` too",
+        ),
+        (
+            "interleaved:4x4:exact-edges:band=depth:side=left",
+            "side=both, side=near or side=far",
+        ),
+        (
+            "interleaved:4x4:exact-edges:band=albedo:contrast=0",
+            "above 0 and at most 1",
+        ),
+        (
+            "interleaved:4x4:exact-edges:band=depth:contrast=1.5",
+            "above 0 and at most 1",
+        ),
+        (
+            "interleaved:4x4:exact-edges:band=albedo:contrast=nan",
+            "above 0 and at most 1",
         ),
         ("interleaved:4x4:enough=17", "K from 1 to 16"),
         ("interleaved:2x2:enough=0", "K from 1 to 4"),
@@ -1115,6 +1491,7 @@ fn bad_tiles_and_counts_are_refused() {
     assert!(Spec::parse("interleaved:4x4:raw:none").is_ok());
     assert!(Spec::parse("interleaved:8x8:enough=32:search=1:implicit").is_ok());
     assert!(Spec::parse("interleaved:4x4:exact-edges:search=1").is_ok());
+    assert!(Spec::parse("interleaved:4x4:exact-edges=2:band=depth:contrast=1").is_ok());
     assert!(Spec::parse("interleaved:4x4:normal=0.98:plane=0.01:direct").is_ok());
     let err = Spec::parse("interleaved:4x4:exact-edges=4").expect_err("R = 4");
     assert!(err.contains("R from 0 to 3"), "{err}");

@@ -69,6 +69,16 @@ pub struct InterleavedLighting {
     /// The BAND_OBJECTS define (`band=object`, with `exact-edges=R`): the band is the pixels with
     /// a pixel of another object (or none) within R, not those with a pixel off their surface.
     pub band_objects: bool,
+    /// The BAND_CONTRAST define (`band=albedo|depth:contrast=T`, with `band_objects`): T > 0 keeps
+    /// only the object band's pixels with another object (or the background) of another tone
+    /// within R; 0 off.
+    pub band_contrast: f32,
+    /// The BAND_DEPTH define (`band=depth`, with `band_contrast`): the two sides' distances
+    /// from the camera, not their tones; the background always differs.
+    pub band_depth: bool,
+    /// The BAND_SIDE define (`side=...`, with `band_depth`): 0 both sides, 1 the nearer, 2 the
+    /// farther.
+    pub band_side: u32,
     /// The ENOUGH define (`ours` only): found subsets that spare the fallback.
     pub enough: u32,
     /// The SAME_NORMAL_COS and PLANE_TOLERANCE defines (`ours` only): its same-surface test.
@@ -262,6 +272,12 @@ pub fn decl_culled(interleaving: Option<&InterleavedLighting>, cull: bool) -> Co
         }
         if i.band_objects {
             d = d.define("BAND_OBJECTS", 1);
+        }
+        if i.band_contrast > 0.0 {
+            d = d.define("BAND_CONTRAST", format!("{:?}", i.band_contrast));
+        }
+        if i.band_depth {
+            d = d.define("BAND_DEPTH", 1).define("BAND_SIDE", i.band_side);
         }
         if i.pairs {
             d = d.define("FALLBACK_PAIRS", 1).bindings(&[

@@ -43,7 +43,7 @@ const LAYERS: [LayerDecl; 3] = [
 pub const REGISTRATION: Registration = Registration {
     name: "interleaved",
     grammar: "interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D]\
-              [:ours|seed|box|none][:search=S][:enough=K][:exact-edges[=R]][:band=surface|object]\
+              [:ours|seed|box|none][:search=S][:enough=K][:exact-edges[=R]][:band=surface|object|albedo|depth][:contrast=T]\
               [:direct][:implicit][:debug]\
               [:floor][:fallback=pairs|inline][:window=tile|fetch][:parts=base|lights|filter]",
     about: "deferred's VPLs, interleaved: the G-buffer split into M x N sub-images, sub-image k \
@@ -108,10 +108,23 @@ pub const MAX_EXACT_EDGES: u32 = 3;
 /// the seed's edge thresholds; docs/interleaved.md sweeps both.
 pub const DEFAULT_SAME_NORMAL_COS: f32 = 0.9;
 pub const DEFAULT_PLANE_TOLERANCE: f32 = 0.02;
+/// The contrast bands' (`band=albedo`, `band=depth`) threshold unless `contrast=T` says
+/// otherwise: the least difference of the two sides' tones (albedo luminance, or the
+/// background's radiance's) or distances from the camera, as a share of the larger.
+pub const DEFAULT_BAND_CONTRAST: f32 = 0.5;
 /// `ours`' search beyond the window unless `search=K` says otherwise.
 pub const DEFAULT_SEARCH: u32 = 0;
 /// VPLs unless `vpls=N` says otherwise.
 pub const DEFAULT_VPLS: u32 = 1024;
+
+/// `band=...`: which pixels `exact-edges=R` shades exactly.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Band {
+    Surface,
+    Object,
+    Albedo,
+    Depth,
+}
 
 /// How the window's subset estimates become a pixel's VPL irradiance (the FILTER define).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -167,6 +180,19 @@ pub struct InterleavedConfig {
     /// within R (`object`: silhouettes and contacts, where FLIP's edge features magnify an error
     /// most; a crease within an object keeps the ordinary filter and its fallback).
     pub band_objects: bool,
+    /// `band=albedo|depth` (with `exact-edges=R`; they set `band_objects` too), `contrast=T`: of
+    /// the object band's pixels only those whose square holds the background or a pixel of
+    /// another object whose tone (`albedo`: the luminance of its albedo, the background's
+    /// radiance's) or distance from the camera (`depth`; the background always differs) differs
+    /// from the pixel's by at least T of the larger of the two. 0: off (the object band, or the
+    /// surface band).
+    pub band_contrast: f32,
+    /// `band=depth`: the contrast band's two sides compared by their distance from the camera
+    /// (the background always differs), not by their tone.
+    pub band_depth: bool,
+    /// `side=both|near|far` (`band=depth`): 0 both sides of a depth step make the band, 1 the
+    /// nearer side only (the background counts as farther), 2 the farther side only.
+    pub band_side: u32,
     /// `normal=C` (`ours`): a window pixel is on p's surface only where the two normals' dot is
     /// at least C (default [`DEFAULT_SAME_NORMAL_COS`]).
     pub same_normal_cos: f32,
@@ -252,6 +278,8 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
     let (mut implicit, mut debug, mut floor, mut direct) = (false, false, false, false);
     let mut exact_edges = 0;
     let mut band = None;
+    let mut contrast = None;
+    let mut band_side = None;
     let mut parts = Parts::All;
     let mut fallback = None;
     let mut window = None;
@@ -335,10 +363,38 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
             }
             "band" => {
                 band = match p.split_once('=').map(|(_, v)| v) {
-                    Some("surface") => Some(false),
-                    Some("object") => Some(true),
-                    _ => return Err(format!("interleaved `{p}`: band=surface or band=object")),
+                    Some("surface") => Some(Band::Surface),
+                    Some("object") => Some(Band::Object),
+                    Some("albedo") => Some(Band::Albedo),
+                    Some("depth") => Some(Band::Depth),
+                    _ => {
+                        return Err(format!(
+                            "interleaved `{p}`: band=surface, band=object, band=albedo or band=depth"
+                        ));
+                    }
                 };
+                None
+            }
+            "side" => {
+                band_side = match p.split_once('=').map(|(_, v)| v) {
+                    Some("both") => Some(0),
+                    Some("near") => Some(1),
+                    Some("far") => Some(2),
+                    _ => {
+                        return Err(format!(
+                            "interleaved `{p}`: side=both, side=near or side=far"
+                        ));
+                    }
+                };
+                None
+            }
+            "contrast" => {
+                let t = p.split_once('=').and_then(|(_, v)| v.parse::<f32>().ok());
+                contrast = Some(t.filter(|t| *t > 0.0 && *t <= 1.0).ok_or_else(|| {
+                    format!(
+                        "interleaved `{p}`: contrast=T with T a share of the brighter tone,                          above 0 and at most 1"
+                    )
+                })?);
                 None
             }
             "search" => {
@@ -384,8 +440,8 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
                     "interleaved",
                     p,
                     "vpls=N, points=N, rsm=R, reach=D, clamp=D, one filter of none (raw), box, \
-                     ours, seed, and search=0|1, enough=K, exact-edges[=R], band=surface|object, \
-                     normal=C, plane=T, \
+                     ours, seed, and search=0|1, enough=K, exact-edges[=R], \
+                     band=surface|object|albedo|depth, contrast=T, normal=C, plane=T, \
                      direct, implicit, debug, floor, fallback=pairs|inline, window=tile|fetch, \
                      parts=base|lights|filter",
                 ));
@@ -455,6 +511,20 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
                 .into(),
         );
     }
+    if band_side.is_some() && band != Some(Band::Depth) {
+        return Err(
+            "interleaved: `side=...` says which side of a depth step `band=depth` takes; give \
+             `band=depth` too"
+                .into(),
+        );
+    }
+    if contrast.is_some() && !matches!(band, Some(Band::Albedo | Band::Depth)) {
+        return Err(
+            "interleaved: `contrast=T` is the threshold of a contrast band; give \
+             `band=albedo` or `band=depth` too"
+                .into(),
+        );
+    }
     if implicit && floor {
         return Err(
             "interleaved: `floor` measures the split and gather passes, which `implicit` does not \
@@ -471,7 +541,13 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
         search,
         enough: enough.unwrap_or(m * n),
         exact_edges,
-        band_objects: band.unwrap_or(false),
+        band_objects: matches!(band, Some(Band::Object | Band::Albedo | Band::Depth)),
+        band_contrast: match band {
+            Some(Band::Albedo | Band::Depth) => contrast.unwrap_or(DEFAULT_BAND_CONTRAST),
+            _ => 0.0,
+        },
+        band_depth: band == Some(Band::Depth),
+        band_side: band_side.unwrap_or(0),
         same_normal_cos,
         plane_tolerance,
         floor,
@@ -589,6 +665,9 @@ pub fn lighting_variant(config: &InterleavedConfig) -> InterleavedLighting {
         enough: config.enough,
         exact_edges: config.exact_edges,
         band_objects: config.band_objects,
+        band_contrast: config.band_contrast,
+        band_depth: config.band_depth,
+        band_side: config.band_side,
         same_normal_cos: config.same_normal_cos,
         plane_tolerance: config.plane_tolerance,
         filter: config.filter as u32,
