@@ -43,7 +43,7 @@ const LAYERS: [LayerDecl; 3] = [
 pub const REGISTRATION: Registration = Registration {
     name: "interleaved",
     grammar: "interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D]\
-              [:ours|seed|box|none][:search=S][:enough=K][:exact-edges[=R]][:band=surface|object|albedo|depth][:contrast=T]\
+              [:ours|seed|box|none][:search=S][:enough=K][:exact-edges[=R]][:band=surface|object|albedo|depth][:contrast=T][:side=both|near|far]\
               [:direct][:implicit][:debug]\
               [:floor][:fallback=pairs|inline][:window=tile|fetch][:parts=base|lights|filter]",
     about: "deferred's VPLs, interleaved: the G-buffer split into M x N sub-images, sub-image k \
