@@ -168,6 +168,44 @@ enum Mode {
     Seed,
 }
 
+impl Mode {
+    /// `ours` with `search`, `enough` and `exact-edges=R` (R = 0: none), the band `surface`'s.
+    fn ours(search: bool, enough: usize, exact_edges: i64) -> Mode {
+        Mode::Ours {
+            search,
+            enough,
+            exact_edges,
+            band_objects: false,
+            band_contrast: 0.0,
+            band_depth: false,
+            band_side: 0,
+        }
+    }
+
+    /// The same with the object band (`band=object`: `depth` false, `contrast` 0), or of it only
+    /// the pixels past a contrast (`band=albedo` or, with `depth`, `band=depth`; `contrast=T`),
+    /// on `side` 0 both, 1 near, 2 far.
+    fn band(self, depth: bool, contrast: f64, side: u8) -> Mode {
+        match self {
+            Mode::Ours {
+                search,
+                enough,
+                exact_edges,
+                ..
+            } => Mode::Ours {
+                search,
+                enough,
+                exact_edges,
+                band_objects: true,
+                band_contrast: contrast,
+                band_depth: depth,
+                band_side: side,
+            },
+            other => other,
+        }
+    }
+}
+
 type Px = (i64, i64);
 
 /// What the model of the filters reads of a frame, in f64.
@@ -362,116 +400,29 @@ fn the_filters_match_their_cpu_model() {
         for (mode, param) in [
             (Mode::None, "none"),
             (Mode::Box, "box"),
+            (Mode::ours(false, subsets, 0), "ours"),
+            (Mode::ours(true, subsets, 0), "search=1"),
+            (Mode::ours(false, subsets / 2, 0), "enough=HALF"),
+            (Mode::ours(false, subsets, 1), "exact-edges"),
+            (Mode::ours(true, subsets, 2), "exact-edges=2:search=1"),
             (
-                Mode::Ours {
-                    search: false,
-                    enough: subsets,
-                    exact_edges: 0,
-                    band_objects: false,
-                    band_contrast: 0.0,
-                    band_depth: false,
-                    band_side: 0,
-                },
-                "ours",
-            ),
-            (
-                Mode::Ours {
-                    search: true,
-                    enough: subsets,
-                    exact_edges: 0,
-                    band_objects: false,
-                    band_contrast: 0.0,
-                    band_depth: false,
-                    band_side: 0,
-                },
-                "search=1",
-            ),
-            (
-                Mode::Ours {
-                    search: false,
-                    enough: subsets / 2,
-                    exact_edges: 0,
-                    band_objects: false,
-                    band_contrast: 0.0,
-                    band_depth: false,
-                    band_side: 0,
-                },
-                "enough=HALF",
-            ),
-            (
-                Mode::Ours {
-                    search: false,
-                    enough: subsets,
-                    exact_edges: 1,
-                    band_objects: false,
-                    band_contrast: 0.0,
-                    band_depth: false,
-                    band_side: 0,
-                },
-                "exact-edges",
-            ),
-            (
-                Mode::Ours {
-                    search: true,
-                    enough: subsets,
-                    exact_edges: 2,
-                    band_objects: false,
-                    band_contrast: 0.0,
-                    band_depth: false,
-                    band_side: 0,
-                },
-                "exact-edges=2:search=1",
-            ),
-            (
-                Mode::Ours {
-                    search: true,
-                    enough: subsets,
-                    exact_edges: 2,
-                    band_objects: true,
-                    band_contrast: 0.0,
-                    band_depth: false,
-                    band_side: 0,
-                },
+                Mode::ours(true, subsets, 2).band(false, 0.0, 0),
                 "exact-edges=2:band=object:search=1",
             ),
             // The background (black) against the floor and the wall makes the band, the
             // floor against the wall (tones 0.5 and 0.75: a contrast of 1/3) does not.
             (
-                Mode::Ours {
-                    search: true,
-                    enough: subsets,
-                    exact_edges: 2,
-                    band_objects: true,
-                    band_contrast: 0.5,
-                    band_depth: false,
-                    band_side: 0,
-                },
+                Mode::ours(true, subsets, 2).band(false, 0.5, 0),
                 "exact-edges=2:band=albedo:contrast=0.5:search=1",
             ),
             // The same band by distance: only the background is that far from the floor or
             // the wall (their contact is within a few per cent).
             (
-                Mode::Ours {
-                    search: true,
-                    enough: subsets,
-                    exact_edges: 2,
-                    band_objects: true,
-                    band_contrast: 0.1,
-                    band_depth: true,
-                    band_side: 0,
-                },
+                Mode::ours(true, subsets, 2).band(true, 0.1, 0),
                 "exact-edges=2:band=depth:contrast=0.1:search=1",
             ),
             (
-                Mode::Ours {
-                    search: true,
-                    enough: subsets,
-                    exact_edges: 2,
-                    band_objects: true,
-                    band_contrast: 0.1,
-                    band_depth: true,
-                    band_side: 1,
-                },
+                Mode::ours(true, subsets, 2).band(true, 0.1, 1),
                 "exact-edges=2:band=depth:contrast=0.1:side=near:search=1",
             ),
             (Mode::Seed, "seed"),
@@ -636,15 +587,7 @@ fn direct_matches_its_cpu_model() {
     let clamp_d2 = f64::from(CLAMP * CLAMP);
     for (m, n) in [(4i64, 4i64), (3, 2)] {
         let subsets = (m * n) as usize;
-        let ours = |exact_edges| Mode::Ours {
-            search: false,
-            enough: subsets,
-            exact_edges,
-            band_objects: false,
-            band_contrast: 0.0,
-            band_depth: false,
-            band_side: 0,
-        };
+        let ours = |exact_edges| Mode::ours(false, subsets, exact_edges);
         for (mode, param) in [
             (Mode::None, "none"),
             (Mode::Box, "box"),
@@ -782,96 +725,16 @@ fn the_filters_are_the_identity_on_a_constant_image() {
         let all = (m * n) as usize;
         for mode in [
             Mode::None,
-            Mode::Ours {
-                search: false,
-                enough: all,
-                exact_edges: 0,
-                band_objects: false,
-                band_contrast: 0.0,
-                band_depth: false,
-                band_side: 0,
-            },
-            Mode::Ours {
-                search: true,
-                enough: all,
-                exact_edges: 0,
-                band_objects: false,
-                band_contrast: 0.0,
-                band_depth: false,
-                band_side: 0,
-            },
-            Mode::Ours {
-                search: false,
-                enough: all.div_ceil(2),
-                exact_edges: 0,
-                band_objects: false,
-                band_contrast: 0.0,
-                band_depth: false,
-                band_side: 0,
-            },
-            Mode::Ours {
-                search: true,
-                enough: 1,
-                exact_edges: 0,
-                band_objects: false,
-                band_contrast: 0.0,
-                band_depth: false,
-                band_side: 0,
-            },
-            Mode::Ours {
-                search: false,
-                enough: all,
-                exact_edges: 1,
-                band_objects: false,
-                band_contrast: 0.0,
-                band_depth: false,
-                band_side: 0,
-            },
-            Mode::Ours {
-                search: true,
-                enough: all,
-                exact_edges: 2,
-                band_objects: true,
-                band_contrast: 0.0,
-                band_depth: false,
-                band_side: 0,
-            },
-            Mode::Ours {
-                search: true,
-                enough: all,
-                exact_edges: 2,
-                band_objects: true,
-                band_contrast: 0.5,
-                band_depth: false,
-                band_side: 0,
-            },
-            Mode::Ours {
-                search: true,
-                enough: all,
-                exact_edges: 2,
-                band_objects: true,
-                band_contrast: 0.5,
-                band_depth: true,
-                band_side: 0,
-            },
-            Mode::Ours {
-                search: false,
-                enough: all,
-                exact_edges: 1,
-                band_objects: true,
-                band_contrast: 0.2,
-                band_depth: true,
-                band_side: 1,
-            },
-            Mode::Ours {
-                search: true,
-                enough: all,
-                exact_edges: 3,
-                band_objects: true,
-                band_contrast: 0.2,
-                band_depth: true,
-                band_side: 2,
-            },
+            Mode::ours(false, all, 0),
+            Mode::ours(true, all, 0),
+            Mode::ours(false, all.div_ceil(2), 0),
+            Mode::ours(true, 1, 0),
+            Mode::ours(false, all, 1),
+            Mode::ours(true, all, 2).band(false, 0.0, 0),
+            Mode::ours(true, all, 2).band(false, 0.5, 0),
+            Mode::ours(true, all, 2).band(true, 0.5, 0),
+            Mode::ours(false, all, 1).band(true, 0.2, 1),
+            Mode::ours(true, all, 3).band(true, 0.2, 2),
             Mode::Seed,
         ] {
             for y in 0..h {
