@@ -49,11 +49,10 @@ layout(set = 0, binding = BINDING_DEBUG, rgba32f) uniform writeonly image2D debu
 #include "../inc/perceptual.glsl"
 #include "../upscale/geometry.glsl"
 
-
 // The kernel at squared distance x2 (already scaled): KERNEL 0 tent (radius 1), 1 Catmull-Rom,
 // 2 Lanczos-2, sinc(x) sinc(x / 2), as a degree-9 polynomial in u = x2 / 2 - 1 (a Chebyshev fit
 // on [0, 4], within 5e-7 of the sines in f32; the reference's `lanczos2_poly`). The sines cost
-// about a third of this pass on lavapipe. (FSR 2's own polynomial is off by up to 0.049: on the
+// 15-20% of this pass on lavapipe. (FSR 2's own polynomial is off by up to 0.049: on the
 // moving demo it raised FLIP by 2.4%; docs/upsampling.md.)
 float kernel_weight_sq(float x2) {
 #if KERNEL == 0

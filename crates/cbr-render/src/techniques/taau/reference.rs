@@ -66,7 +66,7 @@ pub fn kernel_weight_sq(kernel: Kernel, x2: f32) -> f32 {
 /// Lanczos-2, sinc(x) sinc(x / 2), at squared distance `x2` in [0, 4) as accumulate.comp
 /// evaluates it: a degree-9 polynomial in u = x2 / 2 - 1, the Chebyshev least-squares fit on
 /// [0, 4] in f64 converted to monomials and rounded to f32, Horner's rule in f32. Within 5e-7 of
-/// the sines (`the_lanczos_polynomial_is_the_sines`); the shader's sines cost about 15% of the
+/// the sines (`the_lanczos_polynomial_is_the_sines`); the shader's sines cost 15-20% of the
 /// accumulate pass on lavapipe (docs/upsampling.md).
 pub fn lanczos2_poly(x2: f32) -> f32 {
     const C: [f32; 10] = [
