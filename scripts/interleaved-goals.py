@@ -17,14 +17,19 @@ REF = "deferred:vpls=1024"
 
 
 def load(path):
+    """bench.json and the 1-minute load average before and after the run: from uptime-*.txt
+    beside it where a script wrote them, else from bench.json's `machine` (since 2026-12-02)."""
     d = os.path.dirname(path)
+    b = json.load(open(path))
+    recorded = (b.get("machine") or {}).get("load_average") or {}
     up = []
-    for n in ("uptime-before.txt", "uptime-after.txt"):
+    for n, k in (("uptime-before.txt", "start"), ("uptime-after.txt", "end")):
         try:
             up.append(open(os.path.join(d, n)).read().split("load average:")[1].split(",")[0].strip())
         except (OSError, IndexError):
-            up.append("?")
-    return json.load(open(path)), up
+            v = recorded.get(k)
+            up.append(f"{v[0]:.2f}" if v else "?")
+    return b, up
 
 
 def specs_table(paths, specs):

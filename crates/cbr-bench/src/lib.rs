@@ -18,6 +18,7 @@ pub mod equal_error;
 pub mod gpu_stats;
 pub mod help;
 pub mod interleaved_attribution;
+pub mod machine;
 pub mod measure;
 pub mod merge;
 pub mod motion_attribution;
@@ -230,6 +231,7 @@ fn units(groups: &[Group], (warmup, frames): (u32, u32), share_reference: bool) 
 
 pub fn run(a: &BenchOptions) -> Result<BenchResult> {
     let started = Instant::now();
+    let load_at_start = machine::load_average();
     let sweep: SweepFile = match &a.sweep {
         Some(p) => read_sweep(p)?,
         None => SweepFile::default(),
@@ -654,6 +656,7 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
         "created_unix_s": std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs()).unwrap_or(0),
         "command": std::env::args().collect::<Vec<_>>(),
         "device": info,
+        "machine": machine::describe(load_at_start),
         "scene": scene_json(&scenes[0]),
         "scenes": scenes.iter().map(scene_json).collect::<Vec<_>>(),
         "protocol": {

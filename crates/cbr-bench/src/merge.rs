@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use serde_json::{Value, json};
 
-use crate::assemble;
+use crate::{assemble, machine};
 
 /// Merged shards: bench.json, and the files its rows name (source, path relative to bench.json).
 pub struct Merged {
@@ -257,6 +257,7 @@ pub fn merge(dirs: &[PathBuf]) -> Result<Merged> {
                 "shard": k,
                 "dir": dirs[i],
                 "host": shards[i]["shard"]["host"],
+                "machine": shards[i]["machine"],
                 "wall_s": shards[i]["wall_s"],
                 "estimated_cost_s": shards[i]["shard"]["estimated_cost_s"][*k as usize],
                 "reference_frames": shards[i]["shard"]["reference_frames"],
@@ -264,6 +265,20 @@ pub fn merge(dirs: &[PathBuf]) -> Result<Merged> {
             }))
             .collect::<Vec<_>>()
     );
+    // The shards' machine when they all ran on one kind (CPU, logical CPUs, SIMD, memory; each
+    // shard's hostname and load average are in `merged_from`), else null: then the rows' times
+    // are of different machines and not comparable as one run's.
+    let kind = machine::identity(&first["machine"]);
+    json["machine"] = if shards
+        .iter()
+        .all(|s| machine::identity(&s["machine"]) == kind)
+    {
+        let mut m = kind;
+        m["per_shard"] = json!("hostname and load average: merged_from");
+        m
+    } else {
+        Value::Null
+    };
     if let Some(o) = json.as_object_mut() {
         o.remove("shard");
     }

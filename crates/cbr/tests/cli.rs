@@ -527,6 +527,20 @@ fn check_bench_schema(b: &serde_json::Value) {
         assert!(!b[k].is_null(), "bench.json lacks `{k}`");
     }
     assert!(b["device"]["name"].is_string() && b["device"]["driver_info"].is_string());
+    // The machine (on lavapipe, the device): its logical CPUs always; on Linux its CPU and the
+    // load average at the start and end.
+    let m = &b["machine"];
+    assert!(m["logical_cpus"].as_u64().is_some_and(|n| n >= 1), "{m}");
+    if std::path::Path::new("/proc/loadavg").exists() {
+        for k in ["start", "end"] {
+            let l = m["load_average"][k].as_array().expect("load average");
+            assert!(
+                l.len() == 3 && l.iter().all(|v| v.as_f64().is_some_and(|v| v >= 0.0)),
+                "{m}"
+            );
+        }
+        assert!(m["cpu"].is_string() && m["simd"].is_array(), "{m}");
+    }
     let rows = b["rows"].as_array().expect("rows");
     assert!(!rows.is_empty());
     let reference = b["reference"].as_str().expect("reference named at the top");

@@ -156,6 +156,16 @@ fn shards_merge_into_the_unsharded_rows_and_bad_ones_are_named() {
     let (w, m) = (bench_json(&whole), bench_json(&merged));
     same_rows(&w, &m);
     assert!(m.get("shard").is_none());
+    // All four shards ran here: one kind of machine, each shard's own load in merged_from.
+    assert_eq!(
+        m["machine"]["per_shard"],
+        "hostname and load average: merged_from"
+    );
+    assert_eq!(m["machine"]["logical_cpus"], w["machine"]["logical_cpus"]);
+    assert!(m["machine"].get("load_average").is_none());
+    for f in m["merged_from"].as_array().unwrap() {
+        assert!(f["machine"]["load_average"].is_object(), "{f}");
+    }
     for r in m["rows"].as_array().unwrap() {
         if let Some(img) = r["images"]["image"].as_str() {
             assert!(merged.join(img).is_file(), "{img}");
