@@ -22,7 +22,8 @@
 //     (band_tone_fetch: the luminance of its albedo, or of the background's radiance) differs
 //     from p's by at least T of the brighter of the two (band_contrast); with BAND_DEPTH too
 //     (`band=depth`) the background, or such a pixel whose distance from the camera differs from
-//     p's by at least T of the farther.
+//     p's by at least T of the farther; with BAND_SIDE 1 (`side=near`) only where p is the nearer
+//     of the two (the background counting as farther), 2 (`side=far`) only the farther.
 // With DIRECT (`direct`) the specular estimates of the point lights go through the same filter
 // with the same choices (the same pixels, weights and fallback subsets), into `specular`.
 layout(set = 0, binding = BINDING_IRRADIANCE) uniform sampler2D g_irradiance;
@@ -317,10 +318,10 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, float ns, out
             boundary = true;
 #elif BAND_SIDE == 1
         // `side=near`: only p on the nearer side (q the background, or farther).
-        if (on_screen(q) && window_id(q) != object &&
-            (window_id(q) == 0u ||
-             length(window_position(q)) - tone >= BAND_CONTRAST * length(window_position(q))))
-            boundary = true;
+        if (on_screen(q) && window_id(q) != object) {
+            float dq = length(window_position(q));
+            if (window_id(q) == 0u || dq - tone >= BAND_CONTRAST * dq) boundary = true;
+        }
 #else
         // `side=far`: only p on the farther side (q nearer).
         if (on_screen(q) && window_id(q) != object && window_id(q) != 0u &&

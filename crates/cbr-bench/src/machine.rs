@@ -36,6 +36,7 @@ pub fn parse_cpuinfo(text: &str) -> Cpu {
     };
     let name = field("model name")
         .or_else(|| field("Hardware"))
+        .or_else(|| field("CPU part"))
         .unwrap_or_default();
     let id = match (field("vendor_id"), field("CPU implementer")) {
         (Some(vendor), _) => {
@@ -62,11 +63,6 @@ pub fn parse_cpuinfo(text: &str) -> Cpu {
         .unwrap_or_default();
     let has: std::collections::HashSet<&str> = flags.split_whitespace().collect();
     let simd = SIMD.iter().copied().filter(|s| has.contains(s)).collect();
-    let name = if name.is_empty() {
-        field("CPU part").unwrap_or_default()
-    } else {
-        name
-    };
     Cpu { name, id, simd }
 }
 

@@ -1054,8 +1054,8 @@ const CARD_ALBEDO: f64 = 0.6;
 /// subsets; every other pixel is plain `ours`' bit for bit, with its fallback count. On
 /// `floor_wall_and_card` (64 x 48; tones: wall 0.75, floor 0.5, card 0.6, background 0.1):
 /// `albedo` with T = 0.15 is the object band, 0.25 leaves out the card against the wall and the
-/// floor, 0.5 the contact too, 0.85
-/// the floor's silhouette, 0.9 everything; `depth` with T = 0.05 leaves out the contact only and
+/// floor, 0.5 the contact too, 0.85 the floor's silhouette, 0.9 everything; `depth` with
+/// T = 0.05 leaves out the contact only and
 /// T = 1 keeps the background's boundaries only; `depth:side=near` keeps the nearer side of
 /// each depth step (the card's pixels before the wall, the floor's and the wall's before the
 /// background), `depth:side=far` the farther (the wall's and the floor's around the card), and

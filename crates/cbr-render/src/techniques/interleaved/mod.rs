@@ -392,7 +392,8 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
                 let t = p.split_once('=').and_then(|(_, v)| v.parse::<f32>().ok());
                 contrast = Some(t.filter(|t| *t > 0.0 && *t <= 1.0).ok_or_else(|| {
                     format!(
-                        "interleaved `{p}`: contrast=T with T a share of the brighter tone,                          above 0 and at most 1"
+                        "interleaved `{p}`: contrast=T with T a share of the larger of the two \
+                         sides' tones or distances, above 0 and at most 1"
                     )
                 })?);
                 None
@@ -441,7 +442,8 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
                     p,
                     "vpls=N, points=N, rsm=R, reach=D, clamp=D, one filter of none (raw), box, \
                      ours, seed, and search=0|1, enough=K, exact-edges[=R], \
-                     band=surface|object|albedo|depth, contrast=T, normal=C, plane=T, \
+                     band=surface|object|albedo|depth, contrast=T, side=both|near|far, normal=C, \
+                     plane=T, \
                      direct, implicit, debug, floor, fallback=pairs|inline, window=tile|fetch, \
                      parts=base|lights|filter",
                 ));
