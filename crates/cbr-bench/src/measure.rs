@@ -152,6 +152,31 @@ pub enum Role<'a> {
     Timing,
 }
 
+/// One frame of a configuration, rendered under a symbol of its own. On lavapipe the frame's
+/// GPU work runs inside this call (render submits and waits), so `scripts/work-count.py` runs
+/// the bench under callgrind with `--dump-before` on this function and on [`counted_frame_end`],
+/// which it calls when the frame is done: each dump that the second one triggers holds one
+/// rendered frame's instructions, lavapipe's JIT code apart (docs/bench-and-report.md, "Work
+/// counts"). Never inlined: the names must survive into the binary. Outside valgrind it is the
+/// plain call.
+#[inline(never)]
+pub fn counted_frame(
+    r: &mut Renderer,
+    scene: &Scene,
+    frame: u32,
+) -> Result<FrameOutput, cbr_gpu::GpuError> {
+    let out = r.render(scene, frame);
+    counted_frame_end();
+    out
+}
+
+/// The end of [`counted_frame`]'s frame, for callgrind's `--dump-before` (a dump when a
+/// function is left misses a call that ends in a jump). Does nothing.
+#[inline(never)]
+pub fn counted_frame_end() {
+    std::hint::black_box(());
+}
+
 pub fn measure(
     gpu: &Gpu,
     scene: &Scene,
@@ -199,7 +224,7 @@ pub fn measure(
     let mut stability = Stability::default();
     bar.inc(u64::from(first));
     for f in first..warmup + frames {
-        let out = r.render(scene, f)?;
+        let out = counted_frame(&mut r, scene, f)?;
         bar.inc(1);
         if out.timings.is_empty() && out.cached.is_some() && f >= warmup {
             m.cached_frames += 1;
