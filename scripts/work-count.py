@@ -13,7 +13,10 @@ GPU work runs inside it; the end is `counted_frame_end`, which it calls last). E
 
 - `jit`: lavapipe's JIT code, the compiled shaders and the raster's generated code: the GPU work;
 - `driver`: libvulkan_lvp.so (binning, rasterisation, dispatch) and the Vulkan loader;
-- `host`: everything else the frame ran (cbr's command recording and readback, libc, LLVM).
+- `llvm`: LLVM compiling a shader variant that lavapipe builds at its first use, inside a frame
+  (in the first frame of a row; zero once warm);
+- `host`: everything else the frame ran (cbr's command recording and readback, and libc, whose
+  memset and memcpy also carry lavapipe's buffer fills and copies).
 
 `jit` is deterministic: the same binary, driver, shaders and inputs give the same count on every
 run (checked 2026-12-02: two runs of the demo at 160x90 agreed on every frame's count of three
@@ -46,12 +49,14 @@ MARKER = "*counted_frame*"
 
 
 def classify(obj):
-    """The part an object's instructions count in: jit, driver or host."""
+    """The part an object's instructions count in: jit, driver, llvm or host."""
     if obj in ("???", ""):
         return "jit"
     base = os.path.basename(obj)
     if base.startswith("libvulkan_lvp") or base.startswith("libvulkan.so"):
         return "driver"
+    if base.startswith("libLLVM"):
+        return "llvm"
     return "host"
 
 
@@ -66,7 +71,7 @@ def parse_dump(path):
     fetches): that pass's work."""
     names = {}
     fn_names = {}
-    parts = {"jit": 0, "driver": 0, "host": 0}
+    parts = {"jit": 0, "driver": 0, "llvm": 0, "host": 0}
     self_cost = {}
     inclusive_calls = {}
     entry_calls = {}
@@ -226,14 +231,16 @@ def main():
                 shutil.rmtree(tmp, ignore_errors=True)
             sys.exit(f"{' '.join(cmd)} failed:\n{p.stderr[-3000:]}")
         log = p.stdout + "\n" + p.stderr
-        frames = frame_dumps(prefix)
         if a.keep_dumps:
             with open(os.path.join(dumps, "bench.log"), "w") as f:
                 f.write(log)
             with open(os.path.join(dumps, "command"), "w") as f:
                 f.write("\0".join(cmd))
-        else:
-            shutil.rmtree(tmp, ignore_errors=True)
+        try:
+            frames = frame_dumps(prefix)
+        finally:
+            if not a.keep_dumps:
+                shutil.rmtree(tmp, ignore_errors=True)
     rows = rows_rendered(log)
     if not rows:
         sys.exit("the bench's log names no configuration (its 'set up in' lines)")
@@ -248,7 +255,7 @@ def main():
         measured = mine[-a.frames:]
         entry = {"spec": name, "width": w, "height": h, "frames_rendered": n,
                  "frames_counted": len(measured)}
-        for part in ("jit", "driver", "host"):
+        for part in ("jit", "driver", "llvm", "host"):
             entry[part] = statistics.median_low(f[part] for f in measured)
             entry[part + "_per_frame"] = [f[part] for f in mine]
         # The JIT entry points of the median frame: one per dispatch or raster function.
@@ -267,7 +274,8 @@ def main():
     doc = {
         "what": "instructions per frame under callgrind (valgrind's CPU: AVX2), llvmpipe on the "
                 "calling thread; jit = lavapipe's JIT code (deterministic), driver = "
-                "libvulkan_lvp.so and the loader, host = the rest of the frame's call; the "
+                "libvulkan_lvp.so and the loader, llvm = shaders compiled at first use, host = "
+                "the rest of the frame's call (libc's fills and copies among it); the "
                 "median of the measured frames (the lower middle one of an even count)",
         "command": cmd,
         "scene": a.scene,
@@ -283,11 +291,12 @@ def main():
     os.replace(path + ".tmp", path)
     print(f"{a.scene}, {a.width}x{a.height}, {a.warmup} warm-up + {a.frames} counted frame(s), "
           f"instructions per frame (G), ratios: {against} over the row")
-    print("| spec | jit | driver | host | x less jit work | x less jit + driver |")
-    print("|---|---|---|---|---|---|")
+    print("| spec | jit | driver | llvm | host | x less jit work | x less jit + driver |")
+    print("|---|---|---|---|---|---|---|")
     for r in results:
         print(f"| `{r['spec']}` | {r['jit'] / 1e9:.3f} | {r['driver'] / 1e9:.3f} | "
-              f"{r['host'] / 1e9:.3f} | {r['jit_ratio']:.2f} | {r['jit_driver_ratio']:.2f} |")
+              f"{r['llvm'] / 1e9:.3f} | {r['host'] / 1e9:.3f} | {r['jit_ratio']:.2f} | "
+              f"{r['jit_driver_ratio']:.2f} |")
     for r in results if a.entries else []:
         print(f"\n`{r['spec']}`: the JIT entry points of its median frame (calls: how often "
               f"lavapipe entered each, a compute pass once per workgroup), instructions "
