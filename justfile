@@ -95,6 +95,21 @@ bench-interleaved-cost tag="1": setup
     scripts/interleaved-cost.sh {{tag}} {{out}}
     python3 scripts/interleaved-table.py {{out}}/bench/ic-{{tag}}/*/bench.json
 
+# Issue 57's goal in instructions (docs/interleaved.md, "Issue 57 in instructions"): lavapipe's JIT
+# work per frame under callgrind (scripts/work-count.py), the same on any host, for the reference,
+# `search=1` and the near-side depth band on four scenes. At 1280x720 about 50 minutes of one core
+# (the reference's frame is 110-190 G instructions); `just interleaved-work 320 180` in about 12.
+interleaved-work width="1280" height="720": setup
+    for s in builtin:demo scenes/sibenik.toml scenes/foliage.toml scenes/specular-sun.toml; do \
+        n=$(basename "$s" .toml | sed 's/builtin://'); \
+        python3 scripts/work-count.py "$s" deferred:vpls=1024 interleaved:4x4:vpls=1024:search=1 interleaved:4x4:vpls=1024:exact-edges=2:band=depth:contrast=0.1:side=near:search=1 --width {{width}} --height {{height}} --entries 8 -o {{out}}/work/interleaved-$n-{{width}}x{{height}} || exit 1; \
+    done
+
+# The `taau` passes against `native`'s frame in instructions (docs/upsampling.md, the cost goal):
+# 1280x720, 2 warm-up frames and one counted; about 10 minutes.
+taau-work: setup
+    python3 scripts/work-count.py builtin:demo native taau taau:0.5 native+taa upscale:fsr1 --against native --width 1280 --height 720 --warmup 2 --frames 1 --entries 12 -o {{out}}/work/taau
+
 # Instructions per resolved pixel of each resolve mode's CPU reference under callgrind: a cost
 # figure that does not move with the machine's load (docs/resolve.md).
 resolve-cost:
