@@ -97,8 +97,8 @@ bench-interleaved-cost tag="1": setup
 
 # Issue 57's goal in instructions (docs/interleaved.md, "Issue 57 in instructions"): lavapipe's JIT
 # work per frame under callgrind (scripts/work-count.py), the same on any host, for the reference,
-# `search=1` and the near-side depth band on four scenes. At 1280x720 about 50 minutes of one core
-# (the reference's frame is 110-190 G instructions); `just interleaved-work 320 180` in about 12.
+# `search=1` and the near-side depth band on four scenes. At 1280x720 about 75 minutes of one core
+# (the reference's frame is 110-190 G instructions); `just interleaved-work 320 180` in about 15.
 interleaved-work width="1280" height="720": setup
     for s in builtin:demo scenes/sibenik.toml scenes/foliage.toml scenes/specular-sun.toml; do \
         n=$(basename "$s" .toml | sed 's/builtin://'); \

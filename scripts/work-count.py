@@ -9,7 +9,8 @@ how fast the host is.
 Runs `cbr bench SCENE --timing-only --no-cache --techniques TECHNIQUE,...` once under callgrind,
 with llvmpipe on the calling thread (LP_NUM_THREADS=0) and a dump at the start and at the end of
 every call of `cbr_bench::measure::counted_frame` (one rendered frame: on lavapipe the frame's
-GPU work runs inside it; the end is `counted_frame_end`, which it calls last). Each frame's dump is split by object:
+GPU work runs inside it; the end is `counted_frame_end`, which it calls last). Each frame's dump
+is split by object:
 
 - `jit`: lavapipe's JIT code, the compiled shaders and the raster's generated code: the GPU work;
 - `driver`: libvulkan_lvp.so (binning, rasterisation, dispatch) and the Vulkan loader;
@@ -21,7 +22,7 @@ GPU work runs inside it; the end is `counted_frame_end`, which it calls last). E
 `jit` is deterministic: the same binary, driver, shaders and inputs give the same count on every
 run (checked 2026-12-02: two runs of the demo at 160x90 agreed on every frame's count of three
 techniques to the instruction).
-The other two move by a few per cent between runs (waits and allocator paths). Valgrind presents
+The other parts move by a few per cent between runs (waits and allocator paths). Valgrind presents
 its own CPU to the program (AVX2, no AVX-512), so LLVM compiles the same code on any x86-64 host
 valgrind runs on; a count is a count of 8-lane (256-bit) instructions, not a time: memory
 latency, gathers and caches, which make one host's ratios differ from another's, are not in it.
@@ -61,14 +62,14 @@ def classify(obj):
 
 
 def parse_dump(path):
-    """(trigger, {jit, driver, host}, entries) of one callgrind dump. The parts: the self cost of
+    """(trigger, {jit, driver, llvm, host}, entries) of one callgrind dump. The parts: the self cost of
     every cost line, by the object of the function it belongs to (a call's inclusive cost line is
     not self cost). The entries: {JIT function: [calls, inclusive instructions]} of the JIT
     functions that code outside the JIT calls (the compute passes' shaders, the raster's
     fragment and setup functions), with how often lavapipe entered each (a compute pass of this
     build's: once per workgroup, so a full-resolution pass at W x H in 8 x 8 groups has
-    W H / 64 calls) and its instructions inclusive of the JIT functions it calls (its texel
-    fetches): that pass's work."""
+    W H / 64 calls) and its instructions inclusive of everything it calls (its texel fetch
+    functions, and any libc or driver helper they call): that pass's work."""
     names = {}
     fn_names = {}
     parts = {"jit": 0, "driver": 0, "llvm": 0, "host": 0}
@@ -168,6 +169,11 @@ def rows_rendered(log):
     return out
 
 
+def ratio(x):
+    """A ratio for the table, or a dash where the row did no work to divide by."""
+    return "–" if x is None else f"{x:.2f}"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("scene")
@@ -184,7 +190,8 @@ def main():
     ap.add_argument("--keep-dumps", action="store_true",
                     help="keep callgrind's dumps and the bench's log in DIR/dumps")
     ap.add_argument("--reparse", action="store_true",
-                    help="read DIR/dumps of an earlier --keep-dumps run instead of running")
+                    help="read DIR/dumps of an earlier --keep-dumps run instead of running (its "
+                         "scene, techniques, size and frames, whatever the command line says)")
     ap.add_argument("-o", "--out", help="folder for work.json and the bench's output")
     a = ap.parse_args()
     against = a.against or a.techniques[0]
@@ -200,15 +207,21 @@ def main():
         env["CBR_SHADER_DIR"] = os.path.abspath(a.shaders)
     cmd = None
     dumps = os.path.join(out, "dumps")
+    saved = ("scene", "techniques", "width", "height", "warmup", "frames", "shaders")
     if a.reparse:
-        # The kept dumps of an earlier run (--keep-dumps): its log and its callgrind files.
+        # The kept dumps of an earlier run (--keep-dumps): its arguments, log and callgrind files.
         try:
+            with open(os.path.join(dumps, "args.json")) as f:
+                args = json.load(f)
             with open(os.path.join(dumps, "bench.log")) as f:
                 log = f.read()
             with open(os.path.join(dumps, "command")) as f:
                 cmd = f.read().split("\0")
         except OSError as e:
             sys.exit(f"--reparse: {e} (run once with --keep-dumps -o {out})")
+        for k in saved:
+            setattr(a, k, args[k])
+        against = a.against or a.techniques[0]
         frames = frame_dumps(os.path.join(dumps, "callgrind.out"))
     else:
         if a.keep_dumps:
@@ -216,27 +229,34 @@ def main():
             for name in os.listdir(dumps):
                 os.remove(os.path.join(dumps, name))
         tmp = dumps if a.keep_dumps else tempfile.mkdtemp(prefix="work-count-", dir=out)
-        prefix = os.path.join(tmp, "callgrind.out")
-        cmd = ["valgrind", "--tool=callgrind", "--smc-check=all-non-file",
-               f"--dump-before={MARKER}",
-               f"--callgrind-out-file={prefix}", a.cbr, "bench", a.scene,
-               "--width", str(a.width), "--height", str(a.height),
-               "--warmup", str(a.warmup), "--frames", str(a.frames),
-               "--timing-only", "--no-cache", "--techniques", ",".join(a.techniques),
-               "-o", os.path.join(out, "bench")]
-        p = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                           text=True)
-        if p.returncode != 0:
-            if not a.keep_dumps:
-                shutil.rmtree(tmp, ignore_errors=True)
-            sys.exit(f"{' '.join(cmd)} failed:\n{p.stderr[-3000:]}")
-        log = p.stdout + "\n" + p.stderr
-        if a.keep_dumps:
-            with open(os.path.join(dumps, "bench.log"), "w") as f:
-                f.write(log)
-            with open(os.path.join(dumps, "command"), "w") as f:
-                f.write("\0".join(cmd))
         try:
+            prefix = os.path.join(tmp, "callgrind.out")
+            cmd = ["valgrind", "--tool=callgrind", "--smc-check=all-non-file",
+                   f"--dump-before={MARKER}",
+                   f"--callgrind-out-file={prefix}", a.cbr, "bench", a.scene,
+                   "--width", str(a.width), "--height", str(a.height),
+                   "--warmup", str(a.warmup), "--frames", str(a.frames),
+                   "--timing-only", "--no-cache", "--techniques", ",".join(a.techniques),
+                   "-o", os.path.join(out, "bench")]
+            p = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True)
+            if p.returncode != 0:
+                sys.exit(f"{' '.join(cmd)} failed:\n{p.stderr[-3000:]}")
+            log = p.stdout + "\n" + p.stderr
+            # The counts are lavapipe's: refuse another device (VK_DRIVER_FILES set elsewhere).
+            with open(os.path.join(out, "bench", "bench.json")) as f:
+                device = json.load(f).get("device") or {}
+            if device.get("driver_name") != "llvmpipe":
+                sys.exit(f"the bench ran on {device.get('name')!r}, not lavapipe: the counts "
+                         f"are of lavapipe's JIT code (unset VK_DRIVER_FILES or point it at "
+                         f"lvp_icd)")
+            if a.keep_dumps:
+                with open(os.path.join(dumps, "bench.log"), "w") as f:
+                    f.write(log)
+                with open(os.path.join(dumps, "command"), "w") as f:
+                    f.write("\0".join(cmd))
+                with open(os.path.join(dumps, "args.json"), "w") as f:
+                    json.dump({k: getattr(a, k) for k in saved}, f)
             frames = frame_dumps(prefix)
         finally:
             if not a.keep_dumps:
@@ -295,12 +315,12 @@ def main():
     print("|---|---|---|---|---|---|---|")
     for r in results:
         print(f"| `{r['spec']}` | {r['jit'] / 1e9:.3f} | {r['driver'] / 1e9:.3f} | "
-              f"{r['llvm'] / 1e9:.3f} | {r['host'] / 1e9:.3f} | {r['jit_ratio']:.2f} | "
-              f"{r['jit_driver_ratio']:.2f} |")
+              f"{r['llvm'] / 1e9:.3f} | {r['host'] / 1e9:.3f} | {ratio(r['jit_ratio'])} | "
+              f"{ratio(r['jit_driver_ratio'])} |")
     for r in results if a.entries else []:
         print(f"\n`{r['spec']}`: the JIT entry points of its median frame (calls: how often "
               f"lavapipe entered each, a compute pass once per workgroup), instructions "
-              f"inclusive of the fetch functions they call")
+              f"inclusive of what they call, their texel fetches among it")
         print("| function | calls | instructions (G) | share of jit |")
         print("|---|---|---|---|")
         for e in r["jit_entries"][:a.entries]:
