@@ -61,6 +61,20 @@ def classify(obj):
     return "host"
 
 
+def compressed_name(line, table):
+    """The name of an `ob=`/`cob=` or `fn=`/`cfn=` line under callgrind's name compression:
+    `(id) name` defines id in `table` (objects and functions have a table each), `(id)` alone
+    refers to it."""
+    m = re.match(r"c?(?:ob|fn)=(?:\((\d+)\))?\s*(.*)$", line.rstrip("\n"))
+    ident, name = m.group(1), m.group(2)
+    if ident is not None:
+        if name:
+            table[ident] = name
+        else:
+            name = table.get(ident, "")
+    return name
+
+
 def parse_dump(path):
     """(trigger, {jit, driver, llvm, host}, entries) of one callgrind dump. The parts: the self cost of
     every cost line, by the object of the function it belongs to (a call's inclusive cost line is
@@ -103,23 +117,13 @@ def parse_dump(path):
                     self_cost[fn] = self_cost.get(fn, 0) + cost
                 continue
             if line.startswith("ob=") or line.startswith("cob="):
-                m = re.match(r"c?ob=(?:\((\d+)\))?\s*(.*)$", line.rstrip("\n"))
-                ident, name = m.group(1), m.group(2)
-                if ident is not None and name:
-                    names[ident] = name
-                if ident is not None and not name:
-                    name = names.get(ident, "")
+                name = compressed_name(line, names)
                 if line.startswith("ob="):
                     obj = name
                 else:
                     callee_obj = name
             elif line.startswith("fn=") or line.startswith("cfn="):
-                m = re.match(r"c?fn=(?:\((\d+)\))?\s*(.*)$", line.rstrip("\n"))
-                ident, name = m.group(1), m.group(2)
-                if ident is not None and name:
-                    fn_names[ident] = name
-                if ident is not None and not name:
-                    name = fn_names.get(ident, "")
+                name = compressed_name(line, fn_names)
                 if line.startswith("fn="):
                     fn = name
                 else:
