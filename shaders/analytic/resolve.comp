@@ -75,7 +75,6 @@ layout(std430, set = 0, binding = BINDING_CELLS_HI) readonly buffer CellsHi { uv
 layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
 layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
 layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
-layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
 layout(set = 0, binding = BINDING_OUT_COLOR, rgba16f) uniform writeonly image2D out_color;
 layout(set = 0, binding = BINDING_OUT_COVERAGE, r32f) uniform writeonly image2D out_coverage;
 layout(set = 0, binding = BINDING_OUT_COUNTS, rgba32ui) uniform writeonly uimage2D out_counts;

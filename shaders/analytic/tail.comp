@@ -27,7 +27,6 @@ layout(std430, set = 0, binding = BINDING_TAIL_MASKS) buffer TailMasks { uint ta
 // The scene's buffers, for the lighting.
 layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
 layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
-layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
 
 #include "../inc/shading.glsl"
 

@@ -17,9 +17,6 @@ layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 layout(set = 0, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
 layout(std430, set = 0, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
 layout(std430, set = 0, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
-layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
-layout(std430, set = 0, binding = BINDING_POINTS) readonly buffer Points { LightData points[]; };
-layout(std430, set = 0, binding = BINDING_VPLS) readonly buffer Vpls { Vpl vpls[]; };
 layout(std430, set = 0, binding = BINDING_COUNTER) buffer Counter {
     uint shaded_fragments;
     uint nonfinite_fragments;
@@ -119,6 +116,15 @@ bool defer_fallback(ivec2 px, vec3 c, uvec2 missing, vec3 sum) {
 }
 #endif
 
+// The point lights START <= i < END of ARRAY (element i - FIRST) added to c at p, each skipped
+// where no lane of the SIMD group is within its reach (`reaches`).
+#define POINT_LIGHTS(ARRAY, FIRST, START, END)                                                   \
+    for (uint i = (START); true; ++i) {                                                          \
+        while (CULL_LIGHTS != 0 && i < (END) && !subgroupAny(reaches(p, ARRAY[i - (FIRST)]))) ++i; \
+        if (i >= (END)) break;                                                                   \
+        add_light(c, p, n, v, albedo, m, ARRAY[i - (FIRST)]);                                    \
+    }
+
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
 #ifdef INTERLEAVED
@@ -147,22 +153,13 @@ void main() {
     // The scene's point lights, then the extra ones (`points=N`), in shade()'s order, each skipped
     // where no pixel of the SIMD group is within its reach (below); with `interleaved:...:direct`
     // they come filtered with the VPLs instead.
+    // Each list in two loops, its uniform part's and the rest's (light_buffers.glsl).
     vec3 v = normalize(-p);
-    uint i = frame.counts.x;
     uint end = frame.counts.x + frame.counts.y;
-    while (true) {
-        while (CULL_LIGHTS != 0 && i < end && !subgroupAny(reaches(p, lights[i]))) ++i;
-        if (i >= end) break;
-        add_light(c, p, n, v, albedo, m, lights[i]);
-        ++i;
-    }
-    i = 0u;
-    while (true) {
-        while (CULL_LIGHTS != 0 && i < pc.counts.x && !subgroupAny(reaches(p, points[i]))) ++i;
-        if (i >= pc.counts.x) break;
-        add_light(c, p, n, v, albedo, m, points[i]);
-        ++i;
-    }
+    POINT_LIGHTS(lights, 0u, frame.counts.x, min(end, UNIFORM_LIGHTS))
+    POINT_LIGHTS(more_lights, UNIFORM_LIGHTS, max(frame.counts.x, UNIFORM_LIGHTS), end)
+    POINT_LIGHTS(points, 0u, 0u, min(pc.counts.x, UNIFORM_LIGHTS))
+    POINT_LIGHTS(more_points, UNIFORM_LIGHTS, UNIFORM_LIGHTS, pc.counts.x)
 #endif
     if (pc.counts.y > 0u && (PARTS == 0 || PARTS == 3)) {
 #ifdef INTERLEAVED
@@ -197,7 +194,12 @@ void main() {
 #endif
 #else
         vec3 e = vec3(0.0);
-        for (uint i = 0u; i < pc.counts.y; ++i) e += vpl_irradiance(p, n, vpls[i], pc.params.x);
+        for (uint i = 0u; i < min(pc.counts.y, UNIFORM_VPLS); ++i) {
+            e += vpl_irradiance(p, n, vpls[i], pc.params.x);
+        }
+        for (uint i = UNIFORM_VPLS; i < pc.counts.y; ++i) {
+            e += vpl_irradiance(p, n, more_vpls[i - UNIFORM_VPLS], pc.params.x);
+        }
         c += albedo * e;
 #endif
     }

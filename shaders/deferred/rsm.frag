@@ -10,7 +10,8 @@
 
 layout(std430, set = SET_SCENE, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
 layout(std430, set = SET_SCENE, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
-layout(std430, set = SET_SCENE, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
+#define LIGHTS_SET SET_SCENE
+#include "../inc/light_buffers.glsl"
 layout(set = SET_MATERIAL, binding = BINDING_ALBEDO) uniform sampler2D albedo_tex;
 layout(set = SET_MATERIAL, binding = BINDING_MASK) uniform sampler2D mask_tex;
 

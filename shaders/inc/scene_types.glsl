@@ -58,6 +58,12 @@ struct MaterialData {
                 //    the textures themselves are bound in the material's descriptor set)
 };
 
+// Lights and VPLs a light buffer holds in its uniform part (inc/light_buffers.glsl; gpu_types.rs
+// UNIFORM_LIGHTS, UNIFORM_VPLS): 64 KiB of lights, and 65,280 bytes of VPLs (a multiple of 256,
+// the largest storage-buffer offset alignment Vulkan allows, where the rest's view starts).
+#define UNIFORM_LIGHTS 2048u
+#define UNIFORM_VPLS 1360u
+
 struct LightData {
     vec4 position;  // xyz: camera-relative position (point) or travel direction (directional); w: 1 point, 0 directional
     vec4 color;     // rgb: colour * intensity; w: range (point lights; <= 0: no window)

@@ -3,8 +3,8 @@
 #ifndef SHADING_GLSL
 #define SHADING_GLSL
 #include "scene_types.glsl"
-
-// Needs the scene's `lights` buffer declared (`shade_lights` and `shade` read it).
+// The light buffers the pass binds (`shade_lights` and `shade` read the scene's `lights`).
+#include "light_buffers.glsl"
 
 // Smooth window that takes a point light to zero at its range (1 well inside it).
 float range_window(float dist, float range) {
@@ -70,10 +70,17 @@ void add_light_terms(inout vec3 diffuse, inout vec3 specular, vec3 p, vec3 n, ve
 // Emission, ambient and the first `count` lights of the scene's `lights` buffer (directional
 // first) reflected towards the camera at camera-relative position p with normal n (facing the
 // camera).
+#ifdef BINDING_LIGHTS
 vec3 shade_lights(vec3 p, vec3 n, vec3 albedo, MaterialData m, FrameConstants frame, uint count) {
     vec3 v = normalize(-p);
     vec3 radiance = m.ke.rgb + frame.ambient.rgb * albedo;
-    for (uint i = 0u; i < count; ++i) add_light(radiance, p, n, v, albedo, m, lights[i]);
+    // The uniform part, then the rest (light_buffers.glsl).
+    for (uint i = 0u; i < min(count, UNIFORM_LIGHTS); ++i) {
+        add_light(radiance, p, n, v, albedo, m, lights[i]);
+    }
+    for (uint i = UNIFORM_LIGHTS; i < count; ++i) {
+        add_light(radiance, p, n, v, albedo, m, more_lights[i - UNIFORM_LIGHTS]);
+    }
     return radiance;
 }
 
@@ -81,6 +88,7 @@ vec3 shade_lights(vec3 p, vec3 n, vec3 albedo, MaterialData m, FrameConstants fr
 vec3 shade(vec3 p, vec3 n, vec3 albedo, MaterialData m, FrameConstants frame) {
     return shade_lights(p, n, albedo, m, frame, frame.counts.x + frame.counts.y);
 }
+#endif
 
 // Irradiance at p (normal n) from one virtual point light (Dachsbacher & Stamminger 2005):
 // flux * max(0, n_vpl.(p - x)) * max(0, n.(x - p)) / (pi * d^2 * max(d^2, clamp_d2)), d = |p - x|:

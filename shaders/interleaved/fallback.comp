@@ -7,8 +7,6 @@
 layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
 #include "../inc/scene_types.glsl"
 
-layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
-layout(std430, set = 0, binding = BINDING_VPLS) readonly buffer Vpls { Vpl vpls[]; };
 #ifndef FINISH
 layout(set = 0, binding = BINDING_POSITION) uniform sampler2D g_position;
 layout(set = 0, binding = BINDING_NORMAL) uniform sampler2D g_normal;

@@ -11,9 +11,6 @@ layout(set = 0, binding = BINDING_POSITION) uniform sampler2D g_position;
 #ifdef BINDING_NORMAL
 layout(set = 0, binding = BINDING_NORMAL) uniform sampler2D g_normal;
 #endif
-#ifdef BINDING_VPLS
-layout(std430, set = 0, binding = BINDING_VPLS) readonly buffer Vpls { Vpl vpls[]; };
-#endif
 #ifdef BINDING_SPLIT_POSITION
 layout(std430, set = 0, binding = BINDING_SPLIT_POSITION) buffer SplitPosition { vec4 s_position[]; };
 #endif
@@ -26,12 +23,8 @@ layout(std430, set = 0, binding = BINDING_SPLIT_IRRADIANCE) buffer SplitIrradian
 // `direct`: the scene's lights (directional first, then its point lights) and the extra point
 // lights (`points=N`), whose point lights the sub-images shade in subsets too; the specular
 // estimates beside the diffuse ones (the split mosaic's and the gathered).
-#ifdef BINDING_LIGHTS
-layout(std430, set = 0, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
-#endif
-#ifdef BINDING_POINTS
-layout(std430, set = 0, binding = BINDING_POINTS) readonly buffer Points { LightData points[]; };
-#endif
+// (The VPLs, the scene's lights and the extra point lights: inc/light_buffers.glsl.)
+#include "../inc/light_buffers.glsl"
 #ifdef BINDING_SPLIT_SPECULAR
 layout(std430, set = 0, binding = BINDING_SPLIT_SPECULAR) buffer SplitSpecular { vec4 s_specular[]; };
 #endif

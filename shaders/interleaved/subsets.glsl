@@ -28,7 +28,14 @@ uint subset_of(ivec2 q) {
 vec3 subset_irradiance(vec3 p, vec3 n, uint k, uint count, float clamp_d2) {
     uint size = count / SUBSETS;
     vec3 e = vec3(0.0);
-    for (uint i = k * size; i < (k + 1u) * size; ++i) e += vpl_irradiance(p, n, vpls[i], clamp_d2);
+    // The uniform part, then the rest (inc/light_buffers.glsl).
+    uint end = (k + 1u) * size;
+    for (uint i = k * size; i < min(end, UNIFORM_VPLS); ++i) {
+        e += vpl_irradiance(p, n, vpls[i], clamp_d2);
+    }
+    for (uint i = max(k * size, UNIFORM_VPLS); i < end; ++i) {
+        e += vpl_irradiance(p, n, more_vpls[i - UNIFORM_VPLS], clamp_d2);
+    }
     return e * float(SUBSETS);
 }
 
@@ -44,10 +51,19 @@ void subset_direct(inout vec3 diffuse, inout vec3 specular, vec3 p, vec3 n, floa
     // Two loops over the one sequence j = k, k + M N, ...: the scene's lights, then the extra
     // ones from the first such j past them (one loop with an if/else would evaluate both light
     // terms for every light on SIMD hardware that runs both sides of a branch, as llvmpipe does).
+    // Each list's uniform part, then its rest (inc/light_buffers.glsl).
     uint j = k;
-    for (; j < counts.y; j += SUBSETS) add_light_terms(d, s, p, n, v, ns, lights[counts.x + j]);
-    for (; j < counts.y + counts.z; j += SUBSETS) {
+    for (; j < counts.y && counts.x + j < UNIFORM_LIGHTS; j += SUBSETS) {
+        add_light_terms(d, s, p, n, v, ns, lights[counts.x + j]);
+    }
+    for (; j < counts.y; j += SUBSETS) {
+        add_light_terms(d, s, p, n, v, ns, more_lights[counts.x + j - UNIFORM_LIGHTS]);
+    }
+    for (; j < counts.y + counts.z && j - counts.y < UNIFORM_LIGHTS; j += SUBSETS) {
         add_light_terms(d, s, p, n, v, ns, points[j - counts.y]);
+    }
+    for (; j < counts.y + counts.z; j += SUBSETS) {
+        add_light_terms(d, s, p, n, v, ns, more_points[j - counts.y - UNIFORM_LIGHTS]);
     }
     diffuse += d * float(SUBSETS);
     specular += s * float(SUBSETS);

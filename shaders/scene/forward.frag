@@ -11,7 +11,6 @@
 layout(set = SET_SCENE, binding = BINDING_FRAME) uniform Frame { FrameConstants frame; };
 layout(std430, set = SET_SCENE, binding = BINDING_OBJECTS) readonly buffer Objects { ObjectData objects[]; };
 layout(std430, set = SET_SCENE, binding = BINDING_MATERIALS) readonly buffer Materials { MaterialData materials[]; };
-layout(std430, set = SET_SCENE, binding = BINDING_LIGHTS) readonly buffer Lights { LightData lights[]; };
 // shaded_fragments: FLAG_COUNT_SHADED only; nonfinite_fragments: always (NaN/Inf containment).
 layout(std430, set = SET_SCENE, binding = BINDING_COUNTER) buffer Counter {
     uint shaded_fragments;
@@ -23,6 +22,7 @@ layout(set = SET_MATERIAL, binding = BINDING_MASK) uniform sampler2D mask_tex;
 layout(set = SET_MATERIAL, binding = BINDING_BUMP) uniform sampler2D bump_tex;
 PUSH_CONSTANTS
 
+#define LIGHTS_SET SET_SCENE
 #include "../inc/shading.glsl"
 
 // msaa2x and `msaa:N:sample` shade per sample: every input is interpolated at the sample position.

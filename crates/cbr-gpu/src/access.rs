@@ -18,6 +18,8 @@ pub enum Access {
     ComputeStorageReadWrite,
     /// Storage image or buffer read (not written) in a compute shader.
     ComputeStorageRead,
+    /// Uniform buffer read in a compute shader (buffers).
+    ComputeUniformRead,
     TransferSrc,
     TransferDst,
     /// Read by the host after the submission completes (buffers).
@@ -41,7 +43,8 @@ impl Access {
             Access::ComputeSampled
             | Access::ComputeStorageWrite
             | Access::ComputeStorageReadWrite
-            | Access::ComputeStorageRead => S::COMPUTE_SHADER,
+            | Access::ComputeStorageRead
+            | Access::ComputeUniformRead => S::COMPUTE_SHADER,
             Access::TransferSrc | Access::TransferDst => S::COPY | S::BLIT | S::CLEAR,
             Access::HostRead => S::HOST,
             Access::GraphicsRead => {
@@ -66,6 +69,7 @@ impl Access {
             Access::ComputeStorageWrite => A::SHADER_STORAGE_WRITE,
             Access::ComputeStorageReadWrite => A::SHADER_STORAGE_WRITE | A::SHADER_STORAGE_READ,
             Access::ComputeStorageRead => A::SHADER_STORAGE_READ,
+            Access::ComputeUniformRead => A::UNIFORM_READ,
             Access::TransferSrc => A::TRANSFER_READ,
             Access::TransferDst => A::TRANSFER_WRITE,
             Access::HostRead => A::HOST_READ,
@@ -92,7 +96,8 @@ impl Access {
             Access::FragmentSampled | Access::ComputeSampled => L::SHADER_READ_ONLY_OPTIMAL,
             Access::ComputeStorageWrite
             | Access::ComputeStorageReadWrite
-            | Access::ComputeStorageRead => L::GENERAL,
+            | Access::ComputeStorageRead
+            | Access::ComputeUniformRead => L::GENERAL,
             Access::TransferSrc => L::TRANSFER_SRC_OPTIMAL,
             Access::TransferDst => L::TRANSFER_DST_OPTIMAL,
             Access::HostRead

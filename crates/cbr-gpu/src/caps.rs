@@ -58,6 +58,11 @@ pub struct Caps {
     pub shader_float16: bool,
     /// Largest storage buffer range one descriptor can bind (lavapipe: 128 MiB).
     pub max_storage_buffer_range: u32,
+    /// Largest uniform buffer range one descriptor can bind (lavapipe and NVIDIA: 64 KiB; the
+    /// scene's lights need 64 KiB: cbr-render's gpu_types, UNIFORM_LIGHTS).
+    pub max_uniform_buffer_range: u32,
+    /// Alignment of a storage buffer descriptor's offset (lavapipe: 16; at most 256).
+    pub min_storage_buffer_offset_alignment: u64,
     /// Size of the largest memory heap with VK_MEMORY_HEAP_DEVICE_LOCAL_BIT (lavapipe: 2 GiB).
     pub device_local_heap_bytes: u64,
     /// Every memory heap is device-local (lavapipe, most integrated GPUs): host-visible memory,
@@ -240,6 +245,8 @@ mod tests {
             compute_subgroup_sizes: vec![8],
             shader_float16: true,
             max_storage_buffer_range: 1 << 27,
+            max_uniform_buffer_range: 1 << 16,
+            min_storage_buffer_offset_alignment: 16,
             device_local_heap_bytes: 1 << 31,
             unified_memory: true,
             max_memory_allocation_size: 1 << 31,

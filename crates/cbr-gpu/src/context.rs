@@ -374,6 +374,8 @@ fn caps_of(instance: &ash::Instance, pd: vk::PhysicalDevice, p: &Probe) -> Caps 
         sub_texel_precision_bits: l.sub_texel_precision_bits,
         shader_float16: p.f12.shader_float16 != 0,
         max_storage_buffer_range: l.max_storage_buffer_range,
+        max_uniform_buffer_range: l.max_uniform_buffer_range,
+        min_storage_buffer_offset_alignment: l.min_storage_buffer_offset_alignment,
         device_local_heap_bytes,
         unified_memory,
         max_memory_allocation_size: p.max_memory_allocation_size,

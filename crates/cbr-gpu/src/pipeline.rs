@@ -99,6 +99,8 @@ impl Drop for SetLayout {
 #[derive(Clone)]
 pub enum Write<'a> {
     Buffer(u32, &'a Buffer),
+    /// `bytes` of a buffer from `offset` (a multiple of the device's offset alignment).
+    BufferRange(u32, &'a Buffer, u64, u64),
     /// Images in `SHADER_READ_ONLY_OPTIMAL` (depth: `DEPTH_READ_ONLY_OPTIMAL`) with their samplers.
     Sampled(u32, Vec<(&'a Image, &'a Sampler)>),
     /// An image used as storage, in `GENERAL`.
@@ -205,6 +207,26 @@ impl DescriptorSet {
                         [vk::DescriptorBufferInfo::default()
                             .buffer(buf.raw())
                             .range(vk::WHOLE_SIZE)],
+                    ));
+                }
+                Write::BufferRange(b, buf, offset, bytes) => {
+                    if offset
+                        .checked_add(*bytes)
+                        .is_none_or(|end| end > buf.size())
+                        || *bytes == 0
+                    {
+                        return Err(GpuError::Other(format!(
+                            "binding {b}: {bytes} bytes from {offset} of a {}-byte buffer",
+                            buf.size()
+                        )));
+                    }
+                    buffer_infos.push((
+                        *b,
+                        check(*b, "buffer", 1)?,
+                        [vk::DescriptorBufferInfo::default()
+                            .buffer(buf.raw())
+                            .offset(*offset)
+                            .range(*bytes)],
                     ));
                 }
                 Write::Sampled(b, imgs) => {

@@ -8,9 +8,18 @@ use cbr_scene::{AlphaSource, Camera, Scene};
 use glam::{DMat3, DMat4, DVec3};
 
 use crate::gpu_types::{
-    FrameConstants, LightData, MAT_ALBEDO, MAT_BUMP, MAT_MASK, MAX_PIECES, MaterialData, ObjectData,
+    FrameConstants, LightData, MAT_ALBEDO, MAT_BUMP, MAT_MASK, MAX_PIECES, MaterialData,
+    ObjectData, SplitBuffer,
 };
 use crate::memory::MemoryEstimate;
+use crate::pass::{Binding, Binds, Use};
+
+/// The bindings of the scene's lights ([`GpuScene::bind_lights`]): the first
+/// [`crate::gpu_types::UNIFORM_LIGHTS`] as a uniform buffer, the rest as a storage buffer.
+pub const LIGHT_BINDINGS: [Binding; 2] = [
+    Binding::uniform("lights"),
+    Binding::buffer("more_lights", Use::Read),
+];
 
 /// One draw: an object's index range in the shared index buffer.
 #[derive(Clone, Copy, Debug)]
@@ -39,6 +48,9 @@ pub struct GpuScene {
     pub sampler: Sampler,
     pub draws: Vec<Draw>,
     pub objects: Buffer,
+    /// The scene's lights, directional first: the first [`crate::gpu_types::UNIFORM_LIGHTS`]
+    /// bound as the uniform buffer `lights`, the rest as the storage buffer `more_lights`
+    /// ([`GpuScene::bind_lights`]).
     pub lights: Buffer,
     pub frame: Buffer,
     pub light_count: (u32, u32),
@@ -315,9 +327,8 @@ impl GpuScene {
         }
         let objects = scene.objects.len().max(1) * std::mem::size_of::<ObjectData>();
         e.storage_buffer("scene.objects", objects as u64, true);
-        let lights = (scene.directional.len() + scene.points.len()).max(1)
-            * std::mem::size_of::<LightData>();
-        e.storage_buffer("scene.lights", lights as u64, true);
+        let lights = SplitBuffer::lights((scene.directional.len() + scene.points.len()) as u64);
+        e.storage_buffer("scene.lights", lights.total, true);
         let frame = std::mem::size_of::<FrameConstants>() as u64;
         e.buffer("scene.frame", frame, true);
         e
@@ -400,12 +411,13 @@ impl GpuScene {
             Location::CpuToGpu,
         )?;
         let light_count = (scene.directional.len() as u32, scene.points.len() as u32);
+        let split = SplitBuffer::lights((scene.directional.len() + scene.points.len()) as u64);
+        split.check(gpu.caps(), &gpu.info().name, "the scene's lights")?;
         let lights = Buffer::new(
             gpu,
             "scene.lights",
-            ((scene.directional.len() + scene.points.len()).max(1)
-                * std::mem::size_of::<LightData>()) as u64,
-            usage_storage,
+            split.total,
+            usage_storage | vk::BufferUsageFlags::UNIFORM_BUFFER,
             Location::CpuToGpu,
         )?;
         let frame = Buffer::new(
@@ -432,6 +444,12 @@ impl GpuScene {
             light_count,
             background: scene.settings.background,
         })
+    }
+
+    /// Binds the scene's lights: `lights` (uniform) and `more_lights` (storage).
+    pub fn bind_lights<'a>(&'a self, binds: Binds<'a>) -> Binds<'a> {
+        let split = SplitBuffer::lights(u64::from(self.light_count.0 + self.light_count.1));
+        split.bind(binds, &self.lights, "lights", "more_lights")
     }
 
     /// Writes this frame's transforms, lights and constants. Callers make sure no submission

@@ -57,6 +57,85 @@ pub struct LightData {
     pub color: [f32; 4],
 }
 
+/// Lights (scene_types.glsl's UNIFORM_LIGHTS) a buffer of lights holds in its uniform part: its
+/// first 64 KiB, which the shaders read as a uniform buffer; the lights past them come through a
+/// storage buffer view of the rest of the same buffer ([`SplitBuffer`]).
+pub const UNIFORM_LIGHTS: u64 = 2048;
+/// VPLs (scene_types.glsl's UNIFORM_VPLS) a VPL buffer's uniform part holds: 65,280 bytes, a
+/// multiple of 256 (the largest storage-buffer offset alignment Vulkan allows) under 64 KiB.
+pub const UNIFORM_VPLS: u64 = 1360;
+
+/// The bytes of a light or VPL buffer of `count` elements of `T` read through two views: a
+/// uniform part of `uniform` elements (always whole, whatever the count) and a storage part of
+/// the rest (at least one element, so the view is never empty). The shaders read element i < the
+/// uniform count from the first, the others from the second, in two loops split at that count:
+/// llvmpipe (Mesa 22.3) loads a uniform buffer's element with an index the same in every lane
+/// once per SIMD vector, and a storage buffer's lane by lane, each lane's load a few tens of
+/// instructions; GPUs read both through their scalar or constant caches
+/// (docs/interleaved.md, "Lights in uniform buffers").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SplitBuffer {
+    /// Bytes of the uniform part (the storage part's offset).
+    pub uniform: u64,
+    /// Bytes of the whole buffer.
+    pub total: u64,
+}
+
+impl SplitBuffer {
+    pub fn of<T>(count: u64, uniform: u64) -> SplitBuffer {
+        let size = std::mem::size_of::<T>() as u64;
+        SplitBuffer {
+            uniform: uniform * size,
+            total: count.max(uniform + 1) * size,
+        }
+    }
+
+    /// A buffer of `count` lights ([`UNIFORM_LIGHTS`] in its uniform part).
+    pub fn lights(count: u64) -> SplitBuffer {
+        SplitBuffer::of::<LightData>(count, UNIFORM_LIGHTS)
+    }
+
+    /// A buffer of `count` VPLs ([`UNIFORM_VPLS`] in its uniform part).
+    pub fn vpls(count: u64) -> SplitBuffer {
+        SplitBuffer::of::<Vpl>(count, UNIFORM_VPLS)
+    }
+
+    /// Binds `buffer` (made `self.total` bytes long) as `uniform` (its first part) and `storage`
+    /// (the rest).
+    pub fn bind<'a>(
+        self,
+        binds: crate::pass::Binds<'a>,
+        buffer: &'a cbr_gpu::Buffer,
+        uniform: &'static str,
+        storage: &'static str,
+    ) -> crate::pass::Binds<'a> {
+        binds
+            .buffer_part(uniform, buffer, 0, self.uniform)
+            .buffer_part(storage, buffer, self.uniform, self.total - self.uniform)
+    }
+
+    /// Refuses a device that cannot bind the uniform part or align the storage part.
+    pub fn check(self, caps: &cbr_gpu::Caps, device: &str, what: &str) -> cbr_gpu::Result<()> {
+        if self.uniform > u64::from(caps.max_uniform_buffer_range) {
+            return Err(cbr_gpu::GpuError::Other(format!(
+                "{device}: {what} keep their first {} bytes in a uniform buffer, and this device \
+                 binds at most {} bytes as one (maxUniformBufferRange; lavapipe and desktop GPUs \
+                 allow 64 KiB)",
+                self.uniform, caps.max_uniform_buffer_range
+            )));
+        }
+        let align = caps.min_storage_buffer_offset_alignment.max(1);
+        if !self.uniform.is_multiple_of(align) {
+            return Err(cbr_gpu::GpuError::Other(format!(
+                "{device}: {what} past the uniform part start at byte {}, not a multiple of \
+                 this device's minStorageBufferOffsetAlignment ({align})",
+                self.uniform
+            )));
+        }
+        Ok(())
+    }
+}
+
 /// A virtual point light of `deferred:vpls=N` (scene_types.glsl's `Vpl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -143,6 +222,86 @@ pub(crate) mod tests {
         check("MaterialData", 3, offset_of!(MaterialData, tex));
         check("LightData", 0, offset_of!(LightData, position));
         check("LightData", 1, offset_of!(LightData, color));
+    }
+
+    /// Struct name -> the lengths of the fixed-size arrays of it (OpTypeArray) in `words`.
+    fn array_lengths(words: &[u32]) -> HashMap<String, Vec<u32>> {
+        let (mut names, mut consts) = (HashMap::new(), HashMap::new());
+        let mut arrays: Vec<(u32, u32)> = Vec::new();
+        let mut i = 5;
+        while i < words.len() {
+            let (len, op) = ((words[i] >> 16) as usize, words[i] & 0xffff);
+            let ops = &words[i + 1..i + len.max(1)];
+            match op {
+                5 => {
+                    let bytes: Vec<u8> = ops[1..]
+                        .iter()
+                        .flat_map(|w| w.to_le_bytes())
+                        .take_while(|&b| b != 0)
+                        .collect();
+                    names.insert(ops[0], String::from_utf8_lossy(&bytes).into_owned());
+                }
+                28 => arrays.push((ops[1], ops[2])), // OpTypeArray result element length
+                43 => {
+                    consts.insert(ops[1], ops[2]); // OpConstant type result value
+                }
+                _ => {}
+            }
+            i += len.max(1);
+        }
+        let mut out: HashMap<String, Vec<u32>> = HashMap::new();
+        for (element, length) in arrays {
+            if let (Some(n), Some(&l)) = (names.get(&element), consts.get(&length)) {
+                out.entry(n.clone()).or_default().push(l);
+            }
+        }
+        out
+    }
+
+    /// The uniform parts the host binds are the arrays the shaders declare (light_buffers.glsl),
+    /// and they fit the 64 KiB every desktop device binds; the storage parts start 256-aligned.
+    #[test]
+    fn the_uniform_parts_match_the_shaders() {
+        use super::*;
+        let shaders = crate::shader_library();
+        let defs = crate::techniques::deferred::lighting::shader_defines();
+        let words = shaders
+            .compile("deferred/lighting.comp", &defs)
+            .expect("compiles");
+        let lengths = array_lengths(&words);
+        let light = lengths.get("LightData").cloned().unwrap_or_default();
+        let vpl = lengths.get("Vpl").cloned().unwrap_or_default();
+        // The scene's lights and the extra point lights; the VPLs.
+        assert_eq!(light, vec![UNIFORM_LIGHTS as u32; 2], "{lengths:?}");
+        assert_eq!(vpl, vec![UNIFORM_VPLS as u32], "{lengths:?}");
+        for split in [SplitBuffer::lights(5), SplitBuffer::vpls(5)] {
+            assert!(
+                split.uniform <= 1 << 16 && split.uniform % 256 == 0,
+                "{split:?}"
+            );
+        }
+        assert_eq!(SplitBuffer::lights(0).total, 2049 * 32);
+        assert_eq!(SplitBuffer::lights(3000).total, 3000 * 32);
+        assert_eq!(SplitBuffer::vpls(1024).uniform, 65280);
+        // A device that binds less, or aligns coarser, is refused by name.
+        let caps = |range, align| cbr_gpu::Caps {
+            max_uniform_buffer_range: range,
+            min_storage_buffer_offset_alignment: align,
+            ..cbr_gpu::Caps::default()
+        };
+        let lights = SplitBuffer::lights(5);
+        assert!(lights.check(&caps(1 << 16, 256), "dev", "lights").is_ok());
+        let err = lights
+            .check(&caps(16384, 16), "dev", "lights")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("dev") && err.contains("16384"), "{err}");
+        let odd = SplitBuffer::of::<Vpl>(5, 1365);
+        let err = odd
+            .check(&caps(1 << 16, 256), "dev", "VPLs")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("minStorageBufferOffsetAlignment"), "{err}");
     }
 
     #[test]

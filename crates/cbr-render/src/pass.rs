@@ -110,7 +110,7 @@ impl BindKind {
                 Use::Write => Access::ComputeStorageWrite,
                 Use::ReadWrite => Access::ComputeStorageReadWrite,
             },
-            BindKind::Uniform => Access::ComputeStorageRead,
+            BindKind::Uniform => Access::ComputeUniformRead,
         }
     }
 
@@ -278,7 +278,7 @@ fn check_binds(pass: &str, bindings: &[Binding], binds: &Binds) -> Result<()> {
                 | (BindKind::StorageImage(_), Bound::Image(_))
                 | (
                     BindKind::StorageBuffer(_) | BindKind::Uniform,
-                    Bound::Buffer(_)
+                    Bound::Buffer(_) | Bound::Part(..)
                 )
         ) || matches!(
             (b.kind, given),
@@ -288,7 +288,7 @@ fn check_binds(pass: &str, bindings: &[Binding], binds: &Binds) -> Result<()> {
             let got = match given {
                 Bound::Image(_) => "an image",
                 Bound::Sampled(..) => "an image with its sampler",
-                Bound::Buffer(_) => "a buffer",
+                Bound::Buffer(_) | Bound::Part(..) => "a buffer",
                 Bound::Set(_) => "a set",
             };
             let what = match b.kind {
@@ -328,6 +328,9 @@ fn make_set(
             }
             (Some(Bound::Image(img)), None) => writes.push(Write::Storage(n, img)),
             (Some(Bound::Buffer(x)), _) => writes.push(Write::Buffer(n, x)),
+            (Some(Bound::Part(x, offset, bytes)), _) => {
+                writes.push(Write::BufferRange(n, x, *offset, *bytes));
+            }
             _ => {
                 return Err(declaration(
                     name,
@@ -639,6 +642,9 @@ pub enum Bound<'a> {
     /// A sampled image with its own sampler ([`Filter::Given`]).
     Sampled(&'a Image, &'a Sampler),
     Buffer(&'a Buffer),
+    /// `bytes` of a buffer from `offset`: one buffer seen as two bindings (the lights' first
+    /// part as a uniform buffer, the rest as a storage buffer: [`crate::gpu_types::split_at`]).
+    Part(&'a Buffer, u64, u64),
     /// A shared set, by its [`SetDecl::name`].
     Set(&'a DescriptorSet),
 }
@@ -678,6 +684,18 @@ impl<'a> Binds<'a> {
 
     pub fn buffer(mut self, name: &'static str, buffer: &'a Buffer) -> Binds<'a> {
         self.set(name, Bound::Buffer(buffer));
+        self
+    }
+
+    /// Binds `name` to `bytes` of `buffer` from `offset`.
+    pub fn buffer_part(
+        mut self,
+        name: &'static str,
+        buffer: &'a Buffer,
+        offset: u64,
+        bytes: u64,
+    ) -> Binds<'a> {
+        self.set(name, Bound::Part(buffer, offset, bytes));
         self
     }
 
@@ -1035,6 +1053,10 @@ fn record_uses(
             Some(Bound::Buffer(x)) => {
                 cmd.use_buffer(x, access);
                 (x.size(), x.host_visible())
+            }
+            Some(Bound::Part(x, _, bytes)) => {
+                cmd.use_buffer(x, access);
+                (*bytes, x.host_visible())
             }
             Some(Bound::Set(_)) | None => (0, false),
         };

@@ -6,7 +6,7 @@ use cbr_gpu::{
     Shaders, vk,
 };
 
-use crate::gpu_scene::GpuScene;
+use crate::gpu_scene::{GpuScene, LIGHT_BINDINGS};
 use crate::gpu_types::{MAT_ALBEDO, MAT_BUMP, MAT_MASK};
 use crate::layouts::LayoutPlan;
 use crate::pass::{Binding, Binds, Filter, GraphicsDecl, GraphicsPass, RasterState, SetDecl, Use};
@@ -39,7 +39,8 @@ pub const SCENE_SET: SetDecl = SetDecl {
         Binding::buffer("objects", Use::Read),
         Binding::buffer("vertices", Use::Read),
         Binding::buffer("materials", Use::Read),
-        Binding::buffer("lights", Use::Read),
+        LIGHT_BINDINGS[0],
+        LIGHT_BINDINGS[1],
         Binding::buffer("counter", Use::Write),
     ],
 };
@@ -523,13 +524,13 @@ pub fn use_scene_buffers(cmd: &mut Cmd, scene: &GpuScene) {
 
 /// The scene set's resources ([`SCENE_SET`]): `scene`'s buffers and the counter.
 pub fn scene_binds<'a>(scene: &'a GpuScene, counter: &'a Buffer) -> Binds<'a> {
-    Binds::new()
+    let binds = Binds::new()
         .buffer("frame", &scene.frame)
         .buffer("objects", &scene.objects)
         .buffer("vertices", &scene.vertices)
         .buffer("materials", &scene.materials)
-        .buffer("lights", &scene.lights)
-        .buffer("counter", counter)
+        .buffer("counter", counter);
+    scene.bind_lights(binds)
 }
 
 /// What an alpha-tested material's mask slot holds.

@@ -104,6 +104,8 @@ fn bump_mapping_matches_native() {
 
 /// `points=N` through the same light term: native with the N lights appended to the scene's
 /// equals `deferred:points=N` within fp16 rounding; and they are lights (the frame changed).
+/// With 2100 lights, past the 2048 of a light buffer's uniform part, the rest come through its
+/// storage view (gpu_types.rs, SplitBuffer): native's scene lights and deferred's extra ones.
 #[test]
 fn extra_point_lights_match_native_with_the_same_lights() {
     let gpu = gpu();
@@ -119,6 +121,18 @@ fn extra_point_lights_match_native_with_the_same_lights() {
         println!("demo + 48 points frame {}: {diff:?}", n.index);
         assert!(diff.max_ulps <= 1, "{diff:?}");
     }
+    let mut many = s.clone();
+    many.points
+        .extend(random_point_lights(&s, 2100, DEFAULT_REACH.into()));
+    let n = render(&gpu, &shaders, &many, "native", &[0]);
+    let d = render(&gpu, &shaders, &s, "deferred:points=2100", &[0]);
+    let diff = compare("points", &n[0], &d[0]);
+    println!("demo + 2100 points: {diff:?}");
+    assert!(diff.max_ulps <= 1, "{diff:?}");
+    assert!(
+        n[0].color != native[0].color,
+        "the 2100 lights changed nothing"
+    );
     let plain = render(&gpu, &shaders, &s, "deferred", &[0]);
     assert!(plain[0].color != deferred[0].color);
     let again = random_point_lights(&s, 48, DEFAULT_REACH.into());
@@ -183,7 +197,9 @@ fn vpl_lighting_matches_the_cpu_reference() {
     let clamp = 0.3f32;
     let clamp_d2 = f64::from(clamp * clamp);
     let mut total_clamped = 0;
-    for (n, side) in [(16u32, 64u32), (256, 512)] {
+    // 2048 VPLs: past the 1360 of the VPL buffer's uniform part, the rest come through its
+    // storage view (gpu_types.rs, SplitBuffer).
+    for (n, side) in [(16u32, 64u32), (256, 512), (2048, 512)] {
         let spec = format!("deferred:vpls={n}:rsm={side}:clamp={clamp}");
         let out = render(&gpu, &shaders, &s, &spec, &[0]).remove(0);
         let vpls = &deferred::vpls(&out).expect("VPLs");

@@ -56,6 +56,32 @@ fn one_by_one_is_deferred() {
     assert_clean(&gpu);
 }
 
+/// Past the light buffers' uniform parts (2048 point lights, 1360 VPLs: gpu_types.rs,
+/// SplitBuffer): 1x1 with 1600 VPLs and 2100 extra point lights, `direct` (the sub-image shades
+/// them all in shaders/interleaved/subsets.glsl) and not (the lighting pass does), is `deferred`
+/// with the same lights (whose own paths past the parts tests/deferred.rs holds to native and to
+/// the CPU reference) within fp16 rounding.
+#[test]
+fn lights_past_the_uniform_parts_are_deferred() {
+    let gpu = gpu();
+    let shaders = cbr_render::shader_library();
+    let mut s = cbr_scene::builtin("demo").expect("demo");
+    (s.settings.width, s.settings.height) = (64, 36);
+    let lights = "vpls=1600:points=2100";
+    let reference = render(&gpu, &shaders, &s, &format!("deferred:{lights}"));
+    for spec in [
+        format!("interleaved:1x1:{lights}"),
+        format!("interleaved:1x1:{lights}:direct"),
+        format!("interleaved:1x1:{lights}:direct:implicit"),
+    ] {
+        let got = render(&gpu, &shaders, &s, &spec);
+        let diff = compare(&spec, &reference, &got);
+        println!("{spec} against deferred:{lights}: {diff:?}");
+        assert!(diff.max_ulps <= 1, "{spec}: {diff:?}");
+    }
+    assert_clean(&gpu);
+}
+
 const CLAMP: f32 = 0.3;
 
 /// Subset k of M x N: the k-th contiguous block of the VPLs.

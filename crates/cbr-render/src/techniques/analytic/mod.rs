@@ -232,11 +232,12 @@ impl Analytic {
 
             // What every compute pass binds: the resources and the scene's buffers by name,
             // each pass taking (and barriering) the ones it declares.
-            let binds = Binds::of(res)
-                .buffer("frame", &scene.frame)
-                .buffer("objects", &scene.objects)
-                .buffer("materials", &scene.materials)
-                .buffer("lights", &scene.lights);
+            let binds = scene.bind_lights(
+                Binds::of(res)
+                    .buffer("frame", &scene.frame)
+                    .buffer("objects", &scene.objects)
+                    .buffer("materials", &scene.materials),
+            );
             let p = &self.passes;
 
             // The albedo pass: the textured fragments' lookups, one invocation per job, once per

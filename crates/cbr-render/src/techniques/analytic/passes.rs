@@ -115,10 +115,11 @@ impl Kernel {
 }
 
 /// The scene's buffers the lighting reads (shaders/inc/shading.glsl), bound by name.
-const SCENE_LIGHTING: [Binding; 3] = [
+const SCENE_LIGHTING: [Binding; 4] = [
     Binding::uniform("frame"),
     Binding::buffer("materials", Use::Read),
-    Binding::buffer("lights", Use::Read),
+    crate::gpu_scene::LIGHT_BINDINGS[0],
+    crate::gpu_scene::LIGHT_BINDINGS[1],
 ];
 
 /// The plan of the albedo jobs' order (albedo_bin.comp with BIN_PLAN, one invocation): each

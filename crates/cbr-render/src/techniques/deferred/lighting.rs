@@ -8,7 +8,8 @@ use cbr_gpu::{Buffer, Cmd, Image, Profiler, Result};
 use super::config::DeferredConfig;
 use super::gbuffer::GBuffer;
 use super::vpl::SunView;
-use crate::gpu_scene::GpuScene;
+use crate::gpu_scene::{GpuScene, LIGHT_BINDINGS};
+use crate::gpu_types::SplitBuffer;
 use crate::memory::MemoryEstimate;
 use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, ResourceDecl, Use};
 use crate::technique::{BuildCtx, FrameCtx};
@@ -163,11 +164,9 @@ pub fn fallback_decl(i: &InterleavedLighting, finish: bool) -> ComputeDecl {
     let mut d = ComputeDecl::new(name, "interleaved/fallback.comp")
         .define("TILE_M", i.m)
         .define("TILE_N", i.n)
-        .bindings(&[
-            Binding::buffer("lights", Use::Read),
-            Binding::buffer("vpls", Use::Read),
-            Binding::buffer("fallback_args", Use::Read),
-        ])
+        .bindings(&LIGHT_BINDINGS)
+        .bindings(&VPL_BINDINGS)
+        .bindings(&[Binding::buffer("fallback_args", Use::Read)])
         .push::<LightingPush>()
         .group(FALLBACK_GROUP, 1);
     d = match finish {
@@ -205,7 +204,28 @@ pub struct LightSources<'a> {
     pub points: &'a Buffer,
     /// The VPLs (`vpls=N`), written by the VPL pass this frame.
     pub vpls: &'a Buffer,
+    /// How each is bound: its uniform part and the rest ([`LightSources::bind`]).
+    pub points_split: SplitBuffer,
+    pub vpls_split: SplitBuffer,
 }
+
+impl<'a> LightSources<'a> {
+    /// Binds `points` and `more_points`, `vpls` and `more_vpls`.
+    pub fn bind(&self, binds: Binds<'a>) -> Binds<'a> {
+        let binds = self.points_split.bind(binds, self.points, "points", "more_points");
+        self.vpls_split.bind(binds, self.vpls, "vpls", "more_vpls")
+    }
+}
+
+/// The bindings of the extra point lights and of the VPLs ([`LightSources::bind`]).
+pub const POINT_BINDINGS: [Binding; 2] = [
+    Binding::uniform("points"),
+    Binding::buffer("more_points", Use::Read),
+];
+pub const VPL_BINDINGS: [Binding; 2] = [
+    Binding::uniform("vpls"),
+    Binding::buffer("more_vpls", Use::Read),
+];
 
 /// The lighting pass (shaders/deferred/lighting.comp): `deferred`'s, or with `interleaving`
 /// `interleaved`'s variant (the VPLs' light from the sub-image estimates).
@@ -224,9 +244,12 @@ pub fn decl_culled(interleaving: Option<&InterleavedLighting>, cull: bool) -> Co
             Binding::uniform("frame"),
             Binding::buffer("objects", Use::Read),
             Binding::buffer("materials", Use::Read),
-            Binding::buffer("lights", Use::Read),
-            Binding::buffer("points", Use::Read),
-            Binding::buffer("vpls", Use::Read),
+            LIGHT_BINDINGS[0],
+            LIGHT_BINDINGS[1],
+            POINT_BINDINGS[0],
+            POINT_BINDINGS[1],
+            VPL_BINDINGS[0],
+            VPL_BINDINGS[1],
             Binding::buffer("counter", Use::ReadWrite),
             Binding::sampled("position"),
             Binding::sampled("normal"),
@@ -364,13 +387,12 @@ impl LightingPass {
         push: &LightingPush,
         interleaving: Option<&Interleaving>,
     ) -> Result<()> {
-        let mut binds = Binds::new()
+        let binds = Binds::new()
             .buffer("frame", &scene.frame)
             .buffer("objects", &scene.objects)
-            .buffer("materials", &scene.materials)
-            .buffer("lights", &scene.lights)
-            .buffer("points", sources.points)
-            .buffer("vpls", sources.vpls)
+            .buffer("materials", &scene.materials);
+        let mut binds = sources
+            .bind(scene.bind_lights(binds))
             .buffer("counter", counter)
             .image("position", &g.position)
             .image("normal", &g.normal)

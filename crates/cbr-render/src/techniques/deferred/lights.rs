@@ -11,23 +11,38 @@ use super::lighting::{LightSources, SunFrame};
 use super::rsm::{RsmPass, VplPass};
 use super::vpl::{self, SunView};
 use crate::gpu_scene::GpuScene;
-use crate::gpu_types::{LightData, Vpl};
+use crate::gpu_types::{SplitBuffer, Vpl};
 use crate::pass::{Memory, ResourceDecl};
 use crate::technique::{BuildCtx, FrameCtx};
 
 /// The light buffers (under the technique's name): the `points=N` lights, written by the host
-/// each frame, and the VPLs (device-local; one unread VPL when there are none).
+/// each frame, and the VPLs (device-local, written by the VPL pass). Each is read through two
+/// views, its first part as a uniform buffer and the rest as a storage buffer ([`SplitBuffer`]),
+/// so each is at least its uniform part long, whatever the count.
 pub fn resources(config: &DeferredConfig) -> [ResourceDecl; 2] {
-    let light = std::mem::size_of::<LightData>() as u64;
+    let uniform = vk::BufferUsageFlags::UNIFORM_BUFFER;
     [
-        ResourceDecl::upload_buffer("points", u64::from(config.points.max(1)) * light),
+        ResourceDecl::buffer_in(
+            "points",
+            points_split(config).total,
+            vk::BufferUsageFlags::STORAGE_BUFFER | uniform,
+            Memory::Upload,
+        ),
         ResourceDecl::buffer_in(
             "vpls",
-            vpl_bytes(config),
-            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
+            vpls_split(config).total,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC | uniform,
             Memory::Device,
         ),
     ]
+}
+
+fn points_split(config: &DeferredConfig) -> SplitBuffer {
+    SplitBuffer::lights(u64::from(config.points))
+}
+
+fn vpls_split(config: &DeferredConfig) -> SplitBuffer {
+    SplitBuffer::vpls(u64::from(config.vpls))
 }
 
 fn vpl_bytes(config: &DeferredConfig) -> u64 {
@@ -67,6 +82,9 @@ impl ManyLights {
             )));
         }
         let gpu = ctx.gpu;
+        let device = &gpu.info().name;
+        points_split(config).check(gpu.caps(), device, &format!("{name}'s point lights"))?;
+        vpls_split(config).check(gpu.caps(), device, &format!("{name}'s VPLs"))?;
         let [points, vpls] = resources(config);
         let (points, vpls) = (points.make_buffer(gpu, name)?, vpls.make_buffer(gpu, name)?);
         let (rsm, vpl_pass, vpl_readback) = if config.vpls > 0 {
@@ -94,6 +112,8 @@ impl ManyLights {
         LightSources {
             points: &self.points,
             vpls: &self.vpls,
+            points_split: points_split(&self.config),
+            vpls_split: vpls_split(&self.config),
         }
     }
 

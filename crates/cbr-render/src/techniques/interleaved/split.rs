@@ -9,14 +9,14 @@
 use cbr_gpu::{Buffer, Cmd, Image, Profiler, Readback, Result, vk};
 
 use super::{Filter, InterleavedConfig};
-use crate::gpu_scene::GpuScene;
+use crate::gpu_scene::{GpuScene, LIGHT_BINDINGS};
 use crate::memory::MemoryEstimate;
 use crate::pass::{Binding, Binds, ComputeDecl, ComputePass, ResourceDecl, Use};
 use crate::resolve::CopyFloor;
 use crate::targets::GBUFFER_FORMAT;
 use crate::technique::BuildCtx;
 use crate::techniques::deferred::GBuffer;
-use crate::techniques::deferred::lighting::LightSources;
+use crate::techniques::deferred::lighting::{LightSources, POINT_BINDINGS, VPL_BINDINGS};
 
 crate::push_constants! {
     /// Push constants (interleave.glsl's).
@@ -59,16 +59,19 @@ pub fn split_decl(c: &InterleavedConfig) -> ComputeDecl {
 /// Shade: sub-image k with VPL subset k (and with `direct` point-light subset k).
 pub fn shade_decl(c: &InterleavedConfig) -> ComputeDecl {
     let mut d = base("interleaved.shade", "interleaved/shade.comp", c).bindings(&[
-        Binding::buffer("vpls", Use::Read),
+        VPL_BINDINGS[0],
+        VPL_BINDINGS[1],
         // shading.glsl's light term reads the scene's lights.
-        Binding::buffer("lights", Use::Read),
+        LIGHT_BINDINGS[0],
+        LIGHT_BINDINGS[1],
         Binding::buffer("split_position", Use::ReadWrite),
         Binding::buffer("split_normal", Use::ReadWrite),
         Binding::buffer("split_irradiance", Use::Write),
     ]);
     if c.direct {
         d = d.bindings(&[
-            Binding::buffer("points", Use::Read),
+            POINT_BINDINGS[0],
+            POINT_BINDINGS[1],
             Binding::buffer("split_specular", Use::Write),
         ]);
     }
@@ -120,12 +123,13 @@ pub fn implicit_decl(c: &InterleavedConfig) -> ComputeDecl {
         c,
     )
     .bindings(&SURFACE)
-    .bind(Binding::buffer("vpls", Use::Read))
-    .bind(Binding::buffer("lights", Use::Read))
+    .bindings(&VPL_BINDINGS)
+    .bindings(&LIGHT_BINDINGS)
     .bind(Binding::image("irradiance", Use::Write));
     if c.direct {
         d = d.bindings(&[
-            Binding::buffer("points", Use::Read),
+            POINT_BINDINGS[0],
+            POINT_BINDINGS[1],
             Binding::image("specular", Use::Write),
         ]);
     }
@@ -447,7 +451,6 @@ impl SplitPasses {
         lights: [u32; 3],
         clamp_d2: f32,
     ) -> Result<()> {
-        let vpls = sources.vpls;
         let push = SplitPush {
             size: self.size,
             counts: [count, lights[0], lights[1], lights[2]],
@@ -472,12 +475,11 @@ impl SplitPasses {
         let im = &self.storage;
         // Every resource by its binding name; each pass binds (and barriers) the ones it
         // declares.
-        let mut binds = Binds::new()
+        let binds = Binds::new()
             .image("position", &g.position)
-            .image("normal", &g.normal)
-            .buffer("vpls", vpls)
-            .buffer("lights", &scene.lights)
-            .buffer("points", sources.points)
+            .image("normal", &g.normal);
+        let mut binds = sources
+            .bind(scene.bind_lights(binds))
             .image("irradiance", &im.irradiance.gathered);
         for (name, b) in [
             ("split_position", im.split_position.as_ref()),
