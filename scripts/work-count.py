@@ -19,9 +19,11 @@ is split by object:
 - `host`: everything else the frame ran (cbr's command recording and readback, and libc, whose
   memset and memcpy also carry lavapipe's buffer fills and copies).
 
-`jit` is deterministic: the same binary, driver, shaders and inputs give the same count on every
-run (checked 2026-12-02: two runs of the demo at 160x90 agreed on every frame's count of three
-techniques to the instruction).
+`jit` is deterministic to a few instructions in tens of millions: the same binary, driver, shaders
+and inputs give the same count on every run (checked 2026-12-02: two runs of the demo at 160x90
+agreed on every frame's count of three techniques to the instruction; four runs of the test's
+held box agreed to the instruction, and one more, under a heavy load of the machine, counted 2
+instructions more in one frame of 38.6 M, cause not found).
 The other parts move by a few per cent between runs (waits and allocator paths). Valgrind presents
 its own CPU to the program (AVX2, no AVX-512), so LLVM compiles the same code on any x86-64 host
 valgrind runs on; a count is a count of 8-lane (256-bit) instructions, not a time: memory

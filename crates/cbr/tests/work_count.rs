@@ -98,9 +98,13 @@ fn every_frame_is_counted_and_a_held_frame_counts_the_same_jit_work() {
         let j = per_frame(r, "jit");
         assert_eq!(j.len(), 3, "{name}");
         // The camera is held and nothing moves: the shaders run the same instructions in both
-        // counted frames, to the instruction.
+        // counted frames, to a few instructions (once, under a heavy load, one frame counted 2
+        // more of 38.6 M: docs/bench-and-report.md, "Work counts").
         assert!(j[1] > 0, "{name}: no JIT instructions in a frame: {j:?}");
-        assert_eq!(j[1], j[2], "{name}: a held frame's JIT work changed: {j:?}");
+        assert!(
+            j[1].abs_diff(j[2]) <= 64,
+            "{name}: a held frame's JIT work changed: {j:?}"
+        );
         assert_eq!(r["jit"].as_u64(), Some(j[2]), "{name}: the median");
         jit.push(j[2]);
     }
