@@ -7,10 +7,10 @@
 // Why: every loop reads them with an index the same in every lane, and llvmpipe (Mesa 22.3)
 // loads a uniform buffer's element once per SIMD vector but a storage buffer's lane by lane (a
 // point light's 32 bytes cost about 580 instructions per 8-lane vector that way: docs/
-// interleaved.md, "Lights in uniform buffers"); GPUs read either through their scalar or
-// constant caches. A loop over them runs as two loops, the uniform part's and then the rest's
-// (never one loop with an if: SIMD hardware that runs both sides of a branch, as llvmpipe does,
-// would then load from both).
+// interleaved.md, "Issue 57: the lights in uniform buffers"); GPUs read either through their
+// scalar or constant caches. A loop over them runs as two loops, the uniform part's and then
+// the rest's (never one loop with an if: SIMD hardware that runs both sides of a branch, as
+// llvmpipe does, would then load from both).
 #ifndef LIGHT_BUFFERS_GLSL
 #define LIGHT_BUFFERS_GLSL
 #include "scene_types.glsl"

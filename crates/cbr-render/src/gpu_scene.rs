@@ -327,8 +327,8 @@ impl GpuScene {
         }
         let objects = scene.objects.len().max(1) * std::mem::size_of::<ObjectData>();
         e.storage_buffer("scene.objects", objects as u64, true);
-        let lights = SplitBuffer::lights((scene.directional.len() + scene.points.len()) as u64);
-        e.storage_buffer("scene.lights", lights.total, true);
+        let lights = (scene.directional.len() + scene.points.len()) as u64;
+        e.storage_buffer("scene.lights", SplitBuffer::LIGHTS.bytes(lights), true);
         let frame = std::mem::size_of::<FrameConstants>() as u64;
         e.buffer("scene.frame", frame, true);
         e
@@ -411,12 +411,12 @@ impl GpuScene {
             Location::CpuToGpu,
         )?;
         let light_count = (scene.directional.len() as u32, scene.points.len() as u32);
-        let split = SplitBuffer::lights((scene.directional.len() + scene.points.len()) as u64);
+        let split = SplitBuffer::LIGHTS;
         split.check(gpu.caps(), &gpu.info().name, "the scene's lights")?;
         let lights = Buffer::new(
             gpu,
             "scene.lights",
-            split.total,
+            split.bytes((scene.directional.len() + scene.points.len()) as u64),
             usage_storage | vk::BufferUsageFlags::UNIFORM_BUFFER,
             Location::CpuToGpu,
         )?;
@@ -448,8 +448,7 @@ impl GpuScene {
 
     /// Binds the scene's lights: `lights` (uniform) and `more_lights` (storage).
     pub fn bind_lights<'a>(&'a self, binds: Binds<'a>) -> Binds<'a> {
-        let split = SplitBuffer::lights(u64::from(self.light_count.0 + self.light_count.1));
-        split.bind(binds, &self.lights, "lights", "more_lights")
+        SplitBuffer::LIGHTS.bind(binds, &self.lights, "lights", "more_lights")
     }
 
     /// Writes this frame's transforms, lights and constants. Callers make sure no submission

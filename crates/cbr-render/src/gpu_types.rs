@@ -65,43 +65,43 @@ pub const UNIFORM_LIGHTS: u64 = 2048;
 /// multiple of 256 (the largest storage-buffer offset alignment Vulkan allows) under 64 KiB.
 pub const UNIFORM_VPLS: u64 = 1360;
 
-/// The bytes of a light or VPL buffer of `count` elements of `T` read through two views: a
-/// uniform part of `uniform` elements (always whole, whatever the count) and a storage part of
-/// the rest (at least one element, so the view is never empty). The shaders read element i < the
+/// How a buffer of lights or VPLs is read: through two views, a uniform part of the first
+/// `uniform` bytes (always whole, whatever the count) and a storage part of the rest of the
+/// buffer (at least one element, so the view is never empty). The shaders read element i < the
 /// uniform count from the first, the others from the second, in two loops split at that count:
 /// llvmpipe (Mesa 22.3) loads a uniform buffer's element with an index the same in every lane
 /// once per SIMD vector, and a storage buffer's lane by lane, each lane's load a few tens of
 /// instructions; GPUs read both through their scalar or constant caches
-/// (docs/interleaved.md, "Lights in uniform buffers").
+/// (docs/interleaved.md, "Issue 57: the lights in uniform buffers").
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SplitBuffer {
     /// Bytes of the uniform part (the storage part's offset).
     pub uniform: u64,
-    /// Bytes of the whole buffer.
-    pub total: u64,
+    /// Bytes of one element.
+    pub element: u64,
 }
 
 impl SplitBuffer {
-    pub fn of<T>(count: u64, uniform: u64) -> SplitBuffer {
-        let size = std::mem::size_of::<T>() as u64;
+    /// Lights: [`UNIFORM_LIGHTS`] in the uniform part.
+    pub const LIGHTS: SplitBuffer = SplitBuffer::of(UNIFORM_LIGHTS, size_of::<LightData>() as u64);
+    /// VPLs: [`UNIFORM_VPLS`] in the uniform part.
+    pub const VPLS: SplitBuffer = SplitBuffer::of(UNIFORM_VPLS, size_of::<Vpl>() as u64);
+
+    pub const fn of(uniform: u64, element: u64) -> SplitBuffer {
         SplitBuffer {
-            uniform: uniform * size,
-            total: count.max(uniform + 1) * size,
+            uniform: uniform * element,
+            element,
         }
     }
 
-    /// A buffer of `count` lights ([`UNIFORM_LIGHTS`] in its uniform part).
-    pub fn lights(count: u64) -> SplitBuffer {
-        SplitBuffer::of::<LightData>(count, UNIFORM_LIGHTS)
+    /// Bytes of a buffer of `count` elements: the uniform part whole and at least one element
+    /// past it.
+    pub fn bytes(self, count: u64) -> u64 {
+        (count * self.element).max(self.uniform + self.element)
     }
 
-    /// A buffer of `count` VPLs ([`UNIFORM_VPLS`] in its uniform part).
-    pub fn vpls(count: u64) -> SplitBuffer {
-        SplitBuffer::of::<Vpl>(count, UNIFORM_VPLS)
-    }
-
-    /// Binds `buffer` (made `self.total` bytes long) as `uniform` (its first part) and `storage`
-    /// (the rest).
+    /// Binds `buffer` (made [`SplitBuffer::bytes`] long) as `uniform` (its first part) and
+    /// `storage` (the rest).
     pub fn bind<'a>(
         self,
         binds: crate::pass::Binds<'a>,
@@ -109,9 +109,10 @@ impl SplitBuffer {
         uniform: &'static str,
         storage: &'static str,
     ) -> crate::pass::Binds<'a> {
+        let rest = buffer.size().saturating_sub(self.uniform);
         binds
             .buffer_part(uniform, buffer, 0, self.uniform)
-            .buffer_part(storage, buffer, self.uniform, self.total - self.uniform)
+            .buffer_part(storage, buffer, self.uniform, rest)
     }
 
     /// Refuses a device that cannot bind the uniform part or align the storage part.
@@ -152,32 +153,42 @@ pub struct Vpl {
 pub(crate) mod tests {
     use std::collections::HashMap;
 
-    /// (struct name, member index) -> byte offset, read from SPIR-V decorations.
-    pub fn member_offsets(words: &[u32]) -> HashMap<(String, u32), u32> {
-        let mut names: HashMap<u32, String> = HashMap::new();
-        let mut offsets: Vec<(u32, u32, u32)> = Vec::new();
+    /// Each instruction of a SPIR-V module: its opcode and operands.
+    fn instructions(words: &[u32]) -> Vec<(u32, &[u32])> {
+        let mut out = Vec::new();
         let mut i = 5;
         while i < words.len() {
             let (len, op) = ((words[i] >> 16) as usize, words[i] & 0xffff);
-            let ops = &words[i + 1..i + len.max(1)];
-            match op {
-                5 => {
-                    // OpName target "name"
-                    let bytes: Vec<u8> = ops[1..]
-                        .iter()
-                        .flat_map(|w| w.to_le_bytes())
-                        .take_while(|&b| b != 0)
-                        .collect();
-                    names.insert(ops[0], String::from_utf8_lossy(&bytes).into_owned());
-                }
-                72 if ops[2] == 35 => offsets.push((ops[0], ops[1], ops[3])), // OpMemberDecorate .. Offset
-                _ => {}
-            }
+            out.push((op, &words[i + 1..i + len.max(1)]));
             i += len.max(1);
         }
-        offsets
+        out
+    }
+
+    /// Id -> name, from the module's OpName instructions.
+    fn names(words: &[u32]) -> HashMap<u32, String> {
+        instructions(words)
             .into_iter()
-            .filter_map(|(ty, member, off)| names.get(&ty).map(|n| ((n.clone(), member), off)))
+            .filter(|(op, _)| *op == 5) // OpName target "name"
+            .map(|(_, ops)| {
+                let bytes: Vec<u8> = ops[1..]
+                    .iter()
+                    .flat_map(|w| w.to_le_bytes())
+                    .take_while(|&b| b != 0)
+                    .collect();
+                (ops[0], String::from_utf8_lossy(&bytes).into_owned())
+            })
+            .collect()
+    }
+
+    /// (struct name, member index) -> byte offset, read from SPIR-V decorations.
+    pub fn member_offsets(words: &[u32]) -> HashMap<(String, u32), u32> {
+        let names = names(words);
+        instructions(words)
+            .into_iter()
+            // OpMemberDecorate struct member Offset value
+            .filter(|(op, ops)| *op == 72 && ops[2] == 35)
+            .filter_map(|(_, ops)| names.get(&ops[0]).map(|n| ((n.clone(), ops[1]), ops[3])))
             .collect()
     }
 
@@ -226,32 +237,18 @@ pub(crate) mod tests {
 
     /// Struct name -> the lengths of the fixed-size arrays of it (OpTypeArray) in `words`.
     fn array_lengths(words: &[u32]) -> HashMap<String, Vec<u32>> {
-        let (mut names, mut consts) = (HashMap::new(), HashMap::new());
-        let mut arrays: Vec<(u32, u32)> = Vec::new();
-        let mut i = 5;
-        while i < words.len() {
-            let (len, op) = ((words[i] >> 16) as usize, words[i] & 0xffff);
-            let ops = &words[i + 1..i + len.max(1)];
-            match op {
-                5 => {
-                    let bytes: Vec<u8> = ops[1..]
-                        .iter()
-                        .flat_map(|w| w.to_le_bytes())
-                        .take_while(|&b| b != 0)
-                        .collect();
-                    names.insert(ops[0], String::from_utf8_lossy(&bytes).into_owned());
-                }
-                28 => arrays.push((ops[1], ops[2])), // OpTypeArray result element length
-                43 => {
-                    consts.insert(ops[1], ops[2]); // OpConstant type result value
-                }
-                _ => {}
-            }
-            i += len.max(1);
-        }
+        let names = names(words);
+        let code = instructions(words);
+        // OpConstant type result value
+        let consts: HashMap<u32, u32> = code
+            .iter()
+            .filter(|(op, _)| *op == 43)
+            .map(|(_, ops)| (ops[1], ops[2]))
+            .collect();
         let mut out: HashMap<String, Vec<u32>> = HashMap::new();
-        for (element, length) in arrays {
-            if let (Some(n), Some(&l)) = (names.get(&element), consts.get(&length)) {
+        // OpTypeArray result element length
+        for (_, ops) in code.iter().filter(|(op, _)| *op == 28) {
+            if let (Some(n), Some(&l)) = (names.get(&ops[1]), consts.get(&ops[2])) {
                 out.entry(n.clone()).or_default().push(l);
             }
         }
@@ -274,29 +271,29 @@ pub(crate) mod tests {
         // The scene's lights and the extra point lights; the VPLs.
         assert_eq!(light, vec![UNIFORM_LIGHTS as u32; 2], "{lengths:?}");
         assert_eq!(vpl, vec![UNIFORM_VPLS as u32], "{lengths:?}");
-        for split in [SplitBuffer::lights(5), SplitBuffer::vpls(5)] {
+        for split in [SplitBuffer::LIGHTS, SplitBuffer::VPLS] {
             assert!(
                 split.uniform <= 1 << 16 && split.uniform % 256 == 0,
                 "{split:?}"
             );
         }
-        assert_eq!(SplitBuffer::lights(0).total, 2049 * 32);
-        assert_eq!(SplitBuffer::lights(3000).total, 3000 * 32);
-        assert_eq!(SplitBuffer::vpls(1024).uniform, 65280);
+        assert_eq!(SplitBuffer::LIGHTS.bytes(0), 2049 * 32);
+        assert_eq!(SplitBuffer::LIGHTS.bytes(3000), 3000 * 32);
+        assert_eq!(SplitBuffer::VPLS.uniform, 65280);
         // A device that binds less, or aligns coarser, is refused by name.
         let caps = |range, align| cbr_gpu::Caps {
             max_uniform_buffer_range: range,
             min_storage_buffer_offset_alignment: align,
             ..cbr_gpu::Caps::default()
         };
-        let lights = SplitBuffer::lights(5);
+        let lights = SplitBuffer::LIGHTS;
         assert!(lights.check(&caps(1 << 16, 256), "dev", "lights").is_ok());
         let err = lights
             .check(&caps(16384, 16), "dev", "lights")
             .unwrap_err()
             .to_string();
         assert!(err.contains("dev") && err.contains("16384"), "{err}");
-        let odd = SplitBuffer::of::<Vpl>(5, 1365);
+        let odd = SplitBuffer::of(1365, 48);
         let err = odd
             .check(&caps(1 << 16, 256), "dev", "VPLs")
             .unwrap_err()

@@ -643,7 +643,7 @@ pub enum Bound<'a> {
     Sampled(&'a Image, &'a Sampler),
     Buffer(&'a Buffer),
     /// `bytes` of a buffer from `offset`: one buffer seen as two bindings (the lights' first
-    /// part as a uniform buffer, the rest as a storage buffer: [`crate::gpu_types::split_at`]).
+    /// part as a uniform buffer, the rest as a storage buffer: [`crate::gpu_types::SplitBuffer`]).
     Part(&'a Buffer, u64, u64),
     /// A shared set, by its [`SetDecl::name`].
     Set(&'a DescriptorSet),

@@ -204,16 +204,13 @@ pub struct LightSources<'a> {
     pub points: &'a Buffer,
     /// The VPLs (`vpls=N`), written by the VPL pass this frame.
     pub vpls: &'a Buffer,
-    /// How each is bound: its uniform part and the rest ([`LightSources::bind`]).
-    pub points_split: SplitBuffer,
-    pub vpls_split: SplitBuffer,
 }
 
 impl<'a> LightSources<'a> {
     /// Binds `points` and `more_points`, `vpls` and `more_vpls`.
     pub fn bind(&self, binds: Binds<'a>) -> Binds<'a> {
-        let binds = self.points_split.bind(binds, self.points, "points", "more_points");
-        self.vpls_split.bind(binds, self.vpls, "vpls", "more_vpls")
+        let binds = SplitBuffer::LIGHTS.bind(binds, self.points, "points", "more_points");
+        SplitBuffer::VPLS.bind(binds, self.vpls, "vpls", "more_vpls")
     }
 }
 

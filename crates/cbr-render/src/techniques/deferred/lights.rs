@@ -24,25 +24,17 @@ pub fn resources(config: &DeferredConfig) -> [ResourceDecl; 2] {
     [
         ResourceDecl::buffer_in(
             "points",
-            points_split(config).total,
+            SplitBuffer::LIGHTS.bytes(u64::from(config.points)),
             vk::BufferUsageFlags::STORAGE_BUFFER | uniform,
             Memory::Upload,
         ),
         ResourceDecl::buffer_in(
             "vpls",
-            vpls_split(config).total,
+            SplitBuffer::VPLS.bytes(u64::from(config.vpls)),
             vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC | uniform,
             Memory::Device,
         ),
     ]
-}
-
-fn points_split(config: &DeferredConfig) -> SplitBuffer {
-    SplitBuffer::lights(u64::from(config.points))
-}
-
-fn vpls_split(config: &DeferredConfig) -> SplitBuffer {
-    SplitBuffer::vpls(u64::from(config.vpls))
 }
 
 fn vpl_bytes(config: &DeferredConfig) -> u64 {
@@ -83,8 +75,9 @@ impl ManyLights {
         }
         let gpu = ctx.gpu;
         let device = &gpu.info().name;
-        points_split(config).check(gpu.caps(), device, &format!("{name}'s point lights"))?;
-        vpls_split(config).check(gpu.caps(), device, &format!("{name}'s VPLs"))?;
+        let (caps, what) = (gpu.caps(), |w: &str| format!("{name}'s {w}"));
+        SplitBuffer::LIGHTS.check(caps, device, &what("point lights"))?;
+        SplitBuffer::VPLS.check(caps, device, &what("VPLs"))?;
         let [points, vpls] = resources(config);
         let (points, vpls) = (points.make_buffer(gpu, name)?, vpls.make_buffer(gpu, name)?);
         let (rsm, vpl_pass, vpl_readback) = if config.vpls > 0 {
@@ -112,8 +105,6 @@ impl ManyLights {
         LightSources {
             points: &self.points,
             vpls: &self.vpls,
-            points_split: points_split(&self.config),
-            vpls_split: vpls_split(&self.config),
         }
     }
 
