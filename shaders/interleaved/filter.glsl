@@ -26,18 +26,24 @@
 //     of the two (the background counting as farther), 2 (`side=far`) only the farther.
 // With DIRECT (`direct`) the specular estimates of the point lights go through the same filter
 // with the same choices (the same pixels, weights and fallback subsets), into `specular`.
+// FLAT_TILES only with the tile and `ours` (the host sets it only then).
+#if defined(FLAT_TILES) && !(defined(WINDOW_TILE) && FILTER == 2)
+#undef FLAT_TILES
+#endif
 layout(set = 0, binding = BINDING_IRRADIANCE) uniform sampler2D g_irradiance;
 layout(set = 0, binding = BINDING_SPECULAR) uniform sampler2D g_specular;
 #ifdef DEBUG
 // Per pixel (docs/interleaved.md, debug views): bits 0-5 the pixel's subset, bit 6 edge (the
 // window holds a pixel not on p's surface; `seed`: the seed's edge test), bits 8-14 the subsets
-// p shaded itself, bit 16 where gather(split(G-buffer)) differs from the G-buffer.
+// p shaded itself, bit 16 where gather(split(G-buffer)) differs from the G-buffer, bit 17 a pixel
+// of a flat tile (FLAT_TILES).
 layout(set = 0, binding = BINDING_DEBUG_BITS, r32ui) uniform writeonly uimage2D debug_bits;
 #endif
 
 const uint DBG_EDGE = 1u << 6;
 const uint DBG_FALLBACK_SHIFT = 8u;
 const uint DBG_ROUNDTRIP = 1u << 16;
+const uint DBG_FLAT = 1u << 17;
 
 #include "../interleaved/subsets.glsl"
 
@@ -88,43 +94,160 @@ ivec2 window_origin() {
     return ivec2(gl_WorkGroupID.xy) * ivec2(LOCAL_SIZE_X, LOCAL_SIZE_Y) - ivec2(APRON_X0, APRON_Y0);
 }
 
-// Every invocation of the workgroup, before any returns: the tile into shared memory, then a
-// barrier. Texels off the screen get object 0 (never on a surface; the filter tests on_screen
-// first anyway).
-void window_load() {
-    ivec2 origin = window_origin();
-    for (uint t = gl_LocalInvocationIndex; t < uint(WIN_W * WIN_H);
-         t += uint(LOCAL_SIZE_X * LOCAL_SIZE_Y)) {
-        ivec2 q = origin + ivec2(int(t) % WIN_W, int(t) / WIN_W);
-        uint id = 0u;
-        vec3 pq = vec3(0.0), nq = vec3(0.0), eq = vec3(0.0), sq = vec3(0.0);
-#if defined(BAND_CONTRAST) && !defined(BAND_DEPTH)
-        float tq = 0.0;
+#ifdef FLAT_TILES
+// `flat=on` (FLAT_TILES, the default of the tile): a tile whose every texel lies on one plane-like
+// surface is *flat*, and its pixels take the box mean of their windows without a test, because
+// every test of the filter would pass there (the same bits: the same sums in the same order).
+// Flat: every texel on the screen and of the reference texel's object (the workgroup's centre
+// pixel c, not the background), every normal within e of c's (|n_q - n_c| <= e, |n_q|^2 within
+// 1% of 1), every position within R of c's, and the signed distances h_q = n_c . (p_q - p_c)
+// spanning S. For any two texels p, q then
+//   n_p . n_q >= (|n_p|^2 + |n_q|^2 - (2e)^2) / 2 >= 0.99 - 2 e^2, and
+//   |n_p . (p_q - p)| <= |n_c . (p_q - p)| + |n_p - n_c| |p_q - p| <= S + 2 e R,
+// so same_surface holds for every pair when 0.99 - 2 e^2 >= SAME_NORMAL_COS + 0.001 and
+// S + 2 e R <= 0.9 PLANE_TOLERANCE (|p_c| - R) (|p| >= |p_c| - R; the 10% and 0.001 cover the
+// shader's float rounding, about 1e-7 of |p|). The object band and the contrast bands need
+// another object, so no pixel of a flat tile is in a band either.
+shared uint t_rough;
+shared uint t_span_pos;
+shared uint t_span_neg;
+shared uint t_e2;
+shared uint t_r2;
+bool g_flat = false;
 #endif
-        if (on_screen(q)) {
-            id = texelFetch(g_ids, q, 0).x;
+
+// A tile texel's G-buffer values (its estimates come apart: a flat tile does not keep them).
+struct TileTexel {
+    uint id;
+    vec3 p;
+    vec3 n;
 #if defined(BAND_CONTRAST) && !defined(BAND_DEPTH)
-            tq = band_tone_fetch(q, id);
+    float tone;
 #endif
-            pq = texelFetch(g_position, q, 0).xyz;
-            nq = texelFetch(g_normal, q, 0).xyz;
-            eq = texelFetch(g_irradiance, q, 0).rgb;
+};
+
+TileTexel tile_fetch(ivec2 q) {
+    TileTexel x;
+    x.id = 0u;
+    x.p = vec3(0.0);
+    x.n = vec3(0.0);
+#if defined(BAND_CONTRAST) && !defined(BAND_DEPTH)
+    x.tone = 0.0;
+#endif
+    if (on_screen(q)) {
+        x.id = texelFetch(g_ids, q, 0).x;
+#if defined(BAND_CONTRAST) && !defined(BAND_DEPTH)
+        x.tone = band_tone_fetch(q, x.id);
+#endif
+        x.p = texelFetch(g_position, q, 0).xyz;
+        x.n = texelFetch(g_normal, q, 0).xyz;
+    }
+    return x;
+}
+
+// Texel t of the tile (at q) into shared memory, with its estimates.
+void tile_store(uint t, ivec2 q, TileTexel x) {
+    vec3 eq = vec3(0.0), sq = vec3(0.0);
+    if (on_screen(q)) {
+        eq = texelFetch(g_irradiance, q, 0).rgb;
 #ifdef DIRECT
-            sq = texelFetch(g_specular, q, 0).rgb;
-#endif
-        }
-        w_ids[t] = id;
-        w_position[t] = pq;
-        w_normal[t] = nq;
-        w_irradiance[t] = eq;
-#ifdef DIRECT
-        w_specular[t] = sq;
-#endif
-#if defined(BAND_CONTRAST) && !defined(BAND_DEPTH)
-        w_tone[t] = tq;
+        sq = texelFetch(g_specular, q, 0).rgb;
 #endif
     }
+    w_ids[t] = x.id;
+    w_position[t] = x.p;
+    w_normal[t] = x.n;
+    w_irradiance[t] = eq;
+#ifdef DIRECT
+    w_specular[t] = sq;
+#endif
+#if defined(BAND_CONTRAST) && !defined(BAND_DEPTH)
+    w_tone[t] = x.tone;
+#endif
+}
+
+ivec2 tile_texel(uint t) {
+    return window_origin() + ivec2(int(t) % WIN_W, int(t) / WIN_W);
+}
+
+const uint TILE_TEXELS = uint(WIN_W * WIN_H);
+const uint GROUP_SIZE = uint(LOCAL_SIZE_X * LOCAL_SIZE_Y);
+
+// Every invocation of the workgroup, before any returns: the tile into shared memory, then a
+// barrier. Texels off the screen get object 0 (never on a surface; the filter tests on_screen
+// first anyway). With FLAT_TILES the G-buffer texels are fetched first and the tile's flatness
+// taken from them (g_flat, the same in every invocation); a flat tile stores nothing (its
+// pixels read their estimates by texel fetches: on llvmpipe a fetch's gather costs less than a
+// shared-memory read, which is a per-lane loop), any other stores its texels and estimates.
+void window_load() {
+#ifdef FLAT_TILES
+    const uint PER_INVOCATION = (TILE_TEXELS + GROUP_SIZE - 1u) / GROUP_SIZE;
+    if (gl_LocalInvocationIndex == 0u) {
+        t_rough = 0u;
+        t_span_pos = 0u;
+        t_span_neg = 0u;
+        t_e2 = 0u;
+        t_r2 = 0u;
+    }
     barrier();
+    ivec2 c = ivec2(gl_WorkGroupID.xy) * ivec2(LOCAL_SIZE_X, LOCAL_SIZE_Y) +
+              ivec2(LOCAL_SIZE_X / 2, LOCAL_SIZE_Y / 2);
+    TileTexel ref = tile_fetch(c);
+    bool rough = !on_screen(c) || ref.id == 0u;
+    float span_pos = 0.0, span_neg = 0.0, e2 = 0.0, r2 = 0.0;
+    TileTexel mine[PER_INVOCATION];
+    for (uint k = 0u; k < PER_INVOCATION; ++k) {
+        uint t = gl_LocalInvocationIndex + k * GROUP_SIZE;
+        if (t >= TILE_TEXELS) break;
+        ivec2 q = tile_texel(t);
+        TileTexel x = tile_fetch(q);
+        mine[k] = x;
+        float h = dot(ref.n, x.p - ref.p);
+        vec3 dn = x.n - ref.n, dp = x.p - ref.p;
+        span_pos = max(span_pos, h);
+        span_neg = max(span_neg, -h);
+        e2 = max(e2, dot(dn, dn));
+        r2 = max(r2, dot(dp, dp));
+        // Off the screen (id 0), another object, a normal not of unit length, or anything not
+        // finite (every comparison with a NaN is false) makes the tile rough.
+        rough = rough || x.id != ref.id || !(abs(dot(x.n, x.n) - 1.0) <= 0.01) ||
+                !(abs(h) <= 1e30) || !(dot(dn, dn) <= 1e30) || !(dot(dp, dp) <= 1e30);
+    }
+    // The workgroup's extremes (each is >= 0, so its bits order as the floats do).
+    rough = subgroupAny(rough);
+    span_pos = subgroupMax(span_pos);
+    span_neg = subgroupMax(span_neg);
+    e2 = subgroupMax(e2);
+    r2 = subgroupMax(r2);
+    if (subgroupElect()) {
+        if (rough) atomicOr(t_rough, 1u);
+        atomicMax(t_span_pos, floatBitsToUint(span_pos));
+        atomicMax(t_span_neg, floatBitsToUint(span_neg));
+        atomicMax(t_e2, floatBitsToUint(e2));
+        atomicMax(t_r2, floatBitsToUint(r2));
+    }
+    barrier();
+    float s = uintBitsToFloat(t_span_pos) + uintBitsToFloat(t_span_neg);
+    float e = sqrt(uintBitsToFloat(t_e2));
+    float r = sqrt(uintBitsToFloat(t_r2));
+    float nearest = length(ref.p) - r;
+    g_flat = t_rough == 0u && 0.99 - 2.0 * e * e >= SAME_NORMAL_COS + 0.001 && nearest > 0.0 &&
+             s + 2.0 * e * r <= 0.9 * PLANE_TOLERANCE * nearest;
+    if (!g_flat) {
+        for (uint k = 0u; k < PER_INVOCATION; ++k) {
+            uint t = gl_LocalInvocationIndex + k * GROUP_SIZE;
+            if (t >= TILE_TEXELS) break;
+            tile_store(t, tile_texel(t), mine[k]);
+        }
+        barrier();
+    }
+#else
+    for (uint t = gl_LocalInvocationIndex; t < TILE_TEXELS; t += GROUP_SIZE) {
+        ivec2 q = tile_texel(t);
+        tile_store(t, q, tile_fetch(q));
+    }
+    barrier();
+#endif
 }
 
 int window_index(ivec2 q) {
@@ -233,6 +356,25 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, float ns, out
     vec3 sum_spec = vec3(0.0);
     uint found = 0u;
     uvec2 missing = uvec2(0u);  // window slots (t = row M + column) with no estimate to use
+#ifdef FLAT_TILES
+    // A flat tile (window_load): every slot is on p's surface and on the screen, and no pixel is
+    // in a band, so the filter is the window's mean, summed in the loop's order below.
+    if (g_flat) {
+        for (int oy = -(TILE_N - 1) / 2; oy <= TILE_N / 2; ++oy) {
+            for (int ox = -(TILE_M - 1) / 2; ox <= TILE_M / 2; ++ox) {
+                ivec2 q = px + ivec2(ox, oy);
+                sum += texelFetch(g_irradiance, q, 0).rgb;
+#ifdef DIRECT
+                sum_spec += texelFetch(g_specular, q, 0).rgb;
+#endif
+                found += 1u;
+            }
+        }
+        bits |= DBG_FLAT;
+        specular = sum_spec / float(found);
+        return sum / float(found);
+    }
+#endif
 #if FILTER == 1 && defined(BOX_ROWS)
     // The gather's window rows (gather.comp, BOX_ROWS): each row's on-screen pixels summed, so the
     // window takes N taps, not M N. The on-screen slots are a rectangle: count them.

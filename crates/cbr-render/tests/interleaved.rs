@@ -941,6 +941,203 @@ fn the_fallback_passes_and_the_window_tile_change_no_bit() {
     assert_clean(&gpu);
 }
 
+/// floor_and_wall as one object (the wall's material), with a panel parallel to the wall 0.4 m
+/// in front of it: a crease (floor and wall) and a step between parallel planes (panel and wall)
+/// within one object, which only the flat tiles' bound on the normals and on the distances from
+/// the reference texel's plane keep rough.
+fn one_folded_object(w: u32, h: u32) -> Scene {
+    let mut s = floor_and_wall(true, w, h);
+    let panel = common::lighting::quad(
+        "panel",
+        [
+            [-0.6, 0.9, 0.4],
+            [-0.6, 0.9, -0.4],
+            [-0.6, 1.5, -0.4],
+            [-0.6, 1.5, 0.4],
+        ],
+        [1.0, 0.0, 0.0],
+        1,
+    );
+    let mut one = s.objects.remove(0);
+    for o in s.objects.drain(..).chain([panel]) {
+        let base = one.vertices.len() as u32;
+        one.vertices.extend(o.vertices);
+        one.indices.extend(o.indices.iter().map(|i| i + base));
+    }
+    one.name = "folded".into();
+    s.objects = vec![one];
+    s
+}
+
+/// floor_and_wall whose wall is two coplanar halves with normals 30 degrees apart (the half at
+/// z < 0 turned towards -z: a shading normal, as a smoothing group or normal map gives), seen
+/// through a 5-degree field of view at the seam: the tiles there lie on one plane, and only the
+/// flat tiles' bound on the normals keeps them rough (at this footprint the bound on the
+/// distances alone would let them through).
+fn bent_wall(w: u32, h: u32) -> Scene {
+    let mut s = floor_and_wall(true, w, h);
+    let turned = [30f32.to_radians().cos(), 0.0, -(30f32.to_radians().sin())];
+    let halves = [
+        (
+            [
+                [-1.0, 0.0, 2.0],
+                [-1.0, 0.0, 0.0],
+                [-1.0, 2.0, 0.0],
+                [-1.0, 2.0, 2.0],
+            ],
+            [1.0, 0.0, 0.0],
+        ),
+        (
+            [
+                [-1.0, 0.0, 0.0],
+                [-1.0, 0.0, -2.0],
+                [-1.0, 2.0, -2.0],
+                [-1.0, 2.0, 0.0],
+            ],
+            turned,
+        ),
+    ];
+    let mut wall = common::lighting::quad("wall", halves[0].0, halves[0].1, 1);
+    let other = common::lighting::quad("wall", halves[1].0, halves[1].1, 1);
+    let base = wall.vertices.len() as u32;
+    wall.vertices.extend(other.vertices);
+    wall.indices.extend(other.indices.iter().map(|i| i + base));
+    s.objects[0] = wall;
+    let key = &mut s.camera.keys[0];
+    (key.position, key.target, key.fov_y_deg) = ([2.5, 1.0, 0.0], [-1.0, 1.0, 0.0], 5.0);
+    s
+}
+
+/// `flat=on` (the default of `ours` with its tile): a workgroup whose tile lies on one
+/// plane-like surface takes each window's mean without the same-surface tests
+/// (shaders/interleaved/filter.glsl, FLAT_TILES), which by its bound would all pass there. The
+/// frame, its non-finite pixels and the debug views are `flat=off`'s bit for bit, with and without
+/// `debug` (its define changes the shader), on the demo (floor, wall, the curved torus, leaves), the
+/// floor-and-wall scene (two planes), the same as one object with a crease and a step between
+/// parallel planes (one_folded_object: only the flatness bound keeps its tiles there rough) and `nan` (non-finite G-buffer texels
+/// make their tiles rough), with `search`, the bands, `direct`, `enough`, the 3x2 and 8x8 tiles;
+/// and flat tiles are taken (neither none nor every pixel, where the scene has both).
+#[test]
+fn flat_tiles_change_no_bit() {
+    let gpu = gpu();
+    let shaders = cbr_render::shader_library();
+    let mut demo = cbr_scene::builtin("demo").expect("demo");
+    (demo.settings.width, demo.settings.height) = (160, 90);
+    let planes = floor_and_wall(true, 96, 64);
+    let folded = one_folded_object(96, 64);
+    let bent = bent_wall(64, 64);
+    let mut nan = cbr_scene::builtin("nan").expect("nan");
+    (nan.settings.width, nan.settings.height) = (64, 36);
+    let band = "exact-edges=2:band=depth:contrast=0.1:side=near:search=1";
+    for (name, s, base, some_rough) in [
+        (
+            "floor and wall",
+            &planes,
+            "interleaved:4x4:vpls=256:search=1".to_string(),
+            true,
+        ),
+        (
+            "one folded object",
+            &folded,
+            "interleaved:4x4:vpls=256".into(),
+            true,
+        ),
+        (
+            "one folded object",
+            &folded,
+            "interleaved:4x4:vpls=256:search=1".into(),
+            true,
+        ),
+        ("bent wall", &bent, "interleaved:4x4:vpls=256".into(), true),
+        ("demo", &demo, "interleaved:4x4:vpls=256".into(), true),
+        (
+            "demo",
+            &demo,
+            "interleaved:4x4:vpls=256:search=1".into(),
+            true,
+        ),
+        (
+            "demo",
+            &demo,
+            format!("interleaved:4x4:vpls=256:{band}"),
+            true,
+        ),
+        (
+            "demo",
+            &demo,
+            "interleaved:4x4:vpls=256:exact-edges=2".into(),
+            true,
+        ),
+        (
+            "demo",
+            &demo,
+            "interleaved:4x4:vpls=256:direct:search=1".into(),
+            true,
+        ),
+        (
+            "demo",
+            &demo,
+            "interleaved:4x4:vpls=256:enough=8".into(),
+            true,
+        ),
+        (
+            "demo",
+            &demo,
+            "interleaved:3x2:vpls=96:search=1".into(),
+            true,
+        ),
+        (
+            "demo",
+            &demo,
+            "interleaved:8x8:vpls=256:exact-edges=3".into(),
+            true,
+        ),
+        ("nan", &nan, "interleaved:4x4:vpls=256".into(), true),
+    ] {
+        for debug in ["", ":debug"] {
+            let on = render(&gpu, &shaders, s, &format!("{base}{debug}"));
+            let off = render(&gpu, &shaders, s, &format!("{base}:flat=off{debug}"));
+            let diff = compare(base.as_str(), &off, &on);
+            assert_eq!(
+                diff.max_ulps, 0,
+                "{name} {base}{debug}: flat=on against off: {diff:?}"
+            );
+            assert_eq!(
+                on.nonfinite_fragments, off.nonfinite_fragments,
+                "{name} {base}{debug}: non-finite pixels"
+            );
+            if debug.is_empty() {
+                continue;
+            }
+            let (a, b) = (
+                InterleavedLayers::from_frame(&on).expect("debug layers"),
+                InterleavedLayers::from_frame(&off).expect("debug layers"),
+            );
+            assert!(
+                (&a.subset, &a.edge, &a.fallback) == (&b.subset, &b.edge, &b.fallback),
+                "{name} {base}: debug views"
+            );
+            let visible = on.ids.iter().filter(|id| id[0] != 0).count() as u64;
+            println!(
+                "{name} {base}: {} of {visible} visible pixels in flat tiles",
+                a.flat_tile_pixels
+            );
+            assert_eq!(
+                b.flat_tile_pixels, 0,
+                "{name} {base}: flat=off took flat tiles"
+            );
+            assert!(a.flat_tile_pixels > 0, "{name} {base}: no flat tile");
+            if some_rough {
+                assert!(
+                    a.flat_tile_pixels < visible,
+                    "{name} {base}: every tile flat"
+                );
+            }
+        }
+    }
+    assert_clean(&gpu);
+}
+
 /// `ours`' same-surface thresholds reach the filter: `normal=C` and `plane=T` at their defaults
 /// give the default's frame bit for bit; tighter ones make more pixels shade subsets themselves
 /// (the demo has curved and creased surfaces within one object), looser ones fewer.
@@ -1356,6 +1553,15 @@ fn bad_tiles_and_counts_are_refused() {
             "above 0 and at most 1",
         ),
         ("interleaved:4x4:enough=17", "K from 1 to 16"),
+        ("interleaved:4x4:flat=maybe", "flat=on or flat=off"),
+        (
+            "interleaved:4x4:window=fetch:flat=on",
+            "the flat tiles of its `window=tile`",
+        ),
+        (
+            "interleaved:4x4:box:flat=off",
+            "the flat tiles of its `window=tile`",
+        ),
         ("interleaved:2x2:enough=0", "K from 1 to 4"),
         ("interleaved:4x4:implicit:floor", "`implicit` does not have"),
         ("interleaved:4x4:normal=1.5", "a cosine from -1 to 1"),

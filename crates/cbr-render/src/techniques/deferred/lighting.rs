@@ -106,6 +106,9 @@ pub struct InterleavedLighting {
     /// window's G-buffer texels and estimates from a tile fetched into shared memory once per
     /// workgroup (shaders/interleaved/filter.glsl); `window=fetch` fetches each per window.
     pub window_tile: bool,
+    /// `flat=on` (FLAT_TILES; with `window_tile`, the default): a tile on one plane-like surface
+    /// takes the box mean of each window without the same-surface tests (filter.glsl).
+    pub flat_tiles: bool,
 }
 
 /// The fallback passes' work groups (fallback_list.glsl's FALLBACK_GROUP).
@@ -289,6 +292,9 @@ pub fn decl_culled(interleaving: Option<&InterleavedLighting>, cull: bool) -> Co
         }
         if i.window_tile {
             d = d.define("WINDOW_TILE", 1);
+        }
+        if i.flat_tiles {
+            d = d.define("FLAT_TILES", 1);
         }
         if i.band_objects {
             d = d.define("BAND_OBJECTS", 1);

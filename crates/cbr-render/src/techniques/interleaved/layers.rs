@@ -28,7 +28,7 @@ pub const MOSAIC_LAYER: LayerDecl = LayerDecl {
 };
 
 /// run.json's per-frame `interleaved` object (with `debug`).
-pub const STATS: [StatDecl; 6] = [
+pub const STATS: [StatDecl; 7] = [
     StatDecl {
         name: "interleaved.tile",
         about: "M, N",
@@ -54,6 +54,11 @@ pub const STATS: [StatDecl; 6] = [
         about: "pixels where the split G-buffer gathered back differs from the G-buffer (0 \
                 unless the split and gather are not inverses)",
     },
+    StatDecl {
+        name: "interleaved.flat_tile_pixels",
+        about: "pixels on a surface in a flat tile (`flat=on`): their filter took the window's \
+                mean without its same-surface tests",
+    },
 ];
 
 /// The debug views, typed.
@@ -71,6 +76,8 @@ pub struct InterleavedLayers {
     /// Pixels where the G-buffer split and gathered back differs from the G-buffer (position or
     /// normal, bit for bit): 0 unless the split and gather are not inverses.
     pub roundtrip_mismatches: u64,
+    /// Pixels on a surface whose workgroup's tile was flat (`flat=on`, filter.glsl's FLAT_TILES).
+    pub flat_tile_pixels: u64,
     /// The split mosaic of the subset estimates (M Ws x N Hs texels, RGB); `None` with
     /// `implicit`, which has no split.
     pub mosaic: Option<(u32, u32, Vec<[f32; 3]>)>,
@@ -107,6 +114,7 @@ impl InterleavedLayers {
                 0.0
             }),
             Stat::Count(self.roundtrip_mismatches),
+            Stat::Count(self.flat_tile_pixels),
         ];
         for (d, s) in STATS.iter().zip(stats) {
             out.set_stat(d.name, s);
@@ -132,6 +140,7 @@ impl InterleavedLayers {
             edge: l.channel::<u8>("edge")?.to_vec(),
             fallback: l.channel::<u8>("fallback")?.to_vec(),
             roundtrip_mismatches: out.count("interleaved.roundtrip_mismatches")?,
+            flat_tile_pixels: out.count("interleaved.flat_tile_pixels")?,
             mosaic,
         })
     }

@@ -1,5 +1,5 @@
 //! `interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D][:ours|seed|box|none]
-//! [:search=S][:enough=K][:exact-edges[=R]][:band=B][:direct][:implicit][:debug][:floor][:fallback=F][:window=W][:parts=P]`: interleaved many-light
+//! [:search=S][:enough=K][:exact-edges[=R]][:band=B][:direct][:implicit][:debug][:floor][:fallback=F][:window=W][:flat=on|off][:parts=P]`: interleaved many-light
 //! shading (Segovia et al. 2006; docs/interleaved.md) on `deferred`'s G-buffer and VPLs.
 //!
 //! Passes per frame, one submission: `interleaved.gbuffer` (deferred's G-buffer pass), the sun's
@@ -45,7 +45,7 @@ pub const REGISTRATION: Registration = Registration {
     grammar: "interleaved:MxN[:vpls=N][:points=N][:rsm=R][:reach=D][:clamp=D]\
               [:ours|seed|box|none][:search=S][:enough=K][:exact-edges[=R]][:band=surface|object|albedo|depth][:contrast=T][:side=both|near|far]\
               [:direct][:implicit][:debug]\
-              [:floor][:fallback=pairs|inline][:window=tile|fetch][:parts=base|lights|filter]",
+              [:floor][:fallback=pairs|inline][:window=tile|fetch][:flat=on|off][:parts=base|lights|filter]",
     about: "deferred's VPLs, interleaved: the G-buffer split into M x N sub-images, sub-image k \
             shaded with the k-th block of N / (M N) VPLs, gathered back, filtered (ours: \
             geometry-aware, missing subsets shaded at the pixel; seed: the seed's edge-skipping \
@@ -220,6 +220,11 @@ pub struct InterleavedConfig {
     /// the default; with `search=1` since 2026-12-01), or each texel fetched by every window that
     /// holds it (`fetch`). The same frame.
     pub window_tile: bool,
+    /// `flat=on|off` (`ours` with `window=tile`): a workgroup whose tile lies on one plane-like
+    /// surface (shaders/interleaved/filter.glsl, FLAT_TILES: every same-surface test there would
+    /// pass, by a bound) takes the box mean of each window without the tests (`on`, the default),
+    /// or tests every slot as elsewhere (`off`). The same frame.
+    pub flat_tiles: bool,
     pub lights: DeferredConfig,
 }
 
@@ -283,6 +288,7 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
     let mut parts = Parts::All;
     let mut fallback = None;
     let mut window = None;
+    let mut flat = None;
     let mut search = DEFAULT_SEARCH;
     let mut enough = None;
     let mut same_normal_cos = DEFAULT_SAME_NORMAL_COS;
@@ -321,6 +327,14 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
                             "interleaved `{p}`: fallback=pairs or fallback=inline"
                         ));
                     }
+                };
+                None
+            }
+            "flat" => {
+                flat = match p.split_once('=').map(|(_, v)| v) {
+                    Some("on") => Some(true),
+                    Some("off") => Some(false),
+                    _ => return Err(format!("interleaved `{p}`: flat=on or flat=off")),
                 };
                 None
             }
@@ -445,7 +459,7 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
                      band=surface|object|albedo|depth, contrast=T, side=both|near|far, normal=C, \
                      plane=T, \
                      direct, implicit, debug, floor, fallback=pairs|inline, window=tile|fetch, \
-                     parts=base|lights|filter",
+                     flat=on|off, parts=base|lights|filter",
                 ));
             }
         };
@@ -500,6 +514,14 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
         return Err("interleaved: `window=...` is how the `ours` filter reads its window".into());
     }
     let window_tile = window.unwrap_or(filter == Filter::Ours);
+    if flat.is_some() && !window_tile {
+        return Err(
+            "interleaved: `flat=...` is how the `ours` filter takes the flat tiles of its \
+             `window=tile`"
+                .into(),
+        );
+    }
+    let flat_tiles = flat.unwrap_or(true) && window_tile;
     if exact_edges > 0 && filter != Filter::Ours {
         return Err(format!(
             "interleaved: `exact-edges` is a variant of the `ours` filter, not of `{}`",
@@ -557,6 +579,7 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
         parts,
         pairs,
         window_tile,
+        flat_tiles,
         lights,
     })
 }
@@ -652,6 +675,7 @@ impl Interleaved {
             edge: words.iter().map(|&b| u8::from(b & DBG_EDGE != 0)).collect(),
             fallback: words.iter().map(|&b| ((b >> 8) & 0x7f) as u8).collect(),
             roundtrip_mismatches: words.iter().filter(|&&b| b & DBG_ROUNDTRIP != 0).count() as u64,
+            flat_tile_pixels: words.iter().filter(|&&b| b & DBG_FLAT != 0).count() as u64,
             mosaic,
         }))
     }
@@ -679,6 +703,7 @@ pub fn lighting_variant(config: &InterleavedConfig) -> InterleavedLighting {
         parts: config.parts as u32,
         pairs: config.pairs,
         window_tile: config.window_tile,
+        flat_tiles: config.flat_tiles,
     }
 }
 
@@ -695,9 +720,11 @@ fn interleaving<'a>(
     }
 }
 
-/// filter.glsl's debug bits: bits 0-5 the subset, 6 edge, 8-14 fallback subsets, 16 round trip.
+/// filter.glsl's debug bits: bits 0-5 the subset, 6 edge, 8-14 fallback subsets, 16 round trip,
+/// 17 a flat tile's pixel.
 const DBG_EDGE: u32 = 1 << 6;
 const DBG_ROUNDTRIP: u32 = 1 << 16;
+const DBG_FLAT: u32 = 1 << 17;
 
 impl Technique for Interleaved {
     fn render(&mut self, ctx: &mut FrameCtx) -> Result<()> {
