@@ -26,8 +26,8 @@
 //     of the two (the background counting as farther), 2 (`side=far`) only the farther.
 // With DIRECT (`direct`) the specular estimates of the point lights go through the same filter
 // with the same choices (the same pixels, weights and fallback subsets), into `specular`.
-// FLAT_TILES only with the tile and `ours` (the host sets it only then).
-#if defined(FLAT_TILES) && !(defined(WINDOW_TILE) && FILTER == 2)
+// FLAT_TILES only with `ours` (the host sets it only then).
+#if defined(FLAT_TILES) && FILTER != 2
 #undef FLAT_TILES
 #endif
 layout(set = 0, binding = BINDING_IRRADIANCE) uniform sampler2D g_irradiance;
@@ -72,13 +72,14 @@ bool band_contrast(float a, float b) {
 // reads them there: each texel is fetched once per workgroup instead of once per window that
 // holds it (16 for 4x4). The same bits, so the same frame. `search=1`'s candidates lie at most
 // one period from p (`candidate`: o -/+ P on the other side of p, or +-P for o = 0).
-#if defined(WINDOW_TILE) && FILTER == 2
+#if FILTER == 2
 const int APRON_X0 = max(max((TILE_M - 1) / 2, SEARCH * TILE_M), EXACT_EDGES);
 const int APRON_X1 = max(max(TILE_M / 2, SEARCH * TILE_M), EXACT_EDGES);
 const int APRON_Y0 = max(max((TILE_N - 1) / 2, SEARCH * TILE_N), EXACT_EDGES);
 const int APRON_Y1 = max(max(TILE_N / 2, SEARCH * TILE_N), EXACT_EDGES);
 const int WIN_W = LOCAL_SIZE_X + APRON_X0 + APRON_X1;
 const int WIN_H = LOCAL_SIZE_Y + APRON_Y0 + APRON_Y1;
+#ifdef WINDOW_TILE
 shared uint w_ids[WIN_W * WIN_H];
 shared vec3 w_position[WIN_W * WIN_H];
 shared vec3 w_normal[WIN_W * WIN_H];
@@ -88,6 +89,7 @@ shared vec3 w_specular[WIN_W * WIN_H];
 #endif
 #if defined(BAND_CONTRAST) && !defined(BAND_DEPTH)
 shared float w_tone[WIN_W * WIN_H];
+#endif
 #endif
 
 ivec2 window_origin() {
@@ -114,6 +116,10 @@ shared uint t_span_neg;
 shared uint t_e2;
 shared uint t_r2;
 bool g_flat = false;
+// The tile holds one object only (every texel on the screen and of the centre texel's object):
+// then no pixel of it has another object (or the background) within reach, and the object and
+// contrast bands, which need one, are empty there without their square's tests.
+bool g_one_object = false;
 #endif
 
 // A tile texel's G-buffer values (its estimates come apart: a flat tile does not keep them).
@@ -145,6 +151,7 @@ TileTexel tile_fetch(ivec2 q) {
     return x;
 }
 
+#ifdef WINDOW_TILE
 // Texel t of the tile (at q) into shared memory, with its estimates.
 void tile_store(uint t, ivec2 q, TileTexel x) {
     vec3 eq = vec3(0.0), sq = vec3(0.0);
@@ -165,6 +172,8 @@ void tile_store(uint t, ivec2 q, TileTexel x) {
     w_tone[t] = x.tone;
 #endif
 }
+
+#endif
 
 ivec2 tile_texel(uint t) {
     return window_origin() + ivec2(int(t) % WIN_W, int(t) / WIN_W);
@@ -193,15 +202,20 @@ void window_load() {
     ivec2 c = ivec2(gl_WorkGroupID.xy) * ivec2(LOCAL_SIZE_X, LOCAL_SIZE_Y) +
               ivec2(LOCAL_SIZE_X / 2, LOCAL_SIZE_Y / 2);
     TileTexel ref = tile_fetch(c);
-    bool rough = !on_screen(c) || ref.id == 0u;
+    bool others = !on_screen(c) || ref.id == 0u;
+    bool rough = others;
     float span_pos = 0.0, span_neg = 0.0, e2 = 0.0, r2 = 0.0;
+#ifdef WINDOW_TILE
     TileTexel mine[PER_INVOCATION];
+#endif
     for (uint k = 0u; k < PER_INVOCATION; ++k) {
         uint t = gl_LocalInvocationIndex + k * GROUP_SIZE;
         if (t >= TILE_TEXELS) break;
         ivec2 q = tile_texel(t);
         TileTexel x = tile_fetch(q);
+#ifdef WINDOW_TILE
         mine[k] = x;
+#endif
         float h = dot(ref.n, x.p - ref.p);
         vec3 dn = x.n - ref.n, dp = x.p - ref.p;
         span_pos = max(span_pos, h);
@@ -210,17 +224,19 @@ void window_load() {
         r2 = max(r2, dot(dp, dp));
         // Off the screen (id 0), another object, a normal not of unit length, or anything not
         // finite (every comparison with a NaN is false) makes the tile rough.
-        rough = rough || x.id != ref.id || !(abs(dot(x.n, x.n) - 1.0) <= 0.01) ||
+        others = others || x.id != ref.id;
+        rough = rough || others || !(abs(dot(x.n, x.n) - 1.0) <= 0.01) ||
                 !(abs(h) <= 1e30) || !(dot(dn, dn) <= 1e30) || !(dot(dp, dp) <= 1e30);
     }
     // The workgroup's extremes (each is >= 0, so its bits order as the floats do).
     rough = subgroupAny(rough);
+    others = subgroupAny(others);
     span_pos = subgroupMax(span_pos);
     span_neg = subgroupMax(span_neg);
     e2 = subgroupMax(e2);
     r2 = subgroupMax(r2);
     if (subgroupElect()) {
-        if (rough) atomicOr(t_rough, 1u);
+        if (rough) atomicOr(t_rough, others ? 3u : 1u);
         atomicMax(t_span_pos, floatBitsToUint(span_pos));
         atomicMax(t_span_neg, floatBitsToUint(span_neg));
         atomicMax(t_e2, floatBitsToUint(e2));
@@ -231,8 +247,10 @@ void window_load() {
     float e = sqrt(uintBitsToFloat(t_e2));
     float r = sqrt(uintBitsToFloat(t_r2));
     float nearest = length(ref.p) - r;
+    g_one_object = (t_rough & 2u) == 0u;
     g_flat = t_rough == 0u && 0.99 - 2.0 * e * e >= SAME_NORMAL_COS + 0.001 && nearest > 0.0 &&
              s + 2.0 * e * r <= 0.9 * PLANE_TOLERANCE * nearest;
+#ifdef WINDOW_TILE
     if (!g_flat) {
         for (uint k = 0u; k < PER_INVOCATION; ++k) {
             uint t = gl_LocalInvocationIndex + k * GROUP_SIZE;
@@ -241,7 +259,8 @@ void window_load() {
         }
         barrier();
     }
-#else
+#endif
+#elif defined(WINDOW_TILE)
     for (uint t = gl_LocalInvocationIndex; t < TILE_TEXELS; t += GROUP_SIZE) {
         ivec2 q = tile_texel(t);
         tile_store(t, q, tile_fetch(q));
@@ -250,6 +269,9 @@ void window_load() {
 #endif
 }
 
+#endif
+
+#if FILTER == 2 && defined(WINDOW_TILE)
 int window_index(ivec2 q) {
     ivec2 l = q - window_origin();
     return l.y * WIN_W + l.x;
@@ -265,7 +287,9 @@ vec3 window_specular(ivec2 q) { return w_specular[window_index(q)]; }
 float window_tone(ivec2 q) { return w_tone[window_index(q)]; }
 #endif
 #else
+#if FILTER != 2
 void window_load() {}
+#endif
 uint window_id(ivec2 q) { return texelFetch(g_ids, q, 0).x; }
 vec3 window_position(ivec2 q) { return texelFetch(g_position, q, 0).xyz; }
 vec3 window_normal(ivec2 q) { return texelFetch(g_normal, q, 0).xyz; }
@@ -449,6 +473,10 @@ vec3 interleaved_irradiance(ivec2 px, uint object, vec3 p, vec3 n, float ns, out
     float tone = length(p);
 #elif defined(BAND_CONTRAST)
     float tone = window_tone(px);
+#endif
+#if defined(FLAT_TILES) && defined(BAND_OBJECTS)
+    // A tile of one object has no pixel of another within R (window_load): no band to test.
+    if (!g_one_object)
 #endif
     for (int k = 0; k < side * side; ++k) {
         ivec2 q = px + ivec2(k % side - EXACT_EDGES, k / side - EXACT_EDGES);

@@ -1012,7 +1012,7 @@ fn bent_wall(w: u32, h: u32) -> Scene {
 /// plane-like surface takes each window's mean without the same-surface tests
 /// (shaders/interleaved/filter.glsl, FLAT_TILES), which by its bound would all pass there. The
 /// frame, its non-finite pixels and the debug views are `flat=off`'s bit for bit, with and without
-/// `debug` (its define changes the shader), on the demo (floor, wall, the curved torus, leaves), the
+/// `debug` (its define changes the shader), with the tile and with `window=fetch`, on the demo (floor, wall, the curved torus, leaves), the
 /// floor-and-wall scene (two planes), the same as one object with a crease and a step between
 /// parallel planes (one_folded_object: only the flatness bound keeps its tiles there rough) and `nan` (non-finite G-buffer texels
 /// make their tiles rough), with `search`, the bands, `direct`, `enough`, the 3x2 and 8x8 tiles;
@@ -1071,6 +1071,24 @@ fn flat_tiles_change_no_bit() {
         (
             "demo",
             &demo,
+            "interleaved:4x4:vpls=256:exact-edges=2:band=object".into(),
+            true,
+        ),
+        (
+            "demo",
+            &demo,
+            "interleaved:4x4:vpls=256:exact-edges=1:band=albedo:contrast=0.5".into(),
+            true,
+        ),
+        (
+            "one folded object",
+            &folded,
+            format!("interleaved:4x4:vpls=256:{band}"),
+            true,
+        ),
+        (
+            "demo",
+            &demo,
             "interleaved:4x4:vpls=256:direct:search=1".into(),
             true,
         ),
@@ -1094,7 +1112,7 @@ fn flat_tiles_change_no_bit() {
         ),
         ("nan", &nan, "interleaved:4x4:vpls=256".into(), true),
     ] {
-        for debug in ["", ":debug"] {
+        for debug in ["", ":debug", ":window=fetch", ":window=fetch:debug"] {
             let on = render(&gpu, &shaders, s, &format!("{base}{debug}"));
             let off = render(&gpu, &shaders, s, &format!("{base}:flat=off{debug}"));
             let diff = compare(base.as_str(), &off, &on);
@@ -1106,7 +1124,7 @@ fn flat_tiles_change_no_bit() {
                 on.nonfinite_fragments, off.nonfinite_fragments,
                 "{name} {base}{debug}: non-finite pixels"
             );
-            if debug.is_empty() {
+            if !debug.ends_with("debug") {
                 continue;
             }
             let (a, b) = (
@@ -1554,14 +1572,7 @@ fn bad_tiles_and_counts_are_refused() {
         ),
         ("interleaved:4x4:enough=17", "K from 1 to 16"),
         ("interleaved:4x4:flat=maybe", "flat=on or flat=off"),
-        (
-            "interleaved:4x4:window=fetch:flat=on",
-            "the flat tiles of its `window=tile`",
-        ),
-        (
-            "interleaved:4x4:box:flat=off",
-            "the flat tiles of its `window=tile`",
-        ),
+        ("interleaved:4x4:box:flat=off", "`box` does not have"),
         ("interleaved:2x2:enough=0", "K from 1 to 4"),
         ("interleaved:4x4:implicit:floor", "`implicit` does not have"),
         ("interleaved:4x4:normal=1.5", "a cosine from -1 to 1"),

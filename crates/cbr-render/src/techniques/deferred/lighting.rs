@@ -106,7 +106,7 @@ pub struct InterleavedLighting {
     /// window's G-buffer texels and estimates from a tile fetched into shared memory once per
     /// workgroup (shaders/interleaved/filter.glsl); `window=fetch` fetches each per window.
     pub window_tile: bool,
-    /// `flat=on` (FLAT_TILES; with `window_tile`, the default): a tile on one plane-like surface
+    /// `flat=on` (FLAT_TILES; `ours`, the default): a tile on one plane-like surface
     /// takes the box mean of each window without the same-surface tests (filter.glsl).
     pub flat_tiles: bool,
 }

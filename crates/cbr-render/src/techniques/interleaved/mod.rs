@@ -220,7 +220,7 @@ pub struct InterleavedConfig {
     /// the default; with `search=1` since 2026-12-01), or each texel fetched by every window that
     /// holds it (`fetch`). The same frame.
     pub window_tile: bool,
-    /// `flat=on|off` (`ours` with `window=tile`): a workgroup whose tile lies on one plane-like
+    /// `flat=on|off` (`ours`, with either window): a workgroup whose tile lies on one plane-like
     /// surface (shaders/interleaved/filter.glsl, FLAT_TILES: every same-surface test there would
     /// pass, by a bound) takes the box mean of each window without the tests (`on`, the default),
     /// or tests every slot as elsewhere (`off`). The same frame.
@@ -514,14 +514,14 @@ pub fn parse(params: &[&str]) -> std::result::Result<InterleavedConfig, String> 
         return Err("interleaved: `window=...` is how the `ours` filter reads its window".into());
     }
     let window_tile = window.unwrap_or(filter == Filter::Ours);
-    if flat.is_some() && !window_tile {
-        return Err(
-            "interleaved: `flat=...` is how the `ours` filter takes the flat tiles of its \
-             `window=tile`"
-                .into(),
-        );
+    if flat.is_some() && filter != Filter::Ours {
+        return Err(format!(
+            "interleaved: `flat=...` is how the `ours` filter takes its flat tiles, which `{}` \
+             does not have",
+            filter.name()
+        ));
     }
-    let flat_tiles = flat.unwrap_or(true) && window_tile;
+    let flat_tiles = flat.unwrap_or(true) && filter == Filter::Ours;
     if exact_edges > 0 && filter != Filter::Ours {
         return Err(format!(
             "interleaved: `exact-edges` is a variant of the `ours` filter, not of `{}`",
