@@ -79,6 +79,16 @@ const int APRON_Y0 = max(max((TILE_N - 1) / 2, SEARCH * TILE_N), EXACT_EDGES);
 const int APRON_Y1 = max(max(TILE_N / 2, SEARCH * TILE_N), EXACT_EDGES);
 const int WIN_W = LOCAL_SIZE_X + APRON_X0 + APRON_X1;
 const int WIN_H = LOCAL_SIZE_Y + APRON_Y0 + APRON_Y1;
+// The core of the tile (FLAT_TILES): the texels the workgroup's window slots and `exact-edges`'
+// squares reach, without `search`'s candidates. Where every slot is on p's surface no candidate
+// is looked at, and where no texel of another object is within the square no band is tested, so
+// a tile's flatness (and its being of one object) is a property of its core alone.
+const int CORE_X0 = max((TILE_M - 1) / 2, EXACT_EDGES);
+const int CORE_X1 = max(TILE_M / 2, EXACT_EDGES);
+const int CORE_Y0 = max((TILE_N - 1) / 2, EXACT_EDGES);
+const int CORE_Y1 = max(TILE_N / 2, EXACT_EDGES);
+const int CORE_W = LOCAL_SIZE_X + CORE_X0 + CORE_X1;
+const int CORE_H = LOCAL_SIZE_Y + CORE_Y0 + CORE_Y1;
 #ifdef WINDOW_TILE
 shared uint w_ids[WIN_W * WIN_H];
 shared vec3 w_position[WIN_W * WIN_H];
@@ -97,10 +107,12 @@ ivec2 window_origin() {
 }
 
 #ifdef FLAT_TILES
-// `flat=on` (FLAT_TILES, the default of the tile): a tile whose every texel lies on one plane-like
+// `flat=on` (FLAT_TILES, the default of the tile): a tile whose core (every texel the
+// workgroup's window slots and `exact-edges`' squares reach, CORE_*) lies on one plane-like
 // surface is *flat*, and its pixels take the box mean of their windows without a test, because
-// every test of the filter would pass there (the same bits: the same sums in the same order).
-// Flat: every texel on the screen and of the reference texel's object (the workgroup's centre
+// every test of the filter would pass there (the same bits: the same sums in the same order;
+// `search`'s candidates are looked at only for a slot off p's surface, so they do not count).
+// Flat: every texel of the core on the screen and of the reference texel's object (the workgroup's centre
 // pixel c, not the background), every normal within e of c's (|n_q - n_c| <= e, |n_q|^2 within
 // 1% of 1), every position within R of c's, and the signed distances h_q = n_c . (p_q - p_c)
 // spanning S. For any two texels p, q then
@@ -116,7 +128,7 @@ shared uint t_span_neg;
 shared uint t_e2;
 shared uint t_r2;
 bool g_flat = false;
-// The tile holds one object only (every texel on the screen and of the centre texel's object):
+// The tile's core holds one object only (every texel on the screen and of the centre texel's object):
 // then no pixel of it has another object (or the background) within reach, and the object and
 // contrast bands, which need one, are empty there without their square's tests.
 bool g_one_object = false;
@@ -179,6 +191,12 @@ ivec2 tile_texel(uint t) {
     return window_origin() + ivec2(int(t) % WIN_W, int(t) / WIN_W);
 }
 
+#ifdef FLAT_TILES
+ivec2 core_origin() {
+    return ivec2(gl_WorkGroupID.xy) * ivec2(LOCAL_SIZE_X, LOCAL_SIZE_Y) - ivec2(CORE_X0, CORE_Y0);
+}
+#endif
+
 const uint TILE_TEXELS = uint(WIN_W * WIN_H);
 const uint GROUP_SIZE = uint(LOCAL_SIZE_X * LOCAL_SIZE_Y);
 
@@ -190,7 +208,12 @@ const uint GROUP_SIZE = uint(LOCAL_SIZE_X * LOCAL_SIZE_Y);
 // shared-memory read, which is a per-lane loop), any other stores its texels and estimates.
 void window_load() {
 #ifdef FLAT_TILES
-    const uint PER_INVOCATION = (TILE_TEXELS + GROUP_SIZE - 1u) / GROUP_SIZE;
+#ifdef WINDOW_TILE
+    const uint CLASS_TEXELS = TILE_TEXELS;
+#else
+    const uint CLASS_TEXELS = uint(CORE_W * CORE_H);
+#endif
+    const uint PER_INVOCATION = (CLASS_TEXELS + GROUP_SIZE - 1u) / GROUP_SIZE;
     if (gl_LocalInvocationIndex == 0u) {
         t_rough = 0u;
         t_span_pos = 0u;
@@ -208,13 +231,19 @@ void window_load() {
 #ifdef WINDOW_TILE
     TileTexel mine[PER_INVOCATION];
 #endif
+    // With the tile the invocations fetch all of it (a rough tile stores it) and measure its core
+    // (below); with `window=fetch` they fetch the core alone.
     for (uint k = 0u; k < PER_INVOCATION; ++k) {
         uint t = gl_LocalInvocationIndex + k * GROUP_SIZE;
-        if (t >= TILE_TEXELS) break;
+        if (t >= CLASS_TEXELS) break;
+#ifdef WINDOW_TILE
         ivec2 q = tile_texel(t);
         TileTexel x = tile_fetch(q);
-#ifdef WINDOW_TILE
         mine[k] = x;
+        ivec2 l = q - core_origin();
+        if (l.x < 0 || l.y < 0 || l.x >= CORE_W || l.y >= CORE_H) continue;
+#else
+        TileTexel x = tile_fetch(core_origin() + ivec2(int(t) % CORE_W, int(t) / CORE_W));
 #endif
         float h = dot(ref.n, x.p - ref.p);
         vec3 dn = x.n - ref.n, dp = x.p - ref.p;
