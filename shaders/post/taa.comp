@@ -37,7 +37,7 @@ layout(set = 0, binding = BINDING_OUT_RANGE, rgba16f) uniform writeonly image2D 
 // running mean), F_FILTER (reconstruct the current sample at the pixel centre, Karis' filter),
 // F_COUNT (the current-frame weight is at least 1 / (m + 1), m the frames the pixel's history
 // holds), F_LUMA (Karis' luminance weights in the blend), F_CYCLE (a still pixel shows the mean
-// of its last complete jitter cycle): the flag bits, and MOVED / ID_MASK
+// of its last complete jitter cycle), F_CENTRED (a reset frame is rendered unjittered): the flag bits, and MOVED / ID_MASK
 // (the geometry the technique gives) and HIST_ID_MASK / COUNT_SHIFT / COUNT_MAX (history
 // geometry: x = object ID | count << COUNT_SHIFT | MOVED where the pixel moved more than the
 // still threshold), are defines from crates/cbr-render/src/post/taa.rs.
@@ -316,7 +316,9 @@ void main() {
     vec4 cyc_out = vec4(0.0);
     vec4 rng_out = vec4(1.0, 0.0, 1.0, 0.0);
 #if MODE == 0
-    if (has(F_CYCLE) && !moving) {
+    // F_CENTRED: a reset frame was rendered unjittered (the renderer's centred reset): it is no
+    // phase of the cycle, which starts with the next frame.
+    if (has(F_CYCLE) && !moving && !(has(F_RESET) && has(F_CENTRED))) {
         float l = y0.x;
         // The mean the last complete cycle left in the history, shown until the next one is.
         bool hold = cycling && complete;

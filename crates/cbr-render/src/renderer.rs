@@ -360,9 +360,30 @@ impl Renderer {
         }
     }
 
-    fn view(&self, scene: &Scene, frame: u32) -> FrameView {
+    /// Whether frame `frame` renders centred: it has no history (`reset`) and the jittering
+    /// post pass asks for its resets unjittered ([`PostPass::centred_at_reset`]).
+    fn centred(&self, reset: bool) -> bool {
+        reset
+            && self
+                .post
+                .iter()
+                .any(|p| p.jitter(0).is_some() && p.centred_at_reset())
+    }
+
+    fn view(&self, scene: &Scene, frame: u32, centred: bool) -> FrameView {
         let time = scene.time_of_frame(frame);
         let s = &self.settings;
+        // A centred frame takes neither the post pass's jitter nor its LOD bias (the setting
+        // `--lod-bias` still holds).
+        let (jitter, lod_bias, lod_motion) = match centred {
+            true => (
+                s.jitter,
+                s.lod_bias
+                    .unwrap_or_else(|| self.technique.default_lod_bias()),
+                [0.0; 2],
+            ),
+            false => (self.jitter(frame), self.lod_bias(), self.lod_motion()),
+        };
         let mut flags = if s.count_shaded { FLAG_COUNT_SHADED } else { 0 };
         if s.debug_lod {
             flags |= FLAG_DEBUG_LOD;
@@ -375,10 +396,10 @@ impl Renderer {
             width: s.width,
             height: s.height,
             aspect: f64::from(s.width) / f64::from(s.height),
-            lod_bias: self.lod_bias(),
-            lod_motion: self.lod_motion(),
+            lod_bias,
+            lod_motion,
             frame_index: frame,
-            screen_jitter: self.jitter(frame),
+            screen_jitter: jitter,
             raster: RasterUniforms {
                 viewport: (s.width as f32, s.height as f32),
                 jitter: [[0.0; 2]; 2],
@@ -392,10 +413,13 @@ impl Renderer {
     /// Histories (resolves, post passes) continue from frame f - 1 when that was the last frame
     /// rendered and no camera cut lies between the two, and reset otherwise.
     pub fn render(&mut self, scene: &Scene, frame: u32) -> Result<FrameOutput> {
-        let view = self.view(scene, frame);
+        let time = scene.time_of_frame(frame);
         let reset = frame == 0
             || self.last_frame != Some(frame - 1)
-            || scene.camera.cut_between(view.prev_time, view.time);
+            || scene
+                .camera
+                .cut_between(time - 1.0 / scene.settings.fps, time);
+        let view = self.view(scene, frame, self.centred(reset));
         let key = self.cache.as_ref().map(|c| c.key(&view, frame));
         if let (Some(c), Some(k)) = (&self.cache, &key)
             && let Some(out) = c.load(k, frame, view.time)

@@ -31,15 +31,15 @@ fn mean_abs(a: &[[f32; 3]], b: &[[f32; 3]]) -> f32 {
         / a.len() as f32
 }
 
-/// The native frames 0..8 of a static scene rendered with TAA's jitters and LOD bias, and their
-/// per-pixel mean (8 samples per pixel).
+/// The native frames 1..=8 of a static scene rendered with TAA's jitters and LOD bias (the 8
+/// phases of its cycle: frame 0 renders centred), and their per-pixel mean (8 samples per pixel).
 fn jittered_cycle(
     gpu: &cbr_gpu::Gpu,
     s: &Scene,
     w: u32,
     h: u32,
 ) -> (Vec<Vec<[f32; 3]>>, Vec<[f32; 3]>) {
-    let natives: Vec<Vec<[f32; 3]>> = (0..8)
+    let natives: Vec<Vec<[f32; 3]>> = (1..=8)
         .map(|f| rgb(&jittered_native(gpu, s, w, h, 8, f)))
         .collect();
     let mean = (0..(w * h) as usize)
@@ -75,6 +75,23 @@ fn jittered_native_for(
         ..spec(w, h, "native")
     };
     render(gpu, s, settings, &[f]).remove(0)
+}
+
+/// The frame `+taa` with configuration `c` renders at frame `f`, the first of its run when
+/// `first`: with no history to blend (a reset) ours renders it centred, as `native` does
+/// (`centred_reset`); every other frame is jittered ([`jittered_native_for`]).
+fn taa_input(
+    gpu: &cbr_gpu::Gpu,
+    s: &Scene,
+    (w, h): (u32, u32),
+    c: &TaaConfig,
+    f: u32,
+    first: bool,
+) -> FrameOutput {
+    match first && c.centred_reset {
+        true => render(gpu, s, spec(w, h, "native"), &[f]).remove(0),
+        false => jittered_native_for(gpu, s, w, h, c, f),
+    }
 }
 
 /// The shader against the CPU reference, frame by frame: each frame's reference takes the GPU's
@@ -129,7 +146,8 @@ fn shader_matches_reference(gpu: &cbr_gpu::Gpu, s: &Scene, frames: &[u32], param
         let mut worst = (0.0f32, 0usize);
         let natives: Vec<FrameOutput> = frames
             .iter()
-            .map(|&f| jittered_native_for(gpu, s, w, h, &c, f))
+            .enumerate()
+            .map(|(k, &f)| taa_input(gpu, s, (w, h), &c, f, k == 0))
             .collect();
         let inputs: Vec<(Vec<[f32; 3]>, Vec<u32>)> = natives
             .iter()
@@ -145,7 +163,10 @@ fn shader_matches_reference(gpu: &cbr_gpu::Gpu, s: &Scene, frames: &[u32], param
             history: None,
             n: k as u32,
             exposure_scale: s.settings.exposure.exp2(),
-            jitter: taa::jitter(c.length, frames[k]),
+            jitter: match k == 0 && c.centred_reset {
+                true => [0.0; 2],
+                false => taa::jitter(c.length, frames[k]),
+            },
             cycle: None,
         };
         // The history geometry the GPU wrote last frame: the first frame is a reset (it depends
@@ -203,8 +224,9 @@ fn shader_matches_reference(gpu: &cbr_gpu::Gpu, s: &Scene, frames: &[u32], param
 }
 
 /// Clipping off, weight 1 / (n + 1): frame n of a static scene is the mean of the n + 1 native
-/// frames rendered with the jitters of frames 0..=n (within f16: each frame's output is rounded
-/// to f16 before it is the next frame's history).
+/// frames rendered as `+taa` renders frames 0..=n (frame 0 centred, the reset, the others with
+/// their jitters; within f16: each frame's output is rounded to f16 before it is the next
+/// frame's history).
 #[test]
 fn without_clipping_the_mean_weight_gives_the_mean_of_the_jittered_frames() {
     let gpu = gpu();
@@ -217,9 +239,10 @@ fn without_clipping_the_mean_weight_gives_the_mean_of_the_jittered_frames() {
         spec(w, h, "native+taa:mean:without-clip"),
         &frames,
     );
+    let c = TaaConfig::parse(&["mean", "without-clip"]).expect("config");
     let natives: Vec<Vec<[f32; 3]>> = frames
         .iter()
-        .map(|&f| rgb(&jittered_native(&gpu, &s, w, h, 8, f)))
+        .map(|&f| rgb(&taa_input(&gpu, &s, (w, h), &c, f, f == 0)))
         .collect();
     for n in [0usize, 3, 7] {
         let got = rgb(&outs[n]);
@@ -289,11 +312,12 @@ fn with_clipping_a_static_scene_converges() {
     assert_clean(&gpu);
 }
 
-/// The jitter cycle (`+taa`'s default): on a static scene every pixel is still, so frame 7 (the
-/// first complete cycle of 8 phases) is the mean of the 8 jittered native frames, within one
-/// f16 rounding of the output and the f32 running mean's, and every later frame is frame 7 bit
-/// for bit: a converged still pixel does not flicker at all. `without-cycle` keeps moving by
-/// its weight 0.1 times each new sample's distance from the mean.
+/// The jitter cycle (`+taa`'s default): on a static scene every pixel is still, so frame 8 (the
+/// first complete cycle of 8 phases, frames 1-8: frame 0, the reset, renders centred and is no
+/// phase of it) is the mean of the 8 jittered native frames, within one f16 rounding of the
+/// output and the f32 running mean's, and every later frame is frame 8 bit for bit: a converged
+/// still pixel does not flicker at all. `without-cycle` keeps moving by its weight 0.1 times
+/// each new sample's distance from the mean.
 #[test]
 fn a_still_pixel_shows_the_mean_of_its_last_jitter_cycle() {
     let gpu = gpu();
@@ -302,7 +326,7 @@ fn a_still_pixel_shows_the_mean_of_its_last_jitter_cycle() {
     let frames: Vec<u32> = (0..20).collect();
     let outs = render(&gpu, &s, spec(w, h, "native+taa"), &frames);
     let (_, mean) = jittered_cycle(&gpu, &s, w, h);
-    let got = rgb(&outs[7]);
+    let got = rgb(&outs[8]);
     let mut worst = 0.0f32;
     for (g, m) in got.iter().zip(&mean) {
         for c in 0..3 {
@@ -311,14 +335,14 @@ fn a_still_pixel_shows_the_mean_of_its_last_jitter_cycle() {
     }
     assert!(
         worst <= 1.0,
-        "frame 7: {worst:.2}x one f16 step off the 8-frame mean"
+        "frame 8: {worst:.2}x one f16 step off the 8-frame mean"
     );
-    for f in 8..20 {
-        let same = outs[f].color == outs[7].color;
-        assert!(same, "frame {f} differs from frame 7");
+    for f in 9..20 {
+        let same = outs[f].color == outs[8].color;
+        assert!(same, "frame {f} differs from frame 8");
     }
     // Before the cycle is complete the output is the running blend, and it differs.
-    assert!(outs[6].color != outs[7].color);
+    assert!(outs[7].color != outs[8].color);
     let old = render(&gpu, &s, spec(w, h, "native+taa:without-cycle"), &frames);
     let changed = (8..20)
         .filter(|&f| old[f].color != old[f - 1].color)
@@ -327,11 +351,12 @@ fn a_still_pixel_shows_the_mean_of_its_last_jitter_cycle() {
     assert_clean(&gpu);
 }
 
-/// A still pixel whose shading changes leaves its cycle: the static demo held for 16 frames (two
-/// complete cycles), then every light dimmed to 30% from frame 16 on. Every sample of frame 16
-/// lit enough to leave the tolerance lies below the range of the last cycle, so its history is
-/// rejected and the output is the dimmed jittered frame; with a tolerance wider than the change
-/// (`ctol=1`) frame 16 would still show the old cycle's mean, bit for bit.
+/// A still pixel whose shading changes leaves its cycle: the static demo held for 17 frames (the
+/// centred frame 0, then two complete cycles), then every light dimmed to 30% from frame 17 on.
+/// Every sample of frame 17 lit enough to leave the tolerance lies below the range of the last
+/// cycle, so its history is rejected and the output is the dimmed jittered frame; with a
+/// tolerance wider than the change (`ctol=1`) frame 17 would still show the old cycle's mean,
+/// bit for bit.
 #[test]
 fn a_still_pixel_whose_shading_changes_leaves_its_cycle() {
     let gpu = gpu();
@@ -347,25 +372,25 @@ fn a_still_pixel_whose_shading_changes_leaves_its_cycle() {
     let run = |spec_: &str| -> Vec<FrameOutput> {
         let shaders = cbr_render::shader_library();
         let mut r = Renderer::new(&gpu, &shaders, &s, spec(w, h, spec_)).expect("renderer");
-        (0..18u32)
-            .map(|f| r.render(if f < 16 { &s } else { &dim }, f).expect("frame"))
+        (0..19u32)
+            .map(|f| r.render(if f < 17 { &s } else { &dim }, f).expect("frame"))
             .collect()
     };
     let ours = run("native+taa");
     let held = run("native+taa:ctol=1");
     assert!(
-        ours[15].color == ours[14].color,
+        ours[16].color == ours[15].color,
         "converged before the change"
     );
     assert!(
-        held[16].color == held[15].color,
+        held[17].color == held[16].color,
         "ctol=1: the old mean is held"
     );
     // Pixel by pixel: where the dimmed sample's perceptual luma leaves the range of the 8
     // jittered samples of scene A by more than the tolerance (0.01; 1e-3 of margin for the
-    // range's f16 rounding), frame 16 is that sample, bit for bit (the history rejected); where
-    // it stays inside, frame 15's cycle mean, bit for bit (the sky, dark texels).
-    let dimmed = jittered_native(&gpu, &dim, w, h, 8, 16);
+    // range's f16 rounding), frame 17 is that sample, bit for bit (the history rejected); where
+    // it stays inside, frame 16's cycle mean, bit for bit (the sky, dark texels).
+    let dimmed = jittered_native(&gpu, &dim, w, h, 8, 17);
     let (cycle_a, _) = jittered_cycle(&gpu, &s, w, h);
     let e = s.settings.exposure.exp2();
     let l = |c: [f32; 3]| taa::to_p(c, e)[0];
@@ -378,19 +403,19 @@ fn a_still_pixel_whose_shading_changes_leaves_its_cycle() {
         let lf = l(fresh[i]);
         if lf < lo - 0.011 || lf > hi + 0.011 {
             assert!(
-                px(&ours[16], i) == px(&dimmed, i),
+                px(&ours[17], i) == px(&dimmed, i),
                 "pixel {i} changed but kept its mean"
             );
             followed += 1;
         } else if lf > lo - 0.009 && lf < hi + 0.009 {
             assert!(
-                px(&ours[16], i) == px(&ours[15], i),
+                px(&ours[17], i) == px(&ours[16], i),
                 "pixel {i} did not change but left"
             );
             kept += 1;
         }
     }
-    eprintln!("frame 16: {followed} pixels left their cycle, {kept} kept it");
+    eprintln!("frame 17: {followed} pixels left their cycle, {kept} kept it");
     assert!(followed > 200 && kept > 200, "{followed} left, {kept} kept");
     assert_clean(&gpu);
 }
@@ -508,8 +533,9 @@ fn nan_and_inf_never_enter_the_history() {
     assert_clean(&gpu);
 }
 
-/// A camera cut (a key flagged `cut`) resets the history: the first frame after it is the
-/// jittered native frame itself, with no trace of the previous shot.
+/// A camera cut (a key flagged `cut`) resets the history: the first frame after it is
+/// `native`'s own frame (rendered centred: nothing to blend a jittered sample with), with no
+/// trace of the previous shot; with `without-centred-reset` it is the jittered native frame.
 #[test]
 fn a_camera_cut_resets_the_history() {
     let gpu = gpu();
@@ -517,11 +543,22 @@ fn a_camera_cut_resets_the_history() {
     let s = common::demo_with_cut(w, h, 4);
     let taa = "native+taa";
     let outs = render(&gpu, &s, spec(w, h, taa), &(0..6).collect::<Vec<_>>());
-    let native4 = jittered_native(&gpu, &s, w, h, 8, 4);
+    let native4 = render(&gpu, &s, spec(w, h, "native"), &[4]).remove(0);
     assert!(
         outs[4].color == native4.color,
-        "frame 4 (the cut) is not the fresh native frame"
+        "frame 4 (the cut) is not native's frame"
     );
+    let old = render(
+        &gpu,
+        &s,
+        spec(w, h, "native+taa:without-centred-reset"),
+        &(0..5).collect::<Vec<_>>(),
+    );
+    assert!(
+        old[4].color == jittered_native(&gpu, &s, w, h, 8, 4).color,
+        "without-centred-reset: frame 4 (the cut) is not the jittered native frame"
+    );
+    assert!(old[4].color != native4.color);
     assert!(
         outs[3].color != jittered_native(&gpu, &s, w, h, 8, 3).color,
         "frame 3 blends history"
@@ -530,6 +567,34 @@ fn a_camera_cut_resets_the_history() {
         outs[5].color != jittered_native(&gpu, &s, w, h, 8, 5).color,
         "frame 5 blends again"
     );
+    assert_clean(&gpu);
+}
+
+/// A frame without history is the technique's own: frame 0 of `T+taa` is `T`'s frame 0 bit for
+/// bit (rendered unjittered at `T`'s LOD bias, passed through), for native and checkerboard;
+/// the next frame is jittered and blends. INSIDE's TAA (as published) and
+/// `without-centred-reset` jitter frame 0 as well, so theirs differs from the technique's.
+#[test]
+fn a_frame_without_history_is_the_techniques_own() {
+    let gpu = gpu();
+    let (w, h) = (48u32, 27u32);
+    let s = demo(w, h);
+    for t in ["native", "checkerboard:rotated:ours"] {
+        let own = render(&gpu, &s, spec(w, h, t), &[0, 1]);
+        let taa = render(&gpu, &s, spec(w, h, &format!("{t}+taa")), &[0, 1]);
+        assert!(
+            taa[0].color == own[0].color,
+            "{t}+taa: frame 0 is not {t}'s"
+        );
+        assert!(taa[1].color != own[1].color, "{t}+taa: frame 1 blends");
+        for other in ["inside", "without-centred-reset"] {
+            let o = render(&gpu, &s, spec(w, h, &format!("{t}+taa:{other}")), &[0]);
+            assert!(
+                o[0].color != own[0].color,
+                "{t}+taa:{other}: frame 0 is jittered"
+            );
+        }
+    }
     assert_clean(&gpu);
 }
 

@@ -83,6 +83,12 @@ pub trait PostPass {
     fn lod_speed(&self) -> f32 {
         0.0
     }
+    /// A jittering pass's frames without history (the first, a camera cut: [`PostFrame::reset`])
+    /// are rendered unjittered and without [`PostPass::lod_bias`] (TAA: nothing to average a
+    /// jittered, sharper sample over, so the pixel-centred frame is the better one to show).
+    fn centred_at_reset(&self) -> bool {
+        false
+    }
 }
 
 /// A post pass's constructor: context and parameters.

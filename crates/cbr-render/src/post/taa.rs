@@ -144,6 +144,12 @@ pub struct TaaConfig {
     /// the moving hard cases it helps `texture` and `spinner` and hurts `horizon`, `far` and
     /// `foliage`, whose grazing surfaces want the sharper level even moving; docs/post-aa.md).
     pub motion_lod: bool,
+    /// A frame with no history (the first, a camera cut) is rendered unjittered at the
+    /// technique's own LOD bias, and shown as it is: with nothing to average a jittered sample
+    /// and a sharper texture over, the pixel-centred frame is the better estimate of the pixel
+    /// (`native`'s own frame); it starts no jitter cycle (`without-centred-reset`; off in
+    /// INSIDE's mode, which jitters every frame as published).
+    pub centred_reset: bool,
 }
 
 /// Below this motion (pixels) a pixel is still: when its history texel was still too, the ID
@@ -188,6 +194,7 @@ impl TaaConfig {
         cycle: true,
         cycle_tolerance: 0.01,
         motion_lod: false,
+        centred_reset: true,
     };
 
     pub const INSIDE: TaaConfig = TaaConfig {
@@ -201,6 +208,7 @@ impl TaaConfig {
         luma: false,
         adaptive: false,
         cycle: false,
+        centred_reset: false,
         ..TaaConfig::OURS
     };
 
@@ -268,6 +276,10 @@ impl TaaConfig {
                     ours_only("still pixels' jitter cycle")?;
                     c.cycle = false
                 }
+                "without-centred-reset" => {
+                    ours_only("centred frame at a reset")?;
+                    c.centred_reset = false
+                }
                 "motionlod" => {
                     ours_only("LOD bias withdrawn with motion")?;
                     c.motion_lod = true
@@ -309,7 +321,7 @@ impl TaaConfig {
                             "inside, 8, 16, alpha=A, amax=A, speed=V, gamma=G, tol=T, ctol=T, lod=B, \
                              mean, without-dilation, without-clip, without-ids, without-depth, \
                              without-catmull, without-speed, without-count, without-luma, \
-                             without-cycle, motionlod, adaptive, filter",
+                             without-cycle, without-centred-reset, motionlod, adaptive, filter",
                         ));
                     }
                 },
@@ -335,6 +347,7 @@ impl TaaConfig {
             (self.luma, F_LUMA),
             (self.adaptive, F_ADAPTIVE),
             (self.cycle, F_CYCLE),
+            (self.centred_reset, F_CENTRED),
         ] {
             if on {
                 f |= bit;
@@ -356,6 +369,7 @@ pub const F_COUNT: u32 = 256;
 pub const F_LUMA: u32 = 512;
 pub const F_ADAPTIVE: u32 = 1024;
 pub const F_CYCLE: u32 = 2048;
+pub const F_CENTRED: u32 = 4096;
 
 /// The radical inverse of `i` in `base` (the Halton sequence's element i).
 pub fn halton(mut i: u32, base: u32) -> f32 {
@@ -409,6 +423,7 @@ pub fn decl(inside: bool, packed: bool) -> ComputeDecl {
             ("F_LUMA", F_LUMA),
             ("F_ADAPTIVE", F_ADAPTIVE),
             ("F_CYCLE", F_CYCLE),
+            ("F_CENTRED", F_CENTRED),
             ("MOVED", MOVED),
             ("ID_MASK", !MOVED),
             ("HIST_ID_MASK", HIST_ID_MASK),
@@ -549,6 +564,10 @@ impl PostPass for Taa {
             true => self.config.speed,
             false => 0.0,
         }
+    }
+
+    fn centred_at_reset(&self) -> bool {
+        self.config.centred_reset
     }
 }
 
@@ -901,7 +920,9 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                 }
             }
             let mut next = CycleState::NONE;
-            if c.cycle && !c.inside && !moving(v) {
+            // A centred reset frame is no phase of the jitter cycle: the cycle starts after it.
+            let centred = c.centred_reset && i.history.is_none();
+            if c.cycle && !c.inside && !moving(v) && !centred {
                 let l = y0[0];
                 if cycling && cyc.k > 0 {
                     let k = cyc.k + 1;
@@ -1028,7 +1049,8 @@ mod tests {
     }
 
     /// The jitter cycle on a 6x5 still frame whose colour alternates 1, 2 (what jitter does to
-    /// a pixel): frame 7 completes the first cycle and shows its mean 1.5, frames 8-11 hold it
+    /// a pixel), with frame 0 jittered too (`without-centred-reset`; ours starts the cycle at
+    /// frame 1, after the centred reset, and completes it at frame 8): frame 7 completes the first cycle and shows its mean 1.5, frames 8-11 hold it
     /// bit for bit; frame 12's sample 5 lies outside the cycle's luma range, so the history is
     /// rejected (the output is the sample, 5, one frame held) and its cycle restarts; with a
     /// tolerance wider than the change it holds 1.5, and with `without-cycle` it blends.
@@ -1066,7 +1088,15 @@ mod tests {
             }
             seen
         };
-        let ours = run(&TaaConfig::OURS);
+        // Ours renders frame 0 (the reset) centred: it is no phase of the cycle, which then runs
+        // over frames 1-8 (its mean 1.5 at frame 8).
+        let centred = run(&TaaConfig::OURS);
+        assert_eq!(centred[0].1, CycleState::NONE, "a centred reset starts no cycle");
+        assert_eq!(centred[1].1.k, 1, "the cycle starts after it");
+        assert_eq!(centred[7].1.k, 7);
+        assert_eq!(centred[8].0, [1.5; 3], "frame 8: the cycle's mean");
+        // The rest on frames jittered from frame 0 on (`without-centred-reset`).
+        let ours = run(&TaaConfig::parse(&["without-centred-reset"]).expect("config"));
         assert_eq!(ours[7].0, [1.5; 3], "frame 7: the cycle's mean");
         assert_eq!(ours[7].1.k, 0, "a complete cycle starts the next");
         let l = |v: f32| f16_round(to_p([v; 3], 1.0)[0]);
