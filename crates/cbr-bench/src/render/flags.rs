@@ -60,6 +60,14 @@ pub enum TaaAblationArg {
     Catmull,
     /// The current-frame weight rising with speed: alpha everywhere.
     Speed,
+    /// The per-pixel frame count (the weight at least 1 / (m + 1)).
+    Count,
+    /// Karis' luminance weights in the blend: a linear blend.
+    Luma,
+    /// Still pixels held at the mean of their last jitter cycle.
+    Cycle,
+    /// A frame without history rendered centred: jittered like every other.
+    CentredReset,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -165,8 +173,12 @@ fn parse_group(s: &str) -> std::result::Result<u32, String> {
 }
 
 /// The lower-case name of a flag's value (`Velocity` -> `velocity`).
-fn lower(v: impl std::fmt::Debug) -> String {
-    format!("{v:?}").to_lowercase()
+/// A flag value's name as clap spells it (`CentredReset` -> `centred-reset`), the name of the
+/// spec parameter it stands for.
+fn lower(v: &impl clap::ValueEnum) -> String {
+    v.to_possible_value()
+        .map(|p| p.get_name().to_string())
+        .unwrap_or_default()
 }
 
 impl Shorthand {
@@ -269,6 +281,11 @@ mod tests {
                 "native+taa",
                 &["--taa-without", "clip,speed"],
                 "native+taa:without-clip:without-speed",
+            ),
+            (
+                "native+taa",
+                &["--taa-without", "count,luma,cycle,centred-reset"],
+                "native+taa:without-count:without-luma:without-cycle:without-centred-reset",
             ),
         ] {
             match spec(text, flags) {

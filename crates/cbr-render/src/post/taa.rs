@@ -54,8 +54,17 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
 };
 
 /// The parts `without-X` switches off.
-pub const ABLATIONS: [&str; 9] = [
-    "dilation", "clip", "ids", "depth", "catmull", "speed", "count", "luma", "cycle",
+pub const ABLATIONS: [&str; 10] = [
+    "dilation",
+    "clip",
+    "ids",
+    "depth",
+    "catmull",
+    "speed",
+    "count",
+    "luma",
+    "cycle",
+    "centred-reset",
 ];
 
 /// `cbr render --taa-without X,...`: adds `without-X` (X one of [`ABLATIONS`]) to the spec's
