@@ -108,7 +108,11 @@ fn every_frame_is_counted_and_a_held_frame_counts_the_same_jit_work() {
         // The median of the two counted frames is the lower one (`statistics.median_low`): they
         // may differ by the few instructions allowed above (seen: 1 of 1.07 M under the test
         // suite's load).
-        assert_eq!(r["jit"].as_u64(), Some(j[1].min(j[2])), "{name}: the median");
+        assert_eq!(
+            r["jit"].as_u64(),
+            Some(j[1].min(j[2])),
+            "{name}: the median"
+        );
         jit.push(j[2]);
     }
     // Four times the VPLs cost more shading, and the ratios are the first technique's count over
