@@ -595,6 +595,16 @@ fn a_frame_without_history_is_the_techniques_own() {
             );
         }
     }
+    // A `--lod-bias` setting holds on the centred frame as on the technique's own.
+    let biased = |s_: &str| RenderSettings {
+        lod_bias: Some(-2.0),
+        ..spec(w, h, s_)
+    };
+    let own = render(&gpu, &s, biased("native"), &[0]);
+    let taa = render(&gpu, &s, biased("native+taa"), &[0]);
+    assert!(own[0].color == taa[0].color, "--lod-bias -2: frame 0");
+    let plain = render(&gpu, &s, spec(w, h, "native"), &[0]);
+    assert!(own[0].color != plain[0].color, "the bias changes the frame");
     assert_clean(&gpu);
 }
 
