@@ -374,13 +374,16 @@ impl Renderer {
         let time = scene.time_of_frame(frame);
         let s = &self.settings;
         // A centred frame takes neither the post pass's jitter nor its LOD bias (the setting
-        // `--lod-bias` still holds).
+        // `--lod-bias`, with its motion setting, still holds).
         let (jitter, lod_bias, lod_motion) = match centred {
             true => (
                 s.jitter,
                 s.lod_bias
                     .unwrap_or_else(|| self.technique.default_lod_bias()),
-                [0.0; 2],
+                match s.lod_bias {
+                    Some(_) => s.lod_motion.unwrap_or([0.0; 2]),
+                    None => [0.0; 2],
+                },
             ),
             false => (self.jitter(frame), self.lod_bias(), self.lod_motion()),
         };

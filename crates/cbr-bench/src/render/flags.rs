@@ -172,7 +172,6 @@ fn parse_group(s: &str) -> std::result::Result<u32, String> {
     }
 }
 
-/// The lower-case name of a flag's value (`Velocity` -> `velocity`).
 /// A flag value's name as clap spells it (`CentredReset` -> `centred-reset`), the name of the
 /// spec parameter it stands for.
 fn lower(v: &impl clap::ValueEnum) -> String {

@@ -1059,8 +1059,8 @@ mod tests {
 
     /// The jitter cycle on a 6x5 still frame whose colour alternates 1, 2 (what jitter does to
     /// a pixel), with frame 0 jittered too (`without-centred-reset`; ours starts the cycle at
-    /// frame 1, after the centred reset, and completes it at frame 8): frame 7 completes the first cycle and shows its mean 1.5, frames 8-11 hold it
-    /// bit for bit; frame 12's sample 5 lies outside the cycle's luma range, so the history is
+    /// frame 1, after the centred reset, and completes it at frame 8): frame 7 completes the
+    /// first cycle and shows its mean 1.5, frames 8-11 hold it bit for bit; frame 12's sample 5 lies outside the cycle's luma range, so the history is
     /// rejected (the output is the sample, 5, one frame held) and its cycle restarts; with a
     /// tolerance wider than the change it holds 1.5, and with `without-cycle` it blends.
     #[test]
