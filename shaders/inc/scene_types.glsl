@@ -24,9 +24,14 @@
 #define MAT_ALBEDO 1
 #define MAT_MASK 2
 #define MAT_BUMP 4
+// Bits 8-12: the scene's `anisotropy` (at most that many lookups along a texture footprint's
+// longer side: inc/aniso.glsl), the same for every material; 0 or 1: one isotropic trilinear
+// lookup, the sampler's own filter.
+#define MAT_ANISO_SHIFT 8
 #ifndef MAT_FEATURES
 #define MAT_FEATURES 7
 #endif
+#define MAT_ANISO ((MAT_FEATURES >> MAT_ANISO_SHIFT) & 31)
 
 struct FrameConstants {
     vec4 viewport;      // the viewport NDC maps to, in target pixels: width, height, 1/width, 1/height

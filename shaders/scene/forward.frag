@@ -24,6 +24,7 @@ PUSH_CONSTANTS
 
 #define LIGHTS_SET SET_SCENE
 #include "../inc/shading.glsl"
+#include "../inc/aniso.glsl"
 
 // msaa2x and `msaa:N:sample` shade per sample: every input is interpolated at the sample position.
 #if LAYOUT == LAYOUT_MSAA2X || defined(SAMPLE_SHADING)
@@ -108,10 +109,35 @@ float lod_bias() {
     return frame.ambient.w - frame.screen_jitter.z * r;
 }
 
+// The footprint's derivatives the anisotropic lookups take: the layout's full-res screen
+// derivatives, or the implicit ones, scaled by 2^bias.
+void aniso_gradients(vec2 uv, out vec2 gx, out vec2 gy) {
+    if (lod_gradients()) {
+        screen_gradients(uv, gx, gy);
+    } else {
+        gx = dFdx(uv);
+        gy = dFdy(uv);
+    }
+    float s = exp2(lod_bias());
+    gx *= s;
+    gy *= s;
+}
+
 vec4 tex(sampler2D t, vec2 uv) {
 #ifdef ID_ONLY
     // The prepass rasterises native's grid: native's footprint, whatever the checkerboard bias.
+#if MAT_ANISO > 1
+    return texture_aniso_n(t, uv, dFdx(uv), dFdy(uv), MAT_ANISO);
+#else
     return texture(t, uv);
+#endif
+#endif
+#if MAT_ANISO > 1
+    // The scene's `anisotropy`: up to MAT_ANISO trilinear lookups along the footprint's longer
+    // side, each at its shorter side's level (inc/aniso.glsl); the bias scales the footprint.
+    vec2 ax, ay;
+    aniso_gradients(uv, ax, ay);
+    return texture_aniso_n(t, uv, ax, ay, MAT_ANISO);
 #endif
     if (!lod_gradients()) return texture(t, uv, lod_bias());
     vec2 gx, gy;
@@ -122,8 +148,14 @@ vec4 tex(sampler2D t, vec2 uv) {
     return textureGrad(t, uv, s * gx, s * gy);
 }
 
-// The level of detail `tex` selects (the isotropic formula of the Vulkan spec), for FLAG_DEBUG_LOD.
+// The level of detail `tex` selects (the isotropic formula of the Vulkan spec; with the scene's
+// `anisotropy`, that of its lookups), for FLAG_DEBUG_LOD.
 float lod_of(sampler2D t, vec2 uv) {
+#if MAT_ANISO > 1
+    vec2 ax, ay;
+    aniso_gradients(uv, ax, ay);
+    return aniso_lod(t, ax, ay, MAT_ANISO);
+#endif
     vec2 a = dFdx(uv);
     vec2 b = dFdy(uv);
     float bias = lod_bias();

@@ -97,6 +97,9 @@ pub struct BenchOptions {
     /// k of the disocclusion FLIP: a pixel counts when its reference object ID differs from its
     /// ID in any of the k frames before (default 4).
     pub disocclusion_frames: Option<u32>,
+    /// Anisotropic texture filtering's most lookups for every scene (1 to 16; default: each
+    /// scene's `anisotropy`).
+    pub anisotropy: Option<u32>,
     /// Device index or name substring.
     pub device: Option<String>,
     /// Validation layers on (slower; messages counted in bench.json).
@@ -239,8 +242,12 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
     let sources = scene_sources(&a.scene, &sweep, a.sweep.as_deref())?;
     let mut scenes = Vec::new();
     for src in &sources {
-        let s = cbr_scene::load(src, &LoadOptions::default())
+        let mut s = cbr_scene::load(src, &LoadOptions::default())
             .with_context(|| format!("scene {src}"))?;
+        if let Some(n) = a.anisotropy {
+            cbr_scene::check_anisotropy(n).map_err(|e| anyhow::anyhow!("--anisotropy: {e}"))?;
+            s.settings.anisotropy = n;
+        }
         if let Some(o) = scenes.iter().find(|o: &&cbr_scene::Scene| o.name == s.name) {
             bail!(
                 "scenes: two scenes are named `{}` ({} and {})",
@@ -648,7 +655,7 @@ pub fn run(a: &BenchOptions) -> Result<BenchResult> {
     let messages = gpu.validation().messages();
     // The protocol's error entries, or what a timing-only run says instead.
     let measured = |text: &str| if a.timing_only { NOT_MEASURED } else { text }.to_string();
-    let scene_json = |s: &cbr_scene::Scene| json!({"name": s.name, "source": s.source, "triangles": s.triangle_count()});
+    let scene_json = |s: &cbr_scene::Scene| json!({"name": s.name, "source": s.source, "triangles": s.triangle_count(), "anisotropy": s.settings.anisotropy});
     let mut bench = json!({
         "schema": "cbr.bench/1",
         "cbr_version": env!("CARGO_PKG_VERSION"),

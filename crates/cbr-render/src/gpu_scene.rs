@@ -8,8 +8,8 @@ use cbr_scene::{AlphaSource, Camera, Scene};
 use glam::{DMat3, DMat4, DVec3};
 
 use crate::gpu_types::{
-    FrameConstants, LightData, MAT_ALBEDO, MAT_BUMP, MAT_MASK, MAX_PIECES, MaterialData,
-    ObjectData, SplitBuffer,
+    FrameConstants, LightData, MAT_ALBEDO, MAT_ANISO_SHIFT, MAT_BUMP, MAT_MASK, MAX_PIECES,
+    MaterialData, ObjectData, SplitBuffer,
 };
 use crate::memory::MemoryEstimate;
 use crate::pass::{Binding, Binds, Use};
@@ -148,19 +148,26 @@ fn material_data(m: &cbr_scene::Material, bump: bool) -> MaterialData {
 }
 
 /// Per material of `scene`, the texture paths its shading takes (MAT_ALBEDO, MAT_MASK,
-/// MAT_BUMP): which raster pipeline variant it draws with (crate::scene_pass::MaterialVariants),
+/// MAT_BUMP) and, with any of them, the scene's anisotropy (MAT_ANISO_SHIFT): which raster pipeline variant it draws with (crate::scene_pass::MaterialVariants),
 /// known without a device (the compile-only build's `PassCtx::materials`).
 pub fn material_features(scene: &Scene) -> Vec<u32> {
+    // The scene's anisotropy goes with every textured material's paths (bits 8-12); 1, the
+    // isotropic default, is no bit, so those pipelines are the ones built before it existed.
+    let aniso = match scene.settings.anisotropy {
+        a @ 2.. => a.min(cbr_scene::MAX_ANISOTROPY) << MAT_ANISO_SHIFT,
+        _ => 0,
+    };
     scene
         .materials
         .iter()
         .map(|m| {
             // tex: albedo, mask, the mask's channel (no path of its own), bump; -1 = none.
-            [MAT_ALBEDO, MAT_MASK, 0, MAT_BUMP]
+            let paths = [MAT_ALBEDO, MAT_MASK, 0, MAT_BUMP]
                 .iter()
                 .zip(material_data(m, scene.settings.bump).tex)
                 .filter(|&(_, t)| t >= 0)
-                .fold(0, |f, (bit, _)| f | bit)
+                .fold(0, |f, (bit, _)| f | bit);
+            if paths != 0 { paths | aniso } else { 0 }
         })
         .collect()
 }

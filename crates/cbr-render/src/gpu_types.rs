@@ -30,6 +30,9 @@ pub const FLAG_DEBUG_LOD: u32 = 8;
 pub const MAT_ALBEDO: u32 = 1;
 pub const MAT_MASK: u32 = 2;
 pub const MAT_BUMP: u32 = 4;
+/// Bits 8-12 of a MAT_FEATURES combination: the scene's `anisotropy` (scene_types.glsl's
+/// MAT_ANISO), the same for every material with a texture; 0 where it is 1.
+pub const MAT_ANISO_SHIFT: u32 = 8;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]

@@ -49,8 +49,8 @@ pub enum Filter {
     Linear,
     /// Bilinear in texel units (Vulkan's unnormalizedCoordinates): the resolve's history reads.
     LinearTexels,
-    /// The sampler comes with the image ([`Binds::sampled`]): the scene's textures, mipmapped
-    /// and anisotropic, sampled through the scene's own sampler.
+    /// The sampler comes with the image ([`Binds::sampled`]): the scene's textures, mipmapped and
+    /// trilinear, sampled through the scene's own sampler.
     Given,
 }
 

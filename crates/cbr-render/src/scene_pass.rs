@@ -47,7 +47,7 @@ pub const SCENE_SET: SetDecl = SetDecl {
 
 /// One set per material. Separate samplers rather than an indexed array: lavapipe has no
 /// `shaderSampledImageArrayDynamicIndexing`. Sampled through the scene's sampler (mipmapped,
-/// anisotropic).
+/// trilinear); the scene's `anisotropy` is the shader's own lookups (shaders/inc/aniso.glsl).
 pub const MATERIAL_SET: SetDecl = SetDecl {
     name: "material",
     bindings: &[

@@ -54,6 +54,7 @@ fn scene(objects: Vec<Object>, keys: Vec<CameraKey>, width: u32, height: u32) ->
             ambient: [0.0; 3],
             background: [0.0; 3],
             bump: false,
+            anisotropy: 1,
         },
         stats: LoadStats::default(),
     }

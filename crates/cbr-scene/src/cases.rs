@@ -233,6 +233,7 @@ impl Parts {
                 ambient: self.ambient,
                 background: self.background,
                 bump: false,
+                anisotropy: 1,
             },
             stats,
         }

@@ -53,6 +53,9 @@ pub struct SceneDesc {
     pub ambient: Option<[f32; 3]>,
     pub background: Option<[f32; 3]>,
     pub bump: Option<bool>,
+    /// Anisotropic texture filtering: at most this many trilinear lookups along a footprint's
+    /// longer side (1 to [`crate::MAX_ANISOTROPY`]; 1, the default: one isotropic lookup).
+    pub anisotropy: Option<Spanned<u32>>,
     /// `false`: drop every material's textures (albedo, alpha mask, bump): geometry and flat
     /// materials only, to tell geometric aliasing from shading aliasing.
     pub textures: Option<bool>,
@@ -173,7 +176,11 @@ pub fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, file: &Path) -> Re
         check_finite_floats(&root, "", span, text, file)?;
     }
     serde_path_to_error::deserialize(de).map_err(|e| {
-        let path = e.path().to_string();
+        // A `Spanned` value's path names its private field: the key is the path without it.
+        let path = e
+            .path()
+            .to_string()
+            .replace(".$__serde_spanned_private_value", "");
         let inner = e.into_inner();
         let line = inner.span().map(|s| line_of(text, s.start)).unwrap_or(1);
         SceneError::syntax(file, line, format!("`{path}`: {}", inner.message()))
@@ -190,6 +197,15 @@ impl SceneDesc {
                     file,
                     line_of(text, p.position.span().start),
                     format!("`lights.point[{i}].position`: {e}"),
+                )
+            })?;
+        }
+        if let Some(a) = &desc.anisotropy {
+            crate::check_anisotropy(*a.get_ref()).map_err(|e| {
+                SceneError::syntax(
+                    file,
+                    line_of(text, a.span().start),
+                    format!("`anisotropy`: {e}"),
                 )
             })?;
         }
@@ -438,6 +454,31 @@ mod tests {
         assert_eq!(
             e,
             "s.toml:3: `lights.random_points.count`: 4000000000 lights; at most 1048576"
+        );
+    }
+
+    #[test]
+    fn anisotropy_is_one_to_sixteen_lookups() {
+        let text = |n: i64| format!("obj = \"a.obj\"\nwidth = 64\nanisotropy = {n}\n");
+        for n in [1, 2, 16] {
+            let d = parse(&text(n)).expect("in range");
+            assert_eq!(d.anisotropy.map(|a| *a.get_ref()), Some(n as u32));
+        }
+        for n in [0, 17] {
+            let e = parse(&text(n)).expect_err("out of range").to_string();
+            assert_eq!(
+                e,
+                format!(
+                    "s.toml:3: `anisotropy`: {n} lookups; anisotropic filtering takes 1 \
+                     (isotropic) to 16"
+                )
+            );
+        }
+        // Not a whole number of lookups: the reader's own error, with its line.
+        let e = parse(&text(-1)).expect_err("negative").to_string();
+        assert!(
+            e.starts_with("s.toml:3: `anisotropy`: invalid value"),
+            "{e}"
         );
     }
 

@@ -53,6 +53,21 @@ pub struct LoadOptions {
     pub missing_textures: Option<MissingTextures>,
 }
 
+/// The most lookups anisotropic texture filtering takes along a footprint (`anisotropy`), as
+/// GPUs' 16x.
+pub const MAX_ANISOTROPY: u32 = 16;
+
+/// Refuses an `anisotropy` (a scene's, or `--anisotropy`) outside 1..=[`MAX_ANISOTROPY`].
+pub fn check_anisotropy(a: u32) -> std::result::Result<(), String> {
+    if (1..=MAX_ANISOTROPY).contains(&a) {
+        Ok(())
+    } else {
+        Err(format!(
+            "{a} lookups; anisotropic filtering takes 1 (isotropic) to {MAX_ANISOTROPY}"
+        ))
+    }
+}
+
 /// Loads `builtin:NAME`, a scene TOML, or a bare OBJ (framed by an automatic camera).
 pub fn load(spec: &str, opts: &LoadOptions) -> Result<Scene> {
     load_from(&Disk, spec, opts)
@@ -261,6 +276,9 @@ fn apply_settings(scene: &mut Scene, d: &desc::SceneDesc, path: &Path) -> Result
     s.ambient = d.ambient.unwrap_or(s.ambient);
     s.background = d.background.unwrap_or(s.background);
     s.bump = d.bump.unwrap_or(s.bump);
+    if let Some(a) = &d.anisotropy {
+        s.anisotropy = *a.get_ref();
+    }
     if d.textures == Some(false) {
         for m in &mut scene.materials {
             m.kd_tex = None;

@@ -500,6 +500,7 @@ pub fn demo() -> Scene {
             ambient: [0.05, 0.06, 0.08],
             background: [0.35, 0.5, 0.8],
             bump: false,
+            anisotropy: 1,
         },
         stats,
     }

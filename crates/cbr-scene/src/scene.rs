@@ -143,6 +143,11 @@ pub struct Settings {
     /// Shade with `map_bump` height maps (screen-space derivative bump mapping). Off by default:
     /// it shows bright seams along triangle edges on Šibenik (docs/native.md).
     pub bump: bool,
+    /// Anisotropic texture filtering: at most this many trilinear lookups along a texture
+    /// footprint's longer side, each at its shorter side's level (shaders/inc/aniso.glsl); 1 (the
+    /// default): one isotropic trilinear lookup, the sampler's own. The scene's `anisotropy`, or
+    /// `--anisotropy N`.
+    pub anisotropy: u32,
 }
 
 impl Default for Settings {
@@ -157,6 +162,7 @@ impl Default for Settings {
             ambient: [0.03; 3],
             background: [0.0; 3],
             bump: false,
+            anisotropy: 1,
         }
     }
 }

@@ -58,6 +58,11 @@ pub struct BenchArgs {
     /// their ID in any of the k frames before [default: 4].
     #[arg(long, value_name = "K")]
     disocclusion_frames: Option<u32>,
+    /// Anisotropic texture filtering: at most N trilinear lookups along a texture footprint's
+    /// longer side, in every row and the reference (1 = isotropic; default: each scene's
+    /// `anisotropy`, else 1).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=16))]
+    anisotropy: Option<u32>,
     /// Device index or name substring.
     #[arg(long)]
     device: Option<String>,
@@ -101,6 +106,7 @@ impl BenchArgs {
             time_cached_rows: self.time_cached_rows,
             timing_only: self.timing_only,
             disocclusion_frames: self.disocclusion_frames,
+            anisotropy: self.anisotropy,
             device: self.device.clone(),
             validation: self.validation,
             shard: self.shard.as_deref().map(Shard::parse).transpose()?,

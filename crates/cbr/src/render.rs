@@ -59,6 +59,11 @@ pub struct RenderArgs {
     /// What to do when a texture named by an MTL cannot be read.
     #[arg(long, value_enum)]
     missing_textures: Option<MissingTexturesArg>,
+    /// Anisotropic texture filtering: at most N trilinear lookups along a texture footprint's
+    /// longer side, on every technique and the reference (1 = isotropic; default: the scene's
+    /// `anisotropy`, else 1).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=16))]
+    anisotropy: Option<u32>,
 }
 
 pub fn run(a: &RenderArgs) -> Result<()> {
@@ -82,6 +87,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             MissingTexturesArg::Error => MissingTextures::Error,
             MissingTexturesArg::Fallback => MissingTextures::Fallback,
         }),
+        anisotropy: a.anisotropy,
     })?;
     if done.validation_messages > 0 {
         eprintln!(

@@ -66,6 +66,8 @@ pub struct RenderOptions {
     /// The frame cache's folder (default cbr_render::cache::default_dir).
     pub cache_dir: Option<PathBuf>,
     pub missing_textures: Option<MissingTextures>,
+    /// Anisotropic texture filtering's most lookups (1 to 16; default: the scene's).
+    pub anisotropy: Option<u32>,
 }
 
 /// What a finished render wrote.
@@ -96,6 +98,10 @@ pub fn run(a: &RenderOptions) -> Result<RenderResult> {
     s.frames = a.frames.unwrap_or(s.frames);
     if let Some(e) = a.exposure {
         s.exposure = e;
+    }
+    if let Some(n) = a.anisotropy {
+        cbr_scene::check_anisotropy(n).map_err(|e| anyhow::anyhow!("--anisotropy: {e}"))?;
+        s.anisotropy = n;
     }
     check_resolution(s.width, s.height).map_err(anyhow::Error::msg)?;
     if s.frames == 0 {
@@ -226,6 +232,7 @@ pub fn run(a: &RenderOptions) -> Result<RenderResult> {
             "frames": frames,
             "fps": scene.settings.fps,
             "lod_bias": renderer.lod_bias(),
+            "anisotropy": scene.settings.anisotropy,
             "count_shaded": settings.count_shaded,
             "cache": renderer.cache_dir(),
             "depth": "reverse-Z D32 with an infinite far plane; the EXR depth layer holds view-space distance along the camera axis (+inf where empty)",

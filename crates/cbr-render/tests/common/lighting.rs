@@ -148,6 +148,7 @@ pub fn floor_and_wall(with_floor: bool, w: u32, h: u32) -> Scene {
             ambient: [0.0; 3],
             background: [0.0; 3],
             bump: false,
+            anisotropy: 1,
         },
         stats: LoadStats::default(),
     }
