@@ -99,15 +99,59 @@ void screen_gradients(vec2 uv, out vec2 gx, out vec2 gy) {
 #endif
 }
 
+// How far the fragment has moved towards screen_jitter.w's speed, in [0, 1] (`+taa:motionlod`):
+// 0 where it is still, and everywhere without that setting (w = 0); 1 from that speed on, and
+// where the speed is not finite (a vertex behind the previous camera).
+float motion_share() {
+    if (frame.screen_jitter.w == 0.0) return 0.0;
+    float r = length(to_pixels(v_clip) - to_pixels(v_prev_clip)) * frame.screen_jitter.w;
+    return (r >= 0.0 && r < 1.0) ? r : 1.0;
+}
+
 // The fragment's LOD bias: the frame's, less the part a moving fragment sheds (TAA's sharper
 // bias, withdrawn linearly up to screen_jitter.w's speed; its history averages too few jittered
-// samples for it). A speed that is not finite (a vertex behind the previous camera) sheds it all;
-// with screen_jitter.zw = 0 the bias is the frame's exactly.
+// samples for it). With screen_jitter.zw = 0 the bias is the frame's exactly.
 float lod_bias() {
-    float r = length(to_pixels(v_clip) - to_pixels(v_prev_clip)) * frame.screen_jitter.w;
-    r = (r >= 0.0 && r < 1.0) ? r : 1.0;
-    return frame.ambient.w - frame.screen_jitter.z * r;
+    return frame.ambient.w - frame.screen_jitter.z * motion_share();
 }
+
+// `+taa:motionlod` also moves a moving fragment's shading inputs (UV, position, normal) back to
+// the unjittered pixel centre, by the same share of the jitter: the projection's jitter puts the
+// pixel centre on the scene point at centre - jitter, so the inputs are taken at + jitter, to
+// first order through their screen derivatives (per output pixel, from the derivatives between
+// this layout's neighbouring samples). Coverage, depth, the alpha test and the velocity keep
+// the jittered raster's, so edges are still anti-aliased by the jitter; the shading of a pixel
+// whose history holds few frames is native's (docs/post-aa.md). Exactly the input where the
+// share is 0 (still fragments, and without the setting).
+// The derivatives a, b between this layout's neighbouring samples, per output pixel (as
+// screen_gradients; the native layout rendering below the output resolution, `upscale`, scaled
+// by its target pixels per output pixel).
+void output_derivatives(vec3 a, vec3 b, out vec3 gx, out vec3 gy) {
+#if LAYOUT == LAYOUT_SPLIT || LAYOUT == LAYOUT_MSAA2X
+    gx = 0.5 * a;
+    gy = 0.5 * b;
+#elif LAYOUT == LAYOUT_ROTATED
+    gx = 0.5 * (a + b);
+    gy = 0.5 * (b - a);
+#else
+    gx = a * (frame.viewport.x * frame.output_size.z);
+    gy = b * (frame.viewport.y * frame.output_size.w);
+#endif
+}
+
+// v at the unjittered pixel centre's share r of the way: v + offset . d(v)/d(output pixel), with
+// offset = r x the jitter; v itself, bit for bit, where r is 0.
+vec3 unjittered(vec3 v, float r) {
+    vec3 gx, gy;
+    output_derivatives(dFdx(v), dFdy(v), gx, gy);
+    vec2 o = frame.screen_jitter.xy * r;
+    vec3 moved = v + gx * o.x + gy * o.y;
+    return r > 0.0 ? moved : v;
+}
+vec2 unjittered(vec2 v, float r) {
+    return unjittered(vec3(v, 0.0), r).xy;
+}
+
 
 // The footprint's derivatives the anisotropic lookups take: the layout's full-res screen
 // derivatives, or the implicit ones, scaled by 2^bias.
@@ -181,6 +225,12 @@ vec3 bump(vec3 n, vec3 p, float height) {
 void main() {
     ObjectData o = objects[pc.object_index];
     MaterialData m = materials[o.ids.y];
+    // The shading inputs, moved back to the pixel centre by a moving fragment's share of the
+    // jitter under `+taa:motionlod` (`unjittered`); the raster's own everywhere else.
+    float share = motion_share();
+    vec2 uv = unjittered(v_uv, share);
+    vec3 world = unjittered(v_world, share);
+    vec3 normal = unjittered(v_normal, share);
 #if LAYOUT == LAYOUT_MASKED
     if (((int(gl_FragCoord.x) + int(gl_FragCoord.y)) & 1) != int(frame.counts.w & FLAG_PARITY)) demote;
 #elif LAYOUT == LAYOUT_INTERLACED
@@ -199,23 +249,23 @@ void main() {
 #else
     vec3 albedo = m.kd.rgb;
 #if (MAT_FEATURES & MAT_ALBEDO) != 0
-    if (m.tex.x >= 0) albedo *= tex(albedo_tex, v_uv).rgb;
+    if (m.tex.x >= 0) albedo *= tex(albedo_tex, uv).rgb;
 #endif
-    vec3 n = normalize(v_normal);
+    vec3 n = normalize(normal);
     // Double-sided: OBJ winding is unreliable, so face the normal towards the camera.
-    if (dot(n, -v_world) < 0.0) n = -n;
+    if (dot(n, -world) < 0.0) n = -n;
 #if (MAT_FEATURES & MAT_BUMP) != 0
     if (m.tex.w >= 0) {
-        float h = tex(bump_tex, v_uv).r * m.ke.w;
-        n = bump(n, v_world, h);
+        float h = tex(bump_tex, uv).r * m.ke.w;
+        n = bump(n, world, h);
     }
 #endif
 #ifdef GBUFFER
-    o_position = vec4(v_world, 1.0);
+    o_position = vec4(world, 1.0);
     o_normal = vec4(n, m.ks.w);
     o_albedo = vec4(albedo, 1.0);
     if ((frame.counts.w & FLAG_DEBUG_LOD) != 0u) {
-        o_albedo = vec4(m.tex.x >= 0 ? lod_of(albedo_tex, v_uv) : -100.0, 0.0, 0.0, 1.0);
+        o_albedo = vec4(m.tex.x >= 0 ? lod_of(albedo_tex, uv) : -100.0, 0.0, 0.0, 1.0);
     }
     o_velocity = to_pixels(v_clip) - to_pixels(v_prev_clip);
     o_ids = uvec2(o.ids.x, uint(gl_PrimitiveID));
@@ -226,7 +276,7 @@ void main() {
     // start at 1); the store it guards keeps the late tests.
     if (o.ids.x == 0u) atomicAdd(nonfinite_fragments, 1u);
 #else
-    vec3 c = shade(v_world, n, albedo, m, frame);
+    vec3 c = shade(world, n, albedo, m, frame);
     // NaN/Inf containment: a fragment whose shading is not finite is written black and counted
     // (reported per frame), so no history downstream ever holds one. Finite radiance above the
     // fp16 targets' largest value is clamped to it rather than becoming +inf there.
@@ -236,7 +286,7 @@ void main() {
     }
     o_color = vec4(min(c, vec3(65504.0)), 1.0);
     if ((frame.counts.w & FLAG_DEBUG_LOD) != 0u) {
-        o_color = vec4(m.tex.x >= 0 ? lod_of(albedo_tex, v_uv) : -100.0, 0.0, 0.0, 1.0);
+        o_color = vec4(m.tex.x >= 0 ? lod_of(albedo_tex, uv) : -100.0, 0.0, 0.0, 1.0);
     }
     o_velocity = to_pixels(v_clip) - to_pixels(v_prev_clip);
 #ifndef NO_IDS
