@@ -257,7 +257,27 @@ void main() {
             // Each reprojection resamples the history and softens it: the faster the pixel moves,
             // the more the current frame weighs (alpha rises linearly to speed.x at speed.y px).
             float a = pc.params.x;
-            if (pc.speed_jitter.y > 0.0) a = mix(a, pc.speed_jitter.x, min(length(v) / pc.speed_jitter.y, 1.0));
+            // F_INTERIOR (`motionlod`): a moving pixel away from edges was shaded at the pixel
+            // centre at the technique's LOD by the scene pass, so its current sample is the
+            // technique's own and the history only softens it: its weight rises to 1, not to
+            // amax. Edges keep amax: there the history is what anti-aliases them. An edge: the
+            // 3x3 shows another object, or its depth is not one plane (reverse-Z depth is affine
+            // in screen space on a plane, so on each of the four lines through the centre
+            // d(-o) + d(o) - 2 d(0) is 0; off by more than the depth tolerance times d(0)). A
+            // receding floor, whose depth span over three pixels can be large, is no edge.
+            float amax = pc.speed_jitter.x;
+            if (has(F_INTERIOR)) {
+                bool edge = false;
+                for (int k = 0; k < 9; k++) edge = edge || nid[k] != nid[4];
+                float dc = geom_depth(p);
+                for (int k = 0; k < 4; k++) {
+                    float da = geom_depth(clamp_px(p + OFF[k]));
+                    float db = geom_depth(clamp_px(p - OFF[k]));
+                    edge = edge || abs(da + db - 2.0 * dc) > pc.params.z * dc;
+                }
+                if (!edge) amax = 1.0;
+            }
+            if (pc.speed_jitter.y > 0.0) a = mix(a, amax, min(length(v) / pc.speed_jitter.y, 1.0));
             // A history of m frames (m + 1 = count) takes the current frame with weight at least
             // 1 / (m + 1): the running mean until the exponential window 1 / alpha is full, after
             // a reset and after every rejection (a disoccluded pixel converges as fast as a

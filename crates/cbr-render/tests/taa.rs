@@ -113,6 +113,7 @@ fn the_shader_matches_its_cpu_reference_on_a_moving_camera() {
         "without-count:without-luma",
         "adaptive",
         "motionlod",
+        "motionlod:speed=0.05",
     ];
     shader_matches_reference(&gpu, &demo(w, h), &frames, &params);
     assert_clean(&gpu);

@@ -68,6 +68,8 @@ pub enum TaaAblationArg {
     Cycle,
     /// A frame without history rendered centred: jittered like every other.
     CentredReset,
+    /// With `motionlod`, a moving interior's current frame rising to weight 1: to `amax`.
+    Interior,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]

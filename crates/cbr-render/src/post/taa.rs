@@ -54,7 +54,7 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
 };
 
 /// The parts `without-X` switches off.
-pub const ABLATIONS: [&str; 10] = [
+pub const ABLATIONS: [&str; 11] = [
     "dilation",
     "clip",
     "ids",
@@ -65,6 +65,7 @@ pub const ABLATIONS: [&str; 10] = [
     "luma",
     "cycle",
     "centred-reset",
+    "interior",
 ];
 
 /// `cbr render --taa-without X,...`: adds `without-X` (X one of [`ABLATIONS`]) to the spec's
@@ -147,12 +148,20 @@ pub struct TaaConfig {
     /// The cycle's change test: how far (perceptual luma, 0..1) a sample may lie outside the
     /// last complete cycle's range (`ctol=T`).
     pub cycle_tolerance: f32,
-    /// The LOD bias is withdrawn from moving fragments, linearly up to `speed` pixels per frame
-    /// (the scene pass's per-fragment bias, [`PostPass::lod_speed`]): a pixel that moves keeps
-    /// few jittered samples to average a sharper texture over (`motionlod`; off by default: on
-    /// the moving hard cases it helps `texture` and `spinner` and hurts `horizon`, `far` and
-    /// `foliage`, whose grazing surfaces want the sharper level even moving; docs/post-aa.md).
+    /// The LOD bias is withdrawn from moving fragments, linearly up to `speed` pixels per frame,
+    /// and their shading inputs are moved back to the pixel centre by the same share of the
+    /// jitter (the scene pass's per-fragment bias and `unjittered()`, [`PostPass::lod_speed`]): a
+    /// pixel that moves keeps few jittered samples to average a sharper, shifted texture over
+    /// (`motionlod`; with `interior`, 10 of the 13 moving hard cases at most `native`'s against
+    /// the default's 8; off by default: it costs Šibenik and foliage, whose edges and leaves
+    /// want the default's history and LOD; docs/post-aa.md).
     pub motion_lod: bool,
+    /// With `motion_lod`: a moving pixel away from edges (its 3x3 one object, its reverse-Z depth
+    /// one plane within `depth_tolerance`: a receding floor is no edge) takes the current frame at a weight rising to 1 at `speed`, not
+    /// to `alpha_max`: the scene pass shades it at the pixel centre at the technique's LOD, so
+    /// its current sample is the technique's own, and the history only softens it; edges keep
+    /// `alpha_max`, where the history is what anti-aliases them (`without-interior`).
+    pub interior: bool,
     /// A frame with no history (the first, a camera cut) is rendered unjittered at the
     /// technique's own LOD bias, and shown as it is: with nothing to average a jittered sample
     /// and a sharper texture over, the pixel-centred frame is the better estimate of the pixel
@@ -203,6 +212,7 @@ impl TaaConfig {
         cycle: true,
         cycle_tolerance: 0.01,
         motion_lod: false,
+        interior: true,
         centred_reset: true,
     };
 
@@ -217,6 +227,7 @@ impl TaaConfig {
         luma: false,
         adaptive: false,
         cycle: false,
+        interior: false,
         centred_reset: false,
         ..TaaConfig::OURS
     };
@@ -293,6 +304,10 @@ impl TaaConfig {
                     ours_only("LOD bias withdrawn with motion")?;
                     c.motion_lod = true
                 }
+                "without-interior" => {
+                    ours_only("moving interiors' current frame")?;
+                    c.interior = false
+                }
                 "without-catmull" => {
                     ours_only("Catmull-Rom history (it is bilinear)")?;
                     c.catmull = false
@@ -330,7 +345,8 @@ impl TaaConfig {
                             "inside, 8, 16, alpha=A, amax=A, speed=V, gamma=G, tol=T, ctol=T, lod=B, \
                              mean, without-dilation, without-clip, without-ids, without-depth, \
                              without-catmull, without-speed, without-count, without-luma, \
-                             without-cycle, without-centred-reset, motionlod, adaptive, filter",
+                             without-cycle, without-centred-reset, without-interior, motionlod, \
+                             adaptive, filter",
                         ));
                     }
                 },
@@ -357,6 +373,7 @@ impl TaaConfig {
             (self.adaptive, F_ADAPTIVE),
             (self.cycle, F_CYCLE),
             (self.centred_reset, F_CENTRED),
+            (self.motion_lod && self.interior && self.speed > 0.0, F_INTERIOR),
         ] {
             if on {
                 f |= bit;
@@ -379,6 +396,7 @@ pub const F_LUMA: u32 = 512;
 pub const F_ADAPTIVE: u32 = 1024;
 pub const F_CYCLE: u32 = 2048;
 pub const F_CENTRED: u32 = 4096;
+pub const F_INTERIOR: u32 = 8192;
 
 /// The radical inverse of `i` in `base` (the Halton sequence's element i).
 pub fn halton(mut i: u32, base: u32) -> f32 {
@@ -433,6 +451,7 @@ pub fn decl(inside: bool, packed: bool) -> ComputeDecl {
             ("F_ADAPTIVE", F_ADAPTIVE),
             ("F_CYCLE", F_CYCLE),
             ("F_CENTRED", F_CENTRED),
+            ("F_INTERIOR", F_INTERIOR),
             ("MOVED", MOVED),
             ("ID_MASK", !MOVED),
             ("HIST_ID_MASK", HIST_ID_MASK),
@@ -873,9 +892,23 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                             zip3(hc, c0, |a, b| a + (b - a) * wt)
                         } else {
                             let mut a = c.alpha;
+                            // A moving interior rises to 1 (`interior`, see the shader): no
+                            // other object in the 3x3, and 1 / depth (reverse-Z's shape) affine
+                            // on the four lines through the centre.
+                            let inv = |p: [i32; 2]| 1.0 / i.depth[at(p)];
+                            let ic = inv([x, y]);
+                            let edge = nid.iter().any(|&n| n != nid[4])
+                                || OFF[..4].iter().any(|o| {
+                                    let (a, b) = (inv([x + o[0], y + o[1]]), inv([x - o[0], y - o[1]]));
+                                    (a + b - 2.0 * ic).abs() > c.depth_tolerance * ic
+                                });
+                            let amax = match c.motion_lod && c.interior && !edge {
+                                true => 1.0,
+                                false => c.alpha_max,
+                            };
                             if c.speed > 0.0 {
                                 let s = (v[0] * v[0] + v[1] * v[1]).sqrt() / c.speed;
-                                a += (c.alpha_max - a) * s.min(1.0);
+                                a += (amax - a) * s.min(1.0);
                             }
                             if c.count {
                                 a = a.max(1.0 / count as f32);
@@ -1130,6 +1163,108 @@ mod tests {
         });
         assert!((off[11].0[0] - off[10].0[0]).abs() > 1e-3, "without-cycle blends");
         assert!(off.iter().all(|(_, s)| *s == CycleState::NONE));
+    }
+
+    /// `motionlod`'s moving interiors (`interior`): on a 6x5 frame moving 2 px a frame (the
+    /// default `speed`, so amax applies in full), left half object 1, right half object 2, a
+    /// history of 3 against a current frame of 1 (linear blend, no clipping): a pixel whose 3x3
+    /// is one object on one plane takes the current frame alone (1), also where the plane
+    /// recedes (depth 2 to 3 over the 3x3, affine in 1 / depth); one whose 3x3 meets the other
+    /// object, or a depth 50% farther off that plane, blends with amax (2); `without-interior`,
+    /// or no `motionlod`, blends everywhere.
+    #[test]
+    fn moving_interiors_take_the_current_frame_under_motionlod() {
+        let (w, h) = (6usize, 5usize);
+        let cur = flat(w, h, [1.0; 3]);
+        let vel = vec![[0.0f32, 2.0]; w * h];
+        let ids: Vec<u32> = (0..w * h).map(|i| if i % w < 3 { 1 } else { 2 }).collect();
+        let hist = flat(w, h, [3.0; 3]);
+        let hg: Vec<(u32, f32)> = ids
+            .iter()
+            .map(|&id| (hist_geom_x(id, 20, true), 2.0))
+            .collect();
+        let run = |c: &TaaConfig, depth: &[f32]| {
+            let i = RefInputs {
+                width: w,
+                height: h,
+                color: &cur,
+                velocity: &vel,
+                depth,
+                ids: &ids,
+                history: Some((&hist, &hg)),
+                n: 20,
+                exposure_scale: 1.0,
+                jitter: [0.0; 2],
+                cycle: None,
+            };
+            reference(c, &i).0
+        };
+        let base = TaaConfig {
+            clip: false,
+            luma: false,
+            ..TaaConfig::OURS
+        };
+        let ml = TaaConfig {
+            motion_lod: true,
+            ..base
+        };
+        let flat_depth = vec![2.0f32; w * h];
+        // (0, 3): its 3x3 (clamped) is object 1 only; (2, 3) meets object 2 at x = 3. Both
+        // histories (2 rows up) show object 1.
+        let (interior, edge) = (3 * w, 3 * w + 2);
+        let o = run(&ml, &flat_depth);
+        assert_eq!(o[interior], [1.0; 3], "a moving interior: the current frame");
+        assert!((o[edge][0] - 2.0).abs() < 1e-6, "an edge blends: {:?}", o[edge]);
+        for c in [
+            TaaConfig {
+                interior: false,
+                ..ml
+            },
+            base,
+        ] {
+            let o = run(&c, &flat_depth);
+            assert!((o[interior][0] - 2.0).abs() < 1e-6, "{:?}", o[interior]);
+        }
+        // A depth 50% farther in (0, 3)'s 3x3: an edge too.
+        let mut deeper = flat_depth.clone();
+        deeper[4 * w + 1] = 3.0;
+        assert!((run(&ml, &deeper)[interior][0] - 2.0).abs() < 1e-6);
+        // A receding plane: 1 / depth affine in y, from 1/2 at row 2 to 1/3 at row 4 (its span
+        // over the 3x3, 50%, is far over the tolerance): still an interior. Each history texel
+        // holds the depth its point has now, 2 rows down (the camera moved), so the history's
+        // depth test keeps it: `without-interior` blends it.
+        let z = |row: usize| 1.0 / (0.5 - row as f32 / 12.0 + 2.0 / 12.0);
+        let recede: Vec<f32> = (0..w * h).map(|k| z(k / w)).collect();
+        let hg_recede: Vec<(u32, f32)> = ids
+            .iter()
+            .enumerate()
+            .map(|(k, &id)| (hist_geom_x(id, 20, true), z(k / w + 2)))
+            .collect();
+        let i = RefInputs {
+            width: w,
+            height: h,
+            color: &cur,
+            velocity: &vel,
+            depth: &recede,
+            ids: &ids,
+            history: Some((&hist, &hg_recede)),
+            n: 20,
+            exposure_scale: 1.0,
+            jitter: [0.0; 2],
+            cycle: None,
+        };
+        assert_eq!(reference(&ml, &i).0[interior], [1.0; 3], "a receding plane's interior");
+        let kept = reference(
+            &TaaConfig {
+                interior: false,
+                ..ml
+            },
+            &i,
+        )
+        .0[interior];
+        assert!((kept[0] - 2.0).abs() < 1e-6, "its history is kept: {kept:?}");
+        assert!(TaaConfig::parse(&["motionlod", "without-interior"]).is_ok());
+        assert!(TaaConfig::parse(&["inside", "without-interior"]).is_err());
     }
 
     /// Known answers on a 6x5 frame: a reset passes the current frame through; a static
