@@ -1183,7 +1183,7 @@ mod tests {
             .iter()
             .map(|&id| (hist_geom_x(id, 20, true), 2.0))
             .collect();
-        let run = |c: &TaaConfig, depth: &[f32]| {
+        let run_with = |c: &TaaConfig, depth: &[f32], hg: &[(u32, f32)]| {
             let i = RefInputs {
                 width: w,
                 height: h,
@@ -1191,7 +1191,7 @@ mod tests {
                 velocity: &vel,
                 depth,
                 ids: &ids,
-                history: Some((&hist, &hg)),
+                history: Some((&hist, hg)),
                 n: 20,
                 exposure_scale: 1.0,
                 jitter: [0.0; 2],
@@ -1199,6 +1199,7 @@ mod tests {
             };
             reference(c, &i).0
         };
+        let run = |c: &TaaConfig, depth: &[f32]| run_with(c, depth, &hg);
         let base = TaaConfig {
             clip: false,
             luma: false,
@@ -1240,28 +1241,13 @@ mod tests {
             .enumerate()
             .map(|(k, &id)| (hist_geom_x(id, 20, true), z(k / w + 2)))
             .collect();
-        let i = RefInputs {
-            width: w,
-            height: h,
-            color: &cur,
-            velocity: &vel,
-            depth: &recede,
-            ids: &ids,
-            history: Some((&hist, &hg_recede)),
-            n: 20,
-            exposure_scale: 1.0,
-            jitter: [0.0; 2],
-            cycle: None,
+        let o = run_with(&ml, &recede, &hg_recede);
+        assert_eq!(o[interior], [1.0; 3], "a receding plane's interior");
+        let without = TaaConfig {
+            interior: false,
+            ..ml
         };
-        assert_eq!(reference(&ml, &i).0[interior], [1.0; 3], "a receding plane's interior");
-        let kept = reference(
-            &TaaConfig {
-                interior: false,
-                ..ml
-            },
-            &i,
-        )
-        .0[interior];
+        let kept = run_with(&without, &recede, &hg_recede)[interior];
         assert!((kept[0] - 2.0).abs() < 1e-6, "its history is kept: {kept:?}");
         assert!(TaaConfig::parse(&["motionlod", "without-interior"]).is_ok());
         assert!(TaaConfig::parse(&["inside", "without-interior"]).is_err());
