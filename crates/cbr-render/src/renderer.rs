@@ -331,7 +331,7 @@ impl Renderer {
             .iter()
             .find_map(|p| {
                 let v = p.lod_speed();
-                (v > 0.0).then(|| [p.lod_bias(), 1.0 / v])
+                (v > 0.0).then(|| [p.lod_shed(), 1.0 / v])
             })
             .unwrap_or([0.0; 2])
     }

@@ -58,7 +58,8 @@ fn jittered_native(gpu: &cbr_gpu::Gpu, s: &Scene, w: u32, h: u32, len: u32, f: u
 }
 
 /// The same for configuration `c`: its jitter, its LOD bias, withdrawn from moving fragments up
-/// to its speed with `motionlod`.
+/// to its speed with `motionlod`, and its moving fragments shaded at the pixel centre with
+/// `unjitter` (or `motionlod`).
 fn jittered_native_for(
     gpu: &cbr_gpu::Gpu,
     s: &Scene,
@@ -67,11 +68,12 @@ fn jittered_native_for(
     c: &TaaConfig,
     f: u32,
 ) -> FrameOutput {
-    let motion = c.motion_lod && c.speed > 0.0;
+    let motion = c.unjitter && c.speed > 0.0;
+    let shed = if c.motion_lod { c.lod_bias } else { 0.0 };
     let settings = RenderSettings {
         jitter: taa::jitter(c.length, f),
         lod_bias: Some(c.lod_bias),
-        lod_motion: motion.then(|| [c.lod_bias, 1.0 / c.speed]),
+        lod_motion: motion.then(|| [shed, 1.0 / c.speed]),
         ..spec(w, h, "native")
     };
     render(gpu, s, settings, &[f]).remove(0)
@@ -114,6 +116,7 @@ fn the_shader_matches_its_cpu_reference_on_a_moving_camera() {
         "adaptive",
         "motionlod",
         "motionlod:speed=0.05",
+        "unjitter:speed=0.05",
     ];
     shader_matches_reference(&gpu, &demo(w, h), &frames, &params);
     assert_clean(&gpu);
@@ -440,6 +443,8 @@ fn the_lod_bias_is_withdrawn_from_moving_fragments() {
     };
     assert_eq!(motion("native+taa:motionlod"), [-1.0, 0.5]);
     assert_eq!(motion("native+taa:motionlod:speed=4"), [-1.0, 0.25]);
+    // `unjitter`: moving fragments shaded at the centre, at the full bias.
+    assert_eq!(motion("native+taa:unjitter"), [0.0, 0.5]);
     for fixed in [
         "native",
         "native+taa",

@@ -77,11 +77,17 @@ pub trait PostPass {
     fn lod_bias(&self) -> f32 {
         0.0
     }
-    /// The speed (pixels per frame) at which [`PostPass::lod_bias`] is withdrawn from a
-    /// fragment, linearly from none at rest (TAA: a fast pixel's history averages too few
-    /// jittered samples for the sharper texture); 0: the bias applies to every fragment.
+    /// The speed (pixels per frame) at which a moving fragment sheds [`PostPass::lod_shed`] of
+    /// the LOD bias and is shaded at the unjittered pixel centre, linearly from neither at rest
+    /// (TAA: a fast pixel's history averages too few jittered samples for a shifted, sharper
+    /// one); 0: every fragment is the jittered raster's, at the full bias.
     fn lod_speed(&self) -> f32 {
         0.0
+    }
+    /// The part of the LOD bias a fragment moving at [`PostPass::lod_speed`] or faster sheds
+    /// (TAA's `motionlod`: all of [`PostPass::lod_bias`]; `unjitter`: none).
+    fn lod_shed(&self) -> f32 {
+        self.lod_bias()
     }
     /// A jittering pass's frames without history (the first, a camera cut: [`PostFrame::reset`])
     /// are rendered unjittered and without [`PostPass::lod_bias`] (TAA: nothing to average a

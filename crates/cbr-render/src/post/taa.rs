@@ -38,7 +38,7 @@ use crate::targets::COLOR_FORMAT;
 
 pub const REGISTRATION: PostRegistration = PostRegistration {
     name: "taa",
-    grammar: "taa[:inside][:8|16][:alpha=A][:amax=A][:speed=V][:gamma=G][:tol=T][:ctol=T][:lod=B][:mean][:filter][:adaptive][:motionlod][:without-X...]",
+    grammar: "taa[:inside][:8|16][:alpha=A][:amax=A][:speed=V][:gamma=G][:tol=T][:ctol=T][:lod=B][:mean][:filter][:adaptive][:unjitter][:motionlod][:without-X...]",
     about: "temporal AA: Halton jitter, dilated velocity, Catmull-Rom history, YCoCg variance \
             clipping, ID and depth rejection, speed-dependent weight, per-pixel frame count (X: \
             dilation, clip, ids, depth, catmull, speed, count, luma, cycle: still pixels show the \
@@ -148,15 +148,19 @@ pub struct TaaConfig {
     /// The cycle's change test: how far (perceptual luma, 0..1) a sample may lie outside the
     /// last complete cycle's range (`ctol=T`).
     pub cycle_tolerance: f32,
-    /// The LOD bias is withdrawn from moving fragments, linearly up to `speed` pixels per frame,
-    /// and their shading inputs are moved back to the pixel centre by the same share of the
-    /// jitter (the scene pass's per-fragment bias and `unjittered()`, [`PostPass::lod_speed`]): a
-    /// pixel that moves keeps few jittered samples to average a sharper, shifted texture over
-    /// (`motionlod`; with `interior`, 10 of the 13 moving hard cases at most `native`'s against
-    /// the default's 8; off by default: it costs Šibenik and foliage, whose edges and leaves
-    /// want the default's history and LOD; docs/post-aa.md).
+    /// Moving fragments are shaded at the pixel centre: their shading inputs are moved back by
+    /// their share of the jitter, linearly up to `speed` pixels per frame (the scene pass's
+    /// `unjittered()`, [`PostPass::lod_speed`]), and with `interior` their pixels away from
+    /// edges take the current frame (`unjitter`; `motionlod` implies it). A pixel that moves
+    /// keeps few jittered samples to average a shifted sample over. Off by default: it costs
+    /// Šibenik (docs/post-aa.md).
+    pub unjitter: bool,
+    /// `unjitter`, and the LOD bias withdrawn from moving fragments by the same share
+    /// ([`PostPass::lod_shed`]; `motionlod`): with an isotropic texture filter the sharper level
+    /// stands in for anisotropic filtering on grazing surfaces and the foliage's leaves, so
+    /// `unjitter` alone is better there; with `anisotropy` the shed is right (docs/post-aa.md).
     pub motion_lod: bool,
-    /// With `motion_lod`: a moving pixel away from edges (its 3x3 one object, its reverse-Z depth
+    /// With `unjitter`: a moving pixel away from edges (its 3x3 one object, its reverse-Z depth
     /// one plane within `depth_tolerance`: a receding floor is no edge) takes the current frame at a weight rising to 1 at `speed`, not
     /// to `alpha_max`: the scene pass shades it at the pixel centre at the technique's LOD, so
     /// its current sample is the technique's own, and the history only softens it; edges keep
@@ -211,6 +215,7 @@ impl TaaConfig {
         adaptive: false,
         cycle: true,
         cycle_tolerance: 0.01,
+        unjitter: false,
         motion_lod: false,
         interior: true,
         centred_reset: true,
@@ -227,6 +232,7 @@ impl TaaConfig {
         luma: false,
         adaptive: false,
         cycle: false,
+        unjitter: false,
         interior: false,
         centred_reset: false,
         ..TaaConfig::OURS
@@ -302,7 +308,12 @@ impl TaaConfig {
                 }
                 "motionlod" => {
                     ours_only("LOD bias withdrawn with motion")?;
-                    c.motion_lod = true
+                    c.motion_lod = true;
+                    c.unjitter = true
+                }
+                "unjitter" => {
+                    ours_only("moving fragments shaded at the pixel centre")?;
+                    c.unjitter = true
                 }
                 "without-interior" => {
                     ours_only("moving interiors' current frame")?;
@@ -345,7 +356,7 @@ impl TaaConfig {
                             "inside, 8, 16, alpha=A, amax=A, speed=V, gamma=G, tol=T, ctol=T, lod=B, \
                              mean, without-dilation, without-clip, without-ids, without-depth, \
                              without-catmull, without-speed, without-count, without-luma, \
-                             without-cycle, without-centred-reset, without-interior, motionlod, \
+                             without-cycle, without-centred-reset, without-interior, unjitter, motionlod, \
                              adaptive, filter",
                         ));
                     }
@@ -373,7 +384,7 @@ impl TaaConfig {
             (self.adaptive, F_ADAPTIVE),
             (self.cycle, F_CYCLE),
             (self.centred_reset, F_CENTRED),
-            (self.motion_lod && self.interior && self.speed > 0.0, F_INTERIOR),
+            (self.unjitter && self.interior && self.speed > 0.0, F_INTERIOR),
         ] {
             if on {
                 f |= bit;
@@ -588,8 +599,15 @@ impl PostPass for Taa {
     }
 
     fn lod_speed(&self) -> f32 {
-        match self.config.motion_lod {
+        match self.config.unjitter {
             true => self.config.speed,
+            false => 0.0,
+        }
+    }
+
+    fn lod_shed(&self) -> f32 {
+        match self.config.motion_lod {
+            true => self.config.lod_bias,
             false => 0.0,
         }
     }
@@ -902,7 +920,7 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                                     let (a, b) = (inv([x + o[0], y + o[1]]), inv([x - o[0], y - o[1]]));
                                     (a + b - 2.0 * ic).abs() > c.depth_tolerance * ic
                                 });
-                            let amax = match c.motion_lod && c.interior && !edge {
+                            let amax = match c.unjitter && c.interior && !edge {
                                 true => 1.0,
                                 false => c.alpha_max,
                             };
@@ -1207,6 +1225,7 @@ mod tests {
         };
         let ml = TaaConfig {
             motion_lod: true,
+            unjitter: true,
             ..base
         };
         let flat_depth = vec![2.0f32; w * h];
@@ -1249,6 +1268,18 @@ mod tests {
         };
         let kept = run_with(&without, &recede, &hg_recede)[interior];
         assert!((kept[0] - 2.0).abs() < 1e-6, "its history is kept: {kept:?}");
+        // `unjitter` (no LOD shed) has the same rule.
+        let unjitter = TaaConfig::parse(&["unjitter"]).expect("unjitter");
+        assert!(unjitter.unjitter && !unjitter.motion_lod);
+        let o = run(
+            &TaaConfig {
+                clip: false,
+                luma: false,
+                ..unjitter
+            },
+            &flat_depth,
+        );
+        assert_eq!(o[interior], [1.0; 3], "`unjitter`: the current frame");
         assert!(TaaConfig::parse(&["motionlod", "without-interior"]).is_ok());
         assert!(TaaConfig::parse(&["inside", "without-interior"]).is_err());
     }
