@@ -99,7 +99,8 @@ void screen_gradients(vec2 uv, out vec2 gx, out vec2 gy) {
 #endif
 }
 
-// How far the fragment has moved towards screen_jitter.w's speed, in [0, 1] (`+taa:motionlod`):
+// How far the fragment has moved towards screen_jitter.w's speed, in [0, 1] (`+taa:unjitter`,
+// `+taa:motionlod`):
 // 0 where it is still, and everywhere without that setting (w = 0); 1 from that speed on, and
 // where the speed is not finite (a vertex behind the previous camera).
 float motion_share() {
@@ -115,14 +116,6 @@ float lod_bias() {
     return frame.ambient.w - frame.screen_jitter.z * motion_share();
 }
 
-// `+taa:motionlod` also moves a moving fragment's shading inputs (UV, position, normal) back to
-// the unjittered pixel centre, by the same share of the jitter: the projection's jitter puts the
-// pixel centre on the scene point at centre - jitter, so the inputs are taken at + jitter, to
-// first order through their screen derivatives (per output pixel, from the derivatives between
-// this layout's neighbouring samples). Coverage, depth, the alpha test and the velocity keep
-// the jittered raster's, so edges are still anti-aliased by the jitter; the shading of a pixel
-// whose history holds few frames is native's (docs/post-aa.md). Exactly the input where the
-// share is 0 (still fragments, and without the setting).
 // The derivatives a, b between this layout's neighbouring samples, per output pixel (as
 // screen_gradients; the native layout rendering below the output resolution, `upscale`, scaled
 // by its target pixels per output pixel).
@@ -139,8 +132,15 @@ void output_derivatives(vec3 a, vec3 b, out vec3 gx, out vec3 gy) {
 #endif
 }
 
+// `+taa:unjitter` and `+taa:motionlod` move a moving fragment's shading inputs (UV, position,
+// normal) back to the unjittered pixel centre by its share of the jitter: the projection's jitter
+// puts the pixel centre on the scene point at centre - jitter, so the inputs are taken at
+// + jitter, to first order through their screen derivatives. Coverage, depth, the alpha test
+// and the velocity keep the jittered raster's, so edges are still anti-aliased by the jitter;
+// the shading of a pixel whose history holds few frames is native's (docs/post-aa.md).
 // v at the unjittered pixel centre's share r of the way: v + offset . d(v)/d(output pixel), with
-// offset = r x the jitter; v itself, bit for bit, where r is 0.
+// offset = r x the jitter; v itself, bit for bit, where r is 0 (still fragments, and without
+// the setting).
 vec3 unjittered(vec3 v, float r) {
     vec3 gx, gy;
     output_derivatives(dFdx(v), dFdy(v), gx, gy);
@@ -151,7 +151,6 @@ vec3 unjittered(vec3 v, float r) {
 vec2 unjittered(vec2 v, float r) {
     return unjittered(vec3(v, 0.0), r).xy;
 }
-
 
 // The footprint's derivatives the anisotropic lookups take: the layout's full-res screen
 // derivatives, or the implicit ones, scaled by 2^bias.
@@ -226,7 +225,7 @@ void main() {
     ObjectData o = objects[pc.object_index];
     MaterialData m = materials[o.ids.y];
     // The shading inputs, moved back to the pixel centre by a moving fragment's share of the
-    // jitter under `+taa:motionlod` (`unjittered`); the raster's own everywhere else.
+    // jitter under `+taa:unjitter` and `motionlod` (`unjittered`); the raster's own elsewhere.
     float share = motion_share();
     vec2 uv = unjittered(v_uv, share);
     vec3 world = unjittered(v_world, share);
