@@ -162,10 +162,12 @@ void main() {
     ivec2 g_best = p;
     float lo = 1e30, hi = -1e30;
     uint nid[9];
+    float nd[9];
     for (int k = 0; k < 9; k++) {
         ivec2 t = clamp_px(p + OFF[k]);
         float d = geom_depth(t);
         nid[k] = geom_id(t);
+        nd[k] = d;
         lo = min(lo, d);
         hi = max(hi, d);
         if (d > d_best) {
@@ -267,14 +269,11 @@ void main() {
             // receding floor, whose depth span over three pixels can be large, is no edge.
             float amax = pc.speed_jitter.x;
             if (has(F_INTERIOR)) {
+                // OFF[k] and OFF[8 - k] are opposite: the line through the centre.
                 bool edge = false;
                 for (int k = 0; k < 9; k++) edge = edge || nid[k] != nid[4];
-                float dc = geom_depth(p);
-                for (int k = 0; k < 4; k++) {
-                    float da = geom_depth(clamp_px(p + OFF[k]));
-                    float db = geom_depth(clamp_px(p - OFF[k]));
-                    edge = edge || abs(da + db - 2.0 * dc) > pc.params.z * dc;
-                }
+                for (int k = 0; k < 4; k++)
+                    edge = edge || abs(nd[k] + nd[8 - k] - 2.0 * nd[4]) > pc.params.z * nd[4];
                 if (!edge) amax = 1.0;
             }
             if (pc.speed_jitter.y > 0.0) a = mix(a, amax, min(length(v) / pc.speed_jitter.y, 1.0));

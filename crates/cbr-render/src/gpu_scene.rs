@@ -85,8 +85,10 @@ pub struct FrameView {
     pub aspect: f64,
     pub lod_bias: f32,
     /// (b, 1 / V): a fragment moving at speed s (pixels per frame) takes `lod_bias - b min(s /
-    /// V, 1)`: TAA's sharper bias is withdrawn from what moves (a moving pixel's history holds
-    /// few samples to average the sharper texture over). (0, 0): the bias everywhere.
+    /// V, 1)` and is shaded min(s / V, 1) of the way back to the unjittered pixel centre
+    /// (`+taa:unjitter`, b = 0; `+taa:motionlod`, b = TAA's bias): a moving pixel's history holds
+    /// few samples to average a shifted, sharper sample over. (0, 0): the jittered raster, at
+    /// the bias, everywhere.
     pub lod_motion: [f32; 2],
     pub frame_index: u32,
     /// The projection's sub-pixel jitter in output pixels, every layout (RenderSettings::jitter
@@ -148,8 +150,8 @@ fn material_data(m: &cbr_scene::Material, bump: bool) -> MaterialData {
 }
 
 /// Per material of `scene`, the texture paths its shading takes (MAT_ALBEDO, MAT_MASK,
-/// MAT_BUMP) and, with any of them, the scene's anisotropy (MAT_ANISO_SHIFT): which raster pipeline variant it draws with (crate::scene_pass::MaterialVariants),
-/// known without a device (the compile-only build's `PassCtx::materials`).
+/// MAT_BUMP) and, with any of them, the scene's anisotropy (MAT_ANISO_SHIFT): which raster
+/// pipeline variant it draws with (crate::scene_pass::MaterialVariants), known without a device (the compile-only build's `PassCtx::materials`).
 pub fn material_features(scene: &Scene) -> Vec<u32> {
     // The scene's anisotropy goes with every textured material's paths (bits 8-12); 1, the
     // isotropic default, is no bit, so those pipelines are the ones built before it existed.

@@ -68,7 +68,8 @@ pub enum TaaAblationArg {
     Cycle,
     /// A frame without history rendered centred: jittered like every other.
     CentredReset,
-    /// With `motionlod`, a moving interior's current frame rising to weight 1: to `amax`.
+    /// With `unjitter` or `motionlod`, a moving interior's current frame rising to weight 1:
+    /// to `amax`, as at edges.
     Interior,
 }
 

@@ -42,7 +42,9 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
     about: "temporal AA: Halton jitter, dilated velocity, Catmull-Rom history, YCoCg variance \
             clipping, ID and depth rejection, speed-dependent weight, per-pixel frame count (X: \
             dilation, clip, ids, depth, catmull, speed, count, luma, cycle: still pixels show the \
-            mean of their last jitter cycle); `inside`: Playdead's INSIDE TAA",
+            mean of their last jitter cycle, centred-reset, interior); `unjitter`: moving \
+            fragments shaded at the pixel centre, moving interiors take the current frame; \
+            `motionlod`: that and the sharper LOD shed; `inside`: Playdead's INSIDE TAA",
     check: |p| TaaConfig::parse(p).map(|_| ()),
     geometry: true,
     estimate: |ctx, _| crate::pass::estimate(&resources(ctx.width, ctx.height), "taa"),
@@ -161,10 +163,11 @@ pub struct TaaConfig {
     /// `unjitter` alone is better there; with `anisotropy` the shed is right (docs/post-aa.md).
     pub motion_lod: bool,
     /// With `unjitter`: a moving pixel away from edges (its 3x3 one object, its reverse-Z depth
-    /// one plane within `depth_tolerance`: a receding floor is no edge) takes the current frame at a weight rising to 1 at `speed`, not
-    /// to `alpha_max`: the scene pass shades it at the pixel centre at the technique's LOD, so
-    /// its current sample is the technique's own, and the history only softens it; edges keep
-    /// `alpha_max`, where the history is what anti-aliases them (`without-interior`).
+    /// one plane within `depth_tolerance`: a receding floor is no edge) takes the current frame
+    /// at a weight rising to 1 at `speed`, not to `alpha_max`: the scene pass shades it at the
+    /// pixel centre, so its current sample is the technique's own and the history only softens
+    /// it; edges keep `alpha_max`, where the history is what anti-aliases them
+    /// (`without-interior`).
     pub interior: bool,
     /// A frame with no history (the first, a camera cut) is rendered unjittered at the
     /// technique's own LOD bias, and shown as it is: with nothing to average a jittered sample
@@ -785,11 +788,13 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
             let (mut best, mut z_best) = (at([x, y]), f32::INFINITY);
             let (mut lo, mut hi) = (f32::INFINITY, -f32::INFINITY);
             let mut nid = [0u32; 9];
+            let mut nz = [0.0f32; 9];
             let mut any = false;
             for (k, o) in OFF.iter().enumerate() {
                 let t = at([x + o[0], y + o[1]]);
                 let z = i.depth[t];
                 nid[k] = i.ids[t];
+                nz[k] = z;
                 lo = lo.min(z);
                 hi = hi.max(z);
                 if !any || z < z_best {
@@ -912,15 +917,16 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                             let mut a = c.alpha;
                             // A moving interior rises to 1 (`interior`, see the shader): no
                             // other object in the 3x3, and 1 / depth (reverse-Z's shape) affine
-                            // on the four lines through the centre.
-                            let inv = |p: [i32; 2]| 1.0 / i.depth[at(p)];
-                            let ic = inv([x, y]);
-                            let edge = nid.iter().any(|&n| n != nid[4])
-                                || OFF[..4].iter().any(|o| {
-                                    let (a, b) = (inv([x + o[0], y + o[1]]), inv([x - o[0], y - o[1]]));
-                                    (a + b - 2.0 * ic).abs() > c.depth_tolerance * ic
-                                });
-                            let amax = match c.unjitter && c.interior && !edge {
+                            // on the four lines through the centre (OFF[k], OFF[8 - k]).
+                            let inv = nz.map(|z| 1.0 / z);
+                            let edge = || {
+                                nid.iter().any(|&n| n != nid[4])
+                                    || (0..4).any(|k| {
+                                        (inv[k] + inv[8 - k] - 2.0 * inv[4]).abs()
+                                            > c.depth_tolerance * inv[4]
+                                    })
+                            };
+                            let amax = match c.unjitter && c.interior && !edge() {
                                 true => 1.0,
                                 false => c.alpha_max,
                             };
@@ -1111,7 +1117,8 @@ mod tests {
     /// The jitter cycle on a 6x5 still frame whose colour alternates 1, 2 (what jitter does to
     /// a pixel), with frame 0 jittered too (`without-centred-reset`; ours starts the cycle at
     /// frame 1, after the centred reset, and completes it at frame 8): frame 7 completes the
-    /// first cycle and shows its mean 1.5, frames 8-11 hold it bit for bit; frame 12's sample 5 lies outside the cycle's luma range, so the history is
+    /// first cycle and shows its mean 1.5, frames 8-11 hold it bit for bit; frame 12's sample 5
+    /// lies outside the cycle's luma range, so the history is
     /// rejected (the output is the sample, 5, one frame held) and its cycle restarts; with a
     /// tolerance wider than the change it holds 1.5, and with `without-cycle` it blends.
     #[test]
@@ -1183,7 +1190,7 @@ mod tests {
         assert!(off.iter().all(|(_, s)| *s == CycleState::NONE));
     }
 
-    /// `motionlod`'s moving interiors (`interior`): on a 6x5 frame moving 2 px a frame (the
+    /// `unjitter`'s and `motionlod`'s moving interiors (`interior`): on a 6x5 frame moving 2 px a frame (the
     /// default `speed`, so amax applies in full), left half object 1, right half object 2, a
     /// history of 3 against a current frame of 1 (linear blend, no clipping): a pixel whose 3x3
     /// is one object on one plane takes the current frame alone (1), also where the plane
