@@ -114,6 +114,31 @@ vec3 history_catmull(vec2 q) {
 
 vec3 history_bilinear(vec2 q) { return textureLod(hist, q / vec2(pc.size.xy), 0.0).rgb; }
 
+// A thin feature (FSR 2's lock test, as taau's lock pass): the centre's perceptual luma is a
+// ridge, above or below every neighbour not similar to it (similar: a ratio under 1.05), and no
+// 2x2 quad around it is all similar. Non-finite samples read as `fallback` (the centre's
+// replacement's luma).
+bool similar(float a, float b) {
+    float lo = min(a, b), hi = max(a, b);
+    return hi <= 0.0 || (lo > 0.0 && hi < 1.05 * lo);
+}
+bool thin_feature(vec3 c[9], bool ok[9], float fallback) {
+    float n = ok[4] ? to_p(c[4]).x : fallback;
+    bool sim[9];
+    float lo = 1e30, hi = -1e30;
+    for (int k = 0; k < 9; k++) {
+        float a = ok[k] ? to_p(c[k]).x : n;
+        sim[k] = k == 4 || similar(a, n);
+        if (!sim[k]) {
+            lo = min(lo, a);
+            hi = max(hi, a);
+        }
+    }
+    if (!(n > hi || n < lo)) return false;
+    return !((sim[0] && sim[1] && sim[3]) || (sim[1] && sim[2] && sim[5]) ||
+             (sim[3] && sim[6] && sim[7]) || (sim[5] && sim[7] && sim[8]));
+}
+
 const ivec2 OFF[9] = ivec2[9](ivec2(-1, -1), ivec2(0, -1), ivec2(1, -1), ivec2(-1, 0), ivec2(0, 0),
                               ivec2(1, 0), ivec2(-1, 1), ivec2(0, 1), ivec2(1, 1));
 
@@ -207,8 +232,34 @@ void main() {
         cycling = !changed;
     }
 #endif
+    // The 3x3's reverse-Z depth is one plane: reverse-Z depth is affine in screen space on a
+    // plane, so on each of the four lines through the centre (OFF[k], OFF[8 - k]) d(-o) + d(o) -
+    // 2 d(0) is 0; a plane: within the depth tolerance times d(0). A receding floor, whose depth
+    // span over three pixels can be large, is one.
+    bool plane = true;
+    for (int k = 0; k < 4; k++)
+        plane = plane && abs(nd[k] + nd[8 - k] - 2.0 * nd[4]) <= pc.params.z * nd[4];
+    // F_LOCK: a thin feature's lock (FSR 2's locks, for `+taa`). A moving pixel keeps its
+    // lock's life in the cycle image's x (it has no cycle); the history texel's is read where
+    // that texel moved. A lock lives L frames (the jitter cycle), renewed wherever this frame's
+    // sample is a thin feature. It holds on a surface only (the 3x3 one plane: a decal, a far
+    // stripe, a texture's line, which move with the surface, so their history reprojects
+    // exactly; not a silhouette, whose history slides over what is behind it): there the history
+    // is kept from rectification in the lock's proportion and from the ID test (a sub-pixel
+    // feature that this frame's jitter missed is not disoccluded; the depth test still applies),
+    // and the pixel is no interior.
+    float life = 0.0;
+#if MODE == 0
+    if (has(F_LOCK)) {
+        if (use && (g.x & MOVED) != 0u)
+            life = max(texelFetch(hist_cycle, ivec2(floor(q)), 0).x - 1.0 / float(pc.flags.z), 0.0);
+        if (thin_feature(c, ok, y0.x)) life = 1.0;
+    }
+#endif
+    float hold = plane ? life : 0.0;
+    bool locked = hold > 0.0;
     if (use && !still && (has(F_IDS) || has(F_DEPTH))) {
-        if (has(F_IDS)) {
+        if (has(F_IDS) && !locked) {
             bool seen = false;
             for (int k = 0; k < 9; k++) seen = seen || nid[k] == (g.x & HIST_ID_MASK);
             use = use && seen;
@@ -249,8 +300,9 @@ void main() {
             }
             vec3 mu = m1 / 9.0;
             vec3 sigma = sqrt(max(m2 / 9.0 - mu * mu, vec3(0.0)));
-            vec3 yh = clip_towards(mu, to_p(h), mu - pc.params.y * sigma, mu + pc.params.y * sigma);
-            h = from_p(yh);
+            vec3 yp = to_p(h);
+            vec3 yh = clip_towards(mu, yp, mu - pc.params.y * sigma, mu + pc.params.y * sigma);
+            h = from_p(mix(yh, yp, hold));
         }
         if (has(F_MEAN)) {
             float w = 1.0 / float(pc.flags.y + 1u);
@@ -259,21 +311,16 @@ void main() {
             // Each reprojection resamples the history and softens it: the faster the pixel moves,
             // the more the current frame weighs (alpha rises linearly to speed.x at speed.y px).
             float a = pc.params.x;
-            // F_INTERIOR (`motionlod`): a moving pixel away from edges was shaded at the pixel
-            // centre at the technique's LOD by the scene pass, so its current sample is the
-            // technique's own and the history only softens it: its weight rises to 1, not to
-            // amax. Edges keep amax: there the history is what anti-aliases them. An edge: the
-            // 3x3 shows another object, or its depth is not one plane (reverse-Z depth is affine
-            // in screen space on a plane, so on each of the four lines through the centre
-            // d(-o) + d(o) - 2 d(0) is 0; off by more than the depth tolerance times d(0)). A
-            // receding floor, whose depth span over three pixels can be large, is no edge.
+            // F_INTERIOR (`unjitter`, `motionlod`): a moving pixel away from edges was shaded at
+            // the pixel centre by the scene pass, so its current sample is the technique's own
+            // and the history only softens it: its weight rises to 1, not to amax. Edges keep
+            // amax: there the history is what anti-aliases them. An edge: the 3x3 shows another
+            // object, or its depth is not one plane (`plane` above); a locked thin feature is
+            // one too.
             float amax = pc.speed_jitter.x;
             if (has(F_INTERIOR)) {
-                // OFF[k] and OFF[8 - k] are opposite: the line through the centre.
-                bool edge = false;
+                bool edge = !plane || locked;
                 for (int k = 0; k < 9; k++) edge = edge || nid[k] != nid[4];
-                for (int k = 0; k < 4; k++)
-                    edge = edge || abs(nd[k] + nd[8 - k] - 2.0 * nd[4]) > pc.params.z * nd[4];
                 if (!edge) amax = 1.0;
             }
             if (pc.speed_jitter.y > 0.0) a = mix(a, amax, min(length(v) / pc.speed_jitter.y, 1.0));
@@ -360,6 +407,9 @@ void main() {
             rng_out = vec4(hold ? rng.xy : vec2(1.0, 0.0), l, l);
         }
     }
+#endif
+#if MODE == 0
+    if (moving) cyc_out = vec4(life, 0.0, 0.0, 0.0);
 #endif
     imageStore(out_cycle, p, cyc_out);
     imageStore(out_range, p, rng_out);

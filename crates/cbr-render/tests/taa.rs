@@ -117,6 +117,7 @@ fn the_shader_matches_its_cpu_reference_on_a_moving_camera() {
         "motionlod",
         "motionlod:speed=0.05",
         "unjitter:speed=0.05",
+        "without-locks",
     ];
     shader_matches_reference(&gpu, &demo(w, h), &frames, &params);
     assert_clean(&gpu);

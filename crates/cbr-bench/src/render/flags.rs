@@ -71,6 +71,8 @@ pub enum TaaAblationArg {
     /// With `unjitter` or `motionlod`, a moving interior's current frame rising to weight 1:
     /// to `amax`, as at edges.
     Interior,
+    /// Thin features' locks: a sub-pixel feature's history clipped like any other.
+    Locks,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]

@@ -56,7 +56,7 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
 };
 
 /// The parts `without-X` switches off.
-pub const ABLATIONS: [&str; 11] = [
+pub const ABLATIONS: [&str; 12] = [
     "dilation",
     "clip",
     "ids",
@@ -68,6 +68,7 @@ pub const ABLATIONS: [&str; 11] = [
     "cycle",
     "centred-reset",
     "interior",
+    "locks",
 ];
 
 /// `cbr render --taa-without X,...`: adds `without-X` (X one of [`ABLATIONS`]) to the spec's
@@ -175,6 +176,14 @@ pub struct TaaConfig {
     /// (`native`'s own frame); it starts no jitter cycle (`without-centred-reset`; off in
     /// INSIDE's mode, which jitters every frame as published).
     pub centred_reset: bool,
+    /// Thin features' locks (FSR 2's, as `taau`'s): a pixel whose sample is a luma ridge with no
+    /// similar 2x2 around it is locked for `length` frames (renewed while it stays one, carried
+    /// with the history); a locked history is kept from the clip in proportion to the lock's
+    /// life and from the ID test, and a locked pixel is no interior. A sub-pixel feature that
+    /// this frame's jitter missed (`zfight`'s far stripes) keeps its share of the history
+    /// instead of being clipped to the surface around it (`without-locks`; off in INSIDE's
+    /// mode).
+    pub locks: bool,
 }
 
 /// Below this motion (pixels) a pixel is still: when its history texel was still too, the ID
@@ -222,6 +231,7 @@ impl TaaConfig {
         motion_lod: false,
         interior: true,
         centred_reset: true,
+        locks: true,
     };
 
     pub const INSIDE: TaaConfig = TaaConfig {
@@ -238,6 +248,7 @@ impl TaaConfig {
         unjitter: false,
         interior: false,
         centred_reset: false,
+        locks: false,
         ..TaaConfig::OURS
     };
 
@@ -318,6 +329,10 @@ impl TaaConfig {
                     ours_only("moving fragments shaded at the pixel centre")?;
                     c.unjitter = true
                 }
+                "without-locks" => {
+                    ours_only("thin-feature locks")?;
+                    c.locks = false
+                }
                 "without-interior" => {
                     ours_only("moving interiors' current frame")?;
                     c.interior = false
@@ -359,7 +374,8 @@ impl TaaConfig {
                             "inside, 8, 16, alpha=A, amax=A, speed=V, gamma=G, tol=T, ctol=T, lod=B, \
                              mean, without-dilation, without-clip, without-ids, without-depth, \
                              without-catmull, without-speed, without-count, without-luma, \
-                             without-cycle, without-centred-reset, without-interior, unjitter, motionlod, \
+                             without-cycle, without-centred-reset, without-interior, without-locks, unjitter, \
+                             motionlod, \
                              adaptive, filter",
                         ));
                     }
@@ -388,6 +404,7 @@ impl TaaConfig {
             (self.cycle, F_CYCLE),
             (self.centred_reset, F_CENTRED),
             (self.unjitter && self.interior && self.speed > 0.0, F_INTERIOR),
+            (self.locks, F_LOCK),
         ] {
             if on {
                 f |= bit;
@@ -411,6 +428,7 @@ pub const F_ADAPTIVE: u32 = 1024;
 pub const F_CYCLE: u32 = 2048;
 pub const F_CENTRED: u32 = 4096;
 pub const F_INTERIOR: u32 = 8192;
+pub const F_LOCK: u32 = 16384;
 
 /// The radical inverse of `i` in `base` (the Halton sequence's element i).
 pub fn halton(mut i: u32, base: u32) -> f32 {
@@ -466,6 +484,7 @@ pub fn decl(inside: bool, packed: bool) -> ComputeDecl {
             ("F_CYCLE", F_CYCLE),
             ("F_CENTRED", F_CENTRED),
             ("F_INTERIOR", F_INTERIOR),
+            ("F_LOCK", F_LOCK),
             ("MOVED", MOVED),
             ("ID_MASK", !MOVED),
             ("HIST_ID_MASK", HIST_ID_MASK),
@@ -652,7 +671,8 @@ pub struct RefInputs<'a> {
     pub cycle: Option<&'a [CycleState]>,
 }
 
-/// A pixel's jitter cycle (the `history_cycle` and `history_range` images).
+/// A pixel's jitter cycle (the `history_cycle` and `history_range` images), or a moving pixel's
+/// lock.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CycleState {
     /// The mean of this cycle's samples so far (linear HDR, f32).
@@ -662,6 +682,9 @@ pub struct CycleState {
     /// Perceptual luma range: [lo, hi] of the last complete cycle (lo > hi: none) and of this
     /// one, each rounded to f16 as the RGBA16F image stores it.
     pub range: [f32; 4],
+    /// A moving pixel's lock life (`locks`; 0: none): `history_cycle`'s x, a moving pixel
+    /// having no cycle.
+    pub lock: f32,
 }
 
 impl CycleState {
@@ -669,6 +692,7 @@ impl CycleState {
         mean: [0.0; 3],
         k: 0,
         range: [1.0, 0.0, 1.0, 0.0],
+        lock: 0.0,
     };
     fn complete(&self) -> bool {
         self.range[0] <= self.range[1]
@@ -715,6 +739,25 @@ fn rel_diff(a: f32, b: f32) -> f32 {
     } else {
         1.0
     }
+}
+
+/// The shader's `thin_feature`: the centre's perceptual luma `n` a ridge over the neighbours
+/// not similar to it (ratio under 1.05), with no all-similar 2x2 quad around it. `l`: the 3x3's
+/// lumas.
+fn thin_feature(l: &[f32; 9]) -> bool {
+    let similar = |a: f32, b: f32| {
+        let (lo, hi) = (a.min(b), a.max(b));
+        hi <= 0.0 || (lo > 0.0 && hi < 1.05 * lo)
+    };
+    let n = l[4];
+    let sim: [bool; 9] = std::array::from_fn(|k| k == 4 || similar(l[k], n));
+    let (mut lo, mut hi) = (1e30f32, -1e30f32);
+    for k in (0..9).filter(|&k| !sim[k]) {
+        lo = lo.min(l[k]);
+        hi = hi.max(l[k]);
+    }
+    let quad = |a: usize, b: usize, c: usize| sim[a] && sim[b] && sim[c];
+    (n > hi || n < lo) && !(quad(0, 1, 3) || quad(1, 2, 5) || quad(3, 6, 7) || quad(5, 7, 8))
 }
 
 fn moving(v: [f32; 2]) -> bool {
@@ -784,6 +827,10 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                 c0 = cf;
             }
             let y0 = to_p(c0, e);
+            let lumas: [f32; 9] = std::array::from_fn(|k| match ok[k] {
+                true => to_p(cs[k], e)[0],
+                false => y0[0],
+            });
             // Geometry: nearest of the 3x3 (smallest linear depth), IDs, depth span.
             let (mut best, mut z_best) = (at([x, y]), f32::INFINITY);
             let (mut lo, mut hi) = (f32::INFINITY, -f32::INFINITY);
@@ -802,6 +849,12 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                 }
             }
             let v = i.velocity[if c.dilation { best } else { at([x, y]) }];
+            // The 3x3 is one plane (see the shader): 1 / depth (reverse-Z's shape) affine on the
+            // four lines through the centre (OFF[k], OFF[8 - k]).
+            let inv = nz.map(|z| 1.0 / z);
+            let plane = (0..4).all(|k| {
+                (inv[k] + inv[8 - k] - 2.0 * inv[4]).abs() <= c.depth_tolerance * inv[4]
+            });
             let q = [x as f32 + 0.5 - v[0], y as f32 + 0.5 - v[1]];
             let mut result = if c.adaptive { cf } else { c0 };
             // Frames the output holds (see the shader).
@@ -809,6 +862,12 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
             // The pixel's cycle goes on (see the shader), from this state at its history texel.
             let (mut cycling, mut cyc) = (false, CycleState::NONE);
             let mut hist_texel = [0.0f32; 3];
+            // The lock's life (`locks`, see the shader): 1 on a thin feature, else the history's
+            // less 1 / L.
+            let mut life = match c.locks && !c.inside && thin_feature(&lumas) {
+                true => 1.0f32,
+                false => 0.0,
+            };
             if let Some((hist, hgeom)) = i.history {
                 let mut use_h = q[0] >= 0.0 && q[1] >= 0.0 && q[0] < w as f32 && q[1] < h as f32;
                 let (hid, hz) = match use_h {
@@ -826,8 +885,15 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                     cycling = !changed;
                 }
                 let held = (hid >> COUNT_SHIFT) & COUNT_MAX;
+                if c.locks && !c.inside && life < 1.0 && use_h && hid & MOVED != 0 {
+                    let t = at([q[0].floor() as i32, q[1].floor() as i32]);
+                    let prev = i.cycle.map_or(0.0, |s| s[t].lock);
+                    life = (prev - 1.0 / c.length as f32).max(0.0);
+                }
+                // The lock holds on a surface only (see the shader).
+                let hold = if plane { life } else { 0.0 };
                 if use_h && !still && (c.ids || c.depth) {
-                    if c.ids {
+                    if c.ids && hold <= 0.0 {
                         use_h = use_h && nid.contains(&(hid & HIST_ID_MASK));
                     }
                     if c.depth {
@@ -902,31 +968,24 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                             let mu = map3(m1, |v| v / 9.0);
                             let sigma = zip3(m2, mu, |a, m| (a / 9.0 - m * m).max(0.0).sqrt());
                             let g = c.gamma;
+                            let yp = to_p(hc, e);
                             let yh = clip_towards(
                                 mu,
-                                to_p(hc, e),
+                                yp,
                                 zip3(mu, sigma, |m, s| m - g * s),
                                 zip3(mu, sigma, |m, s| m + g * s),
                             );
-                            hc = from_p(yh, e);
+                            hc = from_p(zip3(yh, yp, |a, b| a * (1.0 - hold) + b * hold), e);
                         }
                         result = if c.mean {
                             let wt = 1.0 / (i.n + 1) as f32;
                             zip3(hc, c0, |a, b| a + (b - a) * wt)
                         } else {
                             let mut a = c.alpha;
-                            // A moving interior rises to 1 (`interior`, see the shader): no
-                            // other object in the 3x3, and 1 / depth (reverse-Z's shape) affine
-                            // on the four lines through the centre (OFF[k], OFF[8 - k]).
-                            let inv = nz.map(|z| 1.0 / z);
-                            let edge = || {
-                                nid.iter().any(|&n| n != nid[4])
-                                    || (0..4).any(|k| {
-                                        (inv[k] + inv[8 - k] - 2.0 * inv[4]).abs()
-                                            > c.depth_tolerance * inv[4]
-                                    })
-                            };
-                            let amax = match c.unjitter && c.interior && !edge() {
+                            // A moving interior rises to 1 (`interior`, see the shader): one
+                            // plane, no other object in the 3x3, no lock holding.
+                            let edge = !plane || hold > 0.0 || nid.iter().any(|&n| n != nid[4]);
+                            let amax = match c.unjitter && c.interior && !edge {
                                 true => 1.0,
                                 false => c.alpha_max,
                             };
@@ -1005,6 +1064,7 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                             mean: m,
                             k,
                             range: [cyc.range[0], cyc.range[1], cur[0], cur[1]],
+                            lock: 0.0,
                         };
                     }
                 } else {
@@ -1019,9 +1079,13 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                             true => [cyc.range[0], cyc.range[1], l, l],
                             false => [1.0, 0.0, l, l],
                         },
+                        lock: 0.0,
                     };
                 }
                 next.range = next.range.map(f16_round);
+            }
+            if !c.inside && moving(v) {
+                next.lock = life;
             }
             cycles.push(next);
             out.push(result);
@@ -1289,6 +1353,103 @@ mod tests {
         assert_eq!(o[interior], [1.0; 3], "`unjitter`: the current frame");
         assert!(TaaConfig::parse(&["motionlod", "without-interior"]).is_ok());
         assert!(TaaConfig::parse(&["inside", "without-interior"]).is_err());
+    }
+
+    /// Thin features' locks (`locks`), on a 6x7 frame panning 1 px a frame over a plane of 0.2
+    /// (object 1, depth 2). The history holds a 1 px line of 1.0 on row 3 (a decal, object 2,
+    /// at the plane's depth) that this frame's jitter missed, locked last frame: its history is
+    /// kept (the ID test skipped, the clip relaxed by the lock's life 7/8), where without locks
+    /// the ID test drops it for the plane. The lock ages by 1/8 a frame and dies; a history
+    /// nearer than the tolerance (a disocclusion) is dropped, locked or not; a lock holds on a
+    /// surface only (with the row below 50% farther, the 3x3 is no plane: a silhouette); and
+    /// this frame's own thin line sets a lock on its row only.
+    #[test]
+    fn a_locked_thin_feature_keeps_its_history() {
+        let (w, h) = (6usize, 7usize);
+        let plane = [0.2f32; 3];
+        let cur = flat(w, h, plane);
+        let vel = vec![[1.0f32, 0.0]; w * h];
+        let depth = vec![2.0f32; w * h];
+        let ids = vec![1u32; w * h];
+        let hist: Vec<V3> = (0..w * h)
+            .map(|k| if k / w == 3 { [1.0; 3] } else { plane })
+            .collect();
+        let hg = |z: f32| -> Vec<(u32, f32)> {
+            (0..w * h)
+                .map(|k| match k / w == 3 {
+                    true => (hist_geom_x(2, 20, true), z),
+                    false => (hist_geom_x(1, 20, true), 2.0),
+                })
+                .collect()
+        };
+        let locks = |life: f32| -> Vec<CycleState> {
+            (0..w * h)
+                .map(|k| CycleState {
+                    lock: if k / w == 3 { life } else { 0.0 },
+                    ..CycleState::NONE
+                })
+                .collect()
+        };
+        let run_at = |c: &TaaConfig,
+                      color: &[V3],
+                      depth: &[f32],
+                      hg: &[(u32, f32)],
+                      cyc: &[CycleState]| {
+            reference_cycle(
+                c,
+                &RefInputs {
+                    width: w,
+                    height: h,
+                    color,
+                    velocity: &vel,
+                    depth,
+                    ids: &ids,
+                    history: Some((&hist, hg)),
+                    n: 20,
+                    exposure_scale: 1.0,
+                    jitter: [0.0; 2],
+                    cycle: Some(cyc),
+                },
+            )
+        };
+        let run = |c: &TaaConfig, color: &[V3], hg: &[(u32, f32)], cyc: &[CycleState]| {
+            run_at(c, color, &depth, hg, cyc)
+        };
+        let near = |a: V3| a.iter().all(|v| (v - plane[0]).abs() < 1e-5);
+        let ours = TaaConfig::OURS;
+        let p = 3 * w + 3;
+        let (o, _, next) = run(&ours, &cur, &hg(2.0), &locks(1.0));
+        assert!(o[p][0] > 0.5, "the locked line keeps its history: {:?}", o[p]);
+        assert_eq!(next[p].lock, 1.0 - 1.0 / 8.0, "the lock ages by 1 / L");
+        assert!(near(o[p + w]), "the plane around it: {:?}", o[p + w]);
+        let without = TaaConfig::parse(&["without-locks"]).expect("without-locks");
+        assert!(!without.locks && ours.locks);
+        let (o, _, next) = run(&without, &cur, &hg(2.0), &locks(1.0));
+        assert!(near(o[p]), "without locks the ID test drops it: {:?}", o[p]);
+        assert_eq!(next[p].lock, 0.0);
+        // A lock at its last 1/L is gone this frame.
+        assert!(near(run(&ours, &cur, &hg(2.0), &locks(1.0 / 8.0)).0[p]));
+        // Nearer by 50% (a disocclusion): dropped, locked or not.
+        assert!(near(run(&ours, &cur, &hg(1.0), &locks(1.0)).0[p]));
+        // A silhouette: no plane, no hold (the lock itself lives on).
+        let step: Vec<f32> = (0..w * h)
+            .map(|k| if k / w == 4 { 3.0 } else { 2.0 })
+            .collect();
+        let (o, _, next) = run_at(&ours, &cur, &step, &hg(2.0), &locks(1.0));
+        assert!(near(o[p]), "a silhouette's lock does not hold: {:?}", o[p]);
+        assert_eq!(next[p].lock, 1.0 - 1.0 / 8.0);
+        // The ID test alone off, the clip keeps the line only in the lock's proportion.
+        let no_ids = TaaConfig { ids: false, ..ours };
+        let kept = run(&no_ids, &cur, &hg(2.0), &locks(1.0)).0[p][0];
+        let clipped = run(&TaaConfig { locks: false, ..no_ids }, &cur, &hg(2.0), &locks(1.0)).0[p];
+        assert!(kept > 0.5 && (clipped[0] - 0.2).abs() < 1e-3, "{kept} {clipped:?}");
+        // This frame's own line (a ridge, no similar 2x2): locked at life 1 on its row alone.
+        let (_, _, next) = run(&ours, &hist, &hg(2.0), &locks(0.0));
+        for (k, s) in next.iter().enumerate() {
+            assert_eq!(s.lock, if k / w == 3 { 1.0 } else { 0.0 }, "pixel {k}");
+        }
+        assert!(TaaConfig::parse(&["inside", "without-locks"]).is_err());
+        assert!(!TaaConfig::INSIDE.locks);
     }
 
     /// Known answers on a 6x5 frame: a reset passes the current frame through; a static
