@@ -300,9 +300,12 @@ void main() {
             }
             vec3 mu = m1 / 9.0;
             vec3 sigma = sqrt(max(m2 / 9.0 - mu * mu, vec3(0.0)));
+            // A history inside the box is kept bit for bit (the round trip through the
+            // perceptual space is not exact).
             vec3 yp = to_p(h);
-            vec3 yh = clip_towards(mu, yp, mu - pc.params.y * sigma, mu + pc.params.y * sigma);
-            h = from_p(mix(yh, yp, hold));
+            vec3 lo = mu - pc.params.y * sigma, hi = mu + pc.params.y * sigma;
+            if (any(lessThan(yp, lo)) || any(greaterThan(yp, hi)))
+                h = from_p(mix(clip_towards(mu, yp, lo, hi), yp, hold));
         }
         if (has(F_MEAN)) {
             float w = 1.0 / float(pc.flags.y + 1u);
@@ -338,7 +341,10 @@ void main() {
                 wc /= 1.0 + luma(cc * pc.params.w);
                 wh /= 1.0 + luma(h * pc.params.w);
             }
-            result = (wc * cc + wh * h) / (wc + wh);
+            // h + (cc - h) t is h itself where cc = h; (wc cc + wh h) / (wc + wh) is not, and the
+            // RGBA16F store kept the difference: specular's constant dark sky ended an f16 ulp
+            // off its colour (FLIP 0.0023 there against native's 0).
+            result = h + (cc - h) * (wc / (wc + wh));
         }
 #else
         // INSIDE: rounded min-max (the 3x3 box averaged with the cross's), chroma shrunk around

@@ -969,13 +969,13 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                             let sigma = zip3(m2, mu, |a, m| (a / 9.0 - m * m).max(0.0).sqrt());
                             let g = c.gamma;
                             let yp = to_p(hc, e);
-                            let yh = clip_towards(
-                                mu,
-                                yp,
-                                zip3(mu, sigma, |m, s| m - g * s),
-                                zip3(mu, sigma, |m, s| m + g * s),
-                            );
-                            hc = from_p(zip3(yh, yp, |a, b| a * (1.0 - hold) + b * hold), e);
+                            let lo = zip3(mu, sigma, |m, s| m - g * s);
+                            let hi = zip3(mu, sigma, |m, s| m + g * s);
+                            // Inside the box the history is kept as it is (see the shader).
+                            if (0..3).any(|k| yp[k] < lo[k] || yp[k] > hi[k]) {
+                                let yh = clip_towards(mu, yp, lo, hi);
+                                hc = from_p(zip3(yh, yp, |a, b| a * (1.0 - hold) + b * hold), e);
+                            }
                         }
                         result = if c.mean {
                             let wt = 1.0 / (i.n + 1) as f32;
@@ -1005,7 +1005,8 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                                 wc /= 1.0 + dot(map3(cc, |v| v * e), LUMA);
                                 wh /= 1.0 + dot(map3(hc, |v| v * e), LUMA);
                             }
-                            zip3(cc, hc, |a, b| (wc * a + wh * b) / (wc + wh))
+                            // h + (c - h) t: h itself where c = h (see the shader).
+                            zip3(cc, hc, |a, b| b + (a - b) * (wc / (wc + wh)))
                         };
                     } else {
                         let (mut mn, mut mx, mut avg) = ([f32::MAX; 3], [f32::MIN; 3], [0.0f32; 3]);
