@@ -46,7 +46,8 @@ layout(set = 0, binding = BINDING_OUT_RANGE, rgba16f) uniform writeonly image2D 
 // since the reset), z: the jitter cycle's length L; params: alpha (current-frame weight), gamma,
 // depth tolerance, exposure scale; feedback_still: INSIDE feedback min, max, still threshold
 // (pixels), the cycle's change tolerance (perceptual luma); speed_jitter:
-// x: current-frame weight at and above speed y (pixels per frame; 0: off), zw: the jitter.
+// x: current-frame weight at and above speed y (pixels per frame; 0: off), zw: the jitter;
+// interior: x the speed at which a moving interior's weight reaches 1 (F_INTERIOR).
 PUSH_CONSTANTS
 
 bool has(uint f) { return (pc.flags.x & f) != 0u; }
@@ -247,7 +248,7 @@ void main() {
     // exactly; not a silhouette, whose history slides over what is behind it): there the history
     // is kept from rectification in the lock's proportion and from the ID test (a sub-pixel
     // feature that this frame's jitter missed is not disoccluded; the depth test still applies),
-    // and the pixel is no interior.
+    // and the pixel is no interior (but see F_SHED).
     float life = 0.0;
 #if MODE == 0
     if (has(F_LOCK)) {
@@ -258,12 +259,11 @@ void main() {
 #endif
     float hold = plane ? life : 0.0;
     bool locked = hold > 0.0;
+    // The history's object is one of the 3x3's.
+    bool seen = false;
+    for (int k = 0; k < 9; k++) seen = seen || nid[k] == (g.x & HIST_ID_MASK);
     if (use && !still && (has(F_IDS) || has(F_DEPTH))) {
-        if (has(F_IDS) && !locked) {
-            bool seen = false;
-            for (int k = 0; k < 9; k++) seen = seen || nid[k] == (g.x & HIST_ID_MASK);
-            use = use && seen;
-        }
+        if (has(F_IDS) && !locked) use = use && seen;
         if (has(F_DEPTH)) {
             float hd = uintBitsToFloat(g.y);
             use = use && ((hd >= lo && hd <= hi) || depth_rel_diff(hd, lo) <= pc.params.z ||
@@ -318,15 +318,24 @@ void main() {
             // the pixel centre by the scene pass, so its current sample is the technique's own
             // and the history only softens it: its weight rises to 1, not to amax. Edges keep
             // amax: there the history is what anti-aliases them. An edge: the 3x3 shows another
-            // object, or its depth is not one plane (`plane` above); a locked thin feature is
-            // one too.
+            // object, or its depth is not one plane (`plane` above); so is a locked pixel. Its
+            // sample is sharper than native's where the LOD bias stays (`unjitter`), so its
+            // lock keeps the history that averages it; with the bias shed (F_SHED, `motionlod`)
+            // the sample is native's own, and only a lock on a history of an object the 3x3 does
+            // not show (a sub-pixel feature this frame missed) keeps it.
+            // An interior's weight reaches 1 at the speed at which the scene pass shades it
+            // wholly at the centre (interior.x, `uspeed`), an edge's amax at `speed`.
             float amax = pc.speed_jitter.x;
+            float ramp = pc.speed_jitter.y;
             if (has(F_INTERIOR)) {
-                bool edge = !plane || locked;
+                bool edge = !plane || (locked && (!seen || !has(F_SHED)));
                 for (int k = 0; k < 9; k++) edge = edge || nid[k] != nid[4];
-                if (!edge) amax = 1.0;
+                if (!edge) {
+                    amax = 1.0;
+                    ramp = pc.interior.x;
+                }
             }
-            if (pc.speed_jitter.y > 0.0) a = mix(a, amax, min(length(v) / pc.speed_jitter.y, 1.0));
+            if (pc.speed_jitter.y > 0.0) a = mix(a, amax, min(length(v) / ramp, 1.0));
             // A history of m frames (m + 1 = count) takes the current frame with weight at least
             // 1 / (m + 1): the running mean until the exponential window 1 / alpha is full, after
             // a reset and after every rejection (a disoccluded pixel converges as fast as a

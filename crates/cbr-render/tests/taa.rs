@@ -68,12 +68,12 @@ fn jittered_native_for(
     c: &TaaConfig,
     f: u32,
 ) -> FrameOutput {
-    let motion = c.unjitter && c.speed > 0.0;
+    let motion = c.unjitter && c.unjitter_speed() > 0.0;
     let shed = if c.motion_lod { c.lod_bias } else { 0.0 };
     let settings = RenderSettings {
         jitter: taa::jitter(c.length, f),
         lod_bias: Some(c.lod_bias),
-        lod_motion: motion.then(|| [shed, 1.0 / c.speed]),
+        lod_motion: motion.then(|| [shed, 1.0 / c.unjitter_speed()]),
         ..spec(w, h, "native")
     };
     render(gpu, s, settings, &[f]).remove(0)
@@ -118,6 +118,7 @@ fn the_shader_matches_its_cpu_reference_on_a_moving_camera() {
         "motionlod:speed=0.05",
         "unjitter:speed=0.05",
         "without-locks",
+        "motionlod:uspeed=0.1:ispeed=0.1",
     ];
     shader_matches_reference(&gpu, &demo(w, h), &frames, &params);
     assert_clean(&gpu);

@@ -38,7 +38,7 @@ use crate::targets::COLOR_FORMAT;
 
 pub const REGISTRATION: PostRegistration = PostRegistration {
     name: "taa",
-    grammar: "taa[:inside][:8|16][:alpha=A][:amax=A][:speed=V][:gamma=G][:tol=T][:ctol=T][:lod=B][:mean][:filter][:adaptive][:unjitter][:motionlod][:without-X...]",
+    grammar: "taa[:inside][:8|16][:alpha=A][:amax=A][:speed=V][:uspeed=V][:gamma=G][:tol=T][:ctol=T][:lod=B][:mean][:filter][:adaptive][:unjitter][:motionlod][:without-X...]",
     about: "temporal AA: Halton jitter, dilated velocity, Catmull-Rom history, YCoCg variance \
             clipping, ID and depth rejection, speed-dependent weight, per-pixel frame count (X: \
             dilation, clip, ids, depth, catmull, speed, count, luma, cycle: still pixels show the \
@@ -163,6 +163,13 @@ pub struct TaaConfig {
     /// stands in for anisotropic filtering on grazing surfaces and the foliage's leaves, so
     /// `unjitter` alone is better there; with `anisotropy` the shed is right (docs/post-aa.md).
     pub motion_lod: bool,
+    /// With `unjitter`: the speed (pixels per frame) at and above which a moving fragment is
+    /// shaded at the pixel centre, its share of the jitter rising linearly to it (and with
+    /// `motionlod` the LOD bias shed by the same share); `None`: `speed` (`uspeed=V`).
+    pub unjitter_speed: Option<f32>,
+    /// With `interior`: the speed at which a moving interior's current-frame weight reaches 1;
+    /// `None`: `speed` (`ispeed=V`).
+    pub interior_speed: Option<f32>,
     /// With `unjitter`: a moving pixel away from edges (its 3x3 one object, its reverse-Z depth
     /// one plane within `depth_tolerance`: a receding floor is no edge) takes the current frame
     /// at a weight rising to 1 at `speed`, not to `alpha_max`: the scene pass shades it at the
@@ -229,6 +236,8 @@ impl TaaConfig {
         cycle_tolerance: 0.01,
         unjitter: false,
         motion_lod: false,
+        unjitter_speed: None,
+        interior_speed: None,
         interior: true,
         centred_reset: true,
         locks: true,
@@ -363,6 +372,14 @@ impl TaaConfig {
                         ours_only("depth test")?;
                         c.depth_tolerance = num(p, v, 0.0, 1.0)?
                     }
+                    Some(("ispeed", v)) => {
+                        ours_only("moving interiors' current frame")?;
+                        c.interior_speed = Some(num(p, v, 0.001, 1000.0)?)
+                    }
+                    Some(("uspeed", v)) => {
+                        ours_only("moving fragments shaded at the pixel centre")?;
+                        c.unjitter_speed = Some(num(p, v, 0.001, 1000.0)?)
+                    }
                     Some(("ctol", v)) => {
                         ours_only("still pixels' jitter cycle")?;
                         c.cycle_tolerance = num(p, v, 0.0, 1.0)?
@@ -371,7 +388,8 @@ impl TaaConfig {
                         return Err(crate::technique::unknown_param(
                             "taa",
                             p,
-                            "inside, 8, 16, alpha=A, amax=A, speed=V, gamma=G, tol=T, ctol=T, lod=B, \
+                            "inside, 8, 16, alpha=A, amax=A, speed=V, uspeed=V, gamma=G, tol=T, ctol=T, \
+                             lod=B, \
                              mean, without-dilation, without-clip, without-ids, without-depth, \
                              without-catmull, without-speed, without-count, without-luma, \
                              without-cycle, without-centred-reset, without-interior, without-locks, unjitter, \
@@ -386,6 +404,18 @@ impl TaaConfig {
             c.cycle = false;
         }
         Ok(c)
+    }
+
+    /// The speed at and above which `unjitter` shades a moving fragment wholly at the pixel
+    /// centre (`uspeed`, else `speed`; 0: never).
+    pub fn unjitter_speed(&self) -> f32 {
+        self.unjitter_speed.unwrap_or(self.speed)
+    }
+
+    /// The speed at which a moving interior's current-frame weight reaches 1 (`ispeed`, else
+    /// `speed`).
+    pub fn interior_speed(&self) -> f32 {
+        self.interior_speed.unwrap_or(self.speed)
     }
 
     fn flags(&self) -> u32 {
@@ -405,6 +435,7 @@ impl TaaConfig {
             (self.centred_reset, F_CENTRED),
             (self.unjitter && self.interior && self.speed > 0.0, F_INTERIOR),
             (self.locks, F_LOCK),
+            (self.motion_lod, F_SHED),
         ] {
             if on {
                 f |= bit;
@@ -429,6 +460,7 @@ pub const F_CYCLE: u32 = 2048;
 pub const F_CENTRED: u32 = 4096;
 pub const F_INTERIOR: u32 = 8192;
 pub const F_LOCK: u32 = 16384;
+pub const F_SHED: u32 = 32768;
 
 /// The radical inverse of `i` in `base` (the Halton sequence's element i).
 pub fn halton(mut i: u32, base: u32) -> f32 {
@@ -460,6 +492,9 @@ crate::push_constants! {
         /// x: current-frame weight at and above speed y (pixels per frame; 0: off); zw: the
         /// frame's jitter (pixels).
         speed_jitter: [f32; 4],
+        /// x: the speed (pixels per frame) at which a moving interior's current-frame weight
+        /// reaches 1 (`interior`: the unjitter speed, at which it is shaded at the centre).
+        interior: [f32; 4],
     }
 }
 
@@ -485,6 +520,7 @@ pub fn decl(inside: bool, packed: bool) -> ComputeDecl {
             ("F_CENTRED", F_CENTRED),
             ("F_INTERIOR", F_INTERIOR),
             ("F_LOCK", F_LOCK),
+            ("F_SHED", F_SHED),
             ("MOVED", MOVED),
             ("ID_MASK", !MOVED),
             ("HIST_ID_MASK", HIST_ID_MASK),
@@ -559,6 +595,7 @@ impl Taa {
                 c.cycle_tolerance,
             ],
             speed_jitter: [c.alpha_max, c.speed, 0.0, 0.0],
+            interior: [c.interior_speed(), 0.0, 0.0, 0.0],
         };
         Ok(Taa {
             config: c,
@@ -622,7 +659,7 @@ impl PostPass for Taa {
 
     fn lod_speed(&self) -> f32 {
         match self.config.unjitter {
-            true => self.config.speed,
+            true => self.config.unjitter_speed(),
             false => 0.0,
         }
     }
@@ -892,9 +929,10 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                 }
                 // The lock holds on a surface only (see the shader).
                 let hold = if plane { life } else { 0.0 };
+                let seen = nid.contains(&(hid & HIST_ID_MASK));
                 if use_h && !still && (c.ids || c.depth) {
                     if c.ids && hold <= 0.0 {
-                        use_h = use_h && nid.contains(&(hid & HIST_ID_MASK));
+                        use_h = use_h && seen;
                     }
                     if c.depth {
                         let tol = c.depth_tolerance;
@@ -983,14 +1021,18 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                         } else {
                             let mut a = c.alpha;
                             // A moving interior rises to 1 (`interior`, see the shader): one
-                            // plane, no other object in the 3x3, no lock holding.
-                            let edge = !plane || hold > 0.0 || nid.iter().any(|&n| n != nid[4]);
-                            let amax = match c.unjitter && c.interior && !edge {
-                                true => 1.0,
-                                false => c.alpha_max,
+                            // plane, no other object in the 3x3, no lock holding (under
+                            // `motionlod`: no lock holding a history of an object it does not
+                            // show).
+                            let edge = !plane
+                                || (hold > 0.0 && (!seen || !c.motion_lod))
+                                || nid.iter().any(|&n| n != nid[4]);
+                            let (amax, ramp) = match c.unjitter && c.interior && !edge {
+                                true => (1.0, c.interior_speed()),
+                                false => (c.alpha_max, c.speed),
                             };
                             if c.speed > 0.0 {
-                                let s = (v[0] * v[0] + v[1] * v[1]).sqrt() / c.speed;
+                                let s = (v[0] * v[0] + v[1] * v[1]).sqrt() / ramp;
                                 a += (amax - a) * s.min(1.0);
                             }
                             if c.count {
@@ -1352,6 +1394,42 @@ mod tests {
             &flat_depth,
         );
         assert_eq!(o[interior], [1.0; 3], "`unjitter`: the current frame");
+        // A lock on the interior's history texel (life 7/8 after aging): with the bias kept
+        // (`unjitter`) the lock keeps the history that averages the sharper sample (amax, 2);
+        // with it shed (`motionlod`) the sample is native's own and the interior takes it (1),
+        // unless the locked history shows an object the 3x3 does not (a sub-pixel feature this
+        // frame missed; the ID test skipped for the lock): then amax again.
+        let locked: Vec<CycleState> = (0..w * h)
+            .map(|_| CycleState {
+                lock: 1.0,
+                ..CycleState::NONE
+            })
+            .collect();
+        let run_locked = |c: &TaaConfig, hg: &[(u32, f32)]| {
+            let i = RefInputs {
+                width: w,
+                height: h,
+                color: &cur,
+                velocity: &vel,
+                depth: &flat_depth,
+                ids: &ids,
+                history: Some((&hist, hg)),
+                n: 20,
+                exposure_scale: 1.0,
+                jitter: [0.0; 2],
+                cycle: Some(&locked),
+            };
+            reference(c, &i).0[interior]
+        };
+        let uj = TaaConfig {
+            motion_lod: false,
+            ..ml
+        };
+        assert!((run_locked(&uj, &hg)[0] - 2.0).abs() < 1e-6, "unjitter: locked, amax");
+        assert_eq!(run_locked(&ml, &hg), [1.0; 3], "motionlod: the interior's own sample");
+        let other: Vec<(u32, f32)> = hg.iter().map(|_| (hist_geom_x(3, 20, true), 2.0)).collect();
+        let o = run_locked(&ml, &other);
+        assert!((o[0] - 2.0).abs() < 1e-6, "a locked history of another object: {o:?}");
         assert!(TaaConfig::parse(&["motionlod", "without-interior"]).is_ok());
         assert!(TaaConfig::parse(&["inside", "without-interior"]).is_err());
     }
