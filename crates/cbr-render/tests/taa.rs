@@ -447,9 +447,12 @@ fn the_lod_bias_is_withdrawn_from_moving_fragments() {
     assert_eq!(motion("native+taa:motionlod:speed=4"), [-1.0, 0.25]);
     // `unjitter`: moving fragments shaded at the centre, at the full bias.
     assert_eq!(motion("native+taa:unjitter"), [0.0, 0.5]);
+    assert_eq!(motion("native+taa"), [0.0, 0.5], "unjitter is the default");
+    assert_eq!(motion("native+taa:uspeed=0.25"), [0.0, 4.0]);
     for fixed in [
         "native",
-        "native+taa",
+        "native+taa:without-unjitter",
+        "native+taa:motionlod:without-unjitter",
         "native+taa:inside",
         "native+taa:motionlod:without-speed",
     ] {

@@ -68,11 +68,13 @@ pub enum TaaAblationArg {
     Cycle,
     /// A frame without history rendered centred: jittered like every other.
     CentredReset,
-    /// With `unjitter` or `motionlod`, a moving interior's current frame rising to weight 1:
-    /// to `amax`, as at edges.
+    /// A moving interior's current frame rising to weight 1: to `amax`, as at edges.
     Interior,
     /// Thin features' locks: a sub-pixel feature's history clipped like any other.
     Locks,
+    /// Moving fragments shaded at the pixel centre (and their interiors' current frame): the
+    /// jittered path (also drops `motionlod`).
+    Unjitter,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]

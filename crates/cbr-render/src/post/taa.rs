@@ -38,13 +38,14 @@ use crate::targets::COLOR_FORMAT;
 
 pub const REGISTRATION: PostRegistration = PostRegistration {
     name: "taa",
-    grammar: "taa[:inside][:8|16][:alpha=A][:amax=A][:speed=V][:uspeed=V][:gamma=G][:tol=T][:ctol=T][:lod=B][:mean][:filter][:adaptive][:unjitter][:motionlod][:without-X...]",
+    grammar: "taa[:inside][:8|16][:alpha=A][:amax=A][:speed=V][:uspeed=V][:ispeed=V][:gamma=G][:tol=T][:ctol=T][:lod=B][:mean][:filter][:adaptive][:motionlod][:without-X...]",
     about: "temporal AA: Halton jitter, dilated velocity, Catmull-Rom history, YCoCg variance \
-            clipping, ID and depth rejection, speed-dependent weight, per-pixel frame count (X: \
-            dilation, clip, ids, depth, catmull, speed, count, luma, cycle: still pixels show the \
-            mean of their last jitter cycle, centred-reset, interior); `unjitter`: moving \
-            fragments shaded at the pixel centre, moving interiors take the current frame; \
-            `motionlod`: that and the sharper LOD shed; `inside`: Playdead's INSIDE TAA",
+            clipping, ID and depth rejection, speed-dependent weight, per-pixel frame count, \
+            thin-feature locks, moving fragments shaded at the pixel centre and moving interiors \
+            taking the current frame (X: dilation, clip, ids, depth, catmull, speed, count, luma, \
+            cycle: still pixels show the mean of their last jitter cycle, centred-reset, \
+            interior, locks, unjitter); `motionlod`: the sharper LOD shed with motion too; \
+            `inside`: Playdead's INSIDE TAA",
     check: |p| TaaConfig::parse(p).map(|_| ()),
     geometry: true,
     estimate: |ctx, _| crate::pass::estimate(&resources(ctx.width, ctx.height), "taa"),
@@ -56,7 +57,7 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
 };
 
 /// The parts `without-X` switches off.
-pub const ABLATIONS: [&str; 12] = [
+pub const ABLATIONS: [&str; 13] = [
     "dilation",
     "clip",
     "ids",
@@ -69,6 +70,7 @@ pub const ABLATIONS: [&str; 12] = [
     "centred-reset",
     "interior",
     "locks",
+    "unjitter",
 ];
 
 /// `cbr render --taa-without X,...`: adds `without-X` (X one of [`ABLATIONS`]) to the spec's
@@ -154,9 +156,10 @@ pub struct TaaConfig {
     /// Moving fragments are shaded at the pixel centre: their shading inputs are moved back by
     /// their share of the jitter, linearly up to `speed` pixels per frame (the scene pass's
     /// `unjittered()`, [`PostPass::lod_speed`]), and with `interior` their pixels away from
-    /// edges take the current frame (`unjitter`; `motionlod` implies it). A pixel that moves
-    /// keeps few jittered samples to average a shifted sample over. Off by default: it costs
-    /// Šibenik (docs/post-aa.md).
+    /// edges take the current frame (`motionlod` needs it). A pixel that moves keeps few
+    /// jittered samples to average a shifted sample over. On by default since 2026-12-07
+    /// (docs/post-aa.md: at most `+taa`'s error on every scene measured); `without-unjitter`
+    /// is the jittered path.
     pub unjitter: bool,
     /// `unjitter`, and the LOD bias withdrawn from moving fragments by the same share
     /// ([`PostPass::lod_shed`]; `motionlod`): with an isotropic texture filter the sharper level
@@ -234,7 +237,7 @@ impl TaaConfig {
         adaptive: false,
         cycle: true,
         cycle_tolerance: 0.01,
-        unjitter: false,
+        unjitter: true,
         motion_lod: false,
         unjitter_speed: None,
         interior_speed: None,
@@ -338,6 +341,11 @@ impl TaaConfig {
                     ours_only("moving fragments shaded at the pixel centre")?;
                     c.unjitter = true
                 }
+                "without-unjitter" => {
+                    ours_only("moving fragments shaded at the pixel centre")?;
+                    c.unjitter = false;
+                    c.motion_lod = false
+                }
                 "without-locks" => {
                     ours_only("thin-feature locks")?;
                     c.locks = false
@@ -392,7 +400,8 @@ impl TaaConfig {
                              lod=B, \
                              mean, without-dilation, without-clip, without-ids, without-depth, \
                              without-catmull, without-speed, without-count, without-luma, \
-                             without-cycle, without-centred-reset, without-interior, without-locks, unjitter, \
+                             without-cycle, without-centred-reset, without-interior, without-locks, \
+                             without-unjitter, ispeed=V, unjitter, \
                              motionlod, \
                              adaptive, filter",
                         ));
@@ -1335,6 +1344,7 @@ mod tests {
         let base = TaaConfig {
             clip: false,
             luma: false,
+            unjitter: false,
             ..TaaConfig::OURS
         };
         let ml = TaaConfig {
@@ -1587,9 +1597,11 @@ mod tests {
         let blend = (0.1 / 2.0 * 1.0 + 0.9 / 4.0 * 3.0) / (0.1 / 2.0 + 0.9 / 4.0);
         assert!(o.iter().all(|c| (c[0] - blend).abs() < 1e-5), "{:?}", o[0]);
         // Without clipping: Karis's luminance weights, alpha 0.1: (0.1/2 * 1 + 0.9/4 * 3) / (0.1/2 + 0.9/4).
+        // (The jittered path: `unjitter`'s interiors have their own weight, tested below.)
         let c = TaaConfig {
             clip: false,
             speed: 0.0,
+            unjitter: false,
             ..TaaConfig::OURS
         };
         let (o, _) = reference(&c, &i);
