@@ -883,7 +883,10 @@ Result rendered_result(ivec2 p, Sample s) {
     real a = real(mix(FUSED_ALPHA, FUSED_ALPHA_MAX, min(length(s.v) / FUSED_SPEED, 1.0)));
     real wc = a / (real(1.0) + max(luma(s.c), real(0.0)));
     real wh = (real(1.0) - a) / (real(1.0) + max(luma(h), real(0.0)));
-    r.c = (wc * s.c + wh * h) / (wc + wh);
+    // The weighted mean (wc c + wh h) / (wc + wh) as h + (c - h) t: exactly h where c = h, where
+    // the quotient form is off in the last bits and the RGBA16F history keeps them (`+taa`'s
+    // blend, docs/post-aa.md: every hard case's FLIP fell with the change).
+    r.c = h + (s.c - h) * (wc / (wc + wh));
     return r;
 }
 #else

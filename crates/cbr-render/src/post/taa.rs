@@ -14,9 +14,13 @@
 //!   least 1 / (m + 1), m the frames the pixel's history holds (a count kept per pixel in the
 //!   history geometry, 1 after a reset or a rejection): a running mean until the exponential
 //!   window is full, so a disoccluded or reset pixel converges as fast as possible instead of
-//!   keeping its first jittered sample at weight (1 - alpha)^k (issue 55). `without-X` switches
-//!   one part off (`dilation`, `clip`, `ids`, `depth`, `catmull`, `speed`, `count`, `luma`);
-//!   `adaptive` reconstructs the current sample at the pixel centre in proportion 1 / m.
+//!   keeping its first jittered sample at weight (1 - alpha)^k (issue 55). Thin features (a
+//!   luma ridge with no similar 2x2) are locked for a jitter cycle: on a surface (the 3x3 one
+//!   plane) a locked history skips the ID test and the clip in the lock's proportion (FSR 2's
+//!   locks). Moving fragments are shaded at the pixel centre by the scene pass, and moving
+//!   interiors take the current frame (`unjitter`, the default). The blend is h + (c - h) t,
+//!   exactly h where c = h. `without-X` switches one part off ([`ABLATIONS`]); `adaptive`
+//!   reconstructs the current sample at the pixel centre in proportion 1 / m.
 //! - `+taa:inside` (Pedersen 2016, Playdead's INSIDE): Halton x16, 3x3 closest-depth dilation,
 //!   bilinear history, the rounded min-max box (3x3 averaged with the cross) with chroma shrunk to
 //!   1/8 of the luma extent around the centre's, clipped towards the clamped mean, feedback

@@ -335,7 +335,8 @@ impl Ctx<'_> {
         let a = super::FUSED_ALPHA + (super::FUSED_ALPHA_MAX - super::FUSED_ALPHA) * t;
         let wc = a / (1.0 + luma(s.c).max(0.0));
         let wh = (1.0 - a) / (1.0 + luma(h).max(0.0));
-        r.c = [0, 1, 2].map(|k| (wc * s.c[k] + wh * h[k]) / (wc + wh));
+        // h + (c - h) t: exactly h where c = h (the shader says why).
+        r.c = [0, 1, 2].map(|k| h[k] + (s.c[k] - h[k]) * (wc / (wc + wh)));
         r
     }
 
