@@ -107,6 +107,39 @@ pub fn apply_shorthand(
     Ok(())
 }
 
+/// The switches only ours has (INSIDE's TAA refuses them): the parameter, what INSIDE lacks (for
+/// the error), and what it sets.
+type Switch = (&'static str, &'static str, fn(&mut TaaConfig));
+const OURS_SWITCHES: &[Switch] = &[
+    ("without-ids", "ID test", |c| c.ids = false),
+    ("without-depth", "depth test", |c| c.depth = false),
+    ("without-speed", "speed-dependent weight", |c| c.speed = 0.0),
+    ("without-count", "per-pixel frame count", |c| c.count = false),
+    ("without-luma", "luminance-weighted blend", |c| c.luma = false),
+    ("without-cycle", "still pixels' jitter cycle", |c| c.cycle = false),
+    ("without-centred-reset", "centred frame at a reset", |c| {
+        c.centred_reset = false
+    }),
+    ("without-locks", "thin-feature locks", |c| c.locks = false),
+    ("without-interior", "moving interiors' current frame", |c| {
+        c.interior = false
+    }),
+    ("without-catmull", "Catmull-Rom history (it is bilinear)", |c| {
+        c.catmull = false
+    }),
+    ("unjitter", "moving fragments shaded at the pixel centre", |c| {
+        c.unjitter = true
+    }),
+    ("without-unjitter", "moving fragments shaded at the pixel centre", |c| {
+        c.unjitter = false;
+        c.motion_lod = false
+    }),
+    ("motionlod", "LOD bias withdrawn with motion", |c| {
+        c.motion_lod = true;
+        c.unjitter = true
+    }),
+];
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TaaConfig {
     /// Playdead's INSIDE TAA instead of ours.
@@ -288,6 +321,11 @@ impl TaaConfig {
                     false => Ok(()),
                 }
             };
+            if let Some((_, what, switch)) = OURS_SWITCHES.iter().find(|s| s.0 == *p) {
+                ours_only(what)?;
+                switch(&mut c);
+                continue;
+            }
             match *p {
                 "inside" => {}
                 "8" => c.length = 8,
@@ -308,60 +346,6 @@ impl TaaConfig {
                 }
                 "without-dilation" => c.dilation = false,
                 "without-clip" => c.clip = false,
-                "without-ids" => {
-                    ours_only("ID test")?;
-                    c.ids = false
-                }
-                "without-depth" => {
-                    ours_only("depth test")?;
-                    c.depth = false
-                }
-                "without-speed" => {
-                    ours_only("speed-dependent weight")?;
-                    c.speed = 0.0
-                }
-                "without-count" => {
-                    ours_only("per-pixel frame count")?;
-                    c.count = false
-                }
-                "without-luma" => {
-                    ours_only("luminance-weighted blend")?;
-                    c.luma = false
-                }
-                "without-cycle" => {
-                    ours_only("still pixels' jitter cycle")?;
-                    c.cycle = false
-                }
-                "without-centred-reset" => {
-                    ours_only("centred frame at a reset")?;
-                    c.centred_reset = false
-                }
-                "motionlod" => {
-                    ours_only("LOD bias withdrawn with motion")?;
-                    c.motion_lod = true;
-                    c.unjitter = true
-                }
-                "unjitter" => {
-                    ours_only("moving fragments shaded at the pixel centre")?;
-                    c.unjitter = true
-                }
-                "without-unjitter" => {
-                    ours_only("moving fragments shaded at the pixel centre")?;
-                    c.unjitter = false;
-                    c.motion_lod = false
-                }
-                "without-locks" => {
-                    ours_only("thin-feature locks")?;
-                    c.locks = false
-                }
-                "without-interior" => {
-                    ours_only("moving interiors' current frame")?;
-                    c.interior = false
-                }
-                "without-catmull" => {
-                    ours_only("Catmull-Rom history (it is bilinear)")?;
-                    c.catmull = false
-                }
                 _ => match p.split_once('=') {
                     Some(("alpha", v)) => {
                         ours_only("alpha (its feedback is 0.88-0.97)")?;
@@ -1234,6 +1218,32 @@ mod tests {
         vec![c; w * h]
     }
 
+    /// A frame's colour, velocity, depth and IDs.
+    type Frame<'a> = (&'a [V3], &'a [[f32; 2]], &'a [f32], &'a [u32]);
+
+    /// A frame's inputs with a history of 20 frames, exposure 1 and no jitter: the frame, the
+    /// history, the previous frame's cycles and locks.
+    fn moving_frame<'a>(
+        (width, height): (usize, usize),
+        (color, velocity, depth, ids): Frame<'a>,
+        history: RefHistory<'a>,
+        cycle: Option<&'a [CycleState]>,
+    ) -> RefInputs<'a> {
+        RefInputs {
+            width,
+            height,
+            color,
+            velocity,
+            depth,
+            ids,
+            history: Some(history),
+            n: 20,
+            exposure_scale: 1.0,
+            jitter: [0.0; 2],
+            cycle,
+        }
+    }
+
     /// The jitter cycle on a 6x5 still frame whose colour alternates 1, 2 (what jitter does to
     /// a pixel), with frame 0 jittered too (`without-centred-reset`; ours starts the cycle at
     /// frame 1, after the centred reset, and completes it at frame 8): frame 7 completes the
@@ -1328,22 +1338,13 @@ mod tests {
             .iter()
             .map(|&id| (hist_geom_x(id, 20, true), 2.0))
             .collect();
-        let run_with = |c: &TaaConfig, depth: &[f32], hg: &[(u32, f32)]| {
-            let i = RefInputs {
-                width: w,
-                height: h,
-                color: &cur,
-                velocity: &vel,
-                depth,
-                ids: &ids,
-                history: Some((&hist, hg)),
-                n: 20,
-                exposure_scale: 1.0,
-                jitter: [0.0; 2],
-                cycle: None,
+        // The previous frame's locks (`CycleState::lock`), where a case gives them.
+        let run_cycle =
+            |c: &TaaConfig, depth: &[f32], hg: &[(u32, f32)], cycle: Option<&[CycleState]>| {
+                let i = moving_frame((w, h), (&cur, &vel, depth, &ids), (&hist, hg), cycle);
+                reference(c, &i).0
             };
-            reference(c, &i).0
-        };
+        let run_with = |c: &TaaConfig, depth: &[f32], hg: &[(u32, f32)]| run_cycle(c, depth, hg, None);
         let run = |c: &TaaConfig, depth: &[f32]| run_with(c, depth, &hg);
         let base = TaaConfig {
             clip: false,
@@ -1419,22 +1420,8 @@ mod tests {
                 ..CycleState::NONE
             })
             .collect();
-        let run_locked = |c: &TaaConfig, hg: &[(u32, f32)]| {
-            let i = RefInputs {
-                width: w,
-                height: h,
-                color: &cur,
-                velocity: &vel,
-                depth: &flat_depth,
-                ids: &ids,
-                history: Some((&hist, hg)),
-                n: 20,
-                exposure_scale: 1.0,
-                jitter: [0.0; 2],
-                cycle: Some(&locked),
-            };
-            reference(c, &i).0[interior]
-        };
+        let run_locked =
+            |c: &TaaConfig, hg: &[(u32, f32)]| run_cycle(c, &flat_depth, hg, Some(&locked))[interior];
         let uj = TaaConfig {
             motion_lod: false,
             ..ml
@@ -1488,22 +1475,8 @@ mod tests {
                       depth: &[f32],
                       hg: &[(u32, f32)],
                       cyc: &[CycleState]| {
-            reference_cycle(
-                c,
-                &RefInputs {
-                    width: w,
-                    height: h,
-                    color,
-                    velocity: &vel,
-                    depth,
-                    ids: &ids,
-                    history: Some((&hist, hg)),
-                    n: 20,
-                    exposure_scale: 1.0,
-                    jitter: [0.0; 2],
-                    cycle: Some(cyc),
-                },
-            )
+            let i = moving_frame((w, h), (color, &vel, depth, &ids), (&hist, hg), Some(cyc));
+            reference_cycle(c, &i)
         };
         let run = |c: &TaaConfig, color: &[V3], hg: &[(u32, f32)], cyc: &[CycleState]| {
             run_at(c, color, &depth, hg, cyc)
