@@ -117,18 +117,17 @@ vec3 history_bilinear(vec2 q) { return textureLod(hist, q / vec2(pc.size.xy), 0.
 
 // A thin feature (FSR 2's lock test, as taau's lock pass): the centre's perceptual luma is a
 // ridge, above or below every neighbour not similar to it (similar: a ratio under 1.05), and no
-// 2x2 quad around it is all similar. Non-finite samples read as `fallback` (the centre's
-// replacement's luma).
+// 2x2 quad around it is all similar. y: the 3x3 in the perceptual space.
 bool similar(float a, float b) {
     float lo = min(a, b), hi = max(a, b);
     return hi <= 0.0 || (lo > 0.0 && hi < 1.05 * lo);
 }
-bool thin_feature(vec3 c[9], bool ok[9], float fallback) {
-    float n = ok[4] ? to_p(c[4]).x : fallback;
+bool thin_feature(vec3 y[9]) {
+    float n = y[4].x;
     bool sim[9];
     float lo = 1e30, hi = -1e30;
     for (int k = 0; k < 9; k++) {
-        float a = ok[k] ? to_p(c[k]).x : n;
+        float a = y[k].x;
         sim[k] = k == 4 || similar(a, n);
         if (!sim[k]) {
             lo = min(lo, a);
@@ -181,6 +180,10 @@ void main() {
     // current frame weighs in the output (below).
     if (has(F_FILTER)) c0 = cf;
     vec3 y0 = to_p(c0);
+    // The 3x3 in the perceptual space (a non-finite sample as the centre's replacement): what
+    // the lock test, the variance box and INSIDE's box read.
+    vec3 yk[9];
+    for (int k = 0; k < 9; k++) yk[k] = ok[k] ? to_p(c[k]) : y0;
 
     // Geometry: the nearest (largest reverse-Z) texel of the 3x3 gives the velocity (dilation);
     // the neighbourhood's object IDs and depth span validate the history.
@@ -254,11 +257,11 @@ void main() {
     if (has(F_LOCK)) {
         if (use && (g.x & MOVED) != 0u)
             life = max(texelFetch(hist_cycle, ivec2(floor(q)), 0).x - 1.0 / float(pc.flags.z), 0.0);
-        if (thin_feature(c, ok, y0.x)) life = 1.0;
+        if (thin_feature(yk)) life = 1.0;
     }
 #endif
-    float hold = plane ? life : 0.0;
-    bool locked = hold > 0.0;
+    float lock_hold = plane ? life : 0.0;
+    bool locked = lock_hold > 0.0;
     // The history's object is one of the 3x3's.
     bool seen = false;
     for (int k = 0; k < 9; k++) seen = seen || nid[k] == (g.x & HIST_ID_MASK);
@@ -294,18 +297,17 @@ void main() {
             // Variance box (mean +- gamma sigma) of the finite neighbours in perceptual YCoCg.
             vec3 m1 = vec3(0.0), m2 = vec3(0.0);
             for (int k = 0; k < 9; k++) {
-                vec3 y = ok[k] ? to_p(c[k]) : y0;
-                m1 += y;
-                m2 += y * y;
+                m1 += yk[k];
+                m2 += yk[k] * yk[k];
             }
             vec3 mu = m1 / 9.0;
             vec3 sigma = sqrt(max(m2 / 9.0 - mu * mu, vec3(0.0)));
             // A history inside the box is kept bit for bit (the round trip through the
             // perceptual space is not exact).
             vec3 yp = to_p(h);
-            vec3 lo = mu - pc.params.y * sigma, hi = mu + pc.params.y * sigma;
-            if (any(lessThan(yp, lo)) || any(greaterThan(yp, hi)))
-                h = from_p(mix(clip_towards(mu, yp, lo, hi), yp, hold));
+            vec3 box_lo = mu - pc.params.y * sigma, box_hi = mu + pc.params.y * sigma;
+            if (any(lessThan(yp, box_lo)) || any(greaterThan(yp, box_hi)))
+                h = from_p(mix(clip_towards(mu, yp, box_lo, box_hi), yp, lock_hold));
         }
         if (has(F_MEAN)) {
             float w = 1.0 / float(pc.flags.y + 1u);
@@ -322,9 +324,8 @@ void main() {
             // sample is sharper than native's where the LOD bias stays (`unjitter`), so its
             // lock keeps the history that averages it; with the bias shed (F_SHED, `motionlod`)
             // the sample is native's own, and only a lock on a history of an object the 3x3 does
-            // not show (a sub-pixel feature this frame missed) keeps it.
-            // An interior's weight reaches 1 at the speed at which the scene pass shades it
-            // wholly at the centre (interior.x, `uspeed`), an edge's amax at `speed`.
+            // not show (a sub-pixel feature this frame missed) keeps it. An interior's weight
+            // reaches 1 at interior.x (`ispeed`), an edge's amax at `speed`.
             float amax = pc.speed_jitter.x;
             float ramp = pc.speed_jitter.y;
             if (has(F_INTERIOR)) {
@@ -361,7 +362,7 @@ void main() {
         vec3 mn = vec3(1e30), mx = vec3(-1e30), avg = vec3(0.0);
         vec3 mn5 = vec3(1e30), mx5 = vec3(-1e30), avg5 = vec3(0.0);
         for (int k = 0; k < 9; k++) {
-            vec3 y = ok[k] ? to_p(c[k]) : y0;
+            vec3 y = yk[k];
             mn = min(mn, y);
             mx = max(mx, y);
             avg += y;
@@ -422,8 +423,7 @@ void main() {
             rng_out = vec4(hold ? rng.xy : vec2(1.0, 0.0), l, l);
         }
     }
-#endif
-#if MODE == 0
+    // A moving pixel has no cycle: its image keeps the lock's life (F_LOCK).
     if (moving) cyc_out = vec4(life, 0.0, 0.0, 0.0);
 #endif
     imageStore(out_cycle, p, cyc_out);

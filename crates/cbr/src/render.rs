@@ -62,7 +62,7 @@ pub struct RenderArgs {
     /// Anisotropic texture filtering: at most N trilinear lookups along a texture footprint's
     /// longer side, on every technique and the reference (1 = isotropic; default: the scene's
     /// `anisotropy`, else 1).
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=16))]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=i64::from(cbr_scene::MAX_ANISOTROPY)))]
     anisotropy: Option<u32>,
 }
 

@@ -490,7 +490,7 @@ crate::push_constants! {
         /// frame's jitter (pixels).
         speed_jitter: [f32; 4],
         /// x: the speed (pixels per frame) at which a moving interior's current-frame weight
-        /// reaches 1 (`interior`: the unjitter speed, at which it is shaded at the centre).
+        /// reaches 1 (`interior`; `ispeed`, else `speed`).
         interior: [f32; 4],
     }
 }
@@ -925,10 +925,10 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                     life = (prev - 1.0 / c.length as f32).max(0.0);
                 }
                 // The lock holds on a surface only (see the shader).
-                let hold = if plane { life } else { 0.0 };
+                let lock_hold = if plane { life } else { 0.0 };
                 let seen = nid.contains(&(hid & HIST_ID_MASK));
                 if use_h && !still && (c.ids || c.depth) {
-                    if c.ids && hold <= 0.0 {
+                    if c.ids && lock_hold <= 0.0 {
                         use_h = use_h && seen;
                     }
                     if c.depth {
@@ -1009,7 +1009,7 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                             // Inside the box the history is kept as it is (see the shader).
                             if (0..3).any(|k| yp[k] < lo[k] || yp[k] > hi[k]) {
                                 let yh = clip_towards(mu, yp, lo, hi);
-                                hc = from_p(zip3(yh, yp, |a, b| a * (1.0 - hold) + b * hold), e);
+                                hc = from_p(zip3(yh, yp, |a, b| a * (1.0 - lock_hold) + b * lock_hold), e);
                             }
                         }
                         result = if c.mean {
@@ -1022,7 +1022,7 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                             // `motionlod`: no lock holding a history of an object it does not
                             // show).
                             let edge = !plane
-                                || (hold > 0.0 && (!seen || !c.motion_lod))
+                                || (lock_hold > 0.0 && (!seen || !c.motion_lod))
                                 || nid.iter().any(|&n| n != nid[4]);
                             let (amax, ramp) = match c.unjitter && c.interior && !edge {
                                 true => (1.0, c.interior_speed()),
