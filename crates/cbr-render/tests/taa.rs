@@ -117,6 +117,7 @@ fn the_shader_matches_its_cpu_reference_on_a_moving_camera() {
         "motionlod",
         "motionlod:speed=0.05",
         "unjitter:speed=0.05",
+        "interior:speed=0.05",
         "without-locks",
         "motionlod:uspeed=0.1:ispeed=0.1",
     ];

@@ -17,8 +17,8 @@
 //!   keeping its first jittered sample at weight (1 - alpha)^k (issue 55). Thin features (a
 //!   luma ridge with no similar 2x2) are locked for a jitter cycle: on a surface (the 3x3 one
 //!   plane) a locked history skips the ID test and the clip in the lock's proportion (FSR 2's
-//!   locks). Moving fragments are shaded at the pixel centre by the scene pass, and moving
-//!   interiors take the current frame (`unjitter`, the default). The blend is h + (c - h) t,
+//!   locks). Moving fragments are shaded at the pixel centre by the scene pass (`unjitter`, the
+//!   default); with `motionlod` (or `interior`) moving interiors take the current frame. The blend is h + (c - h) t,
 //!   exactly h where c = h. `without-X` switches one part off ([`ABLATIONS`]); `adaptive`
 //!   reconstructs the current sample at the pixel centre in proportion 1 / m.
 //! - `+taa:inside` (Pedersen 2016, Playdead's INSIDE): Halton x16, 3x3 closest-depth dilation,
@@ -42,13 +42,13 @@ use crate::targets::COLOR_FORMAT;
 
 pub const REGISTRATION: PostRegistration = PostRegistration {
     name: "taa",
-    grammar: "taa[:inside][:8|16][:alpha=A][:amax=A][:speed=V][:uspeed=V][:ispeed=V][:gamma=G][:tol=T][:ctol=T][:lod=B][:mean][:filter][:adaptive][:motionlod][:without-X...]",
+    grammar: "taa[:inside][:8|16][:alpha=A][:amax=A][:speed=V][:uspeed=V][:ispeed=V][:gamma=G][:tol=T][:ctol=T][:lod=B][:mean][:filter][:adaptive][:motionlod][:interior][:without-X...]",
     about: "temporal AA: Halton jitter, dilated velocity, Catmull-Rom history, YCoCg variance \
             clipping, ID and depth rejection, speed-dependent weight, per-pixel frame count, \
-            thin-feature locks, moving fragments shaded at the pixel centre and moving interiors \
-            taking the current frame (X: dilation, clip, ids, depth, catmull, speed, count, luma, \
+            thin-feature locks, moving fragments shaded at the pixel centre (X: dilation, clip, ids, depth, catmull, speed, count, luma, \
             cycle: still pixels show the mean of their last jitter cycle, centred-reset, \
-            interior, locks, unjitter); `motionlod`: the sharper LOD shed with motion too; \
+            interior, locks, unjitter); `motionlod`: the sharper LOD shed with motion too, and \
+            moving interiors taking the current frame (`interior`: that alone); \
             `inside`: Playdead's INSIDE TAA",
     check: |p| TaaConfig::parse(p).map(|_| ()),
     geometry: true,
@@ -122,7 +122,10 @@ const OURS_SWITCHES: &[Switch] = &[
     }),
     ("without-locks", "thin-feature locks", |c| c.locks = false),
     ("without-interior", "moving interiors' current frame", |c| {
-        c.interior = false
+        c.interior = Some(false)
+    }),
+    ("interior", "moving interiors' current frame", |c| {
+        c.interior = Some(true)
     }),
     ("without-catmull", "Catmull-Rom history (it is bilinear)", |c| {
         c.catmull = false
@@ -212,11 +215,11 @@ pub struct TaaConfig {
     pub interior_speed: Option<f32>,
     /// With `unjitter`: a moving pixel away from edges (its 3x3 one object, its reverse-Z depth
     /// one plane within `depth_tolerance`: a receding floor is no edge) takes the current frame
-    /// at a weight rising to 1 at `speed`, not to `alpha_max`: the scene pass shades it at the
+    /// at a weight rising to 1 at `ispeed`, not to `alpha_max`: the scene pass shades it at the
     /// pixel centre, so its current sample is the technique's own and the history only softens
-    /// it; edges keep `alpha_max`, where the history is what anti-aliases them
-    /// (`without-interior`).
-    pub interior: bool,
+    /// it; edges keep `alpha_max`, where the history is what anti-aliases them. `None`: on with
+    /// `motionlod` only ([`TaaConfig::interior`]); `interior` / `without-interior` set it.
+    pub interior: Option<bool>,
     /// A frame with no history (the first, a camera cut) is rendered unjittered at the
     /// technique's own LOD bias, and shown as it is: with nothing to average a jittered sample
     /// and a sharper texture over, the pixel-centred frame is the better estimate of the pixel
@@ -278,7 +281,7 @@ impl TaaConfig {
         motion_lod: false,
         unjitter_speed: None,
         interior_speed: None,
-        interior: true,
+        interior: None,
         centred_reset: true,
         locks: true,
     };
@@ -295,7 +298,7 @@ impl TaaConfig {
         adaptive: false,
         cycle: false,
         unjitter: false,
-        interior: false,
+        interior: Some(false),
         centred_reset: false,
         locks: false,
         ..TaaConfig::OURS
@@ -389,7 +392,7 @@ impl TaaConfig {
                              mean, without-dilation, without-clip, without-ids, without-depth, \
                              without-catmull, without-speed, without-count, without-luma, \
                              without-cycle, without-centred-reset, without-interior, without-locks, \
-                             without-unjitter, ispeed=V, unjitter, \
+                             without-unjitter, ispeed=V, unjitter, interior, \
                              motionlod, \
                              adaptive, filter",
                         ));
@@ -407,6 +410,15 @@ impl TaaConfig {
     /// centre (`uspeed`, else `speed`; 0: never).
     pub fn unjitter_speed(&self) -> f32 {
         self.unjitter_speed.unwrap_or(self.speed)
+    }
+
+    /// Whether moving interiors take the current frame (`interior`): as set, else with
+    /// `motionlod` only. With the LOD bias kept (`unjitter` alone) a moving fragment is centred
+    /// only in its share of the jitter below `uspeed` and its texture is a level sharper, so the
+    /// history is what averages it: measured worse there on every scene (docs/post-aa.md,
+    /// "Moving interiors under `unjitter`").
+    pub fn interior(&self) -> bool {
+        self.interior.unwrap_or(self.motion_lod)
     }
 
     /// The speed at which a moving interior's current-frame weight reaches 1 (`ispeed`, else
@@ -430,7 +442,7 @@ impl TaaConfig {
             (self.adaptive, F_ADAPTIVE),
             (self.cycle, F_CYCLE),
             (self.centred_reset, F_CENTRED),
-            (self.unjitter && self.interior && self.speed > 0.0, F_INTERIOR),
+            (self.unjitter && self.interior() && self.speed > 0.0, F_INTERIOR),
             (self.locks, F_LOCK),
             (self.motion_lod, F_SHED),
         ] {
@@ -1024,7 +1036,7 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                             let edge = !plane
                                 || (lock_hold > 0.0 && (!seen || !c.motion_lod))
                                 || nid.iter().any(|&n| n != nid[4]);
-                            let (amax, ramp) = match c.unjitter && c.interior && !edge {
+                            let (amax, ramp) = match c.unjitter && c.interior() && !edge {
                                 true => (1.0, c.interior_speed()),
                                 false => (c.alpha_max, c.speed),
                             };
@@ -1320,13 +1332,13 @@ mod tests {
         assert!(off.iter().all(|(_, s)| *s == CycleState::NONE));
     }
 
-    /// `unjitter`'s and `motionlod`'s moving interiors (`interior`): on a 6x5 frame moving 2 px a frame (the
-    /// default `speed`, so amax applies in full), left half object 1, right half object 2, a
-    /// history of 3 against a current frame of 1 (linear blend, no clipping): a pixel whose 3x3
-    /// is one object on one plane takes the current frame alone (1), also where the plane
-    /// recedes (depth 2 to 3 over the 3x3, affine in 1 / depth); one whose 3x3 meets the other
-    /// object, or a depth 50% farther off that plane, blends with amax (2); `without-interior`,
-    /// or no `motionlod`, blends everywhere.
+    /// Moving interiors (`interior`: on with `motionlod`, off with `unjitter` alone unless set):
+    /// on a 6x5 frame moving 2 px a frame (the default `speed`, so amax applies in full), left
+    /// half object 1, right half object 2, a history of 3 against a current frame of 1 (linear
+    /// blend, no clipping): a pixel whose 3x3 is one object on one plane takes the current frame
+    /// alone (1), also where the plane recedes (depth 2 to 3 over the 3x3, affine in 1 / depth);
+    /// one whose 3x3 meets the other object, or a depth 50% farther off that plane, blends with
+    /// amax (2); `without-interior`, plain `unjitter` and the jittered path blend everywhere.
     #[test]
     fn moving_interiors_take_the_current_frame_under_motionlod() {
         let (w, h) = (6usize, 5usize);
@@ -1366,7 +1378,7 @@ mod tests {
         assert!((o[edge][0] - 2.0).abs() < 1e-6, "an edge blends: {:?}", o[edge]);
         for c in [
             TaaConfig {
-                interior: false,
+                interior: Some(false),
                 ..ml
             },
             base,
@@ -1392,23 +1404,26 @@ mod tests {
         let o = run_with(&ml, &recede, &hg_recede);
         assert_eq!(o[interior], [1.0; 3], "a receding plane's interior");
         let without = TaaConfig {
-            interior: false,
+            interior: Some(false),
             ..ml
         };
         let kept = run_with(&without, &recede, &hg_recede)[interior];
         assert!((kept[0] - 2.0).abs() < 1e-6, "its history is kept: {kept:?}");
-        // `unjitter` (no LOD shed) has the same rule.
+        // `unjitter` (no LOD shed, the default) blends its interiors; with `interior` it has the
+        // same rule.
         let unjitter = TaaConfig::parse(&["unjitter"]).expect("unjitter");
-        assert!(unjitter.unjitter && !unjitter.motion_lod);
-        let o = run(
-            &TaaConfig {
-                clip: false,
-                luma: false,
-                ..unjitter
-            },
-            &flat_depth,
-        );
-        assert_eq!(o[interior], [1.0; 3], "`unjitter`: the current frame");
+        assert!(unjitter.unjitter && !unjitter.motion_lod && !unjitter.interior());
+        let plain = |c: TaaConfig| TaaConfig {
+            clip: false,
+            luma: false,
+            ..c
+        };
+        let o = run(&plain(unjitter), &flat_depth);
+        assert!((o[interior][0] - 2.0).abs() < 1e-6, "`unjitter` blends: {:?}", o[interior]);
+        let with = TaaConfig::parse(&["interior"]).expect("interior");
+        assert!(with.unjitter && !with.motion_lod && with.interior());
+        let o = run(&plain(with), &flat_depth);
+        assert_eq!(o[interior], [1.0; 3], "`unjitter:interior`: the current frame");
         // A lock on the interior's history texel (life 7/8 after aging): with the bias kept
         // (`unjitter`) the lock keeps the history that averages the sharper sample (amax, 2);
         // with it shed (`motionlod`) the sample is native's own and the interior takes it (1),
@@ -1424,6 +1439,7 @@ mod tests {
             |c: &TaaConfig, hg: &[(u32, f32)]| run_cycle(c, &flat_depth, hg, Some(&locked))[interior];
         let uj = TaaConfig {
             motion_lod: false,
+            interior: Some(true),
             ..ml
         };
         assert!((run_locked(&uj, &hg)[0] - 2.0).abs() < 1e-6, "unjitter: locked, amax");
@@ -1431,8 +1447,10 @@ mod tests {
         let other: Vec<(u32, f32)> = hg.iter().map(|_| (hist_geom_x(3, 20, true), 2.0)).collect();
         let o = run_locked(&ml, &other);
         assert!((o[0] - 2.0).abs() < 1e-6, "a locked history of another object: {o:?}");
-        assert!(TaaConfig::parse(&["motionlod", "without-interior"]).is_ok());
+        let without = TaaConfig::parse(&["without-interior", "motionlod"]).expect("parse");
+        assert!(without.motion_lod && !without.interior(), "without-interior wins in any order");
         assert!(TaaConfig::parse(&["inside", "without-interior"]).is_err());
+        assert!(TaaConfig::parse(&["inside", "interior"]).is_err());
     }
 
     /// Thin features' locks (`locks`), on a 6x7 frame panning 1 px a frame over a plane of 0.2
