@@ -37,8 +37,9 @@ layout(set = 0, binding = BINDING_OUT_RANGE, rgba16f) uniform writeonly image2D 
 // running mean), F_FILTER (reconstruct the current sample at the pixel centre, Karis' filter),
 // F_COUNT (the current-frame weight is at least 1 / (m + 1), m the frames the pixel's history
 // holds), F_LUMA (Karis' luminance weights in the blend), F_CYCLE (a still pixel shows the mean
-// of its last complete jitter cycle), F_CENTRED (a reset frame is rendered unjittered): the flag bits, and MOVED / ID_MASK
-// (the geometry the technique gives) and HIST_ID_MASK / COUNT_SHIFT / COUNT_MAX (history
+// of its last complete jitter cycle), F_CENTRED (a reset frame is rendered unjittered),
+// F_INTERIOR, F_LOCK, F_SHED (below), F_SURFACE (a surface keeps its own velocity): the flag
+// bits, and MOVED / ID_MASK (the geometry the technique gives) and HIST_ID_MASK / COUNT_SHIFT / COUNT_MAX (history
 // geometry: x = object ID | count << COUNT_SHIFT | MOVED where the pixel moved more than the
 // still threshold), are defines from crates/cbr-render/src/post/taa.rs.
 
@@ -204,7 +205,16 @@ void main() {
             g_best = t;
         }
     }
-    vec2 v = texelFetch(velocity, has(F_DILATION) ? g_best : p, 0).xy;
+    bool plane = true;
+    for (int k = 0; k < 4; k++)
+        plane = plane && abs(nd[k] + nd[8 - k] - 2.0 * nd[4]) <= pc.params.z * nd[4];
+    // Dilation takes the nearest texel's velocity, so that a silhouette's pixels move with the
+    // object in front; on a surface (the 3x3 one plane, F_SURFACE) the pixel keeps its own: the
+    // nearest texel of a receding floor is the one below, whose velocity differs by the
+    // perspective's gradient, and each frame's history was fetched that far off (a lag that the
+    // exponential window accumulates; `specular`'s dark floor, docs/post-aa.md).
+    bool dilate = has(F_DILATION) && !(has(F_SURFACE) && plane);
+    vec2 v = texelFetch(velocity, dilate ? g_best : p, 0).xy;
     vec2 q = vec2(p) + 0.5 - v;
 
     bool use = !has(F_RESET) && all(greaterThanEqual(q, vec2(0.0))) &&
@@ -240,9 +250,6 @@ void main() {
     // plane, so on each of the four lines through the centre (OFF[k], OFF[8 - k]) d(-o) + d(o) -
     // 2 d(0) is 0; a plane: within the depth tolerance times d(0). A receding floor, whose depth
     // span over three pixels can be large, is one.
-    bool plane = true;
-    for (int k = 0; k < 4; k++)
-        plane = plane && abs(nd[k] + nd[8 - k] - 2.0 * nd[4]) <= pc.params.z * nd[4];
     // F_LOCK: a thin feature's lock (FSR 2's locks, for `+taa`). A moving pixel keeps its
     // lock's life in the cycle image's x (it has no cycle); the history texel's is read where
     // that texel moved. A lock lives L frames (the jitter cycle), renewed wherever this frame's

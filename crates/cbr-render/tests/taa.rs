@@ -119,6 +119,7 @@ fn the_shader_matches_its_cpu_reference_on_a_moving_camera() {
         "unjitter:speed=0.05",
         "interior:speed=0.05",
         "without-locks",
+        "without-surface-velocity",
         "motionlod:uspeed=0.1:ispeed=0.1",
     ];
     shader_matches_reference(&gpu, &demo(w, h), &frames, &params);

@@ -50,6 +50,8 @@ pub enum AblationArg {
 pub enum TaaAblationArg {
     /// Velocity of the nearest 3x3 neighbour: the pixel's own instead.
     Dilation,
+    /// A surface's own velocity (the 3x3 one plane): the nearest neighbour's, as at silhouettes.
+    SurfaceVelocity,
     /// YCoCg variance clipping of the history.
     Clip,
     /// Rejection of history showing an object none of the 3x3 shows.
@@ -68,12 +70,12 @@ pub enum TaaAblationArg {
     Cycle,
     /// A frame without history rendered centred: jittered like every other.
     CentredReset,
-    /// A moving interior's current frame rising to weight 1: to `amax`, as at edges.
+    /// A moving interior's current frame rising to weight 1 (`motionlod`, `interior`): to
+    /// `amax`, as at edges.
     Interior,
     /// Thin features' locks: a sub-pixel feature's history clipped like any other.
     Locks,
-    /// Moving fragments shaded at the pixel centre (and their interiors' current frame): the
-    /// jittered path (also drops `motionlod`).
+    /// Moving fragments shaded at the pixel centre: the jittered path (also drops `motionlod`).
     Unjitter,
 }
 
@@ -298,6 +300,21 @@ mod tests {
                 Ok(s) => assert_eq!(s, want, "{text} {flags:?}"),
                 Err(e) => panic!("{text} {flags:?}: {e}"),
             }
+        }
+    }
+
+    /// `--taa-without` offers exactly `+taa`'s ablations, and each one parses.
+    #[test]
+    fn taa_without_offers_every_ablation() {
+        use clap::ValueEnum;
+        let offered: Vec<String> = TaaAblationArg::value_variants().iter().map(lower).collect();
+        let mut want: Vec<String> = taa::ABLATIONS.iter().map(|a| a.to_string()).collect();
+        let mut got = offered.clone();
+        (want.sort(), got.sort());
+        assert_eq!(got, want);
+        for a in &offered {
+            let s = spec("native+taa", &["--taa-without", a]).expect(a);
+            assert_eq!(s, format!("native+taa:without-{a}"));
         }
     }
 

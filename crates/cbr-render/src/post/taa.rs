@@ -4,7 +4,8 @@
 //! applies [`PostPass::jitter`] to the projection). Each pixel blends the current sample with the
 //! history reprojected through the technique's velocity:
 //!
-//! - `+taa` (after Karis 2014): velocity of the nearest of the 3x3 neighbours (dilation), history
+//! - `+taa` (after Karis 2014): velocity of the nearest of the 3x3 neighbours (dilation; a pixel
+//!   whose 3x3 is one plane keeps its own), history
 //!   by a 5-tap Catmull-Rom, clipped towards the neighbourhood mean into the YCoCg variance box
 //!   mean +- gamma sigma (Salvi 2016), blended with current-frame weight alpha, both weighted by
 //!   1 / (1 + luma) (Karis); alpha rises with the pixel's speed (0.1 still, 0.5 from 2 px per
@@ -61,8 +62,9 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
 };
 
 /// The parts `without-X` switches off.
-pub const ABLATIONS: [&str; 13] = [
+pub const ABLATIONS: [&str; 14] = [
     "dilation",
+    "surface-velocity",
     "clip",
     "ids",
     "depth",
@@ -121,6 +123,9 @@ const OURS_SWITCHES: &[Switch] = &[
         c.centred_reset = false
     }),
     ("without-locks", "thin-feature locks", |c| c.locks = false),
+    ("without-surface-velocity", "a surface's own velocity", |c| {
+        c.surface_velocity = false
+    }),
     ("without-interior", "moving interiors' current frame", |c| {
         c.interior = Some(false)
     }),
@@ -166,6 +171,12 @@ pub struct TaaConfig {
     /// footprint, so each looks up a level finer (texture prefiltering would blur twice).
     pub lod_bias: f32,
     pub dilation: bool,
+    /// With `dilation`: a pixel whose 3x3 is one plane (the test of `interior`) keeps its own
+    /// velocity; dilation is for silhouettes, and on a receding surface the nearest texel's
+    /// velocity is off by the perspective's gradient, a reprojection error the history
+    /// accumulates (`without-surface-velocity`: dilation everywhere, as published; off in
+    /// INSIDE's mode).
+    pub surface_velocity: bool,
     pub clip: bool,
     pub ids: bool,
     pub depth: bool,
@@ -267,6 +278,7 @@ impl TaaConfig {
         mean: false,
         lod_bias: -1.0,
         dilation: true,
+        surface_velocity: true,
         clip: true,
         ids: true,
         depth: true,
@@ -299,6 +311,7 @@ impl TaaConfig {
         cycle: false,
         unjitter: false,
         interior: Some(false),
+        surface_velocity: false,
         centred_reset: false,
         locks: false,
         ..TaaConfig::OURS
@@ -389,7 +402,7 @@ impl TaaConfig {
                             p,
                             "inside, 8, 16, alpha=A, amax=A, speed=V, uspeed=V, gamma=G, tol=T, ctol=T, \
                              lod=B, \
-                             mean, without-dilation, without-clip, without-ids, without-depth, \
+                             mean, without-dilation, without-surface-velocity, without-clip, without-ids, without-depth, \
                              without-catmull, without-speed, without-count, without-luma, \
                              without-cycle, without-centred-reset, without-interior, without-locks, \
                              without-unjitter, ispeed=V, unjitter, interior, \
@@ -445,6 +458,7 @@ impl TaaConfig {
             (self.unjitter && self.interior() && self.speed > 0.0, F_INTERIOR),
             (self.locks, F_LOCK),
             (self.motion_lod, F_SHED),
+            (self.surface_velocity, F_SURFACE),
         ] {
             if on {
                 f |= bit;
@@ -470,6 +484,7 @@ pub const F_CENTRED: u32 = 4096;
 pub const F_INTERIOR: u32 = 8192;
 pub const F_LOCK: u32 = 16384;
 pub const F_SHED: u32 = 32768;
+pub const F_SURFACE: u32 = 65536;
 
 /// The radical inverse of `i` in `base` (the Halton sequence's element i).
 pub fn halton(mut i: u32, base: u32) -> f32 {
@@ -530,6 +545,7 @@ pub fn decl(inside: bool, packed: bool) -> ComputeDecl {
             ("F_INTERIOR", F_INTERIOR),
             ("F_LOCK", F_LOCK),
             ("F_SHED", F_SHED),
+            ("F_SURFACE", F_SURFACE),
             ("MOVED", MOVED),
             ("ID_MASK", !MOVED),
             ("HIST_ID_MASK", HIST_ID_MASK),
@@ -894,13 +910,15 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                     (best, z_best, any) = (t, z, true);
                 }
             }
-            let v = i.velocity[if c.dilation { best } else { at([x, y]) }];
             // The 3x3 is one plane (see the shader): 1 / depth (reverse-Z's shape) affine on the
             // four lines through the centre (OFF[k], OFF[8 - k]).
             let inv = nz.map(|z| 1.0 / z);
             let plane = (0..4).all(|k| {
                 (inv[k] + inv[8 - k] - 2.0 * inv[4]).abs() <= c.depth_tolerance * inv[4]
             });
+            // Dilation, except on a surface (`surface_velocity`): the pixel's own velocity.
+            let dilate = c.dilation && !(c.surface_velocity && plane);
+            let v = i.velocity[if dilate { best } else { at([x, y]) }];
             let q = [x as f32 + 0.5 - v[0], y as f32 + 0.5 - v[1]];
             let mut result = if c.adaptive { cf } else { c0 };
             // Frames the output holds (see the shader).
@@ -1451,6 +1469,62 @@ mod tests {
         assert!(without.motion_lod && !without.interior(), "without-interior wins in any order");
         assert!(TaaConfig::parse(&["inside", "without-interior"]).is_err());
         assert!(TaaConfig::parse(&["inside", "interior"]).is_err());
+    }
+
+    /// A surface keeps its own velocity (`surface_velocity`): on a 7x6 frame of a floor
+    /// receding upwards (1 / depth affine in y, nearer below) whose velocity grows with y, as a
+    /// camera's parallax gives, and a near post (object 2, depth 0.5, its own velocity) in column
+    /// 6. The history is a gradient in x and y (bilinear, no clip, no tests), so the output
+    /// shows where it was fetched. The floor's interior takes its own velocity, as without
+    /// dilation (the nearest texel, the one below, moves faster); the pixel beside the post takes
+    /// the post's, as with dilation; `without-surface-velocity` dilates everywhere.
+    #[test]
+    fn a_surface_keeps_its_own_velocity() {
+        let (w, h) = (7usize, 6usize);
+        let cur = flat(w, h, [0.0; 3]);
+        let post = |k: usize| k % w == 6;
+        let z = |row: usize| 1.0 / (0.2 + 0.05 * row as f32);
+        let depth: Vec<f32> = (0..w * h)
+            .map(|k| if post(k) { 0.5 } else { z(k / w) })
+            .collect();
+        let vel: Vec<[f32; 2]> = (0..w * h)
+            .map(|k| match post(k) {
+                true => [-1.5, 0.0],
+                false => [0.3 + 0.2 * (k / w) as f32, 0.5],
+            })
+            .collect();
+        let ids: Vec<u32> = (0..w * h).map(|k| if post(k) { 2 } else { 1 }).collect();
+        let hist: Vec<V3> = (0..w * h)
+            .map(|k| [(k % w) as f32 + 1.0, (k / w) as f32 + 1.0, 0.0])
+            .collect();
+        let hg: Vec<(u32, f32)> = ids.iter().map(|&id| (hist_geom_x(id, 20, true), 2.0)).collect();
+        let run = |c: &TaaConfig| {
+            reference(c, &moving_frame((w, h), (&cur, &vel, &depth, &ids), (&hist, &hg), None)).0
+        };
+        let base = TaaConfig {
+            clip: false,
+            luma: false,
+            catmull: false,
+            ids: false,
+            depth: false,
+            ..TaaConfig::OURS
+        };
+        let own = run(&TaaConfig {
+            dilation: false,
+            ..base
+        });
+        let dilated = run(&TaaConfig {
+            surface_velocity: false,
+            ..base
+        });
+        let ours = run(&base);
+        assert!(TaaConfig::parse(&[]).expect("ours").surface_velocity);
+        assert!(!TaaConfig::parse(&["inside"]).expect("inside").surface_velocity);
+        let (floor, beside) = (2 * w + 2, 2 * w + 5);
+        assert_ne!(own[floor], dilated[floor], "the floor's nearest texel moves faster");
+        assert_eq!(ours[floor], own[floor], "the floor's own velocity");
+        assert_ne!(own[beside], dilated[beside], "the post's velocity differs");
+        assert_eq!(ours[beside], dilated[beside], "beside the post: the post's velocity");
     }
 
     /// Thin features' locks (`locks`), on a 6x7 frame panning 1 px a frame over a plane of 0.2
