@@ -2,7 +2,8 @@
 #extension GL_GOOGLE_include_directive : require
 // taau pass 1 (FSR 2's "reconstruct and dilate"; docs/upsampling.md; CPU reference `dilate` in
 // crates/cbr-render/src/techniques/taau/reference.rs), one render pixel per invocation: the
-// velocity and depth of the nearest (largest reverse-Z) texel of the 3x3, and, with the depth
+// velocity and depth of the nearest (largest reverse-Z) texel of the 3x3 (SURFACE_VELOCITY: the
+// pixel's own velocity where the 3x3 is one plane, as `+taa`'s), and, with the depth
 // clip, the reconstructed previous depth: the dilated depth scattered (atomic max: the nearest
 // wins, in any order) into those of the 2x2 texels around where the pixel was last frame whose
 // bilinear weight there exceeds 0.05; and the
@@ -30,14 +31,27 @@ void main() {
     if (!inside(i, size)) return;
     float best = -1.0;
     ivec2 at = i;
+    float nd[9];
     for (int k = 0; k < 9; k++) {
         ivec2 t = clamp(i + OFF[k], ivec2(0), size - 1);
         float d = texelFetch(depth, t, 0).r;
+        nd[k] = d;
         if (d > best) {
             best = d;
             at = t;
         }
     }
+#if SURFACE_VELOCITY
+    // A surface (reverse-Z affine over the 3x3: on each line through the centre d(-o) + d(o) -
+    // 2 d(0) within the depth tolerance times d(0)) keeps its own velocity: dilation is for
+    // silhouettes, and a receding floor's nearest texel, the one below, moves faster; the
+    // history was fetched that far off every frame. The depth stays the nearest (the depth
+    // clip's).
+    bool plane = true;
+    for (int k = 0; k < 4; k++)
+        plane = plane && abs(nd[k] + nd[8 - k] - 2.0 * nd[4]) <= pc.params.y * nd[4];
+    if (plane) at = i;
+#endif
     vec2 v = texelFetch(velocity, at, 0).xy;
     imageStore(dilated, i, vec4(v, best, 0.0));
     vec3 c = texelFetch(color, i, 0).rgb;

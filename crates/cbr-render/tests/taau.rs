@@ -45,7 +45,9 @@ fn synthetic(w: usize, h: usize, f: usize) -> Synthetic {
                 0.3 + 0.2 * (fy * 0.7).cos(),
                 0.1 + 0.02 * fx,
             ];
-            let (mut v, mut d, mut id) = ([0.4f32, 0.0], 0.05f32, 1u32);
+            // The floor's velocity grows with y (a camera's parallax), so that the nearest
+            // texel's and the pixel's own differ (`surface_velocity`).
+            let (mut v, mut d, mut id) = ([0.4f32 + 0.03 * fy, 0.0], 0.05f32, 1u32);
             if y < 2 {
                 (c, v, d, id) = ([0.5, 0.6, 0.9], [0.0, 0.0], 0.0, 0);
             }
@@ -197,7 +199,7 @@ fn every_pass_matches_its_cpu_reference_over_frames() {
     let out = (32u32, 18u32);
     for spec in [
         &[][..],
-        &["catmull", "without-stability"],
+        &["catmull", "without-stability", "without-surface-velocity"],
         &["bilinear", "without-locks", "without-rcas"],
         &["0.5", "without-depth-clip", "sharpness=1", "debug"],
     ] {

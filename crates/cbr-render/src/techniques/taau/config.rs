@@ -36,7 +36,13 @@ impl Kernel {
 }
 
 /// The parts `without-X` switches off.
-pub const ABLATIONS: [&str; 4] = ["locks", "depth-clip", "rcas", "stability"];
+pub const ABLATIONS: [&str; 5] = [
+    "locks",
+    "depth-clip",
+    "rcas",
+    "stability",
+    "surface-velocity",
+];
 
 /// What a `taau` spec says.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -53,6 +59,9 @@ pub struct TaauConfig {
     pub rcas: bool,
     /// Luminance stability: an oscillating current luma weighs less.
     pub stability: bool,
+    /// The dilation keeps a surface's own velocity (the 3x3 one plane, as `+taa`'s): the
+    /// nearest texel of a receding floor moves faster, and the history lagged by the difference.
+    pub surface_velocity: bool,
     /// RCAS sharpness in stops (0 the sharpest).
     pub sharpness: f32,
     /// The history's weight cap where the pixel is still, in sample weights (a sample exactly on
@@ -80,6 +89,7 @@ impl Default for TaauConfig {
             depth_clip: true,
             rcas: true,
             stability: true,
+            surface_velocity: true,
             sharpness: DEFAULT_SHARPNESS,
             accumulation: 8.0,
             moving_accumulation: 0.5,
@@ -122,7 +132,7 @@ impl TaauConfig {
 }
 
 const EXPECTED: &str = "a scale in (0, 1], bilinear|catmull|lanczos, without-X (X: locks, \
-                        depth-clip, rcas, stability), sharpness=S, accum=A, moving=A, gamma=G, tol=T, \
+                        depth-clip, rcas, stability, surface-velocity), sharpness=S, accum=A, moving=A, gamma=G, tol=T, \
                         lod=B or debug";
 
 pub fn parse(params: &[&str]) -> std::result::Result<TaauConfig, String> {
@@ -150,6 +160,7 @@ pub fn parse(params: &[&str]) -> std::result::Result<TaauConfig, String> {
                 "depth-clip" => c.depth_clip = false,
                 "rcas" => c.rcas = false,
                 "stability" => c.stability = false,
+                "surface-velocity" => c.surface_velocity = false,
                 _ => {
                     return Err(format!(
                         "`{p}`: taau can go without {}",

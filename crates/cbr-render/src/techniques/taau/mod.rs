@@ -48,7 +48,7 @@ const LAYERS: [LayerDecl; 1] = [DEBUG_LAYER];
 pub const REGISTRATION: Registration = Registration {
     name: "taau",
     grammar: "taau[:SCALE][:bilinear|catmull|lanczos][:without-locks][:without-depth-clip]\
-              [:without-rcas][:without-stability][:sharpness=S][:accum=A][:moving=A][:gamma=G][:tol=T]\
+              [:without-rcas][:without-stability][:without-surface-velocity][:sharpness=S][:accum=A][:moving=A][:gamma=G][:tol=T]\
               [:lod=B][:debug]",
     about: "temporal upsampling after FSR 2: render at SCALE per axis (default 1/sqrt(2): the \
             checkerboard's pixel count) with a Halton jitter, dilate, depth clip, lock thin \
@@ -101,6 +101,7 @@ pub const MAX_BIAS: f32 = 1.99;
 
 pub fn dilate_decl(c: &TaauConfig) -> ComputeDecl {
     let mut d = ComputeDecl::new("taau.dilate", "taau/dilate.comp")
+        .define("SURFACE_VELOCITY", u32::from(c.surface_velocity))
         .bind(Binding::sampled("depth"))
         .bind(Binding::sampled("velocity"))
         .bind(Binding::sampled("color"))
@@ -337,6 +338,7 @@ impl TaauPasses {
             reset: f.reset,
             kernel: self.config.kernel,
             stability: self.config.stability,
+            surface_velocity: self.config.surface_velocity,
         }
     }
 

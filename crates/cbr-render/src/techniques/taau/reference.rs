@@ -26,6 +26,8 @@ pub struct Params {
     pub reset: bool,
     pub kernel: Kernel,
     pub stability: bool,
+    /// A surface (the 3x3 one plane) keeps its own velocity (`without-surface-velocity`).
+    pub surface_velocity: bool,
 }
 
 use crate::cpu_math::OFF_3X3 as OFF;
@@ -128,12 +130,20 @@ pub fn dilate(
     for y in 0..h as i32 {
         for x in 0..w as i32 {
             let (mut best, mut at) = (-1.0f32, clamp_at([x, y], p.size));
-            for o in OFF {
+            let mut nd = [0.0f32; 9];
+            for (k, o) in OFF.iter().enumerate() {
                 let t = clamp_at([x + o[0], y + o[1]], p.size);
+                nd[k] = depth[t];
                 if depth[t] > best {
                     best = depth[t];
                     at = t;
                 }
+            }
+            // A surface keeps its own velocity (see the shader); the depth stays the nearest.
+            let plane = (0..4)
+                .all(|k| (nd[k] + nd[8 - k] - 2.0 * nd[4]).abs() <= p.depth_tolerance * nd[4]);
+            if p.surface_velocity && plane {
+                at = clamp_at([x, y], p.size);
             }
             let v = velocity[at];
             dilated[y as usize * w + x as usize] = [v[0], v[1], best, 0.0];
