@@ -310,7 +310,8 @@ mod tests {
         let offered: Vec<String> = TaaAblationArg::value_variants().iter().map(lower).collect();
         let mut want: Vec<String> = taa::ABLATIONS.iter().map(|a| a.to_string()).collect();
         let mut got = offered.clone();
-        (want.sort(), got.sort());
+        want.sort();
+        got.sort();
         assert_eq!(got, want);
         for a in &offered {
             let s = spec("native+taa", &["--taa-without", a]).expect(a);
