@@ -15,7 +15,8 @@
 //    proportion to the disocclusion (the depth clip).
 // 3. Locks: a lock decays by 1 / phases per frame, is renewed where the lock pass found a thin
 //    feature this frame, and dies with a disocclusion over 1/2.
-// 4. Rectification, unless the pixel is still (no motion, no disocclusion; then the history is
+// 4. Rectification, unless the pixel is still (no motion, no disocclusion, not the background
+//    of a turning camera; then the history is
 //    the running mean of the jittered samples and converges): the history clipped towards the
 //    mean into mean +- gamma sigma of the 3x3 samples, each weighted exp(-2.3 d^2) by its
 //    distance d (render pixels) from the output pixel (FSR 2's rectification box), then mixed back towards the unclipped
@@ -211,7 +212,11 @@ void main() {
     float weight = ws;
     if (use) {
         // 4. Rectification.
-        bool still = speed <= STILL && dis == 0.0;
+        // The background (its 3x3 all of it: dilated depth 0) has no velocity written; when the
+        // camera turned (F_BACKGROUND) it moved, and its history is rectified too (a torus that
+        // spun off the sky left its colour there, and the sky's 3x3 never showed it).
+        bool still = speed <= STILL && dis == 0.0 &&
+                     !((pc.flags.x & F_BACKGROUND) != 0u && g.z == 0.0);
         if (!still && count > 0.0) {
             vec3 mu = m1 / count;
             vec3 sigma = sqrt(max(m2 / count - mu * mu, vec3(0.0)));

@@ -113,6 +113,39 @@ impl FrameView {
             ..self.clone()
         }
     }
+
+    /// How far (pixels of this view) the background moved since the previous frame: the
+    /// largest motion of a point at infinity seen at the frame's corners, edge midpoints and
+    /// centre. The scene pass writes no velocity where it draws nothing (the background, whose
+    /// depth is the clear value), and the background moves with the camera's rotation and field
+    /// of view, not its position; a point behind the previous camera counts as infinitely far.
+    pub fn background_motion(&self) -> f64 {
+        let a = self.aspect;
+        let focal = |c: &Camera| 1.0 / (c.fov_y_deg.to_radians() * 0.5).tan();
+        let (f, fp) = (focal(&self.camera), focal(&self.prev_camera));
+        let (r, rp) = (
+            DMat3::from_mat4(self.camera.rotation()),
+            DMat3::from_mat4(self.prev_camera.rotation()),
+        );
+        let size = glam::DVec2::new(f64::from(self.width), f64::from(self.height));
+        let mut worst = 0.0f64;
+        for (x, y) in [-1.0, 0.0, 1.0]
+            .into_iter()
+            .flat_map(|x| [-1.0, 0.0, 1.0].map(|y| (x, y)))
+        {
+            // NDC (x, y) to the view direction (z = -1; Camera::projection's y points down), to
+            // the world, to the previous view, to its NDC.
+            let world = r.transpose() * DVec3::new(x * a / f, -y / f, -1.0);
+            let d = rp * world;
+            if d.z >= 0.0 {
+                return f64::INFINITY;
+            }
+            let prev = glam::DVec2::new(fp / a * d.x / -d.z, -fp * d.y / -d.z);
+            let moved = (prev - glam::DVec2::new(x, y)) * 0.5 * size;
+            worst = worst.max(moved.length());
+        }
+        worst
+    }
 }
 
 fn to_f32(m: DMat4) -> [f32; 16] {
@@ -547,5 +580,64 @@ impl GpuScene {
         };
         self.frame.write(0, bytemuck::bytes_of(&constants))?;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn view(camera: Camera, prev_camera: Camera) -> FrameView {
+        FrameView {
+            camera,
+            prev_camera,
+            time: 0.0,
+            prev_time: 0.0,
+            width: 320,
+            height: 180,
+            aspect: 320.0 / 180.0,
+            lod_bias: 0.0,
+            lod_motion: [0.0; 2],
+            frame_index: 1,
+            screen_jitter: [0.0; 2],
+            raster: RasterUniforms::default(),
+        }
+    }
+
+    fn cam(position: [f64; 3], target: [f64; 3]) -> Camera {
+        Camera {
+            position: DVec3::from(position),
+            target: DVec3::from(target),
+            fov_y_deg: 60.0,
+            near: 0.1,
+        }
+    }
+
+    /// The background (points at infinity) moves with the camera's rotation, not its position:
+    /// 0 for a held or a translated camera; for a yaw of d, at least the centre's shift
+    /// (W / 2) (f / aspect) tan(d) and at most the corners' (under 2.5 times it at 60 degrees);
+    /// infinite where a point was behind the previous camera.
+    #[test]
+    fn the_background_moves_with_the_cameras_rotation_only() {
+        let c = cam([0.0, 1.0, 0.0], [0.0, 1.0, -5.0]);
+        assert_eq!(view(c, c).background_motion(), 0.0);
+        let moved = cam([3.0, 2.0, 1.0], [3.0, 2.0, -4.0]);
+        assert!(view(moved, c).background_motion() < 1e-9);
+        let d = 0.01f64;
+        let yawed = cam([0.0, 1.0, 0.0], [-5.0 * d.sin(), 1.0, -5.0 * d.cos()]);
+        let f = 1.0 / 30f64.to_radians().tan();
+        let centre = 160.0 * f / (320.0 / 180.0) * d.tan();
+        let m = view(yawed, c).background_motion();
+        assert!(
+            m >= centre * 0.999 && m < 2.5 * centre,
+            "{m} against {centre}"
+        );
+        let fov = Camera {
+            fov_y_deg: 61.0,
+            ..c
+        };
+        assert!(view(fov, c).background_motion() > 1.0);
+        let back = cam([0.0, 1.0, 0.0], [0.0, 1.0, 5.0]);
+        assert_eq!(view(back, c).background_motion(), f64::INFINITY);
     }
 }

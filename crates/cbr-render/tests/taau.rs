@@ -49,7 +49,9 @@ fn synthetic(w: usize, h: usize, f: usize) -> Synthetic {
             // texel's and the pixel's own differ (`surface_velocity`).
             let (mut v, mut d, mut id) = ([0.4f32 + 0.03 * fy, 0.0], 0.05f32, 1u32);
             if y < 2 {
-                (c, v, d, id) = ([0.5, 0.6, 0.9], [0.0, 0.0], 0.0, 0);
+                // The background (nothing drawn: depth 0, no velocity) changes from frame to
+                // frame, so that its history is what rectification (F_BACKGROUND) changes.
+                (c, v, d, id) = ([0.5, 0.6, 0.9 - 0.1 * f as f32], [0.0, 0.0], 0.0, 0);
             }
             if x >= sq.0 && x < sq.0 + 6 && y >= sq.1 && y < sq.1 + 5 {
                 c = [3.0, 1.0 + 0.1 * fx, 0.2];
@@ -218,6 +220,7 @@ fn every_pass_matches_its_cpu_reference_over_frames() {
                 reset: frame == 0,
                 jitter: taau::jitter(phases, frame),
                 exposure_stops: 0.5,
+                background_moves: frame % 2 == 1,
             };
             let got = run_frame(&gpu, &passes, &targets, &f);
             let p = passes.params(&f);

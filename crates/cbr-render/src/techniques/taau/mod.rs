@@ -88,13 +88,16 @@ crate::push_constants! {
         params: [f32; 4],
         /// History weight cap still, moving, the speed of the moving cap, a lock's decay.
         accum: [f32; 4],
-        /// x: F_RESET.
+        /// x: F_RESET | F_BACKGROUND.
         flags: [u32; 4],
     }
 }
 
 /// No history this frame (first frame, a gap, a camera cut).
 pub const F_RESET: u32 = 1;
+/// The background moved this frame (the camera turned): a pixel whose 3x3 is all background
+/// (no velocity written there) is not still.
+pub const F_BACKGROUND: u32 = 2;
 
 /// The kernel's largest bias: FSR 2 caps the Lanczos kernel's scale below 2.
 pub const MAX_BIAS: f32 = 1.99;
@@ -132,7 +135,7 @@ pub fn accumulate_decl(c: &TaauConfig) -> ComputeDecl {
     let mut d = ComputeDecl::new("taau.accumulate", "taau/accumulate.comp")
         .define("KERNEL", c.kernel as u32)
         .define("STABILITY", u32::from(c.stability))
-        .constants(&[("F_RESET", F_RESET)])
+        .constants(&[("F_RESET", F_RESET), ("F_BACKGROUND", F_BACKGROUND)])
         .bind(Binding::sampled("prepared"))
         .bind(Binding::sampled("dilated"));
     if c.depth_clip {
@@ -262,6 +265,9 @@ pub struct TaauFrame {
     /// Render pixels.
     pub jitter: [f32; 2],
     pub exposure_stops: f32,
+    /// The background moved since the previous frame (by more than the still threshold, 1/64
+    /// output pixel: [`crate::gpu_scene::FrameView::background_motion`]).
+    pub background_moves: bool,
 }
 
 /// The four passes and RCAS, their resources, on a render frame's targets.
@@ -318,7 +324,8 @@ impl TaauPasses {
         p.jitter_ratio[0] = f.jitter[0];
         p.jitter_ratio[1] = f.jitter[1];
         p.params[0] = f.exposure_stops.exp2();
-        p.flags[0] = if f.reset { F_RESET } else { 0 };
+        p.flags[0] = if f.reset { F_RESET } else { 0 }
+            | if f.background_moves { F_BACKGROUND } else { 0 };
         p
     }
 
@@ -336,6 +343,7 @@ impl TaauPasses {
             bias_max: p.params[3],
             accum: p.accum,
             reset: f.reset,
+            background_moves: f.background_moves,
             kernel: self.config.kernel,
             stability: self.config.stability,
             surface_velocity: self.config.surface_velocity,
@@ -479,6 +487,7 @@ impl Technique for Taau {
             reset: ctx.reset,
             jitter: view.screen_jitter,
             exposure_stops: ctx.scene.settings.exposure,
+            background_moves: ctx.view.background_motion() > f64::from(reference::STILL),
         };
         let counter = ctx.counter;
         let this = &*self;

@@ -24,6 +24,9 @@ pub struct Params {
     /// History weight cap still, moving, the speed of the moving cap, a lock's decay per frame.
     pub accum: [f32; 4],
     pub reset: bool,
+    /// The background moved (`F_BACKGROUND`): a pixel whose dilated depth is the background's
+    /// (0, all its 3x3 background) is not still.
+    pub background_moves: bool,
     pub kernel: Kernel,
     pub stability: bool,
     /// A surface (the 3x3 one plane) keeps its own velocity (`without-surface-velocity`).
@@ -285,7 +288,7 @@ pub struct AccumulateInputs<'a> {
     pub aux: &'a [[f32; 4]],
 }
 
-const STILL: f32 = 1.0 / 64.0;
+pub const STILL: f32 = 1.0 / 64.0;
 /// The rectification box's weight exp(-BOX_CURVE d^2) (FSR 2's).
 const BOX_CURVE: f32 = 2.3;
 
@@ -451,7 +454,8 @@ pub fn accumulate(p: &Params, i: &AccumulateInputs) -> Accumulated {
 
             let (mut change, mut result, mut weight) = (0.0f32, cur, ws);
             if use_h {
-                let still = speed <= STILL && dis == 0.0;
+                let still =
+                    speed <= STILL && dis == 0.0 && !(p.background_moves && g[2] == 0.0);
                 if !still && count > 0.0 {
                     let mu: V3 = std::array::from_fn(|j| m1[j] / count);
                     let sigma: V3 =
