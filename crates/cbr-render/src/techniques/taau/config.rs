@@ -68,7 +68,9 @@ pub struct TaauConfig {
     /// the output pixel weighs 1).
     pub accumulation: f32,
     /// The history's weight cap at [`SPEED`] output pixels per frame and faster (every
-    /// reprojection resamples the history and softens it).
+    /// reprojection resamples the history and softens it). 1 since 2026-12-07 (0.5 before):
+    /// Šibenik moving 1.024x -> 0.988x `native`'s FLIP, the moving demo 1.086x -> 1.094x
+    /// (docs/upsampling.md).
     pub moving_accumulation: f32,
     /// Rectification box: mean +- gamma sigma of the current 3x3 (perceptual YCoCg).
     pub gamma: f32,
@@ -92,7 +94,7 @@ impl Default for TaauConfig {
             surface_velocity: true,
             sharpness: DEFAULT_SHARPNESS,
             accumulation: 8.0,
-            moving_accumulation: 0.5,
+            moving_accumulation: 1.0,
             gamma: 1.0,
             depth_tolerance: 0.05,
             lod_bias: None,
