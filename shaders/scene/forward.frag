@@ -226,7 +226,13 @@ void main() {
     MaterialData m = materials[o.ids.y];
     // The shading inputs, moved back to the pixel centre by a moving fragment's share of the
     // jitter under `+taa:unjitter` and `motionlod` (`unjittered`); the raster's own elsewhere.
+    // A moving fragment of a material without textures is wholly centred, whatever its speed:
+    // the share ramps with speed because a slow pixel's history holds jittered samples that
+    // supersample its texture, and an untextured surface has nothing within the pixel for them
+    // to supersample but its smooth shading, to which the jitter only adds noise (`specular`'s
+    // dark floor, docs/post-aa.md).
     float share = motion_share();
+    if (share > 0.0 && m.tex.x < 0 && m.tex.y < 0 && m.tex.w < 0) share = 1.0;
     vec2 uv = unjittered(v_uv, share);
     vec3 world = unjittered(v_world, share);
     vec3 normal = unjittered(v_normal, share);

@@ -115,9 +115,9 @@ fn the_shader_matches_its_cpu_reference_on_a_moving_camera() {
         "without-count:without-luma",
         "adaptive",
         "motionlod",
-        "motionlod:speed=0.05",
-        "unjitter:speed=0.05",
-        "interior:speed=0.05",
+        "motionlod:speed=0.05:uspeed=0.05:ispeed=0.05",
+        "unjitter:speed=0.05:uspeed=0.05",
+        "interior:speed=0.05:uspeed=0.05:ispeed=0.05",
         "without-locks",
         "without-surface-velocity",
         "motionlod:uspeed=0.1:ispeed=0.1",
@@ -446,7 +446,9 @@ fn the_lod_bias_is_withdrawn_from_moving_fragments() {
             .lod_motion()
     };
     assert_eq!(motion("native+taa:motionlod"), [-1.0, 0.5]);
-    assert_eq!(motion("native+taa:motionlod:speed=4"), [-1.0, 0.25]);
+    assert_eq!(motion("native+taa:motionlod:uspeed=4"), [-1.0, 0.25]);
+    // `speed` is the weight's ramp only (1 by default); the centring's is `uspeed` (2).
+    assert_eq!(motion("native+taa:motionlod:speed=4"), [-1.0, 0.5]);
     // `unjitter`: moving fragments shaded at the centre, at the full bias.
     assert_eq!(motion("native+taa:unjitter"), [0.0, 0.5]);
     assert_eq!(motion("native+taa"), [0.0, 0.5], "unjitter is the default");
@@ -573,6 +575,48 @@ fn motionlod_shades_moving_fragments_at_the_pixel_centre() {
         }
     }
     assert!(still > 3000, "{still} still pixels");
+    // A material without textures is wholly centred whatever its speed; a textured one by its
+    // share, here speed / 1000 (nearly none). `specular`'s spheres and floor are untextured; the
+    // moving demo's interior above is mostly textured.
+    let slow = Some([0.0, 1.0 / 1000.0]);
+    let mut sp = cbr_scene::builtin("specular").expect("specular");
+    (sp.settings.width, sp.settings.height) = (w, h);
+    for (s, untextured) in [(&sp, true), (&s, false)] {
+        let centre = one(s, [0.0; 2], None);
+        let jittered = one(s, jitter, None);
+        let slow_moved = one(s, jitter, slow);
+        let (c, j, m) = (rgb(&centre), rgb(&jittered), rgb(&slow_moved));
+        let (mut sum_j, mut sum_m, mut n) = (0.0f64, 0.0f64, 0usize);
+        for i in 0..c.len() {
+            let v = centre.velocity[i];
+            // Object ID k is the scene's object k - 1 (0: the background).
+            let textured = |id: u32| {
+                let m = &s.materials[s.objects[id as usize - 1].material as usize];
+                m.kd_tex.is_some() || m.bump_tex.is_some()
+            };
+            if (v[0] * v[0] + v[1] * v[1]).sqrt() < 0.25
+                || !interior(&[&centre, &jittered, &slow_moved], i)
+                || textured(centre.ids[i][0]) == untextured
+            {
+                continue;
+            }
+            let d =
+                |a: [f32; 3]| f64::from((0..3).map(|k| (a[k] - c[i][k]).abs()).sum::<f32>() / 3.0);
+            sum_j += d(j[i]);
+            sum_m += d(m[i]);
+            n += 1;
+        }
+        let (err_j, err_m) = (sum_j / n as f64, sum_m / n as f64);
+        eprintln!(
+            "untextured {untextured}: {n} slowly moving interior pixels, |jittered - centred| \
+             {err_j:.5}, at speed / 1000 of the jitter {err_m:.5}"
+        );
+        assert!(n > 200, "{n} pixels");
+        match untextured {
+            true => assert!(err_m < 0.1 * err_j, "untextured: {err_m} against {err_j}"),
+            false => assert!(err_m > 0.9 * err_j, "textured: {err_m} against {err_j}"),
+        }
+    }
     assert_eq!(
         same,
         still,

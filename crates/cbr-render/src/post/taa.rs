@@ -158,7 +158,9 @@ pub struct TaaConfig {
     pub alpha: f32,
     /// The current-frame weight at and above `speed` pixels per frame: alpha rises linearly with
     /// the pixel's speed to it (each reprojection resamples and softens the history). `speed`
-    /// 0: off (`without-speed`).
+    /// 0: off (`without-speed`, which also drops `unjitter`'s centring and `motionlod`). `speed`
+    /// is 1 since 2026-12-07, night (2 before; docs/post-aa.md: every gallery case at most
+    /// `native`'s, at a cost of 2% on moving Šibenik).
     pub alpha_max: f32,
     pub speed: f32,
     /// Variance clipping box half-width in standard deviations (ours).
@@ -205,7 +207,7 @@ pub struct TaaConfig {
     /// last complete cycle's range (`ctol=T`).
     pub cycle_tolerance: f32,
     /// Moving fragments are shaded at the pixel centre: their shading inputs are moved back by
-    /// their share of the jitter, linearly up to `speed` pixels per frame (the scene pass's
+    /// their share of the jitter, linearly up to `uspeed` pixels per frame (the scene pass's
     /// `unjittered()`, [`PostPass::lod_speed`]), and with `interior` their pixels away from
     /// edges take the current frame (`motionlod` needs it). A pixel that moves keeps few
     /// jittered samples to average a shifted sample over. On by default since 2026-12-07
@@ -219,10 +221,11 @@ pub struct TaaConfig {
     pub motion_lod: bool,
     /// With `unjitter`: the speed (pixels per frame) at and above which a moving fragment is
     /// shaded at the pixel centre, its share of the jitter rising linearly to it (and with
-    /// `motionlod` the LOD bias shed by the same share); `None`: `speed` (`uspeed=V`).
+    /// `motionlod` the LOD bias shed by the same share); `None`: [`CENTRING_SPEED`]
+    /// (`uspeed=V`).
     pub unjitter_speed: Option<f32>,
     /// With `interior`: the speed at which a moving interior's current-frame weight reaches 1;
-    /// `None`: `speed` (`ispeed=V`).
+    /// `None`: [`CENTRING_SPEED`] (`ispeed=V`).
     pub interior_speed: Option<f32>,
     /// With `unjitter`: a moving pixel away from edges (its 3x3 one object, its reverse-Z depth
     /// one plane within `depth_tolerance`: a receding floor is no edge) takes the current frame
@@ -250,6 +253,11 @@ pub struct TaaConfig {
 /// Below this motion (pixels) a pixel is still: when its history texel was still too, the ID
 /// and depth tests are skipped (the checkerboard resolve's static threshold).
 pub const STILL_THRESHOLD: f32 = 1.0 / 64.0;
+/// `uspeed`'s and `ispeed`'s default (pixels per frame): a moving fragment is wholly centred,
+/// and with `interior` a moving interior's weight reaches 1, from 2 px a frame. (They followed
+/// `speed`, 2, until `speed` became 1: a centring ramp of 1 px lost foliage, 0.562x -> 0.579x of
+/// `native`'s FLIP, docs/post-aa.md.)
+pub const CENTRING_SPEED: f32 = 2.0;
 /// History geometry's moved bit.
 pub const MOVED: u32 = 0x8000_0000;
 /// History geometry: the frames the history holds (1 after a reset or a rejection, at most
@@ -272,7 +280,7 @@ impl TaaConfig {
         length: 8,
         alpha: 0.1,
         alpha_max: 0.5,
-        speed: 2.0,
+        speed: 1.0,
         gamma: 1.0,
         depth_tolerance: 0.05,
         mean: false,
@@ -420,9 +428,12 @@ impl TaaConfig {
     }
 
     /// The speed at and above which `unjitter` shades a moving fragment wholly at the pixel
-    /// centre (`uspeed`, else `speed`; 0: never).
+    /// centre (`uspeed`, else [`CENTRING_SPEED`]; 0: never, as with `without-speed`).
     pub fn unjitter_speed(&self) -> f32 {
-        self.unjitter_speed.unwrap_or(self.speed)
+        match self.speed > 0.0 {
+            true => self.unjitter_speed.unwrap_or(CENTRING_SPEED),
+            false => 0.0,
+        }
     }
 
     /// Whether moving interiors take the current frame (`interior`): as set, else with
@@ -435,9 +446,9 @@ impl TaaConfig {
     }
 
     /// The speed at which a moving interior's current-frame weight reaches 1 (`ispeed`, else
-    /// `speed`).
+    /// [`CENTRING_SPEED`]).
     pub fn interior_speed(&self) -> f32 {
-        self.interior_speed.unwrap_or(self.speed)
+        self.interior_speed.unwrap_or(CENTRING_SPEED)
     }
 
     fn flags(&self) -> u32 {
@@ -1574,13 +1585,21 @@ mod tests {
             run_at(c, color, &depth, hg, cyc)
         };
         let near = |a: V3| a.iter().all(|v| (v - plane[0]).abs() < 1e-5);
-        let ours = TaaConfig::OURS;
+        // The weight ramp of 2 px (1 px a frame: the current frame at 0.3), so that the kept
+        // history shows over 0.5.
+        let ours = TaaConfig {
+            speed: 2.0,
+            ..TaaConfig::OURS
+        };
         let p = 3 * w + 3;
         let (o, _, next) = run(&ours, &cur, &hg(2.0), &locks(1.0));
         assert!(o[p][0] > 0.5, "the locked line keeps its history: {:?}", o[p]);
         assert_eq!(next[p].lock, 1.0 - 1.0 / 8.0, "the lock ages by 1 / L");
         assert!(near(o[p + w]), "the plane around it: {:?}", o[p + w]);
-        let without = TaaConfig::parse(&["without-locks"]).expect("without-locks");
+        let without = TaaConfig {
+            speed: 2.0,
+            ..TaaConfig::parse(&["without-locks"]).expect("without-locks")
+        };
         assert!(!without.locks && ours.locks);
         let (o, _, next) = run(&without, &cur, &hg(2.0), &locks(1.0));
         assert!(near(o[p]), "without locks the ID test drops it: {:?}", o[p]);
