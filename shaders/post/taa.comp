@@ -57,6 +57,7 @@ const vec3 LUMA = vec3(0.2126, 0.7152, 0.0722);
 float luma(vec3 c) { return dot(c, LUMA); }
 
 #include "../inc/perceptual.glsl"
+#include "../inc/plane.glsl"
 
 // Linear HDR -> perceptual YCoCg at the frame's exposure, and back (taau's space too).
 vec3 to_p(vec3 c) { return perceptual(c, pc.params.w); }
@@ -205,9 +206,8 @@ void main() {
             g_best = t;
         }
     }
-    bool plane = true;
-    for (int k = 0; k < 4; k++)
-        plane = plane && abs(nd[k] + nd[8 - k] - 2.0 * nd[4]) <= pc.params.z * nd[4];
+    // The 3x3's reverse-Z depth is one plane, within the depth tolerance (inc/plane.glsl).
+    bool plane = depth_plane(nd, pc.params.z);
     // Dilation takes the nearest texel's velocity, so that a silhouette's pixels move with the
     // object in front; on a surface (the 3x3 one plane, F_SURFACE) the pixel keeps its own: the
     // nearest texel of a receding floor is the one below, whose velocity differs by the
@@ -246,10 +246,6 @@ void main() {
         cycling = !changed;
     }
 #endif
-    // The 3x3's reverse-Z depth is one plane: reverse-Z depth is affine in screen space on a
-    // plane, so on each of the four lines through the centre (OFF[k], OFF[8 - k]) d(-o) + d(o) -
-    // 2 d(0) is 0; a plane: within the depth tolerance times d(0). A receding floor, whose depth
-    // span over three pixels can be large, is one.
     // F_LOCK: a thin feature's lock (FSR 2's locks, for `+taa`). A moving pixel keeps its
     // lock's life in the cycle image's x (it has no cycle); the history texel's is read where
     // that texel moved. A lock lives L frames (the jitter cycle), renewed wherever this frame's

@@ -24,6 +24,7 @@ layout(set = 0, binding = BINDING_RECON) buffer Recon { uint recon[]; };
 
 const float RECON_WEIGHT = 0.05;
 #include "../inc/perceptual.glsl"
+#include "../inc/plane.glsl"
 
 void main() {
     ivec2 i = ivec2(gl_GlobalInvocationID.xy);
@@ -42,15 +43,11 @@ void main() {
         }
     }
 #if SURFACE_VELOCITY
-    // A surface (reverse-Z affine over the 3x3: on each line through the centre d(-o) + d(o) -
-    // 2 d(0) within the depth tolerance times d(0)) keeps its own velocity: dilation is for
-    // silhouettes, and a receding floor's nearest texel, the one below, moves faster; the
-    // history was fetched that far off every frame. The depth stays the nearest (the depth
-    // clip's).
-    bool plane = true;
-    for (int k = 0; k < 4; k++)
-        plane = plane && abs(nd[k] + nd[8 - k] - 2.0 * nd[4]) <= pc.params.y * nd[4];
-    if (plane) at = i;
+    // A surface (the 3x3 one plane within the depth tolerance, inc/plane.glsl) keeps its own
+    // velocity: dilation is for silhouettes, and a receding floor's nearest texel, the one
+    // below, moves faster; the history was fetched that far off every frame. The depth stays
+    // the nearest (the depth clip's).
+    if (depth_plane(nd, pc.params.y)) at = i;
 #endif
     vec2 v = texelFetch(velocity, at, 0).xy;
     imageStore(dilated, i, vec4(v, best, 0.0));

@@ -57,6 +57,13 @@ pub const OFF_3X3: [[i32; 2]; 9] = [
     [1, 1],
 ];
 
+/// Whether a 3x3 of reverse-Z depths (or of any quantity affine in screen space on a plane, such
+/// as 1 / linear depth), in [`OFF_3X3`]'s order, is one plane within `tol` times the centre's
+/// (inc/plane.glsl's `depth_plane`): on each line through the centre d(-o) + d(o) - 2 d(0).
+pub fn depth_plane(d: &[f32; 9], tol: f32) -> bool {
+    (0..4).all(|k| (d[k] + d[8 - k] - 2.0 * d[4]).abs() <= tol * d[4])
+}
+
 /// Rec. 709 luminance weights (inc/perceptual.glsl's `LUMA_709`).
 pub const LUMA_709: V3 = [0.2126, 0.7152, 0.0722];
 

@@ -923,10 +923,7 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
             }
             // The 3x3 is one plane (see the shader): 1 / depth (reverse-Z's shape) affine on the
             // four lines through the centre (OFF[k], OFF[8 - k]).
-            let inv = nz.map(|z| 1.0 / z);
-            let plane = (0..4).all(|k| {
-                (inv[k] + inv[8 - k] - 2.0 * inv[4]).abs() <= c.depth_tolerance * inv[4]
-            });
+            let plane = crate::cpu_math::depth_plane(&nz.map(|z| 1.0 / z), c.depth_tolerance);
             // Dilation, except on a surface (`surface_velocity`): the pixel's own velocity.
             let dilate = c.dilation && !(c.surface_velocity && plane);
             let v = i.velocity[if dilate { best } else { at([x, y]) }];

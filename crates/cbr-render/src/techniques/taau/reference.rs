@@ -143,9 +143,7 @@ pub fn dilate(
                 }
             }
             // A surface keeps its own velocity (see the shader); the depth stays the nearest.
-            let plane = (0..4)
-                .all(|k| (nd[k] + nd[8 - k] - 2.0 * nd[4]).abs() <= p.depth_tolerance * nd[4]);
-            if p.surface_velocity && plane {
+            if p.surface_velocity && crate::cpu_math::depth_plane(&nd, p.depth_tolerance) {
                 at = clamp_at([x, y], p.size);
             }
             let v = velocity[at];
