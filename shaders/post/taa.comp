@@ -58,6 +58,7 @@ float luma(vec3 c) { return dot(c, LUMA); }
 
 #include "../inc/perceptual.glsl"
 #include "../inc/plane.glsl"
+#include "../inc/thin_feature.glsl"
 
 // Linear HDR -> perceptual YCoCg at the frame's exposure, and back (taau's space too).
 vec3 to_p(vec3 c) { return perceptual(c, pc.params.w); }
@@ -116,30 +117,6 @@ vec3 history_catmull(vec2 q) {
 }
 
 vec3 history_bilinear(vec2 q) { return textureLod(hist, q / vec2(pc.size.xy), 0.0).rgb; }
-
-// A thin feature (FSR 2's lock test, as taau's lock pass): the centre's perceptual luma is a
-// ridge, above or below every neighbour not similar to it (similar: a ratio under 1.05), and no
-// 2x2 quad around it is all similar. y: the 3x3 in the perceptual space.
-bool similar(float a, float b) {
-    float lo = min(a, b), hi = max(a, b);
-    return hi <= 0.0 || (lo > 0.0 && hi < 1.05 * lo);
-}
-bool thin_feature(vec3 y[9]) {
-    float n = y[4].x;
-    bool sim[9];
-    float lo = 1e30, hi = -1e30;
-    for (int k = 0; k < 9; k++) {
-        float a = y[k].x;
-        sim[k] = k == 4 || similar(a, n);
-        if (!sim[k]) {
-            lo = min(lo, a);
-            hi = max(hi, a);
-        }
-    }
-    if (!(n > hi || n < lo)) return false;
-    return !((sim[0] && sim[1] && sim[3]) || (sim[1] && sim[2] && sim[5]) ||
-             (sim[3] && sim[6] && sim[7]) || (sim[5] && sim[7] && sim[8]));
-}
 
 const ivec2 OFF[9] = ivec2[9](ivec2(-1, -1), ivec2(0, -1), ivec2(1, -1), ivec2(-1, 0), ivec2(0, 0),
                               ivec2(1, 0), ivec2(-1, 1), ivec2(0, 1), ivec2(1, 1));
@@ -260,7 +237,9 @@ void main() {
     if (has(F_LOCK)) {
         if (use && (g.x & MOVED) != 0u)
             life = max(texelFetch(hist_cycle, ivec2(floor(q)), 0).x - 1.0 / float(pc.flags.z), 0.0);
-        if (thin_feature(yk)) life = 1.0;
+        float yl[9];
+        for (int k = 0; k < 9; k++) yl[k] = yk[k].x;
+        if (thin_feature(yl)) life = 1.0;
     }
 #endif
     float lock_hold = plane ? life : 0.0;
@@ -319,12 +298,12 @@ void main() {
             // Each reprojection resamples the history and softens it: the faster the pixel moves,
             // the more the current frame weighs (alpha rises linearly to speed.x at speed.y px).
             float a = pc.params.x;
-            // F_INTERIOR (`unjitter`, `motionlod`): a moving pixel away from edges was shaded at
-            // the pixel centre by the scene pass, so its current sample is the technique's own
+            // F_INTERIOR (`motionlod`, or `interior` with `unjitter`): a moving pixel away from
+            // edges was shaded at the pixel centre by the scene pass, so its current sample is the technique's own
             // and the history only softens it: its weight rises to 1, not to amax. Edges keep
             // amax: there the history is what anti-aliases them. An edge: the 3x3 shows another
             // object, or its depth is not one plane (`plane` above); so is a locked pixel. Its
-            // sample is sharper than native's where the LOD bias stays (`unjitter`), so its
+            // sample is sharper than native's where the LOD bias stays (`unjitter:interior`), so its
             // lock keeps the history that averages it; with the bias shed (F_SHED, `motionlod`)
             // the sample is native's own, and only a lock on a history of an object the 3x3 does
             // not show (a sub-pixel feature this frame missed) keeps it. An interior's weight

@@ -12,36 +12,17 @@ layout(set = 0, binding = BINDING_NEW_LOCKS) writeonly buffer Locks { uint new_l
 
 #include "common.glsl"
 
-const float SIMILAR = 1.05;
+#include "../inc/thin_feature.glsl"
 
 // The prepared colour's luma (0 where the colour was not finite).
 float luma_at(ivec2 t) { return texelFetch(prepared, clamp(t, ivec2(0), pc.sizes.zw - 1), 0).x; }
 
-bool similar(float a, float b) {
-    float lo = min(a, b), hi = max(a, b);
-    return hi <= 0.0 || (lo > 0.0 && hi < SIMILAR * lo);
-}
-
 void main() {
     ivec2 i = ivec2(gl_GlobalInvocationID.xy);
     if (!inside(i, pc.sizes.zw)) return;
-    float n = luma_at(i);
-    bool sim[9];
-    float lo = 1e30, hi = -1e30;
-    for (int k = 0; k < 9; k++) {
-        float a = luma_at(i + OFF[k]);
-        sim[k] = k == 4 || similar(a, n);
-        if (!sim[k]) {
-            lo = min(lo, a);
-            hi = max(hi, a);
-        }
-    }
-    if (!(n > hi || n < lo)) return;
-    // The four 2x2 quads holding the centre (3x3 indices).
-    if (sim[0] && sim[1] && sim[3]) return;
-    if (sim[1] && sim[2] && sim[5]) return;
-    if (sim[3] && sim[6] && sim[7]) return;
-    if (sim[5] && sim[7] && sim[8]) return;
+    float l[9];
+    for (int k = 0; k < 9; k++) l[k] = luma_at(i + OFF[k]);
+    if (!thin_feature(l)) return;
     ivec2 p = ivec2(floor((vec2(i) + 0.5 - pc.jitter_ratio.xy) * pc.jitter_ratio.zw));
     p = clamp(p, ivec2(0), pc.sizes.xy - 1);
     new_locks[p.y * pc.sizes.x + p.x] = 1u;

@@ -64,6 +64,25 @@ pub fn depth_plane(d: &[f32; 9], tol: f32) -> bool {
     (0..4).all(|k| (d[k] + d[8 - k] - 2.0 * d[4]).abs() <= tol * d[4])
 }
 
+/// A thin feature (inc/thin_feature.glsl, FSR 2's lock test: `+taa`'s locks and `taau.lock`):
+/// `l`, a 3x3 of perceptual lumas in [`OFF_3X3`]'s order, whose centre is a ridge over the
+/// neighbours not similar to it (a ratio under 1.05), with no all-similar 2x2 quad around it.
+pub fn thin_feature(l: &[f32; 9]) -> bool {
+    let similar = |a: f32, b: f32| {
+        let (lo, hi) = (a.min(b), a.max(b));
+        hi <= 0.0 || (lo > 0.0 && hi < 1.05 * lo)
+    };
+    let n = l[4];
+    let sim: [bool; 9] = std::array::from_fn(|k| k == 4 || similar(l[k], n));
+    let (mut lo, mut hi) = (1e30f32, -1e30f32);
+    for k in (0..9).filter(|&k| !sim[k]) {
+        lo = lo.min(l[k]);
+        hi = hi.max(l[k]);
+    }
+    let quad = |a: usize, b: usize, c: usize| sim[a] && sim[b] && sim[c];
+    (n > hi || n < lo) && !(quad(0, 1, 3) || quad(1, 2, 5) || quad(3, 6, 7) || quad(5, 7, 8))
+}
+
 /// Rec. 709 luminance weights (inc/perceptual.glsl's `LUMA_709`).
 pub const LUMA_709: V3 = [0.2126, 0.7152, 0.0722];
 

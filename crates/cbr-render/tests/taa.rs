@@ -589,10 +589,13 @@ fn motionlod_shades_moving_fragments_at_the_pixel_centre() {
         let (mut sum_j, mut sum_m, mut n) = (0.0f64, 0.0f64, 0usize);
         for i in 0..c.len() {
             let v = centre.velocity[i];
-            // Object ID k is the scene's object k - 1 (0: the background).
+            // Object ID k is the scene's object k - 1 (0: the background); textured as the
+            // shader reads it: an albedo, bump or alpha-mask texture.
             let textured = |id: u32| {
                 let m = &s.materials[s.objects[id as usize - 1].material as usize];
-                m.kd_tex.is_some() || m.bump_tex.is_some()
+                m.kd_tex.is_some()
+                    || m.bump_tex.is_some()
+                    || matches!(m.alpha, cbr_scene::AlphaSource::Texture { .. })
             };
             if (v[0] * v[0] + v[1] * v[1]).sqrt() < 0.25
                 || !interior(&[&centre, &jittered, &slow_moved], i)

@@ -814,25 +814,6 @@ fn rel_diff(a: f32, b: f32) -> f32 {
     }
 }
 
-/// The shader's `thin_feature`: the centre's perceptual luma `n` a ridge over the neighbours
-/// not similar to it (ratio under 1.05), with no all-similar 2x2 quad around it. `l`: the 3x3's
-/// lumas.
-fn thin_feature(l: &[f32; 9]) -> bool {
-    let similar = |a: f32, b: f32| {
-        let (lo, hi) = (a.min(b), a.max(b));
-        hi <= 0.0 || (lo > 0.0 && hi < 1.05 * lo)
-    };
-    let n = l[4];
-    let sim: [bool; 9] = std::array::from_fn(|k| k == 4 || similar(l[k], n));
-    let (mut lo, mut hi) = (1e30f32, -1e30f32);
-    for k in (0..9).filter(|&k| !sim[k]) {
-        lo = lo.min(l[k]);
-        hi = hi.max(l[k]);
-    }
-    let quad = |a: usize, b: usize, c: usize| sim[a] && sim[b] && sim[c];
-    (n > hi || n < lo) && !(quad(0, 1, 3) || quad(1, 2, 5) || quad(3, 6, 7) || quad(5, 7, 8))
-}
-
 fn moving(v: [f32; 2]) -> bool {
     (v[0] * v[0] + v[1] * v[1]).sqrt() > STILL_THRESHOLD
 }
@@ -936,7 +917,7 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
             let mut hist_texel = [0.0f32; 3];
             // The lock's life (`locks`, see the shader): 1 on a thin feature, else the history's
             // less 1 / L.
-            let mut life = match c.locks && !c.inside && thin_feature(&lumas) {
+            let mut life = match c.locks && !c.inside && crate::cpu_math::thin_feature(&lumas) {
                 true => 1.0f32,
                 false => 0.0,
             };

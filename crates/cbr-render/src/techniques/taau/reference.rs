@@ -216,41 +216,17 @@ pub fn depth_clip(p: &Params, dilated: &[[f32; 4]], recon: &[u32]) -> Vec<f32> {
     out
 }
 
-/// lock.comp's similarity ratio.
-pub const SIMILAR: f32 = 1.05;
-
 /// lock.comp: the output pixels locked this frame (1), from the thin features of the prepared
 /// colour ([`prepare`]).
 pub fn lock(p: &Params, prepared: &[[f32; 4]]) -> Vec<u32> {
     let (w, h) = p.size;
     let (ow, oh) = p.out;
     let luma = |t: [i32; 2]| prepared[clamp_at(t, p.size)][0];
-    let similar = |a: f32, b: f32| {
-        let (lo, hi) = (a.min(b), a.max(b));
-        hi <= 0.0 || (lo > 0.0 && hi < SIMILAR * lo)
-    };
     let mut locks = vec![0u32; ow * oh];
     for y in 0..h as i32 {
         for x in 0..w as i32 {
-            let n = luma([x, y]);
-            let mut sim = [false; 9];
-            let (mut lo, mut hi) = (1e30f32, -1e30f32);
-            for (k, o) in OFF.iter().enumerate() {
-                let a = luma([x + o[0], y + o[1]]);
-                sim[k] = k == 4 || similar(a, n);
-                if !sim[k] {
-                    lo = lo.min(a);
-                    hi = hi.max(a);
-                }
-            }
-            if !(n > hi || n < lo) {
-                continue;
-            }
-            if (sim[0] && sim[1] && sim[3])
-                || (sim[1] && sim[2] && sim[5])
-                || (sim[3] && sim[6] && sim[7])
-                || (sim[5] && sim[7] && sim[8])
-            {
+            let l = OFF.map(|o| luma([x + o[0], y + o[1]]));
+            if !crate::cpu_math::thin_feature(&l) {
                 continue;
             }
             let px = ((x as f32 + 0.5 - p.jitter[0]) * p.ratio[0]).floor() as i32;
