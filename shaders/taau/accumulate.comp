@@ -6,7 +6,8 @@
 // 1. The current frame at the output pixel's centre: the 3x3 render samples around it, each at
 //    its unjittered position i + 1/2 - jitter, weighted by the kernel at the distance times the
 //    kernel bias (Lanczos-2 and Catmull-Rom: the ratio W / w capped at 1.99, so the kernel spans
-//    about 2 output pixels; falling to 1, the widest, where the history is dropped), clamped to
+//    about 2 output pixels; falling to 1, the widest, where the history is dropped and as the
+//    pixel's speed nears the moving cap's), clamped to
 //    the samples' range (deringing). The sample weight is the kernel's weight of the nearest
 //    sample: 1 on the pixel centre, less farther off.
 // 2. The history at p + 1/2 - velocity (the dilated velocity of the render pixel under p, scaled
@@ -158,11 +159,15 @@ void main() {
     }
     float keep = use ? 1.0 - dis : 0.0;
 
-    // 1. The current frame at the pixel centre.
+    // 1. The current frame at the pixel centre. The kernel narrows (bias up to params.w) only as
+    // far as a long history will average what it aliases: where the history is dropped, and as
+    // the pixel's speed nears SPEED (the moving cap's, where the history holds a frame or two),
+    // it widens back to 1, the render grid's own Lanczos (the moving demo 1.094x -> 1.054x
+    // `native`'s FLIP; docs/upsampling.md).
 #if KERNEL == 0
     float bias = 1.0;
 #else
-    float bias = mix(1.0, pc.params.w, keep);
+    float bias = mix(1.0, pc.params.w, keep * (1.0 - min(speed / pc.accum.z, 1.0)));
 #endif
     ivec2 c0 = clamp(ivec2(floor(src + jit)), ivec2(0), size - 1);
     vec3 acc = vec3(0.0), m1 = vec3(0.0), m2 = vec3(0.0);

@@ -356,7 +356,10 @@ pub fn accumulate(p: &Params, i: &AccumulateInputs) -> Accumulated {
 
             let bias = match p.kernel {
                 Kernel::Bilinear => 1.0,
-                _ => 1.0 * (1.0 - keep) + p.bias_max * keep,
+                _ => {
+                    let t = keep * (1.0 - (speed / p.accum[2]).min(1.0));
+                    1.0 * (1.0 - t) + p.bias_max * t
+                }
             };
             let c0 = [
                 (src[0] + p.jitter[0]).floor() as i32,
@@ -488,6 +491,68 @@ mod tests {
             })
             .fold(0.0f64, f64::max);
         assert!(worst < 5e-7, "off by {worst}");
+    }
+
+    /// The current frame's kernel narrows (bias `bias_max`) only where the history is long: a
+    /// still pixel with a history takes the narrow kernel, one moving at the moving cap's speed
+    /// (`accum[2]`) or faster the widest (bias 1), one between them between, one without
+    /// history the widest. Read from the sample weight (the kernel's weight of the nearest
+    /// sample) on an 8x8 output of a 6x6 render, jittered off the centre.
+    #[test]
+    fn a_moving_pixel_takes_the_widest_kernel() {
+        let (out, size) = ((8usize, 8usize), (6usize, 6usize));
+        let ratio = [8.0 / 6.0, 8.0 / 6.0];
+        let p = Params {
+            out,
+            size,
+            jitter: [0.31, -0.27],
+            ratio,
+            exposure: 1.0,
+            depth_tolerance: 0.05,
+            gamma: 1.0,
+            bias_max: 8.0 / 6.0,
+            accum: [8.0, 1.0, 2.0, 1.0 / 16.0],
+            reset: false,
+            background_moves: false,
+            kernel: Kernel::Lanczos,
+            stability: true,
+            surface_velocity: true,
+        };
+        let prepared: Vec<[f32; 4]> = (0..size.0 * size.1)
+            .map(|i| [0.2 + 0.01 * i as f32, 0.0, 0.0, 1.0])
+            .collect();
+        let history = vec![[0.3, 0.0, 0.0, 4.0]; out.0 * out.1];
+        let aux = vec![[0.0; 4]; out.0 * out.1];
+        // The sample weight at output pixel (5, 5) with every render pixel moving by `v`
+        // output pixels along x (the dilated velocity is in render pixels).
+        let weight = |v: f32, reset: bool| {
+            let dilated = vec![[v / ratio[0], 0.0, 0.5, 0.0]; size.0 * size.1];
+            let i = AccumulateInputs {
+                prepared: &prepared,
+                dilated: &dilated,
+                disocclusion: None,
+                new_locks: None,
+                history: &history,
+                aux: &aux,
+            };
+            accumulate(&Params { reset, ..p }, &i).debug[5 * out.0 + 5][2]
+        };
+        // The nearest sample's offset from the output pixel's centre, in render pixels.
+        let src = [5.5 / ratio[0], 5.5 / ratio[1]];
+        let d: [f32; 2] = std::array::from_fn(|j| {
+            (src[j] + p.jitter[j]).floor() + 0.5 - p.jitter[j] - src[j]
+        });
+        let d2 = d[0] * d[0] + d[1] * d[1];
+        let at = |bias: f32| kernel_weight_sq(Kernel::Lanczos, d2 * bias * bias);
+        let (narrow, wide) = (at(p.bias_max), at(1.0));
+        assert!(wide - narrow > 0.05, "the case tells the kernels apart: {narrow} {wide}");
+        assert_eq!(weight(0.0, false), narrow, "still, with a history");
+        assert_eq!(weight(2.0, false), wide, "at the moving cap's speed");
+        assert_eq!(weight(3.0, false), wide, "faster");
+        assert_eq!(weight(0.0, true), wide, "no history");
+        let half = weight(1.0, false);
+        assert!(narrow < half && half < wide, "halfway: {narrow} < {half} < {wide}");
+        assert_eq!(half, at(0.5 + 0.5 * p.bias_max));
     }
 
     #[test]
