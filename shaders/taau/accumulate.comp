@@ -161,7 +161,7 @@ void main() {
 
     // 1. The current frame at the pixel centre. The kernel narrows (bias up to params.w) only as
     // far as a long history will average what it aliases: where the history is dropped, and as
-    // the pixel's speed nears SPEED (the moving cap's, where the history holds a frame or two),
+    // the pixel's speed nears accum.z (SPEED, the moving cap's: the history holds a frame or two),
     // it widens back to 1, the render grid's own Lanczos (the moving demo 1.094x -> 1.054x
     // `native`'s FLIP; docs/upsampling.md).
 #if KERNEL == 0

@@ -103,7 +103,8 @@ impl Default for TaauConfig {
     }
 }
 
-/// Output pixels per frame at which the history's cap falls linearly from `accum` to `moving`.
+/// Output pixels per frame at which the history's cap falls linearly from `accum` to `moving`,
+/// and the current frame's kernel widens linearly from W / w to 1 (the render grid's own).
 pub const SPEED: f32 = 2.0;
 
 impl TaauConfig {

@@ -8,7 +8,8 @@
 //! 2. `taau.depth_clip` (render resolution): the disocclusion that depth shows;
 //! 3. `taau.lock` (render resolution): thin features, locked at the output pixel they fall in;
 //! 4. `taau.accumulate` (output resolution): the current samples reconstructed at the output
-//!    pixel with a kernel sized to the upscale ratio (Lanczos-2 by default), the history
+//!    pixel with a kernel sized to the upscale ratio (Lanczos-2 by default; at its widest,
+//!    the render grid's own, without history and from the moving cap's speed on), the history
 //!    reprojected, rectified (unless still or locked), weighted by its stability and
 //!    accumulated; then FSR 1's RCAS (`taau.rcas`).
 //!
