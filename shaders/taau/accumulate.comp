@@ -133,6 +133,8 @@ void main() {
     vec4 g = texelFetch(dilated, under, 0);
     vec2 v = g.xy * ratio;
     float speed = length(v);
+    // How far the pixel is towards SPEED (accum.z): the history's cap and the kernel follow it.
+    float moving = min(speed / pc.accum.z, 1.0);
 #ifdef BINDING_DISOCCLUSION
     float dis = texelFetch(disocclusion, under, 0).r;
 #else
@@ -167,7 +169,7 @@ void main() {
 #if KERNEL == 0
     float bias = 1.0;
 #else
-    float bias = mix(1.0, pc.params.w, keep * (1.0 - min(speed / pc.accum.z, 1.0)));
+    float bias = mix(1.0, pc.params.w, keep * (1.0 - moving));
 #endif
     ivec2 c0 = clamp(ivec2(floor(src + jit)), ivec2(0), size - 1);
     vec3 acc = vec3(0.0), m1 = vec3(0.0), m2 = vec3(0.0);
@@ -237,7 +239,7 @@ void main() {
         }
 #endif
         // 6. Accumulation.
-        float cap = mix(pc.accum.x, pc.accum.y, min(speed / pc.accum.z, 1.0));
+        float cap = mix(pc.accum.x, pc.accum.y, moving);
         float hk = min(hw * keep, cap);
         float total = hk + ws;
         if (total > 0.0) result = (hk * h + ws * cur) / total;

@@ -333,6 +333,8 @@ pub fn accumulate(p: &Params, i: &AccumulateInputs) -> Accumulated {
             let g = i.dilated[under];
             let v = [g[0] * p.ratio[0], g[1] * p.ratio[1]];
             let speed = (v[0] * v[0] + v[1] * v[1]).sqrt();
+            // How far the pixel is towards SPEED (accum[2]): the cap and the kernel follow it.
+            let moving = (speed / p.accum[2]).min(1.0);
             let dis = i.disocclusion.map_or(0.0, |d| d[under]);
 
             let q = [px as f32 + 0.5 - v[0], py as f32 + 0.5 - v[1]];
@@ -357,7 +359,7 @@ pub fn accumulate(p: &Params, i: &AccumulateInputs) -> Accumulated {
             let bias = match p.kernel {
                 Kernel::Bilinear => 1.0,
                 _ => {
-                    let t = keep * (1.0 - (speed / p.accum[2]).min(1.0));
+                    let t = keep * (1.0 - moving);
                     1.0 * (1.0 - t) + p.bias_max * t
                 }
             };
@@ -447,8 +449,7 @@ pub fn accumulate(p: &Params, i: &AccumulateInputs) -> Accumulated {
                     let (a, b) = (change.abs(), aux[2].abs());
                     ws *= 1.0 - 0.5 * a.min(b) / a.max(b);
                 }
-                let t = (speed / p.accum[2]).min(1.0);
-                let cap = p.accum[0] * (1.0 - t) + p.accum[1] * t;
+                let cap = p.accum[0] * (1.0 - moving) + p.accum[1] * moving;
                 let hk = (hw * keep).min(cap);
                 let total = hk + ws;
                 if total > 0.0 {
