@@ -12,8 +12,9 @@
 //    sample: 1 on the pixel centre, less farther off.
 // 2. The history at p + 1/2 - velocity (the dilated velocity of the render pixel under p, scaled
 //    to output pixels), 4x4 separable Lanczos-2 / Catmull-Rom or 2x2 bilinear, deringed by its
-//    2x2; its weight and the lock from the nearest of that 2x2. Dropped on reset, off screen, or in
-//    proportion to the disocclusion (the depth clip).
+//    2x2; its weight and the lock from the nearest of that 2x2. Dropped on reset, off screen, in
+//    proportion to the disocclusion (the depth clip), or where it is another object moving
+//    differently (the object test, below).
 // 3. Locks: a lock decays by 1 / phases per frame, is renewed where the lock pass found a thin
 //    feature this frame, and dies with a disocclusion over 1/2.
 // 4. Rectification, unless the pixel is still (no motion, no disocclusion, not the background
@@ -81,6 +82,10 @@ float kernel_weight_sq(float x2) {
 }
 
 const float STILL = 1.0 / 64.0;
+// The history aux's w: this pixel's nearest sample's object ID (modulo 2^18) << SPEED_BITS |
+// its own speed in SPEED_STEP output pixels a frame (up to SPEED_MAX), an integer exact in f32.
+const uint SPEED_BITS = 6u, SPEED_MASK = 63u, ID_MASK = 0x3ffffu;
+const float SPEED_STEP = 0.25, SPEED_MAX = 15.75;
 const float BOX_CURVE = 2.3;
 
 vec4 hist_texel(ivec2 t) { return texelFetch(hist, clamp(t, ivec2(0), pc.sizes.xy - 1), 0); }
@@ -159,6 +164,25 @@ void main() {
         aux = texelFetch(hist_aux, clamp(nearest, ivec2(0), out_size - 1), 0);
         use = finite3(h) && finite3(aux.xyz) && !isnan(hw) && !isinf(hw);
     }
+    // The object test (OBJECT_TEST; `without-ids` leaves it out): a history texel of another
+    // object than this pixel's nearest sample, moving at least SPEED (accum.z) output pixels a
+    // frame faster or slower than that sample's own velocity, is a disocclusion. FSR 2's depth
+    // clip sees only the surfaces this frame shows: a torus that spun its face away leaves
+    // nothing in the reconstructed depth, and its colour stayed on the wall or sky behind it
+    // under the box (a brick wall's is wide) and the locks. The ID alone is the checkerboard
+    // resolve's and `+taa`'s test; the speed keeps a sub-pixel wire that this frame's jitter
+    // missed (its history moves as the sky around it does) (docs/upsampling.md).
+    ivec2 c0 = clamp(ivec2(floor(src + jit)), ivec2(0), size - 1);
+    uint own_id = texelFetch(low_ids, c0, 0).x & ID_MASK;
+    float own_speed = min(length(texelFetch(low_velocity, c0, 0).xy * ratio), SPEED_MAX);
+#if OBJECT_TEST
+    if (use) {
+        uint code = uint(aux.w);
+        if ((code >> SPEED_BITS) != own_id &&
+            abs(float(code & SPEED_MASK) * SPEED_STEP - own_speed) >= pc.accum.z)
+            dis = 1.0;
+    }
+#endif
     float keep = use ? 1.0 - dis : 0.0;
 
     // 1. The current frame at the pixel centre. The kernel narrows (bias up to params.w) only as
@@ -171,7 +195,6 @@ void main() {
 #else
     float bias = mix(1.0, pc.params.w, keep * (1.0 - moving));
 #endif
-    ivec2 c0 = clamp(ivec2(floor(src + jit)), ivec2(0), size - 1);
     vec3 acc = vec3(0.0), m1 = vec3(0.0), m2 = vec3(0.0);
     vec3 mn = vec3(1e30), mx = vec3(-1e30);
     float wsum = 0.0, count = 0.0, ws = 0.0;
@@ -246,7 +269,7 @@ void main() {
         weight = total;
     }
     imageStore(out_hist, p, vec4(result, weight));
-    imageStore(out_aux, p, vec4(life, cur.x, change, 0.0));
+    imageStore(out_aux, p, vec4(life, cur.x, change, float((own_id << SPEED_BITS) | uint(own_speed / SPEED_STEP + 0.5))));
     imageStore(accumulated, p, vec4(linear_from_perceptual(result, e), 1.0));
 #ifdef BINDING_DEBUG
     imageStore(debug, p, vec4(dis, life, ws, weight));

@@ -202,7 +202,7 @@ fn every_pass_matches_its_cpu_reference_over_frames() {
     for spec in [
         &[][..],
         &["catmull", "without-stability", "without-surface-velocity"],
-        &["bilinear", "without-locks", "without-rcas"],
+        &["bilinear", "without-locks", "without-rcas", "without-ids"],
         &["0.5", "without-depth-clip", "sharpness=1", "debug"],
     ] {
         let c = taau::parse(spec).expect("spec");
@@ -212,6 +212,7 @@ fn every_pass_matches_its_cpu_reference_over_frames() {
         let phases = c.phases(out.0, out.1);
         let (mut prev_h, mut prev_a): (Vec<V4>, Vec<V4>) = (Vec::new(), Vec::new());
         let (mut locked, mut disoccluded, mut clipped_or_blended) = (0usize, 0usize, 0usize);
+        let mut object_drops = 0usize;
         for frame in 0..5u32 {
             let s = synthetic(w as usize, h as usize, frame as usize);
             upload(&gpu, &targets, &s);
@@ -253,7 +254,9 @@ fn every_pass_matches_its_cpu_reference_over_frames() {
                 assert_eq!(l, &reference::lock(&p, &got.prepared), "{what}: locks");
                 locked += l.iter().filter(|&&v| v != 0).count();
             }
-            // 4. Accumulate on the GPU's inputs and its previous history.
+            // 4. Accumulate on the GPU's inputs and its previous history (the object test: the
+            // square moves 2 render pixels a frame over a floor moving under 1).
+            let ids: Vec<u32> = s.ids.iter().map(|id| id[0]).collect();
             let blank = vec![[0.0f32; 4]; (out.0 * out.1) as usize];
             let inputs = AccumulateInputs {
                 prepared: &got.prepared,
@@ -262,8 +265,17 @@ fn every_pass_matches_its_cpu_reference_over_frames() {
                 new_locks: got.locks.as_deref(),
                 history: if frame == 0 { &blank } else { &prev_h },
                 aux: if frame == 0 { &blank } else { &prev_a },
+                velocity: &s.velocity,
+                ids: &ids,
             };
             let want = reference::accumulate(&p, &inputs);
+            if c.ids {
+                let without =
+                    reference::accumulate(&reference::Params { ids: false, ..p }, &inputs);
+                object_drops += (want.debug.iter().zip(&without.debug))
+                    .filter(|(a, b)| a[0] == 1.0 && b[0] < 1.0)
+                    .count();
+            }
             // The box's edges come from exp() and a variance (m2 - mu^2) whose rounding differs
             // between lavapipe's JIT and Rust by ulps that the cancellation magnifies: a
             // clipped history may move by up to 2e-3 (perceptual units, the display range is
@@ -297,12 +309,19 @@ fn every_pass_matches_its_cpu_reference_over_frames() {
             }
             (prev_h, prev_a) = (got.history, got.aux);
         }
-        // Not vacuous: the square disoccludes, the line and the dot lock, history blends in.
+        // Not vacuous: the square disoccludes (depth clip and object test), the line and the dot
+        // lock, history blends in.
         if c.depth_clip {
             assert!(disoccluded > 10, "{spec:?}: {disoccluded} disoccluded");
         }
         if c.locks {
             assert!(locked > 10, "{spec:?}: {locked} locks");
+        }
+        if c.ids {
+            assert!(
+                object_drops > 10,
+                "{spec:?}: {object_drops} dropped by the object test"
+            );
         }
         assert!(
             clipped_or_blended > 500,

@@ -36,9 +36,10 @@ impl Kernel {
 }
 
 /// The parts `without-X` switches off.
-pub const ABLATIONS: [&str; 5] = [
+pub const ABLATIONS: [&str; 6] = [
     "locks",
     "depth-clip",
+    "ids",
     "rcas",
     "stability",
     "surface-velocity",
@@ -55,6 +56,11 @@ pub struct TaauConfig {
     /// Depth clip (FSR 2): the disocclusion a reconstructed previous depth shows drops the
     /// history.
     pub depth_clip: bool,
+    /// The object test: a history texel of another object than the pixel's nearest sample,
+    /// moving at least [`SPEED`] output pixels a frame faster or slower than that sample, is a
+    /// disocclusion (`without-ids`: FSR 2's depth clip alone, which does not see a surface
+    /// that turned away).
+    pub ids: bool,
     /// RCAS on the accumulated output.
     pub rcas: bool,
     /// Luminance stability: an oscillating current luma weighs less.
@@ -89,6 +95,7 @@ impl Default for TaauConfig {
             kernel: Kernel::Lanczos,
             locks: true,
             depth_clip: true,
+            ids: true,
             rcas: true,
             stability: true,
             surface_velocity: true,
@@ -135,7 +142,7 @@ impl TaauConfig {
 }
 
 const EXPECTED: &str = "a scale in (0, 1], bilinear|catmull|lanczos, without-X (X: locks, \
-                        depth-clip, rcas, stability, surface-velocity), sharpness=S, accum=A, moving=A, gamma=G, tol=T, \
+                        depth-clip, ids, rcas, stability, surface-velocity), sharpness=S, accum=A, moving=A, gamma=G, tol=T, \
                         lod=B or debug";
 
 pub fn parse(params: &[&str]) -> std::result::Result<TaauConfig, String> {
@@ -161,6 +168,7 @@ pub fn parse(params: &[&str]) -> std::result::Result<TaauConfig, String> {
             match x {
                 "locks" => c.locks = false,
                 "depth-clip" => c.depth_clip = false,
+                "ids" => c.ids = false,
                 "rcas" => c.rcas = false,
                 "stability" => c.stability = false,
                 "surface-velocity" => c.surface_velocity = false,
@@ -233,6 +241,7 @@ mod tests {
         assert_eq!((d.accumulation, d.gamma, d.depth_tolerance), (16.0, 1.5, 0.1));
         assert!(!d.depth_clip);
         assert!(!parse(&["without-stability"]).expect("ok").stability);
+        assert!(TaauConfig::default().ids && !parse(&["without-ids"]).expect("ok").ids);
     }
 
     #[test]

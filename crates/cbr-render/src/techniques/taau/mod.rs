@@ -10,8 +10,9 @@
 //! 4. `taau.accumulate` (output resolution): the current samples reconstructed at the output
 //!    pixel with a kernel sized to the upscale ratio (Lanczos-2 by default; at its widest,
 //!    the render grid's own, without history and from the moving cap's speed on), the history
-//!    reprojected, rectified (unless still or locked), weighted by its stability and
-//!    accumulated; then FSR 1's RCAS (`taau.rcas`).
+//!    reprojected (dropped where the depth clip or the object test finds a disocclusion),
+//!    rectified (unless still or locked), weighted by its stability and accumulated; then FSR 1's
+//!    RCAS (`taau.rcas`).
 //!
 //! [`config`]: its parameters; [`reference`]: the CPU reference of every pass. Left out, as our
 //! scenes need none of it: reactive and transparency masks (no particles), auto-exposure (the
@@ -39,7 +40,8 @@ pub const DEBUG_LAYER: LayerDecl = LayerDecl {
     channels: &["disocclusion", "lock", "sample_weight", "history_weight"],
     samples: SampleType::F32,
     exr: Some(ExrType::Float),
-    about: "disocclusion: the depth clip's (1 drops the history); lock: a thin feature's lock \
+    about: "disocclusion: the depth clip's, or 1 where the object test drops the history (1 \
+            drops it); lock: a thin feature's lock \
             strength (1: the history is not rectified); sample_weight: the current sample's \
             weight (1 on the pixel centre); history_weight: the accumulated weight",
 };
@@ -49,7 +51,7 @@ const LAYERS: [LayerDecl; 1] = [DEBUG_LAYER];
 pub const REGISTRATION: Registration = Registration {
     name: "taau",
     grammar: "taau[:SCALE][:bilinear|catmull|lanczos][:without-locks][:without-depth-clip]\
-              [:without-rcas][:without-stability][:without-surface-velocity][:sharpness=S][:accum=A][:moving=A][:gamma=G][:tol=T]\
+              [:without-ids][:without-rcas][:without-stability][:without-surface-velocity][:sharpness=S][:accum=A][:moving=A][:gamma=G][:tol=T]\
               [:lod=B][:debug]",
     about: "temporal upsampling after FSR 2: render at SCALE per axis (default 1/sqrt(2): the \
             checkerboard's pixel count) with a Halton jitter, dilate, depth clip, lock thin \
@@ -136,6 +138,7 @@ pub fn accumulate_decl(c: &TaauConfig) -> ComputeDecl {
     let mut d = ComputeDecl::new("taau.accumulate", "taau/accumulate.comp")
         .define("KERNEL", c.kernel as u32)
         .define("STABILITY", u32::from(c.stability))
+        .define("OBJECT_TEST", u32::from(c.ids))
         .constants(&[("F_RESET", F_RESET), ("F_BACKGROUND", F_BACKGROUND)])
         .bind(Binding::sampled("prepared"))
         .bind(Binding::sampled("dilated"));
@@ -347,6 +350,7 @@ impl TaauPasses {
             background_moves: f.background_moves,
             kernel: self.config.kernel,
             stability: self.config.stability,
+            ids: self.config.ids,
             surface_velocity: self.config.surface_velocity,
         }
     }

@@ -29,6 +29,8 @@ pub struct Params {
     pub background_moves: bool,
     pub kernel: Kernel,
     pub stability: bool,
+    /// The object test (`without-ids` off).
+    pub ids: bool,
     /// A surface (the 3x3 one plane) keeps its own velocity (`without-surface-velocity`).
     pub surface_velocity: bool,
 }
@@ -241,7 +243,8 @@ pub fn lock(p: &Params, prepared: &[[f32; 4]]) -> Vec<u32> {
 pub struct Accumulated {
     /// Perceptual colour and the history weight.
     pub history: Vec<[f32; 4]>,
-    /// Lock strength, the current sample's luma, its change, 0.
+    /// Lock strength, the current sample's luma, its change, and the nearest sample's object
+    /// and speed ([`object_code`]).
     pub aux: Vec<[f32; 4]>,
     /// Linear HDR (before RCAS).
     pub color: Vec<V3>,
@@ -260,6 +263,31 @@ pub struct AccumulateInputs<'a> {
     pub new_locks: Option<&'a [u32]>,
     pub history: &'a [[f32; 4]],
     pub aux: &'a [[f32; 4]],
+    /// The render's own velocity (render pixels) and object IDs, for the object test.
+    pub velocity: &'a [[f32; 2]],
+    pub ids: &'a [u32],
+}
+
+/// The history aux's w ([`object_code`]): the object ID modulo 2^18, shifted past the speed's
+/// bits; the speed in steps of 1/4 output pixel a frame, at most 15.75.
+const SPEED_BITS: u32 = 6;
+const SPEED_MASK: u32 = 63;
+const ID_MASK: u32 = 0x3ffff;
+const SPEED_STEP: f32 = 0.25;
+const SPEED_MAX: f32 = 15.75;
+
+/// The object and speed a history texel remembers (accumulate.comp's aux.w): ID << 6 | speed
+/// in quarter output pixels a frame, an integer exact in f32.
+pub fn object_code(id: u32, speed: f32) -> f32 {
+    (((id & ID_MASK) << SPEED_BITS) | (speed.min(SPEED_MAX) / SPEED_STEP + 0.5) as u32) as f32
+}
+
+/// The object test: the history texel (its aux.w `code`) is another object than `id`, moving at
+/// least `speed_gap` output pixels a frame faster or slower than `speed`.
+pub fn other_object(code: f32, id: u32, speed: f32, speed_gap: f32) -> bool {
+    let code = code as u32;
+    (code >> SPEED_BITS) != id & ID_MASK
+        && ((code & SPEED_MASK) as f32 * SPEED_STEP - speed).abs() >= speed_gap
 }
 
 pub const STILL: f32 = 1.0 / 64.0;
@@ -335,7 +363,7 @@ pub fn accumulate(p: &Params, i: &AccumulateInputs) -> Accumulated {
             let speed = (v[0] * v[0] + v[1] * v[1]).sqrt();
             // How far the pixel is towards SPEED (accum[2]): the cap and the kernel follow it.
             let moving = (speed / p.accum[2]).min(1.0);
-            let dis = i.disocclusion.map_or(0.0, |d| d[under]);
+            let mut dis = i.disocclusion.map_or(0.0, |d| d[under]);
 
             let q = [px as f32 + 0.5 - v[0], py as f32 + 0.5 - v[1]];
             let mut use_h = !p.reset
@@ -354,6 +382,22 @@ pub fn accumulate(p: &Params, i: &AccumulateInputs) -> Accumulated {
                 aux = i.aux[clamp_at(nearest, p.out)];
                 use_h = finite(h) && finite([aux[0], aux[1], aux[2]]) && hw.is_finite();
             }
+            let c0 = [
+                (src[0] + p.jitter[0]).floor() as i32,
+                (src[1] + p.jitter[1]).floor() as i32,
+            ];
+            let c0 = [
+                c0[0].clamp(0, p.size.0 as i32 - 1),
+                c0[1].clamp(0, p.size.1 as i32 - 1),
+            ];
+            let at0 = c0[1] as usize * p.size.0 + c0[0] as usize;
+            let own_id = i.ids[at0];
+            let ov = i.velocity[at0];
+            let (ox, oy) = (ov[0] * p.ratio[0], ov[1] * p.ratio[1]);
+            let own_speed = (ox * ox + oy * oy).sqrt().min(SPEED_MAX);
+            if p.ids && use_h && other_object(aux[3], own_id, own_speed, p.accum[2]) {
+                dis = 1.0;
+            }
             let keep = if use_h { 1.0 - dis } else { 0.0 };
 
             let bias = match p.kernel {
@@ -363,14 +407,6 @@ pub fn accumulate(p: &Params, i: &AccumulateInputs) -> Accumulated {
                     1.0 * (1.0 - t) + p.bias_max * t
                 }
             };
-            let c0 = [
-                (src[0] + p.jitter[0]).floor() as i32,
-                (src[1] + p.jitter[1]).floor() as i32,
-            ];
-            let c0 = [
-                c0[0].clamp(0, p.size.0 as i32 - 1),
-                c0[1].clamp(0, p.size.1 as i32 - 1),
-            ];
             let (mut acc, mut m1, mut m2) = ([0.0f32; 3], [0.0f32; 3], [0.0f32; 3]);
             let (mut mn, mut mx) = ([1e30f32; 3], [-1e30f32; 3]);
             let (mut wsum, mut count, mut ws) = (0.0f32, 0.0f32, 0.0f32);
@@ -458,7 +494,7 @@ pub fn accumulate(p: &Params, i: &AccumulateInputs) -> Accumulated {
                 weight = total;
             }
             out.history.push([result[0], result[1], result[2], weight]);
-            out.aux.push([life, cur[0], change, 0.0]);
+            out.aux.push([life, cur[0], change, object_code(own_id, own_speed)]);
             out.color.push(linear_from_perceptual(result, e));
             out.debug.push([dis, life, ws, weight]);
         }
@@ -517,6 +553,7 @@ mod tests {
             background_moves: false,
             kernel: Kernel::Lanczos,
             stability: true,
+            ids: true,
             surface_velocity: true,
         };
         let prepared: Vec<[f32; 4]> = (0..size.0 * size.1)
@@ -524,6 +561,7 @@ mod tests {
             .collect();
         let history = vec![[0.3, 0.0, 0.0, 4.0]; out.0 * out.1];
         let aux = vec![[0.0; 4]; out.0 * out.1];
+        let (velocity, ids) = (vec![[0.0; 2]; size.0 * size.1], vec![0u32; size.0 * size.1]);
         // The sample weight at output pixel (5, 5) with every render pixel moving by `v`
         // output pixels along x (the dilated velocity is in render pixels).
         let weight = |v: f32, reset: bool| {
@@ -535,6 +573,8 @@ mod tests {
                 new_locks: None,
                 history: &history,
                 aux: &aux,
+                velocity: &velocity,
+                ids: &ids,
             };
             accumulate(&Params { reset, ..p }, &i).debug[5 * out.0 + 5][2]
         };
@@ -554,6 +594,74 @@ mod tests {
         let half = weight(1.0, false);
         assert!(narrow < half && half < wide, "halfway: {narrow} < {half} < {wide}");
         assert_eq!(half, at(0.5 + 0.5 * p.bias_max));
+    }
+
+    /// The object test: a history of another object that moved differently (a torus that spun
+    /// away from the wall behind it) is dropped with its lock; the same object, another
+    /// object moving alike (a sub-pixel wire the jitter missed, as the sky around it moves), or
+    /// `without-ids` keep it.
+    #[test]
+    fn another_object_moving_differently_loses_its_history() {
+        let (out, size) = ((8usize, 8usize), (6usize, 6usize));
+        let ratio = [8.0 / 6.0, 8.0 / 6.0];
+        let p = Params {
+            out,
+            size,
+            jitter: [0.0, 0.0],
+            ratio,
+            exposure: 1.0,
+            depth_tolerance: 0.05,
+            gamma: 1.0,
+            bias_max: 8.0 / 6.0,
+            accum: [8.0, 1.0, 2.0, 1.0 / 16.0],
+            reset: false,
+            background_moves: false,
+            kernel: Kernel::Lanczos,
+            stability: true,
+            ids: true,
+            surface_velocity: true,
+        };
+        let prepared = vec![[0.2, 0.0, 0.0, 1.0]; size.0 * size.1];
+        let history = vec![[0.9, 0.0, 0.0, 4.0]; out.0 * out.1];
+        let new_locks = vec![0u32; out.0 * out.1];
+        let velocity = vec![[0.0; 2]; size.0 * size.1];
+        let dilated = vec![[0.0, 0.0, 0.5, 0.0]; size.0 * size.1];
+        // The history remembers object `hid` moving `hspeed` output pixels a frame, locked; this
+        // frame every sample is object `id`, still.
+        let run = |hid: u32, hspeed: f32, id: u32, ids_on: bool| {
+            let aux = vec![[1.0, 0.9, 0.0, object_code(hid, hspeed)]; out.0 * out.1];
+            let ids = vec![id; size.0 * size.1];
+            let i = AccumulateInputs {
+                prepared: &prepared,
+                dilated: &dilated,
+                disocclusion: None,
+                new_locks: Some(&new_locks),
+                history: &history,
+                aux: &aux,
+                velocity: &velocity,
+                ids: &ids,
+            };
+            let a = accumulate(&Params { ids: ids_on, ..p }, &i);
+            let k = 5 * out.0 + 5;
+            (a.debug[k], a.history[k][0], a.aux[k][3])
+        };
+        let (d, h, code) = run(2, 3.0, 1, true);
+        assert_eq!((d[0], d[1]), (1.0, 0.0), "dropped, the lock with it");
+        assert_eq!((h, d[3]), (0.2, d[2]), "the current frame alone");
+        assert_eq!(code, object_code(1, 0.0), "the pixel remembers its own object");
+        for (hid, hspeed, ids_on, what) in [
+            (1, 3.0, true, "the same object"),
+            (2, 1.75, true, "another object moving alike"),
+            (2, 3.0, false, "without-ids"),
+        ] {
+            let (d, h, _) = run(hid, hspeed, 1, ids_on);
+            assert_eq!(d[0], 0.0, "{what}: kept");
+            assert_eq!(d[1], 1.0 - p.accum[3], "{what}: the lock ages");
+            assert!(h > 0.3, "{what}: the history blends in ({h})");
+        }
+        assert!(other_object(object_code(7, 0.0), 8, 2.0, 2.0));
+        assert!(!other_object(object_code(7, 15.75), 7, 0.0, 2.0));
+        assert_eq!(object_code(3, 99.0) as u32 >> 6, 3, "the speed saturates in its bits");
     }
 
     #[test]
