@@ -203,7 +203,13 @@ fn every_pass_matches_its_cpu_reference_over_frames() {
         &[][..],
         &["catmull", "without-stability", "without-surface-velocity"],
         &["bilinear", "without-locks", "without-rcas", "without-ids"],
-        &["0.5", "without-depth-clip", "sharpness=1", "debug"],
+        &[
+            "0.5",
+            "without-depth-clip",
+            "sharpness=1",
+            "debug",
+            "lobes=2",
+        ],
     ] {
         let c = taau::parse(spec).expect("spec");
         let (w, h) = c.render_resolution(out.0, out.1);

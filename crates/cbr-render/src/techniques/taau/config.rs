@@ -70,6 +70,10 @@ pub struct TaauConfig {
     pub surface_velocity: bool,
     /// RCAS sharpness in stops (0 the sharpest).
     pub sharpness: f32,
+    /// The lobes of the history's Lanczos resampling (with the `lanczos` kernel): 3 (6x6 taps),
+    /// or 2 (4x4, FSR 2's). Every reprojection resamples the history and the blur compounds
+    /// over the frames it holds (docs/upsampling.md).
+    pub history_lobes: u32,
     /// The history's weight cap where the pixel is still, in sample weights (a sample exactly on
     /// the output pixel weighs 1).
     pub accumulation: f32,
@@ -100,6 +104,7 @@ impl Default for TaauConfig {
             stability: true,
             surface_velocity: true,
             sharpness: DEFAULT_SHARPNESS,
+            history_lobes: 3,
             accumulation: 8.0,
             moving_accumulation: 1.0,
             gamma: 1.0,
@@ -142,8 +147,8 @@ impl TaauConfig {
 }
 
 const EXPECTED: &str = "a scale in (0, 1], bilinear|catmull|lanczos, without-X (X: locks, \
-                        depth-clip, ids, rcas, stability, surface-velocity), sharpness=S, accum=A, moving=A, gamma=G, tol=T, \
-                        lod=B or debug";
+                        depth-clip, ids, rcas, stability, surface-velocity), sharpness=S, lobes=2|3, accum=A, moving=A, gamma=G, \
+                        tol=T, lod=B or debug";
 
 pub fn parse(params: &[&str]) -> std::result::Result<TaauConfig, String> {
     let mut c = TaauConfig::default();
@@ -191,6 +196,13 @@ pub fn parse(params: &[&str]) -> std::result::Result<TaauConfig, String> {
                 "gamma" => c.gamma = num(p, v, 0.25, 16.0)?,
                 "tol" => c.depth_tolerance = num(p, v, 0.0, 1.0)?,
                 "lod" => c.lod_bias = Some(num(p, v, -4.0, 4.0)?),
+                "lobes" => {
+                    c.history_lobes = match v {
+                        "2" => 2,
+                        "3" => 3,
+                        _ => return Err(format!("`{p}`: the history's Lanczos lobes, 2 or 3")),
+                    }
+                }
                 _ => return Err(crate::technique::unknown_param("taau", p, EXPECTED)),
             }
         } else if p.starts_with(|ch: char| ch.is_ascii_digit() || ch == '.' || ch == '-') {
@@ -206,6 +218,12 @@ pub fn parse(params: &[&str]) -> std::result::Result<TaauConfig, String> {
         } else {
             return Err(crate::technique::unknown_param("taau", p, EXPECTED));
         }
+    }
+    if c.kernel != Kernel::Lanczos && seen.iter().any(|s| s == "lobes") {
+        return Err(format!(
+            "`lobes` is the Lanczos history's; taau `{}` resamples with its own kernel",
+            c.kernel.name()
+        ));
     }
     if !c.rcas && seen.iter().any(|s| s == "sharpness") {
         return Err("`sharpness` is RCAS's; taau `without-rcas` has none".into());
@@ -242,6 +260,8 @@ mod tests {
         assert!(!d.depth_clip);
         assert!(!parse(&["without-stability"]).expect("ok").stability);
         assert!(TaauConfig::default().ids && !parse(&["without-ids"]).expect("ok").ids);
+        assert_eq!(TaauConfig::default().history_lobes, 3);
+        assert_eq!(parse(&["lobes=2", "lanczos"]).expect("ok").history_lobes, 2);
     }
 
     #[test]
@@ -258,6 +278,8 @@ mod tests {
             (&["sharpness=3"], "`sharpness=3`"),
             (&["without-rcas", "sharpness=1"], "RCAS's"),
             (&["debug", "debug"], "one debug"),
+            (&["lobes=4"], "2 or 3"),
+            (&["catmull", "lobes=2"], "Lanczos history's"),
             (&["speed=2"], "`speed=2` is not a parameter of taau"),
         ] {
             let e = parse(params).expect_err(needle);

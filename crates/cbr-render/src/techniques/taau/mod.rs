@@ -51,7 +51,7 @@ const LAYERS: [LayerDecl; 1] = [DEBUG_LAYER];
 pub const REGISTRATION: Registration = Registration {
     name: "taau",
     grammar: "taau[:SCALE][:bilinear|catmull|lanczos][:without-locks][:without-depth-clip]\
-              [:without-ids][:without-rcas][:without-stability][:without-surface-velocity][:sharpness=S][:accum=A][:moving=A][:gamma=G][:tol=T]\
+              [:without-ids][:without-rcas][:without-stability][:without-surface-velocity][:sharpness=S][:lobes=2|3][:accum=A][:moving=A][:gamma=G][:tol=T]\
               [:lod=B][:debug]",
     about: "temporal upsampling after FSR 2: render at SCALE per axis (default 1/sqrt(2): the \
             checkerboard's pixel count) with a Halton jitter, dilate, depth clip, lock thin \
@@ -139,6 +139,7 @@ pub fn accumulate_decl(c: &TaauConfig) -> ComputeDecl {
         .define("KERNEL", c.kernel as u32)
         .define("STABILITY", u32::from(c.stability))
         .define("OBJECT_TEST", u32::from(c.ids))
+        .define("HISTORY_LOBES", c.history_lobes)
         .constants(&[("F_RESET", F_RESET), ("F_BACKGROUND", F_BACKGROUND)])
         .bind(Binding::sampled("prepared"))
         .bind(Binding::sampled("dilated"));
@@ -351,6 +352,7 @@ impl TaauPasses {
             kernel: self.config.kernel,
             stability: self.config.stability,
             ids: self.config.ids,
+            history_lobes: self.config.history_lobes,
             surface_velocity: self.config.surface_velocity,
         }
     }

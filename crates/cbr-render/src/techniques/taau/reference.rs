@@ -31,6 +31,8 @@ pub struct Params {
     pub stability: bool,
     /// The object test (`without-ids` off).
     pub ids: bool,
+    /// The history's Lanczos lobes (2 or 3; with [`Kernel::Lanczos`]).
+    pub history_lobes: u32,
     /// A surface (the 3x3 one plane) keeps its own velocity (`without-surface-velocity`).
     pub surface_velocity: bool,
 }
@@ -294,18 +296,44 @@ pub const STILL: f32 = 1.0 / 64.0;
 /// The rectification box's weight exp(-BOX_CURVE d^2) (FSR 2's).
 const BOX_CURVE: f32 = 2.3;
 
+/// Lanczos-3, 3 sin(pi x) sin(pi x / 3) / (pi x)^2, at the 6 taps x = j - f (j = -2..3, f in
+/// [0, 1)), from three sines as accumulate.comp's `lanczos3_weights`: sin(pi (j - f)) =
+/// -(-1)^j sin(pi f), sin(pi (j - f) / 3) = sin(pi j / 3) cos(pi f / 3) - cos(pi j / 3)
+/// sin(pi f / 3).
+pub fn lanczos3_weights(f: f32) -> [f32; 6] {
+    const PI: f32 = std::f32::consts::PI;
+    const S3: f32 = 0.866_025_4;
+    const SJ: [f32; 6] = [-S3, -S3, 0.0, S3, S3, 0.0];
+    const CJ: [f32; 6] = [-0.5, 0.5, 1.0, 0.5, -0.5, -1.0];
+    // sin(pi f) = sin(pi (1 - f)): the smaller argument keeps its precision near f = 1.
+    let s = (PI * f.min(1.0 - f)).sin();
+    let (s3, c3) = ((PI * f / 3.0).sin(), (PI * f / 3.0).cos());
+    std::array::from_fn(|k| {
+        let x = (k as i32 - 2) as f32 - f;
+        let a = PI * x;
+        let sx = if k % 2 == 0 { -s } else { s };
+        if x.abs() < 1e-4 {
+            1.0
+        } else {
+            3.0 * sx * (SJ[k] * c3 - CJ[k] * s3) / (a * a)
+        }
+    })
+}
+
 fn history_at(p: &Params, hist: &[[f32; 4]], b: [i32; 2], f: [f32; 2], nearest: [i32; 2]) -> [f32; 4] {
-    let (lo, hi) = if p.kernel == Kernel::Bilinear {
-        (0, 1)
-    } else {
-        (-1, 2)
+    let lanczos3 = p.kernel == Kernel::Lanczos && p.history_lobes == 3;
+    let (lo, hi) = match p.kernel {
+        Kernel::Bilinear => (0, 1),
+        _ if lanczos3 => (-2, 3),
+        _ => (-1, 2),
     };
-    let w1 = |f: f32| -> [f32; 4] {
+    let w1 = |f: f32| -> [f32; 6] {
         match p.kernel {
-            Kernel::Bilinear => [1.0 - f, f, 0.0, 0.0],
+            Kernel::Bilinear => [1.0 - f, f, 0.0, 0.0, 0.0, 0.0],
+            _ if lanczos3 => lanczos3_weights(f),
             k => std::array::from_fn(|i| {
                 let d = i as f32 - 1.0 - f;
-                kernel_weight_sq(k, d * d)
+                if i < 4 { kernel_weight_sq(k, d * d) } else { 0.0 }
             }),
         }
     };
@@ -554,6 +582,7 @@ mod tests {
             kernel: Kernel::Lanczos,
             stability: true,
             ids: true,
+            history_lobes: 3,
             surface_velocity: true,
         };
         let prepared: Vec<[f32; 4]> = (0..size.0 * size.1)
@@ -619,6 +648,7 @@ mod tests {
             kernel: Kernel::Lanczos,
             stability: true,
             ids: true,
+            history_lobes: 3,
             surface_velocity: true,
         };
         let prepared = vec![[0.2, 0.0, 0.0, 1.0]; size.0 * size.1];
@@ -662,6 +692,35 @@ mod tests {
         assert!(other_object(object_code(7, 0.0), 8, 2.0, 2.0));
         assert!(!other_object(object_code(7, 15.75), 7, 0.0, 2.0));
         assert_eq!(object_code(3, 99.0) as u32 >> 6, 3, "the speed saturates in its bits");
+    }
+
+    /// The history's Lanczos-3 weights from three sines are the kernel's own (within 1.5e-5 of
+    /// sinc(x) sinc(x / 3) in f64 at every 1/1000 of f), 1 and 0 at whole offsets.
+    #[test]
+    fn the_lanczos3_weights_are_the_kernel() {
+        let sinc = |x: f64| {
+            if x == 0.0 {
+                1.0
+            } else {
+                (std::f64::consts::PI * x).sin() / (std::f64::consts::PI * x)
+            }
+        };
+        let mut worst = 0.0f64;
+        for i in 0..1000 {
+            let f = i as f32 / 1000.0;
+            let w = lanczos3_weights(f);
+            for (k, &wk) in w.iter().enumerate() {
+                let x = (k as i32 - 2) as f64 - f64::from(f);
+                let want = if x.abs() < 3.0 { sinc(x) * sinc(x / 3.0) } else { 0.0 };
+                worst = worst.max((f64::from(wk) - want).abs());
+            }
+        }
+        // f32: the second factor cancels near f = 1 (measured 1.08e-5); S3 rounded to 4
+        // digits gives 0.012.
+        assert!(worst < 1.5e-5, "worst {worst}");
+        let w = lanczos3_weights(0.0);
+        assert_eq!(w[2], 1.0);
+        assert!(w.iter().enumerate().all(|(k, v)| k == 2 || v.abs() < 1e-6), "{w:?}");
     }
 
     #[test]
