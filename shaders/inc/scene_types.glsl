@@ -44,6 +44,10 @@ struct FrameConstants {
                         // (+x right, +y down moves the geometry: `--jitter`, `+taa`); z: the
                         // LOD bias a moving fragment sheds, w: 1 / the speed (pixels per frame)
                         // at which it sheds all of it (0: none)
+    vec4 turning;       // x: the LOD bias a turning object's fragment withdraws in proportion to
+                        // its turn (ObjectData.ids.z: a temporal technique's sharper bias, which
+                        // its history cannot average where the object's own rotation changes its
+                        // shading every frame); yzw: 0
     ivec4 pieces[8];    // xy: the (m, n) translation of each tangram piece, in units of L
 };
 
@@ -52,7 +56,9 @@ struct ObjectData {
     mat4 prev_clip_from_local;  // previous frame (camera and object), for velocity
     mat4 world_from_local;      // camera-relative world: translation = object - camera position
     mat4 normal_from_local;     // inverse transpose of world_from_local's 3x3 (in a mat4)
-    uvec4 ids;                  // x: object ID (index + 1; 0 = background), y: material, zw: 0
+    uvec4 ids;                  // x: object ID (index + 1; 0 = background), y: material,
+                                // z: the object's turn (f32 bits: its own rotation this frame
+                                // over TURN_FULL, at most 1; gpu_scene.rs), w: 0
 };
 
 struct MaterialData {

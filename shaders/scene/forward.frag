@@ -112,8 +112,14 @@ float motion_share() {
 // The fragment's LOD bias: the frame's, less the part a moving fragment sheds (TAA's sharper
 // bias, withdrawn linearly up to screen_jitter.w's speed; its history averages too few jittered
 // samples for it). With screen_jitter.zw = 0 the bias is the frame's exactly.
+//
+// A turning object's fragment (ObjectData.ids.z, its own rotation this frame) withdraws the
+// temporal technique's bias (frame.turning.x) in proportion to its turn: its shading changes every
+// frame, so its history holds a frame or none, and the sharper level only aliases (the demo's
+// spinning torus; docs/upsampling.md). The larger withdrawal of the two applies.
 float lod_bias() {
-    return frame.ambient.w - frame.screen_jitter.z * motion_share();
+    float turn = uintBitsToFloat(objects[pc.object_index].ids.z);
+    return frame.ambient.w - min(frame.screen_jitter.z * motion_share(), frame.turning.x * turn);
 }
 
 // The derivatives a, b between this layout's neighbouring samples, per output pixel (as

@@ -25,8 +25,9 @@
 //    history by the lock's strength.
 // 5. Luminance stability: where the current luma's change reverses the previous frame's
 //    (oscillation), the sample weight drops by half of min / max of the two changes.
-// 6. Accumulation: history weight capped at mix(accum still, accum moving, min(speed / SPEED,
-//    1)); out = (H h + w c) / (H + w); the weight stored is H + w.
+// 6. Accumulation: history weight capped at mix(accum still, accum moving (1 - turn),
+//    min(speed / SPEED, 1)), turn the pixel's object's own rotation (REACTIVE); out = (H h + w c)
+//    / (H + w); the weight stored is H + w.
 // NaN and Inf never enter the history: non-finite samples take no part, a non-finite history is
 // dropped.
 layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
@@ -38,6 +39,10 @@ layout(set = 0, binding = BINDING_DISOCCLUSION) uniform sampler2D disocclusion;
 #endif
 #ifdef BINDING_NEW_LOCKS
 layout(set = 0, binding = BINDING_NEW_LOCKS) readonly buffer Locks { uint new_locks[]; };
+#endif
+#if REACTIVE
+// Each object's turn this frame, by object ID (TaauPasses::set_turns).
+layout(set = 0, binding = BINDING_TURNS) readonly buffer Turns { float turns[]; };
 #endif
 layout(set = 0, binding = BINDING_HIST) uniform sampler2D hist;
 layout(set = 0, binding = BINDING_HIST_AUX) uniform sampler2D hist_aux;
@@ -199,7 +204,8 @@ void main() {
     // resolve's and `+taa`'s test; the speed keeps a sub-pixel wire that this frame's jitter
     // missed (its history moves as the sky around it does) (docs/upsampling.md).
     ivec2 c0 = clamp(ivec2(floor(src + jit)), ivec2(0), size - 1);
-    uint own_id = texelFetch(low_ids, c0, 0).x & ID_MASK;
+    uint raw_id = texelFetch(low_ids, c0, 0).x;
+    uint own_id = raw_id & ID_MASK;
     float own_speed = min(length(texelFetch(low_velocity, c0, 0).xy * ratio), SPEED_MAX);
 #if OBJECT_TEST
     if (use) {
@@ -288,7 +294,15 @@ void main() {
         }
 #endif
         // 6. Accumulation.
-        float cap = mix(pc.accum.x, pc.accum.y, moving);
+        // FSR 2's reactive mask, from the scene's own motion (REACTIVE): a turning object's
+        // shading changes every frame (its normals turn with it), and its history only lags;
+        // at speed it keeps (1 - turn) of the moving cap (the demo's spinning torus).
+#if REACTIVE
+        float turn = raw_id < uint(turns.length()) ? turns[raw_id] : 0.0;
+#else
+        float turn = 0.0;
+#endif
+        float cap = mix(pc.accum.x, pc.accum.y * (1.0 - turn), moving);
         float hk = min(hw * keep, cap);
         float total = hk + ws;
         if (total > 0.0) result = (hk * h + ws * cur) / total;

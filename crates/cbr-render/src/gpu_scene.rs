@@ -71,6 +71,24 @@ pub struct RasterUniforms {
     pub pieces: Vec<[i32; 2]>,
 }
 
+/// The rotation (degrees per frame) at which an object's turn reaches 1.
+pub const TURN_FULL_DEG: f64 = 10.0;
+
+/// An object's turn this frame: the angle its own transform rotated since the previous frame
+/// (the rotation of world · prev_world⁻¹, camera motion apart) over [`TURN_FULL_DEG`], capped
+/// at one. A turning surface's normals turn with it, and its shading changes by as much from
+/// frame to frame; a translating one's hardly does.
+pub fn turn(world: &DMat4, prev_world: &DMat4) -> f32 {
+    let r = DMat3::from_mat4(*world) * DMat3::from_mat4(*prev_world).inverse();
+    let cos = ((r.x_axis.x + r.y_axis.y + r.z_axis.z - 1.0) * 0.5).clamp(-1.0, 1.0);
+    let t = cos.acos().to_degrees() / TURN_FULL_DEG;
+    if t.is_finite() {
+        t.min(1.0) as f32
+    } else {
+        0.0
+    }
+}
+
 /// Where the camera is for one frame, with its previous-frame state for velocities.
 #[derive(Clone, Debug)]
 pub struct FrameView {
@@ -90,6 +108,10 @@ pub struct FrameView {
     /// few samples to average a shifted, sharper sample over. (0, 0): the jittered raster, at
     /// the bias, everywhere.
     pub lod_motion: [f32; 2],
+    /// The LOD bias a turning object's fragments withdraw in proportion to their object's turn
+    /// ([`turn`]): a temporal technique's sharper bias (`taau`'s, `+taa`'s), which its history
+    /// cannot average where the object's own rotation changes its shading every frame. 0: none.
+    pub lod_turn: f32,
     pub frame_index: u32,
     /// The projection's sub-pixel jitter in output pixels, every layout (RenderSettings::jitter
     /// plus a jittering post pass's).
@@ -512,7 +534,12 @@ impl GpuScene {
                     prev_clip_from_local: to_f32(prev_clip_from_rel * prev_rel),
                     world_from_local: to_f32(rel),
                     normal_from_local: to_f32(normal),
-                    ids: [i as u32 + 1, scene.objects[i].material, 0, 0],
+                    ids: [
+                        i as u32 + 1,
+                        scene.objects[i].material,
+                        turn(&world, &prev_world).to_bits(),
+                        0,
+                    ],
                 }
             })
             .collect();
@@ -576,6 +603,7 @@ impl GpuScene {
                 view.lod_motion[0],
                 view.lod_motion[1],
             ],
+            turning: [view.lod_turn, 0.0, 0.0, 0.0],
             pieces,
         };
         self.frame.write(0, bytemuck::bytes_of(&constants))?;
@@ -586,6 +614,37 @@ impl GpuScene {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An object's turn is its own rotation per frame over 10 degrees, at most 1, whatever its
+    /// pivot and translation; a translating object does not turn.
+    #[test]
+    fn an_objects_turn_is_its_own_rotation() {
+        let rot = |deg: f64| DMat4::from_rotation_y(deg.to_radians());
+        let about = |deg: f64, pivot: DVec3| {
+            DMat4::from_translation(pivot) * rot(deg) * DMat4::from_translation(-pivot)
+        };
+        let p = DVec3::new(3.0, 1.0, -2.0);
+        let base = DMat4::from_translation(DVec3::new(0.5, 0.0, 1.0))
+            * DMat4::from_scale(DVec3::splat(2.0));
+        assert_eq!(turn(&base, &base), 0.0);
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-6;
+        assert!(close(
+            turn(&(about(35.0, p) * base), &(about(30.0, p) * base)),
+            0.5
+        ));
+        assert!(
+            close(turn(&(about(-2.5, p) * base), &base), 0.25),
+            "either direction"
+        );
+        assert_eq!(
+            turn(&(about(48.0, p) * base), &(about(30.0, p) * base)),
+            1.0
+        );
+        let moved = DMat4::from_translation(DVec3::new(4.0, 0.0, 0.0)) * base;
+        assert_eq!(turn(&moved, &base), 0.0, "a translation");
+        let x = DMat4::from_rotation_x(5f64.to_radians());
+        assert!(close(turn(&(x * base), &base), 0.5), "about any axis");
+    }
 
     fn view(camera: Camera, prev_camera: Camera) -> FrameView {
         FrameView {
@@ -598,6 +657,7 @@ mod tests {
             aspect: 320.0 / 180.0,
             lod_bias: 0.0,
             lod_motion: [0.0; 2],
+            lod_turn: 0.0,
             frame_index: 1,
             screen_jitter: [0.0; 2],
             raster: RasterUniforms::default(),

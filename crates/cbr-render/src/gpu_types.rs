@@ -13,6 +13,7 @@ pub struct FrameConstants {
     pub counts: [u32; 4],
     pub tangram: [i32; 4],
     pub screen_jitter: [f32; 4],
+    pub turning: [f32; 4],
     pub pieces: [[i32; 4]; MAX_PIECES],
 }
 
@@ -220,7 +221,8 @@ pub(crate) mod tests {
             6,
             offset_of!(FrameConstants, screen_jitter),
         );
-        check("FrameConstants", 7, offset_of!(FrameConstants, pieces));
+        check("FrameConstants", 7, offset_of!(FrameConstants, turning));
+        check("FrameConstants", 8, offset_of!(FrameConstants, pieces));
         check("ObjectData", 0, offset_of!(ObjectData, clip_from_local));
         check(
             "ObjectData",

@@ -1583,6 +1583,21 @@ impl Resources {
         }
     }
 
+    /// A buffer to write from the host (an upload buffer).
+    pub fn buffer_mut(&mut self, name: &str) -> Result<&mut Buffer> {
+        let owner = self.owner.clone();
+        match self
+            .items
+            .iter_mut()
+            .find(|(n, _)| *n == name)
+            .map(|(_, o)| o)
+        {
+            Some(Owned::Buffer(b)) => Ok(b),
+            Some(_) => Err(declaration(&owner, format!("`{name}` is not a buffer"))),
+            None => Err(declaration(&owner, format!("no resource `{name}`"))),
+        }
+    }
+
     pub fn buffer(&self, name: &str) -> Result<&Buffer> {
         match self.find(name)? {
             Owned::Buffer(b) => Ok(b),

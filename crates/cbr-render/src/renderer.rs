@@ -30,6 +30,9 @@ pub struct RenderSettings {
     /// pixels per frame ([`FrameView::lod_motion`]); `None`: the bias applies everywhere (tests
     /// render what `+taa` blends in with it).
     pub lod_motion: Option<[f32; 2]>,
+    /// With `lod_bias` set: the part of it a turning object's fragments withdraw
+    /// ([`FrameView::lod_turn`]); `None`: none (tests).
+    pub lod_turn: Option<f32>,
     /// Count shaded (non-helper) fragments with an atomic counter (tests, `--count-shaded`).
     pub count_shaded: bool,
     /// Write each sample's albedo level of detail to colour.r instead of radiance (tests, docs).
@@ -58,6 +61,7 @@ impl RenderSettings {
             spec,
             lod_bias: None,
             lod_motion: None,
+            lod_turn: None,
             count_shaded: false,
             debug_lod: false,
             instrument: false,
@@ -336,6 +340,21 @@ impl Renderer {
             .unwrap_or([0.0; 2])
     }
 
+    /// The LOD bias a turning object's fragments withdraw ([`FrameView::lod_turn`]): the
+    /// temporal part of the bias (the technique's own, `taau`'s, and the post passes', TAA's;
+    /// a centred frame takes no post pass's bias); with `--lod-bias`, the `lod_turn` setting's
+    /// (none from the command line).
+    pub fn lod_turn(&self, centred: bool) -> f32 {
+        if self.settings.lod_bias.is_some() {
+            return self.settings.lod_turn.unwrap_or(0.0);
+        }
+        let post: f32 = match centred {
+            true => 0.0,
+            false => self.post.iter().map(|p| p.lod_bias()).sum(),
+        };
+        self.technique.temporal_lod_bias() + post
+    }
+
     /// Bytes of the raster targets (what a technique costs in memory).
     pub fn target_bytes(&self) -> u64 {
         self.technique.target_bytes()
@@ -401,6 +420,7 @@ impl Renderer {
             aspect: f64::from(s.width) / f64::from(s.height),
             lod_bias,
             lod_motion,
+            lod_turn: self.lod_turn(centred),
             frame_index: frame,
             screen_jitter: jitter,
             raster: RasterUniforms {

@@ -115,6 +115,11 @@ pub trait Technique {
     fn default_lod_bias(&self) -> f32 {
         0.0
     }
+    /// The part of [`Technique::default_lod_bias`] that only an accumulated history makes up
+    /// for (`taau`'s): a turning object's fragments withdraw it (`FrameView::lod_turn`).
+    fn temporal_lod_bias(&self) -> f32 {
+        0.0
+    }
     /// Bytes of the technique's raster targets (what it costs in memory).
     fn target_bytes(&self) -> u64;
     /// It jitters its own frames (checkerboard `fused`): a jittering post pass after it would

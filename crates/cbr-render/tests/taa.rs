@@ -495,6 +495,74 @@ fn the_lod_bias_is_withdrawn_from_moving_fragments() {
     assert_clean(&gpu);
 }
 
+/// A turning object's fragments withdraw the temporal LOD bias by their object's turn
+/// (`FrameView::lod_turn`: `taau`'s own bias, the post passes' `+taa` bias; none without a
+/// temporal bias, with `taau:without-reactive` or with a fixed `--lod-bias`): on the demo the
+/// torus turns 18 degrees a frame (turn 1), and each of its textured pixels' albedo LOD
+/// (`debug_lod`) rises by the whole withdrawn bias, where every other object's stays.
+#[test]
+fn a_turning_object_withdraws_the_lod_bias() {
+    let gpu = gpu();
+    let (w, h) = (128u32, 72u32);
+    let s = demo(w, h);
+    let shaders = cbr_render::shader_library();
+    let turn = |spec_: &str| {
+        Renderer::new(&gpu, &shaders, &s, spec(w, h, spec_))
+            .expect("renderer")
+            .lod_turn(false)
+    };
+    assert_eq!(turn("native+taa"), -1.0);
+    assert_eq!(
+        turn("checkerboard:rotated:ours+taa"),
+        -1.0,
+        "the post's part only"
+    );
+    assert!((turn("taau") - (0.5f32.sqrt().log2() - 1.0)).abs() < 1e-6);
+    for none in ["native", "taau:without-reactive", "upscale:fsr1"] {
+        assert_eq!(turn(none), 0.0, "{none}");
+    }
+    let fixed = RenderSettings {
+        lod_bias: Some(-1.0),
+        ..spec(w, h, "native+taa")
+    };
+    let r = Renderer::new(&gpu, &shaders, &s, fixed).expect("renderer");
+    assert_eq!(r.lod_turn(false), 0.0, "a fixed --lod-bias");
+    let lod = |t: Option<f32>| {
+        let settings = RenderSettings {
+            debug_lod: true,
+            lod_bias: Some(-1.0),
+            lod_turn: t,
+            ..spec(w, h, "native")
+        };
+        render(&gpu, &s, settings, &[5]).remove(0)
+    };
+    let torus = s
+        .objects
+        .iter()
+        .position(|o| o.name == "spinner")
+        .expect("torus") as u32
+        + 1;
+    let (fixed, turning) = (lod(None), lod(Some(-1.0)));
+    let (mut worst, mut on_torus, mut elsewhere) = (0.0f32, 0, 0);
+    for i in 0..fixed.ids.len() {
+        let a = fixed.color[4 * i].to_f32();
+        if a <= -99.0 || fixed.ids[i] != turning.ids[i] {
+            continue;
+        }
+        let want = if fixed.ids[i][0] == torus { 1.0 } else { 0.0 };
+        worst = worst.max((turning.color[4 * i].to_f32() - a - want).abs());
+        on_torus += usize::from(want == 1.0);
+        elsewhere += usize::from(want == 0.0);
+    }
+    eprintln!("LOD rise off by at most {worst}; {on_torus} torus, {elsewhere} other pixels");
+    assert!(worst < 0.01, "the LOD rise is off by {worst}");
+    assert!(
+        on_torus > 50 && elsewhere > 500,
+        "{on_torus} torus, {elsewhere} other pixels"
+    );
+    assert_clean(&gpu);
+}
+
 /// `+taa:motionlod` moves a moving fragment's shading inputs (UV, position, normal) back to the
 /// unjittered pixel centre by its share of the jitter (forward.frag's `unjittered`): with a fixed
 /// jitter and every moving fragment's share 1 (1/4 px per frame sheds it all), the textured

@@ -192,6 +192,9 @@ fn run_frame(gpu: &Gpu, p: &TaauPasses, t: &FrameTargets, f: &TaauFrame) -> Got 
     }
 }
 
+/// The synthetic frames' turns by object ID: the square (2) turns half of the full turn.
+const TURNS: [f32; 3] = [0.0, 0.0, 0.5];
+
 /// Each pass against its reference, frames 0-4 (frame 0 and 3 reset... frame 0 only), for
 /// the default and every option that changes a shader.
 #[test]
@@ -202,7 +205,13 @@ fn every_pass_matches_its_cpu_reference_over_frames() {
     for spec in [
         &[][..],
         &["catmull", "without-stability", "without-surface-velocity"],
-        &["bilinear", "without-locks", "without-rcas", "without-ids"],
+        &[
+            "bilinear",
+            "without-locks",
+            "without-rcas",
+            "without-ids",
+            "without-reactive",
+        ],
         &[
             "0.5",
             "without-depth-clip",
@@ -214,11 +223,12 @@ fn every_pass_matches_its_cpu_reference_over_frames() {
         let c = taau::parse(spec).expect("spec");
         let (w, h) = c.render_resolution(out.0, out.1);
         let targets = FrameTargets::new(&gpu, "t.render", w, h).expect("targets");
-        let passes = TaauPasses::new(&gpu, &shaders, &c, out).expect("passes");
+        let mut passes = TaauPasses::new(&gpu, &shaders, &c, out).expect("passes");
         let phases = c.phases(out.0, out.1);
         let (mut prev_h, mut prev_a): (Vec<V4>, Vec<V4>) = (Vec::new(), Vec::new());
         let (mut locked, mut disoccluded, mut clipped_or_blended) = (0usize, 0usize, 0usize);
-        let mut object_drops = 0usize;
+        let (mut object_drops, mut reactive) = (0usize, 0usize);
+        passes.set_turns(&TURNS).expect("turns");
         for frame in 0..5u32 {
             let s = synthetic(w as usize, h as usize, frame as usize);
             upload(&gpu, &targets, &s);
@@ -273,8 +283,19 @@ fn every_pass_matches_its_cpu_reference_over_frames() {
                 aux: if frame == 0 { &blank } else { &prev_a },
                 velocity: &s.velocity,
                 ids: &ids,
+                turns: c.reactive.then_some(&TURNS[..]),
             };
             let want = reference::accumulate(&p, &inputs);
+            if c.reactive {
+                let still = AccumulateInputs {
+                    turns: None,
+                    ..inputs
+                };
+                let without = reference::accumulate(&p, &still);
+                reactive += (want.history.iter().zip(&without.history))
+                    .filter(|(a, b)| a != b)
+                    .count();
+            }
             if c.ids {
                 let without =
                     reference::accumulate(&reference::Params { ids: false, ..p }, &inputs);
@@ -327,6 +348,12 @@ fn every_pass_matches_its_cpu_reference_over_frames() {
             assert!(
                 object_drops > 10,
                 "{spec:?}: {object_drops} dropped by the object test"
+            );
+        }
+        if c.reactive {
+            assert!(
+                reactive > 10,
+                "{spec:?}: {reactive} pixels the reactive rule changed"
             );
         }
         assert!(

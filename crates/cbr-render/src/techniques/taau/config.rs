@@ -36,10 +36,11 @@ impl Kernel {
 }
 
 /// The parts `without-X` switches off.
-pub const ABLATIONS: [&str; 6] = [
+pub const ABLATIONS: [&str; 7] = [
     "locks",
     "depth-clip",
     "ids",
+    "reactive",
     "rcas",
     "stability",
     "surface-velocity",
@@ -61,6 +62,11 @@ pub struct TaauConfig {
     /// disocclusion (`without-ids`: FSR 2's depth clip alone, which does not see a surface
     /// that turned away).
     pub ids: bool,
+    /// FSR 2's reactive mask, made from the scene's own motion: a turning object (its own
+    /// rotation this frame over 10 degrees, at most 1: `gpu_scene::turn`) keeps that much less
+    /// history at speed, and its fragments withdraw the LOD bias as much (its shading changes
+    /// every frame, so the history cannot average the sharper level).
+    pub reactive: bool,
     /// RCAS on the accumulated output.
     pub rcas: bool,
     /// Luminance stability: an oscillating current luma weighs less.
@@ -100,6 +106,7 @@ impl Default for TaauConfig {
             locks: true,
             depth_clip: true,
             ids: true,
+            reactive: true,
             rcas: true,
             stability: true,
             surface_velocity: true,
@@ -147,7 +154,7 @@ impl TaauConfig {
 }
 
 const EXPECTED: &str = "a scale in (0, 1], bilinear|catmull|lanczos, without-X (X: locks, \
-                        depth-clip, ids, rcas, stability, surface-velocity), sharpness=S, lobes=2|3, accum=A, moving=A, gamma=G, \
+                        depth-clip, ids, reactive, rcas, stability, surface-velocity), sharpness=S, lobes=2|3, accum=A, moving=A, gamma=G, \
                         tol=T, lod=B or debug";
 
 pub fn parse(params: &[&str]) -> std::result::Result<TaauConfig, String> {
@@ -174,6 +181,7 @@ pub fn parse(params: &[&str]) -> std::result::Result<TaauConfig, String> {
                 "locks" => c.locks = false,
                 "depth-clip" => c.depth_clip = false,
                 "ids" => c.ids = false,
+                "reactive" => c.reactive = false,
                 "rcas" => c.rcas = false,
                 "stability" => c.stability = false,
                 "surface-velocity" => c.surface_velocity = false,
@@ -261,6 +269,7 @@ mod tests {
         assert!(!parse(&["without-stability"]).expect("ok").stability);
         assert!(TaauConfig::default().ids && !parse(&["without-ids"]).expect("ok").ids);
         assert_eq!(TaauConfig::default().history_lobes, 3);
+        assert!(TaauConfig::default().reactive && !parse(&["without-reactive"]).expect("ok").reactive);
         assert_eq!(parse(&["lobes=2", "lanczos"]).expect("ok").history_lobes, 2);
     }
 

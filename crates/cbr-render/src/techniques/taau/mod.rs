@@ -51,7 +51,7 @@ const LAYERS: [LayerDecl; 1] = [DEBUG_LAYER];
 pub const REGISTRATION: Registration = Registration {
     name: "taau",
     grammar: "taau[:SCALE][:bilinear|catmull|lanczos][:without-locks][:without-depth-clip]\
-              [:without-ids][:without-rcas][:without-stability][:without-surface-velocity][:sharpness=S][:lobes=2|3][:accum=A][:moving=A][:gamma=G][:tol=T]\
+              [:without-ids][:without-reactive][:without-rcas][:without-stability][:without-surface-velocity][:sharpness=S][:lobes=2|3][:accum=A][:moving=A][:gamma=G][:tol=T]\
               [:lod=B][:debug]",
     about: "temporal upsampling after FSR 2: render at SCALE per axis (default 1/sqrt(2): the \
             checkerboard's pixel count) with a Halton jitter, dilate, depth clip, lock thin \
@@ -102,6 +102,9 @@ pub const F_RESET: u32 = 1;
 /// (no velocity written there) is not still.
 pub const F_BACKGROUND: u32 = 2;
 
+/// Object IDs the reactive rule knows the turn of (`turns`, indexed by object ID; above it, 0).
+pub const MAX_TURN_IDS: u32 = 4096;
+
 /// The kernel's largest bias: FSR 2 caps the Lanczos kernel's scale below 2.
 pub const MAX_BIAS: f32 = 1.99;
 
@@ -140,6 +143,7 @@ pub fn accumulate_decl(c: &TaauConfig) -> ComputeDecl {
         .define("STABILITY", u32::from(c.stability))
         .define("OBJECT_TEST", u32::from(c.ids))
         .define("HISTORY_LOBES", c.history_lobes)
+        .define("REACTIVE", u32::from(c.reactive))
         .constants(&[("F_RESET", F_RESET), ("F_BACKGROUND", F_BACKGROUND)])
         .bind(Binding::sampled("prepared"))
         .bind(Binding::sampled("dilated"));
@@ -148,6 +152,9 @@ pub fn accumulate_decl(c: &TaauConfig) -> ComputeDecl {
     }
     if c.locks {
         d = d.bind(Binding::buffer("new_locks", Use::Read));
+    }
+    if c.reactive {
+        d = d.bind(Binding::buffer("turns", Use::Read));
     }
     d = d.bindings(&[
         Binding::sampled("hist"),
@@ -222,6 +229,9 @@ fn resources(out: (u32, u32), size: (u32, u32), c: &TaauConfig) -> Vec<ResourceD
     }
     if c.rcas {
         r.push(ResourceDecl::image("out_color", COLOR_FORMAT, ow, oh));
+    }
+    if c.reactive {
+        r.push(ResourceDecl::upload_buffer("turns", u64::from(MAX_TURN_IDS) * 4));
     }
     if c.debug {
         r.push(ResourceDecl::image("debug", vk::Format::R32G32B32A32_SFLOAT, ow, oh));
@@ -321,6 +331,20 @@ impl TaauPasses {
                 flags: [0; 4],
             },
         })
+    }
+
+    /// Each object's turn this frame, indexed by object ID (0 the background; IDs from
+    /// [`MAX_TURN_IDS`] on count as not turning), for the reactive rule (`turns`).
+    pub fn set_turns(&mut self, turns: &[f32]) -> Result<()> {
+        if !self.config.reactive {
+            return Ok(());
+        }
+        let b = self.res.buffer_mut("turns")?;
+        let mut all = vec![0.0f32; MAX_TURN_IDS as usize];
+        for (a, t) in all.iter_mut().zip(turns) {
+            *a = *t;
+        }
+        b.write(0, bytemuck::cast_slice(&all))
     }
 
     /// The push constants of frame `f` (also the CPU reference's parameters: [`Self::params`]).
@@ -489,6 +513,16 @@ impl Technique for Taau {
         let mut view = ctx.view.at_size(w, h);
         view.screen_jitter = [view.screen_jitter[0] + j[0], view.screen_jitter[1] + j[1]];
         ctx.upload(&view)?;
+        let scene = ctx.scene;
+        let turns: Vec<f32> = std::iter::once(0.0)
+            .chain((0..scene.objects.len()).map(|i| {
+                crate::gpu_scene::turn(
+                    &scene.object_transform(i, view.time),
+                    &scene.object_transform(i, view.prev_time),
+                )
+            }))
+            .collect();
+        self.passes.set_turns(&turns)?;
         let f = TaauFrame {
             frame: ctx.frame,
             reset: ctx.reset,
@@ -529,6 +563,16 @@ impl Technique for Taau {
 
     fn default_lod_bias(&self) -> f32 {
         self.config.lod_bias()
+    }
+
+    /// All of it: FSR 2's log2(SCALE) - 1 is for the accumulated output's resolution; a
+    /// turning object, whose history holds a frame or none, is sampled for the render grid.
+    fn temporal_lod_bias(&self) -> f32 {
+        if self.config.reactive {
+            self.config.lod_bias()
+        } else {
+            0.0
+        }
     }
 
     fn jitters(&self) -> bool {

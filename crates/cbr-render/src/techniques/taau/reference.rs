@@ -268,6 +268,8 @@ pub struct AccumulateInputs<'a> {
     /// The render's own velocity (render pixels) and object IDs, for the object test.
     pub velocity: &'a [[f32; 2]],
     pub ids: &'a [u32],
+    /// Each object's turn by object ID (the reactive rule); `None`: `without-reactive`.
+    pub turns: Option<&'a [f32]>,
 }
 
 /// The history aux's w ([`object_code`]): the object ID modulo 2^18, shifted past the speed's
@@ -419,7 +421,8 @@ pub fn accumulate(p: &Params, i: &AccumulateInputs) -> Accumulated {
                 c0[1].clamp(0, p.size.1 as i32 - 1),
             ];
             let at0 = c0[1] as usize * p.size.0 + c0[0] as usize;
-            let own_id = i.ids[at0];
+            let raw_id = i.ids[at0];
+            let own_id = raw_id & ID_MASK;
             let ov = i.velocity[at0];
             let (ox, oy) = (ov[0] * p.ratio[0], ov[1] * p.ratio[1]);
             let own_speed = (ox * ox + oy * oy).sqrt().min(SPEED_MAX);
@@ -513,7 +516,11 @@ pub fn accumulate(p: &Params, i: &AccumulateInputs) -> Accumulated {
                     let (a, b) = (change.abs(), aux[2].abs());
                     ws *= 1.0 - 0.5 * a.min(b) / a.max(b);
                 }
-                let cap = p.accum[0] * (1.0 - moving) + p.accum[1] * moving;
+                let turn = i
+                    .turns
+                    .and_then(|t| t.get(raw_id as usize).copied())
+                    .unwrap_or(0.0);
+                let cap = p.accum[0] * (1.0 - moving) + p.accum[1] * (1.0 - turn) * moving;
                 let hk = (hw * keep).min(cap);
                 let total = hk + ws;
                 if total > 0.0 {
@@ -604,6 +611,7 @@ mod tests {
                 aux: &aux,
                 velocity: &velocity,
                 ids: &ids,
+                turns: None,
             };
             accumulate(&Params { reset, ..p }, &i).debug[5 * out.0 + 5][2]
         };
@@ -670,6 +678,7 @@ mod tests {
                 aux: &aux,
                 velocity: &velocity,
                 ids: &ids,
+                turns: None,
             };
             let a = accumulate(&Params { ids: ids_on, ..p }, &i);
             let k = 5 * out.0 + 5;
@@ -721,6 +730,63 @@ mod tests {
         let w = lanczos3_weights(0.0);
         assert_eq!(w[2], 1.0);
         assert!(w.iter().enumerate().all(|(k, v)| k == 2 || v.abs() < 1e-6), "{w:?}");
+    }
+
+    /// The reactive rule: at the moving cap's speed a turning object keeps (1 - turn) of the
+    /// moving cap (none when it turns 10 degrees a frame or more); at rest, or without
+    /// `turns`, the cap is the usual one.
+    #[test]
+    fn a_turning_object_keeps_less_history_at_speed() {
+        let (out, size) = ((8usize, 8usize), (6usize, 6usize));
+        let ratio = [8.0 / 6.0, 8.0 / 6.0];
+        let p = Params {
+            out,
+            size,
+            jitter: [0.0, 0.0],
+            ratio,
+            exposure: 1.0,
+            depth_tolerance: 0.05,
+            gamma: 16.0,
+            bias_max: 8.0 / 6.0,
+            accum: [8.0, 1.0, 2.0, 1.0 / 16.0],
+            reset: false,
+            background_moves: false,
+            kernel: Kernel::Lanczos,
+            stability: false,
+            ids: true,
+            history_lobes: 3,
+            surface_velocity: true,
+        };
+        let prepared = vec![[0.2, 0.0, 0.0, 1.0]; size.0 * size.1];
+        let history = vec![[0.2, 0.0, 0.0, 4.0]; out.0 * out.1];
+        let aux = vec![[0.0, 0.2, 0.0, object_code(3, 0.0)]; out.0 * out.1];
+        let ids = vec![3u32; size.0 * size.1];
+        // The pixel's history weight after this frame with the object moving `v` output pixels a
+        // frame (its own velocity zero: the object test keeps the history), turning `turn`.
+        let weight = |v: f32, turns: Option<&[f32]>| {
+            let dilated = vec![[v / ratio[0], 0.0, 0.5, 0.0]; size.0 * size.1];
+            let velocity = vec![[0.0; 2]; size.0 * size.1];
+            let i = AccumulateInputs {
+                prepared: &prepared,
+                dilated: &dilated,
+                disocclusion: None,
+                new_locks: None,
+                history: &history,
+                aux: &aux,
+                velocity: &velocity,
+                ids: &ids,
+                turns,
+            };
+            let d = accumulate(&p, &i).debug[5 * out.0 + 5];
+            d[3] - d[2]
+        };
+        let (half, full) = ([0.0, 0.0, 0.0, 0.5], [0.0, 0.0, 0.0, 1.0]);
+        assert!((weight(2.0, None) - 1.0).abs() < 1e-5, "the moving cap");
+        assert!((weight(2.0, Some(&half)) - 0.5).abs() < 1e-5, "half of it, turning half");
+        assert!(weight(3.0, Some(&full)).abs() < 1e-5, "none, turning fully");
+        assert!((weight(0.0, Some(&full)) - 4.0).abs() < 1e-5, "at rest: the history's own weight");
+        assert!((weight(1.0, Some(&full)) - 4.0).abs() < 1e-5, "half way: under the cap 4.5");
+        assert!((weight(2.0, Some(&[1.0; 3])) - 1.0).abs() < 1e-5, "no turn past the list (ID 3)");
     }
 
     #[test]
