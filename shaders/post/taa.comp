@@ -32,6 +32,8 @@ layout(set = 0, binding = BINDING_CYCLE) uniform sampler2D hist_cycle;
 layout(set = 0, binding = BINDING_RANGE) uniform sampler2D hist_range;
 layout(set = 0, binding = BINDING_OUT_CYCLE, rgba32f) uniform writeonly image2D out_cycle;
 layout(set = 0, binding = BINDING_OUT_RANGE, rgba16f) uniform writeonly image2D out_range;
+// Each object's turn this frame, by object ID (F_REACTIVE; gpu_scene.rs `object_turns`).
+layout(set = 0, binding = BINDING_TURNS) readonly buffer Turns { float turns[]; };
 
 // F_RESET, F_DILATION, F_CLIP, F_IDS, F_DEPTH, F_CATMULL, F_MEAN (blend weight 1 / (n + 1): the
 // running mean), F_FILTER (reconstruct the current sample at the pixel centre, Karis' filter),
@@ -319,6 +321,14 @@ void main() {
                 }
             }
             if (pc.speed_jitter.y > 0.0) a = mix(a, amax, min(length(v) / ramp, 1.0));
+            // F_REACTIVE (FSR 2's reactive mask from the scene's own motion, as `taau`'s): a
+            // turning object's shading changes every frame (its normals turn with it), and its
+            // history only lags; its current weight rises on to 1 by its turn, over the same
+            // ramp (the demo's spinning torus; docs/post-aa.md).
+            if (has(F_REACTIVE) && pc.speed_jitter.y > 0.0) {
+                float turn = nid[4] < uint(turns.length()) ? turns[nid[4]] : 0.0;
+                a = mix(a, 1.0, turn * min(length(v) / pc.speed_jitter.y, 1.0));
+            }
             // A history of m frames (m + 1 = count) takes the current frame with weight at least
             // 1 / (m + 1): the running mean until the exponential window 1 / alpha is full, after
             // a reset and after every rejection (a disoccluded pixel converges as fast as a

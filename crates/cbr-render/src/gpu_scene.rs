@@ -89,6 +89,32 @@ pub fn turn(world: &DMat4, prev_world: &DMat4) -> f32 {
     }
 }
 
+/// Object IDs the reactive rules know the turn of (`turns` buffers, indexed by object ID; from
+/// it on, 0).
+pub const MAX_TURN_IDS: u32 = 4096;
+
+/// Every object's [`turn`] between `prev_time` and `time`, by object ID (index + 1; 0 the
+/// background, which does not turn).
+pub fn object_turns(scene: &Scene, time: f64, prev_time: f64) -> Vec<f32> {
+    std::iter::once(0.0)
+        .chain((0..scene.objects.len()).map(|i| {
+            turn(
+                &scene.object_transform(i, time),
+                &scene.object_transform(i, prev_time),
+            )
+        }))
+        .collect()
+}
+
+/// Writes `turns` into a `turns` buffer of [`MAX_TURN_IDS`] floats (zeros past them).
+pub fn write_turns(buffer: &mut Buffer, turns: &[f32]) -> Result<()> {
+    let mut all = vec![0.0f32; MAX_TURN_IDS as usize];
+    for (a, t) in all.iter_mut().zip(turns) {
+        *a = *t;
+    }
+    buffer.write(0, bytemuck::cast_slice(&all))
+}
+
 /// Where the camera is for one frame, with its previous-frame state for velocities.
 #[derive(Clone, Debug)]
 pub struct FrameView {

@@ -350,7 +350,7 @@ impl Renderer {
         }
         let post: f32 = match centred {
             true => 0.0,
-            false => self.post.iter().map(|p| p.lod_bias()).sum(),
+            false => self.post.iter().map(|p| p.lod_turn()).sum(),
         };
         self.technique.temporal_lod_bias() + post
     }
@@ -471,9 +471,11 @@ impl Renderer {
             if self.post.is_empty() {
                 return Ok(());
             }
+            let turns = crate::gpu_scene::object_turns(scene, ctx.view.time, ctx.view.prev_time);
             let pf = PostFrame {
                 frame,
                 reset,
+                turns: &turns,
                 jitter: ctx.view.screen_jitter,
                 geometry: match self.geometry {
                     true => self.technique.geometry(frame),

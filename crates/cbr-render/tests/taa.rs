@@ -74,6 +74,7 @@ fn jittered_native_for(
         jitter: taa::jitter(c.length, f),
         lod_bias: Some(c.lod_bias),
         lod_motion: motion.then(|| [shed, 1.0 / c.unjitter_speed()]),
+        lod_turn: c.reactive.then_some(c.lod_bias),
         ..spec(w, h, "native")
     };
     render(gpu, s, settings, &[f]).remove(0)
@@ -161,6 +162,13 @@ fn shader_matches_reference(gpu: &cbr_gpu::Gpu, s: &Scene, frames: &[u32], param
             .iter()
             .map(|n| (rgb(n), n.ids.iter().map(|i| i[0]).collect()))
             .collect();
+        let turns: Vec<Vec<f32>> = frames
+            .iter()
+            .map(|&f| {
+                let t = s.time_of_frame(f);
+                cbr_render::gpu_scene::object_turns(s, t, t - 1.0 / s.settings.fps)
+            })
+            .collect();
         let input = |k: usize| RefInputs {
             width: w as usize,
             height: h as usize,
@@ -176,6 +184,7 @@ fn shader_matches_reference(gpu: &cbr_gpu::Gpu, s: &Scene, frames: &[u32], param
                 false => taa::jitter(c.length, frames[k]),
             },
             cycle: None,
+            turns: Some(&turns[k]),
         };
         // The history geometry the GPU wrote last frame: the first frame is a reset (it depends
         // on no history); after it, the reference's own (it carries the per-pixel frame count).

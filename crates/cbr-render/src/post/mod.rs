@@ -52,6 +52,8 @@ pub struct PostFrame<'a> {
     pub jitter: [f32; 2],
     /// The technique's geometry this frame (when a pass of the chain reads it).
     pub geometry: Option<Geometry<'a>>,
+    /// Each object's turn this frame by object ID ([`crate::gpu_scene::object_turns`]).
+    pub turns: &'a [f32],
 }
 
 pub trait PostPass {
@@ -82,6 +84,11 @@ pub trait PostPass {
     /// (TAA: a fast pixel's history averages too few jittered samples for a shifted, sharper
     /// one); 0: every fragment is the jittered raster's, at the full bias.
     fn lod_speed(&self) -> f32 {
+        0.0
+    }
+    /// The part of [`PostPass::lod_bias`] a turning object's fragments withdraw by their turn
+    /// (TAA's reactive rule: all of it; [`crate::gpu_scene::FrameView::lod_turn`]).
+    fn lod_turn(&self) -> f32 {
         0.0
     }
     /// The part of the LOD bias a fragment moving at [`PostPass::lod_speed`] or faster sheds

@@ -126,6 +126,9 @@ const OURS_SWITCHES: &[Switch] = &[
     ("without-surface-velocity", "a surface's own velocity", |c| {
         c.surface_velocity = false
     }),
+    ("without-reactive", "turning objects' reactive weight", |c| {
+        c.reactive = false
+    }),
     ("without-interior", "moving interiors' current frame", |c| {
         c.interior = Some(false)
     }),
@@ -179,6 +182,11 @@ pub struct TaaConfig {
     /// accumulates (`without-surface-velocity`: dilation everywhere, as published; off in
     /// INSIDE's mode).
     pub surface_velocity: bool,
+    /// FSR 2's reactive mask from the scene's own motion, as `taau`'s: a turning object's
+    /// moving pixel takes the current frame with weight rising to 1 by its turn
+    /// (`gpu_scene::turn`), and its fragments withdraw the LOD bias as much
+    /// (`without-reactive`; off in INSIDE's mode).
+    pub reactive: bool,
     pub clip: bool,
     pub ids: bool,
     pub depth: bool,
@@ -287,6 +295,7 @@ impl TaaConfig {
         lod_bias: -1.0,
         dilation: true,
         surface_velocity: true,
+        reactive: true,
         clip: true,
         ids: true,
         depth: true,
@@ -320,6 +329,7 @@ impl TaaConfig {
         unjitter: false,
         interior: Some(false),
         surface_velocity: false,
+        reactive: false,
         centred_reset: false,
         locks: false,
         ..TaaConfig::OURS
@@ -470,6 +480,7 @@ impl TaaConfig {
             (self.locks, F_LOCK),
             (self.motion_lod, F_SHED),
             (self.surface_velocity, F_SURFACE),
+            (self.reactive, F_REACTIVE),
         ] {
             if on {
                 f |= bit;
@@ -496,6 +507,7 @@ pub const F_INTERIOR: u32 = 8192;
 pub const F_LOCK: u32 = 16384;
 pub const F_SHED: u32 = 32768;
 pub const F_SURFACE: u32 = 65536;
+pub const F_REACTIVE: u32 = 131072;
 
 /// The radical inverse of `i` in `base` (the Halton sequence's element i).
 pub fn halton(mut i: u32, base: u32) -> f32 {
@@ -557,6 +569,7 @@ pub fn decl(inside: bool, packed: bool) -> ComputeDecl {
             ("F_LOCK", F_LOCK),
             ("F_SHED", F_SHED),
             ("F_SURFACE", F_SURFACE),
+            ("F_REACTIVE", F_REACTIVE),
             ("MOVED", MOVED),
             ("ID_MASK", !MOVED),
             ("HIST_ID_MASK", HIST_ID_MASK),
@@ -576,6 +589,7 @@ pub fn decl(inside: bool, packed: bool) -> ComputeDecl {
             Binding::sampled("range"),
             Binding::image("out_cycle", Use::Write),
             Binding::image("out_range", Use::Write),
+            Binding::buffer("turns", Use::Read),
         ])
         .push::<Push>()
 }
@@ -584,7 +598,9 @@ pub fn decl(inside: bool, packed: bool) -> ComputeDecl {
 /// pixels' jitter cycle (its mean so far and sample count; the luma ranges of the last complete
 /// cycle and of this one).
 fn resources(w: u32, h: u32) -> Vec<ResourceDecl> {
+    let turns = u64::from(crate::gpu_scene::MAX_TURN_IDS) * 4;
     vec![
+        ResourceDecl::upload_buffer("turns", turns),
         ResourceDecl::image("history", COLOR_FORMAT, w, h).history(),
         ResourceDecl::image("history_geom", vk::Format::R32G32_UINT, w, h).history(),
         ResourceDecl::image("history_cycle", vk::Format::R32G32B32A32_SFLOAT, w, h).history(),
@@ -658,6 +674,7 @@ impl PostPass for Taa {
         push.flags[1] = self.accumulated;
         push.speed_jitter[2] = frame.jitter[0];
         push.speed_jitter[3] = frame.jitter[1];
+        crate::gpu_scene::write_turns(self.res.buffer_mut("turns")?, frame.turns)?;
         let g = frame
             .geometry
             .as_ref()
@@ -675,7 +692,8 @@ impl PostPass for Taa {
                 "out_geom",
             )
             .history(self.res.history("history_cycle")?, f, "cycle", "out_cycle")
-            .history(self.res.history("history_range")?, f, "range", "out_range");
+            .history(self.res.history("history_range")?, f, "range", "out_range")
+            .buffer("turns", self.res.buffer("turns")?);
         let size = (push.size[0] as u32, push.size[1] as u32);
         self.pass.dispatch_2d(cmd, profiler, &binds, &push, size)
     }
@@ -691,6 +709,13 @@ impl PostPass for Taa {
 
     fn lod_bias(&self) -> f32 {
         self.config.lod_bias
+    }
+
+    fn lod_turn(&self) -> f32 {
+        match self.config.reactive {
+            true => self.config.lod_bias,
+            false => 0.0,
+        }
     }
 
     fn lod_speed(&self) -> f32 {
@@ -742,6 +767,8 @@ pub struct RefInputs<'a> {
     /// The previous frame's still-pixel cycles ([`reference_cycle`]'s third output); `None`:
     /// none (every pixel starts its cycle).
     pub cycle: Option<&'a [CycleState]>,
+    /// Each object's turn by object ID (the reactive rule); `None`: none turns.
+    pub turns: Option<&'a [f32]>,
 }
 
 /// A pixel's jitter cycle (the `history_cycle` and `history_range` images), or a moving pixel's
@@ -1051,6 +1078,15 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                                 let s = (v[0] * v[0] + v[1] * v[1]).sqrt() / ramp;
                                 a += (amax - a) * s.min(1.0);
                             }
+                            // The reactive rule: a turning object's weight rises on to 1.
+                            if c.reactive && c.speed > 0.0 {
+                                let turn = i
+                                    .turns
+                                    .and_then(|t| t.get(nid[4] as usize).copied())
+                                    .unwrap_or(0.0);
+                                let s = (v[0] * v[0] + v[1] * v[1]).sqrt() / c.speed;
+                                a += (1.0 - a) * (turn * s.min(1.0));
+                            }
                             if c.count {
                                 a = a.max(1.0 / count as f32);
                             }
@@ -1260,6 +1296,7 @@ mod tests {
             exposure_scale: 1.0,
             jitter: [0.0; 2],
             cycle,
+            turns: None,
         }
     }
 
@@ -1297,6 +1334,7 @@ mod tests {
                     exposure_scale: 1.0,
                     jitter: [0.0; 2],
                     cycle: state.as_ref().map(|(_, _, s)| &s[..]),
+                    turns: None,
                 };
                 let next = reference_cycle(c, &i);
                 seen.push((next.0[0], next.2[0]));
@@ -1337,6 +1375,48 @@ mod tests {
         });
         assert!((off[11].0[0] - off[10].0[0]).abs() > 1e-3, "without-cycle blends");
         assert!(off.iter().all(|(_, s)| *s == CycleState::NONE));
+    }
+
+    /// The reactive rule: on the 6x5 frame below moving 2 px a frame (past `speed`), a history
+    /// of 3 against a current frame of 1 (linear blend, no clipping): object 1 turning fully
+    /// takes the current frame alone, turning half blends half way from amax's 2 to 1; object
+    /// 2 (not turning), `without-reactive` or no turns keep amax's blend.
+    #[test]
+    fn a_turning_object_takes_the_current_frame() {
+        let (w, h) = (6usize, 5usize);
+        let cur = flat(w, h, [1.0; 3]);
+        let vel = vec![[0.0f32, 2.0]; w * h];
+        let ids: Vec<u32> = (0..w * h).map(|i| if i % w < 3 { 1 } else { 2 }).collect();
+        let hist = flat(w, h, [3.0; 3]);
+        let hg: Vec<(u32, f32)> = ids.iter().map(|&id| (hist_geom_x(id, 20, true), 2.0)).collect();
+        let depth = vec![2.0f32; w * h];
+        let c = TaaConfig {
+            clip: false,
+            luma: false,
+            ..TaaConfig::OURS
+        };
+        let run = |c: &TaaConfig, turns: Option<&[f32]>| {
+            let i = RefInputs {
+                turns,
+                ..moving_frame((w, h), (&cur, &vel, &depth, &ids), (&hist, &hg), None)
+            };
+            reference(c, &i).0
+        };
+        let (one, two) = (3 * w, 3 * w + 5);
+        let full = run(&c, Some(&[0.0, 1.0, 0.0]));
+        assert_eq!(full[one], [1.0; 3], "turning fully: the current frame");
+        assert!((full[two][0] - 2.0).abs() < 1e-6, "not turning: amax {:?}", full[two]);
+        let half = run(&c, Some(&[0.0, 0.5, 0.0]));
+        assert!((half[one][0] - 1.5).abs() < 1e-6, "turning half: {:?}", half[one]);
+        let off = TaaConfig {
+            reactive: false,
+            ..c
+        };
+        for o in [run(&off, Some(&[0.0, 1.0, 0.0])), run(&c, None)] {
+            assert!((o[one][0] - 2.0).abs() < 1e-6, "{:?}", o[one]);
+        }
+        assert!(!TaaConfig::parse(&["inside"]).expect("inside").reactive);
+        assert!(!TaaConfig::parse(&["without-reactive"]).expect("ok").reactive);
     }
 
     /// Moving interiors (`interior`: on with `motionlod`, off with `unjitter` alone unless set):
@@ -1629,6 +1709,7 @@ mod tests {
             exposure_scale: 1.0,
             jitter: [0.0; 2],
             cycle: None,
+            turns: None,
         };
         let (o, g) = reference(&TaaConfig::OURS, &base);
         assert!(o.iter().all(|c| *c == [1.0; 3]) && g.iter().all(|g| *g == (hist_geom_x(1, 1, false), 2.0)));

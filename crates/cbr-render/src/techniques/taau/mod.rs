@@ -102,9 +102,6 @@ pub const F_RESET: u32 = 1;
 /// (no velocity written there) is not still.
 pub const F_BACKGROUND: u32 = 2;
 
-/// Object IDs the reactive rule knows the turn of (`turns`, indexed by object ID; above it, 0).
-pub const MAX_TURN_IDS: u32 = 4096;
-
 /// The kernel's largest bias: FSR 2 caps the Lanczos kernel's scale below 2.
 pub const MAX_BIAS: f32 = 1.99;
 
@@ -231,7 +228,8 @@ fn resources(out: (u32, u32), size: (u32, u32), c: &TaauConfig) -> Vec<ResourceD
         r.push(ResourceDecl::image("out_color", COLOR_FORMAT, ow, oh));
     }
     if c.reactive {
-        r.push(ResourceDecl::upload_buffer("turns", u64::from(MAX_TURN_IDS) * 4));
+        let n = crate::gpu_scene::MAX_TURN_IDS;
+        r.push(ResourceDecl::upload_buffer("turns", u64::from(n) * 4));
     }
     if c.debug {
         r.push(ResourceDecl::image("debug", vk::Format::R32G32B32A32_SFLOAT, ow, oh));
@@ -334,17 +332,12 @@ impl TaauPasses {
     }
 
     /// Each object's turn this frame, indexed by object ID (0 the background; IDs from
-    /// [`MAX_TURN_IDS`] on count as not turning), for the reactive rule (`turns`).
+    /// [`crate::gpu_scene::MAX_TURN_IDS`] on count as not turning), for the reactive rule.
     pub fn set_turns(&mut self, turns: &[f32]) -> Result<()> {
-        if !self.config.reactive {
-            return Ok(());
+        match self.config.reactive {
+            true => crate::gpu_scene::write_turns(self.res.buffer_mut("turns")?, turns),
+            false => Ok(()),
         }
-        let b = self.res.buffer_mut("turns")?;
-        let mut all = vec![0.0f32; MAX_TURN_IDS as usize];
-        for (a, t) in all.iter_mut().zip(turns) {
-            *a = *t;
-        }
-        b.write(0, bytemuck::cast_slice(&all))
     }
 
     /// The push constants of frame `f` (also the CPU reference's parameters: [`Self::params`]).
@@ -513,15 +506,7 @@ impl Technique for Taau {
         let mut view = ctx.view.at_size(w, h);
         view.screen_jitter = [view.screen_jitter[0] + j[0], view.screen_jitter[1] + j[1]];
         ctx.upload(&view)?;
-        let scene = ctx.scene;
-        let turns: Vec<f32> = std::iter::once(0.0)
-            .chain((0..scene.objects.len()).map(|i| {
-                crate::gpu_scene::turn(
-                    &scene.object_transform(i, view.time),
-                    &scene.object_transform(i, view.prev_time),
-                )
-            }))
-            .collect();
+        let turns = crate::gpu_scene::object_turns(ctx.scene, view.time, view.prev_time);
         self.passes.set_turns(&turns)?;
         let f = TaauFrame {
             frame: ctx.frame,
