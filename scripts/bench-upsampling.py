@@ -26,9 +26,10 @@ ROWS = [
     "checkerboard:rotated:fused", "taau", "taau:0.5", "taau:0.77", "upscale:fsr1",
     "upscale:bilinear",
 ]
-ABLATIONS = ["taau:without-locks", "taau:without-depth-clip", "taau:without-rcas",
-             "taau:without-stability", "taau:bilinear", "taau:catmull", "taau:sharpness=0.2",
-             "taau:lod=-1"]
+ABLATIONS = ["taau:without-locks", "taau:without-depth-clip", "taau:without-ids",
+             "taau:without-reactive", "taau:without-rcas", "taau:without-stability",
+             "taau:without-surface-velocity", "taau:lobes=2", "taau:bilinear", "taau:catmull",
+             "taau:sharpness=0.2", "taau:lod=-1"]
 # Scene, label, warm-up, measured frames. Warm-up 8: every history has had time to fill (taau's
 # jitter has 16 phases at 1/sqrt(2); its history weight saturates in about 8 frames of motion).
 SCENES = [

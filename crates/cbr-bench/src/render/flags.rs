@@ -52,6 +52,9 @@ pub enum TaaAblationArg {
     Dilation,
     /// A surface's own velocity (the 3x3 one plane): the nearest neighbour's, as at silhouettes.
     SurfaceVelocity,
+    /// A turning object's current frame rising to weight 1 and its LOD bias withdrawn by its
+    /// turn (the reactive rule): blended and biased as everything else.
+    Reactive,
     /// YCoCg variance clipping of the history.
     Clip,
     /// Rejection of history showing an object none of the 3x3 shows.

@@ -62,9 +62,10 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
 };
 
 /// The parts `without-X` switches off.
-pub const ABLATIONS: [&str; 14] = [
+pub const ABLATIONS: [&str; 15] = [
     "dilation",
     "surface-velocity",
+    "reactive",
     "clip",
     "ids",
     "depth",
