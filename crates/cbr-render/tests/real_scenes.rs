@@ -79,12 +79,7 @@ fn spider_spot_bunny() {
 #[test]
 fn foliage_cards_are_cut_out_and_the_cylinder_is_invisible() {
     render_scene("foliage.toml", |s, out| {
-        let cyl = s
-            .objects
-            .iter()
-            .position(|o| o.name == "Cylinder01")
-            .expect("cylinder") as u32
-            + 1;
+        let cyl = s.object_id("Cylinder01").expect("cylinder");
         assert!(
             !out.ids.iter().any(|i| i[0] == cyl),
             "the no-UV, alpha-0 cylinder must not be drawn"

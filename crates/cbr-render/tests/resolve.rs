@@ -608,11 +608,7 @@ fn ghosts(
 fn disoccluded_history_is_rejected_not_smeared() {
     let gpu = common::gpu();
     let s = sliding_demo(192, 108);
-    let spinner = 1 + s
-        .objects
-        .iter()
-        .position(|o| o.name == "spinner")
-        .expect("spinner") as u32;
+    let spinner = s.object_id("spinner").expect("spinner");
     let native = frames(&gpu, &s, None, None, false, 5);
     let count = |mode: ResolveMode| {
         let st = ResolveSettings {

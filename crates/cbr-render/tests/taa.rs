@@ -545,12 +545,7 @@ fn a_turning_object_withdraws_the_lod_bias() {
         };
         render(&gpu, &s, settings, &[5]).remove(0)
     };
-    let torus = s
-        .objects
-        .iter()
-        .position(|o| o.name == "spinner")
-        .expect("torus") as u32
-        + 1;
+    let torus = s.object_id("spinner").expect("torus");
     let (fixed, turning) = (lod(None), lod(Some(-1.0)));
     let (mut worst, mut on_torus, mut elsewhere) = (0.0f32, 0, 0);
     for i in 0..fixed.ids.len() {

@@ -251,6 +251,14 @@ impl Scene {
         f64::from(frame) / self.settings.fps
     }
 
+    /// The object ID (index + 1; 0 is the background) of the first object named `name`.
+    pub fn object_id(&self, name: &str) -> Option<u32> {
+        self.objects
+            .iter()
+            .position(|o| o.name == name)
+            .map(|i| i as u32 + 1)
+    }
+
     /// Object-to-world transform of object `index` at time `t` (seconds).
     pub fn object_transform(&self, index: usize, t: f64) -> DMat4 {
         let mut m = DMat4::from_translation(DVec3::from(self.objects[index].origin));

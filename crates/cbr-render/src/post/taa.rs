@@ -1378,6 +1378,28 @@ mod tests {
         assert!(off.iter().all(|(_, s)| *s == CycleState::NONE));
     }
 
+    /// A w x h frame of two objects (1 in the left half, 2 in the right) moving 2 px a frame
+    /// down, the current colour 1 over a history of 3 whose geometry holds each pixel's object
+    /// (20 frames, moved): its colour, velocity, IDs, history and history geometry.
+    #[allow(clippy::type_complexity)]
+    fn two_objects_moving(
+        w: usize,
+        h: usize,
+    ) -> (Vec<V3>, Vec<[f32; 2]>, Vec<u32>, Vec<V3>, Vec<(u32, f32)>) {
+        let ids: Vec<u32> = (0..w * h).map(|i| if i % w < 3 { 1 } else { 2 }).collect();
+        let hg = ids
+            .iter()
+            .map(|&id| (hist_geom_x(id, 20, true), 2.0))
+            .collect();
+        (
+            flat(w, h, [1.0; 3]),
+            vec![[0.0f32, 2.0]; w * h],
+            ids,
+            flat(w, h, [3.0; 3]),
+            hg,
+        )
+    }
+
     /// The reactive rule: on the 6x5 frame below moving 2 px a frame (past `speed`), a history
     /// of 3 against a current frame of 1 (linear blend, no clipping): object 1 turning fully
     /// takes the current frame alone, turning half blends half way from amax's 2 to 1; object
@@ -1385,11 +1407,7 @@ mod tests {
     #[test]
     fn a_turning_object_takes_the_current_frame() {
         let (w, h) = (6usize, 5usize);
-        let cur = flat(w, h, [1.0; 3]);
-        let vel = vec![[0.0f32, 2.0]; w * h];
-        let ids: Vec<u32> = (0..w * h).map(|i| if i % w < 3 { 1 } else { 2 }).collect();
-        let hist = flat(w, h, [3.0; 3]);
-        let hg: Vec<(u32, f32)> = ids.iter().map(|&id| (hist_geom_x(id, 20, true), 2.0)).collect();
+        let (cur, vel, ids, hist, hg) = two_objects_moving(w, h);
         let depth = vec![2.0f32; w * h];
         let c = TaaConfig {
             clip: false,
@@ -1430,14 +1448,7 @@ mod tests {
     #[test]
     fn moving_interiors_take_the_current_frame_under_motionlod() {
         let (w, h) = (6usize, 5usize);
-        let cur = flat(w, h, [1.0; 3]);
-        let vel = vec![[0.0f32, 2.0]; w * h];
-        let ids: Vec<u32> = (0..w * h).map(|i| if i % w < 3 { 1 } else { 2 }).collect();
-        let hist = flat(w, h, [3.0; 3]);
-        let hg: Vec<(u32, f32)> = ids
-            .iter()
-            .map(|&id| (hist_geom_x(id, 20, true), 2.0))
-            .collect();
+        let (cur, vel, ids, hist, hg) = two_objects_moving(w, h);
         // The previous frame's locks (`CycleState::lock`), where a case gives them.
         let run_cycle =
             |c: &TaaConfig, depth: &[f32], hg: &[(u32, f32)], cycle: Option<&[CycleState]>| {

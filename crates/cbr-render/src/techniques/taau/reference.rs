@@ -541,6 +541,29 @@ pub fn accumulate(p: &Params, i: &AccumulateInputs) -> Accumulated {
 mod tests {
     use super::*;
 
+    /// The unit tests' case: an 8x8 output of a 6x6 render (W / w = 4/3, the kernel's bias at
+    /// its largest), Lanczos, every rule on, with the jitter given.
+    fn small(jitter: [f32; 2]) -> Params {
+        Params {
+            out: (8, 8),
+            size: (6, 6),
+            jitter,
+            ratio: [8.0 / 6.0, 8.0 / 6.0],
+            exposure: 1.0,
+            depth_tolerance: 0.05,
+            gamma: 1.0,
+            bias_max: 8.0 / 6.0,
+            accum: [8.0, 1.0, 2.0, 1.0 / 16.0],
+            reset: false,
+            background_moves: false,
+            kernel: Kernel::Lanczos,
+            stability: true,
+            ids: true,
+            history_lobes: 3,
+            surface_velocity: true,
+        }
+    }
+
     /// Lanczos-2 is sinc(x) sinc(x/2): 1 at 0, 0 at 1 and 2, negative between; FSR 2's
     /// polynomial matches it at 0, 1 and 2 and is off by up to 0.049 between (why it is not
     /// used); the tent and Catmull-Rom are the usual ones.
@@ -572,26 +595,8 @@ mod tests {
     /// sample) on an 8x8 output of a 6x6 render, jittered off the centre.
     #[test]
     fn a_moving_pixel_takes_the_widest_kernel() {
-        let (out, size) = ((8usize, 8usize), (6usize, 6usize));
-        let ratio = [8.0 / 6.0, 8.0 / 6.0];
-        let p = Params {
-            out,
-            size,
-            jitter: [0.31, -0.27],
-            ratio,
-            exposure: 1.0,
-            depth_tolerance: 0.05,
-            gamma: 1.0,
-            bias_max: 8.0 / 6.0,
-            accum: [8.0, 1.0, 2.0, 1.0 / 16.0],
-            reset: false,
-            background_moves: false,
-            kernel: Kernel::Lanczos,
-            stability: true,
-            ids: true,
-            history_lobes: 3,
-            surface_velocity: true,
-        };
+        let p = small([0.31, -0.27]);
+        let (out, size, ratio) = (p.out, p.size, p.ratio);
         let prepared: Vec<[f32; 4]> = (0..size.0 * size.1)
             .map(|i| [0.2 + 0.01 * i as f32, 0.0, 0.0, 1.0])
             .collect();
@@ -639,26 +644,8 @@ mod tests {
     /// `without-ids` keep it.
     #[test]
     fn another_object_moving_differently_loses_its_history() {
-        let (out, size) = ((8usize, 8usize), (6usize, 6usize));
-        let ratio = [8.0 / 6.0, 8.0 / 6.0];
-        let p = Params {
-            out,
-            size,
-            jitter: [0.0, 0.0],
-            ratio,
-            exposure: 1.0,
-            depth_tolerance: 0.05,
-            gamma: 1.0,
-            bias_max: 8.0 / 6.0,
-            accum: [8.0, 1.0, 2.0, 1.0 / 16.0],
-            reset: false,
-            background_moves: false,
-            kernel: Kernel::Lanczos,
-            stability: true,
-            ids: true,
-            history_lobes: 3,
-            surface_velocity: true,
-        };
+        let p = small([0.0, 0.0]);
+        let (out, size) = (p.out, p.size);
         let prepared = vec![[0.2, 0.0, 0.0, 1.0]; size.0 * size.1];
         let history = vec![[0.9, 0.0, 0.0, 4.0]; out.0 * out.1];
         let new_locks = vec![0u32; out.0 * out.1];
@@ -737,26 +724,12 @@ mod tests {
     /// `turns`, the cap is the usual one.
     #[test]
     fn a_turning_object_keeps_less_history_at_speed() {
-        let (out, size) = ((8usize, 8usize), (6usize, 6usize));
-        let ratio = [8.0 / 6.0, 8.0 / 6.0];
         let p = Params {
-            out,
-            size,
-            jitter: [0.0, 0.0],
-            ratio,
-            exposure: 1.0,
-            depth_tolerance: 0.05,
             gamma: 16.0,
-            bias_max: 8.0 / 6.0,
-            accum: [8.0, 1.0, 2.0, 1.0 / 16.0],
-            reset: false,
-            background_moves: false,
-            kernel: Kernel::Lanczos,
             stability: false,
-            ids: true,
-            history_lobes: 3,
-            surface_velocity: true,
+            ..small([0.0, 0.0])
         };
+        let (out, size, ratio) = (p.out, p.size, p.ratio);
         let prepared = vec![[0.2, 0.0, 0.0, 1.0]; size.0 * size.1];
         let history = vec![[0.2, 0.0, 0.0, 4.0]; out.0 * out.1];
         let aux = vec![[0.0, 0.2, 0.0, object_code(3, 0.0)]; out.0 * out.1];
