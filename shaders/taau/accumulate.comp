@@ -12,9 +12,9 @@
 //    sample: 1 on the pixel centre, less farther off.
 // 2. The history at p + 1/2 - velocity (the dilated velocity of the render pixel under p, scaled
 //    to output pixels), 6x6 separable Lanczos-3 (HISTORY_LOBES 3; 4x4 Lanczos-2 with 2, as FSR
-//    2), 4x4 Catmull-Rom or 2x2 bilinear, deringed by its 2x2; its weight and the lock from the nearest of that 2x2. Dropped on reset, off screen, in
-//    proportion to the disocclusion (the depth clip), or where it is another object moving
-//    differently (the object test, below).
+//    2), 4x4 Catmull-Rom or 2x2 bilinear, deringed by its 2x2; its weight and the lock from the
+//    nearest of that 2x2. Dropped on reset, off screen, in proportion to the disocclusion (the
+//    depth clip), or where it is another object moving differently (the object test, below).
 // 3. Locks: a lock decays by 1 / phases per frame, is renewed where the lock pass found a thin
 //    feature this frame, and dies with a disocclusion over 1/2.
 // 4. Rectification, unless the pixel is still (no motion, no disocclusion, not the background
@@ -309,7 +309,8 @@ void main() {
         weight = total;
     }
     imageStore(out_hist, p, vec4(result, weight));
-    imageStore(out_aux, p, vec4(life, cur.x, change, float((own_id << SPEED_BITS) | uint(own_speed / SPEED_STEP + 0.5))));
+    uint remembered = (own_id << SPEED_BITS) | uint(own_speed / SPEED_STEP + 0.5);
+    imageStore(out_aux, p, vec4(life, cur.x, change, float(remembered)));
     imageStore(accumulated, p, vec4(linear_from_perceptual(result, e), 1.0));
 #ifdef BINDING_DEBUG
     imageStore(debug, p, vec4(dis, life, ws, weight));
