@@ -322,12 +322,12 @@ void main() {
             }
             if (pc.speed_jitter.y > 0.0) a = mix(a, amax, min(length(v) / ramp, 1.0));
             // F_REACTIVE (FSR 2's reactive mask from the scene's own motion, as `taau`'s): a
-            // turning object's shading changes every frame (its normals turn with it), and its
-            // history only lags; its current weight rises on to 1 by its turn, over the same
-            // ramp (the demo's spinning torus; docs/post-aa.md).
-            if (has(F_REACTIVE) && pc.speed_jitter.y > 0.0) {
+            // turning object's shading changes every frame (its normals turn with it), however
+            // slowly its pixel moves (near its axis), and its history only lags; its current
+            // weight goes on to 1 by its turn (the demo's spinning torus; docs/post-aa.md).
+            if (has(F_REACTIVE)) {
                 float turn = nid[4] < uint(turns.length()) ? turns[nid[4]] : 0.0;
-                a = mix(a, 1.0, turn * min(length(v) / pc.speed_jitter.y, 1.0));
+                a = mix(a, 1.0, turn);
             }
             // A history of m frames (m + 1 = count) takes the current frame with weight at least
             // 1 / (m + 1): the running mean until the exponential window 1 / alpha is full, after

@@ -25,9 +25,9 @@
 //    history by the lock's strength.
 // 5. Luminance stability: where the current luma's change reverses the previous frame's
 //    (oscillation), the sample weight drops by half of min / max of the two changes.
-// 6. Accumulation: history weight capped at mix(accum still, accum moving (1 - turn),
-//    min(speed / SPEED, 1)), turn the pixel's object's own rotation (REACTIVE); out = (H h + w c)
-//    / (H + w); the weight stored is H + w.
+// 6. Accumulation: history weight capped at mix(accum still, accum moving, min(speed / SPEED,
+//    1)) (1 - turn), turn the pixel's object's own rotation (REACTIVE); out = (H h + w c) /
+//    (H + w); the weight stored is H + w.
 // NaN and Inf never enter the history: non-finite samples take no part, a non-finite history is
 // dropped.
 layout(local_size_x = LOCAL_SIZE_X, local_size_y = LOCAL_SIZE_Y) in;
@@ -295,14 +295,15 @@ void main() {
 #endif
         // 6. Accumulation.
         // FSR 2's reactive mask, from the scene's own motion (REACTIVE): a turning object's
-        // shading changes every frame (its normals turn with it), and its history only lags;
-        // at speed it keeps (1 - turn) of the moving cap (the demo's spinning torus).
+        // shading changes every frame (its normals turn with it), however slowly its pixel
+        // moves (near its axis), and its history only lags: it keeps (1 - turn) of the cap
+        // (the demo's spinning torus).
 #if REACTIVE
         float turn = raw_id < uint(turns.length()) ? turns[raw_id] : 0.0;
 #else
         float turn = 0.0;
 #endif
-        float cap = mix(pc.accum.x, pc.accum.y * (1.0 - turn), moving);
+        float cap = mix(pc.accum.x, pc.accum.y, moving) * (1.0 - turn);
         float hk = min(hw * keep, cap);
         float total = hk + ws;
         if (total > 0.0) result = (hk * h + ws * cur) / total;

@@ -1079,14 +1079,13 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                                 let s = (v[0] * v[0] + v[1] * v[1]).sqrt() / ramp;
                                 a += (amax - a) * s.min(1.0);
                             }
-                            // The reactive rule: a turning object's weight rises on to 1.
-                            if c.reactive && c.speed > 0.0 {
+                            // The reactive rule: a turning object's weight goes on to 1.
+                            if c.reactive {
                                 let turn = i
                                     .turns
                                     .and_then(|t| t.get(nid[4] as usize).copied())
                                     .unwrap_or(0.0);
-                                let s = (v[0] * v[0] + v[1] * v[1]).sqrt() / c.speed;
-                                a += (1.0 - a) * (turn * s.min(1.0));
+                                a += (1.0 - a) * turn;
                             }
                             if c.count {
                                 a = a.max(1.0 / count as f32);

@@ -520,7 +520,7 @@ pub fn accumulate(p: &Params, i: &AccumulateInputs) -> Accumulated {
                     .turns
                     .and_then(|t| t.get(raw_id as usize).copied())
                     .unwrap_or(0.0);
-                let cap = p.accum[0] * (1.0 - moving) + p.accum[1] * (1.0 - turn) * moving;
+                let cap = (p.accum[0] * (1.0 - moving) + p.accum[1] * moving) * (1.0 - turn);
                 let hk = (hw * keep).min(cap);
                 let total = hk + ws;
                 if total > 0.0 {
@@ -719,11 +719,11 @@ mod tests {
         assert!(w.iter().enumerate().all(|(k, v)| k == 2 || v.abs() < 1e-6), "{w:?}");
     }
 
-    /// The reactive rule: at the moving cap's speed a turning object keeps (1 - turn) of the
-    /// moving cap (none when it turns 10 degrees a frame or more); at rest, or without
-    /// `turns`, the cap is the usual one.
+    /// The reactive rule: a turning object keeps (1 - turn) of the cap, at rest as at speed
+    /// (none when it turns 10 degrees a frame or more: its shading changes whatever its
+    /// pixel's speed); without `turns`, or past their list, the cap is the usual one.
     #[test]
-    fn a_turning_object_keeps_less_history_at_speed() {
+    fn a_turning_object_keeps_less_history() {
         let p = Params {
             gamma: 16.0,
             stability: false,
@@ -731,7 +731,7 @@ mod tests {
         };
         let (out, size, ratio) = (p.out, p.size, p.ratio);
         let prepared = vec![[0.2, 0.0, 0.0, 1.0]; size.0 * size.1];
-        let history = vec![[0.2, 0.0, 0.0, 4.0]; out.0 * out.1];
+        let history = vec![[0.2, 0.0, 0.0, 6.0]; out.0 * out.1];
         let aux = vec![[0.0, 0.2, 0.0, object_code(3, 0.0)]; out.0 * out.1];
         let ids = vec![3u32; size.0 * size.1];
         // The pixel's history weight after this frame with the object moving `v` output pixels a
@@ -754,12 +754,15 @@ mod tests {
             d[3] - d[2]
         };
         let (half, full) = ([0.0, 0.0, 0.0, 0.5], [0.0, 0.0, 0.0, 1.0]);
-        assert!((weight(2.0, None) - 1.0).abs() < 1e-5, "the moving cap");
-        assert!((weight(2.0, Some(&half)) - 0.5).abs() < 1e-5, "half of it, turning half");
-        assert!(weight(3.0, Some(&full)).abs() < 1e-5, "none, turning fully");
-        assert!((weight(0.0, Some(&full)) - 4.0).abs() < 1e-5, "at rest: the history's own weight");
-        assert!((weight(1.0, Some(&full)) - 4.0).abs() < 1e-5, "half way: under the cap 4.5");
-        assert!((weight(2.0, Some(&[1.0; 3])) - 1.0).abs() < 1e-5, "no turn past the list (ID 3)");
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-5;
+        assert!(close(weight(2.0, None), 1.0), "the moving cap");
+        assert!(close(weight(2.0, Some(&half)), 0.5), "half of it, turning half");
+        assert!(close(weight(3.0, Some(&full)), 0.0), "none, turning fully");
+        assert!(close(weight(0.0, None), 6.0), "at rest: the history's own weight, under 8");
+        assert!(close(weight(0.0, Some(&half)), 4.0), "at rest, turning half: half the cap");
+        assert!(close(weight(0.0, Some(&full)), 0.0), "at rest, turning fully: none");
+        assert!(close(weight(1.0, Some(&half)), 2.25), "half way: half of 4.5");
+        assert!(close(weight(2.0, Some(&[1.0; 3])), 1.0), "no turn past the list (ID 3)");
     }
 
     #[test]
