@@ -1585,16 +1585,16 @@ impl Resources {
 
     /// A buffer to write from the host (an upload buffer).
     pub fn buffer_mut(&mut self, name: &str) -> Result<&mut Buffer> {
-        let owner = self.owner.clone();
-        match self
+        let owner = &self.owner;
+        let found = self
             .items
             .iter_mut()
             .find(|(n, _)| *n == name)
             .map(|(_, o)| o)
-        {
-            Some(Owned::Buffer(b)) => Ok(b),
-            Some(_) => Err(declaration(&owner, format!("`{name}` is not a buffer"))),
-            None => Err(declaration(&owner, format!("no resource `{name}`"))),
+            .ok_or_else(|| declaration(owner, format!("no resource `{name}`")))?;
+        match found {
+            Owned::Buffer(b) => Ok(b),
+            _ => Err(declaration(owner, format!("`{name}` is not a buffer"))),
         }
     }
 

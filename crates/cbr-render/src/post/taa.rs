@@ -19,7 +19,9 @@
 //!   luma ridge with no similar 2x2) are locked for a jitter cycle: on a surface (the 3x3 one
 //!   plane) a locked history skips the ID test and the clip in the lock's proportion (FSR 2's
 //!   locks). Moving fragments are shaded at the pixel centre by the scene pass (`unjitter`, the
-//!   default); with `motionlod` (or `interior`) moving interiors take the current frame. The blend is h + (c - h) t,
+//!   default); with `motionlod` (or `interior`) moving interiors take the current frame. A
+//!   turning object (its own rotation per frame, `gpu_scene::turn`) takes the current frame by
+//!   its turn and withdraws the LOD bias as much (the reactive rule). The blend is h + (c - h) t,
 //!   exactly h where c = h. `without-X` switches one part off ([`ABLATIONS`]); `adaptive`
 //!   reconstructs the current sample at the pixel centre in proportion 1 / m.
 //! - `+taa:inside` (Pedersen 2016, Playdead's INSIDE): Halton x16, 3x3 closest-depth dilation,
@@ -184,7 +186,7 @@ pub struct TaaConfig {
     /// INSIDE's mode).
     pub surface_velocity: bool,
     /// FSR 2's reactive mask from the scene's own motion, as `taau`'s: a turning object's
-    /// moving pixel takes the current frame with weight rising to 1 by its turn
+    /// pixel takes the current frame with weight mix(a, 1, turn), whatever its speed
     /// (`gpu_scene::turn`), and its fragments withdraw the LOD bias as much
     /// (`without-reactive`; off in INSIDE's mode).
     pub reactive: bool,

@@ -63,9 +63,9 @@ pub struct TaauConfig {
     /// that turned away).
     pub ids: bool,
     /// FSR 2's reactive mask, made from the scene's own motion: a turning object (its own
-    /// rotation this frame over 10 degrees, at most 1: `gpu_scene::turn`) keeps that much less
-    /// history at speed, and its fragments withdraw the LOD bias as much (its shading changes
-    /// every frame, so the history cannot average the sharper level).
+    /// rotation this frame over 10 degrees, at most 1: `gpu_scene::turn`) keeps (1 - turn) of
+    /// the history's cap, at rest as at speed, and its fragments withdraw the LOD bias as much
+    /// (its shading changes every frame, so the history cannot average the sharper level).
     pub reactive: bool,
     /// RCAS on the accumulated output.
     pub rcas: bool,

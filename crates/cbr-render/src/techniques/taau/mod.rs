@@ -14,9 +14,11 @@
 //!    rectified (unless still or locked), weighted by its stability and accumulated; then FSR 1's
 //!    RCAS (`taau.rcas`).
 //!
-//! [`config`]: its parameters; [`reference`]: the CPU reference of every pass. Left out, as our
-//! scenes need none of it: reactive and transparency masks (no particles), auto-exposure (the
-//! scene's exposure is known).
+//! FSR 2's reactive mask is made from the scene's own motion: a turning object keeps (1 - turn)
+//! of the history's cap and withdraws the LOD bias by its turn (`gpu_scene::turn`, the `turns`
+//! buffer, [`TaauPasses::set_turns`]). [`config`]: its parameters; [`reference`]: the CPU
+//! reference of every pass. Left out, as our scenes need none of it: the transparency and
+//! composition mask (no particles), auto-exposure (the scene's exposure is known).
 
 pub mod config;
 pub mod reference;
