@@ -4,8 +4,9 @@
 // The CPU reference is crates/cbr-render/src/post/taa.rs (`reference`): keep the two in step,
 // operation for operation.
 //
-// MODE 0 (`+taa`, after Karis 2014): 3x3 closest-depth velocity dilation, 5-tap Catmull-Rom
-// history (Jimenez's bilinear form), YCoCg variance clipping (Salvi) of the history towards the
+// MODE 0 (`+taa`, after Karis 2014): 3x3 closest-depth velocity dilation, history by Karis'
+// 5-tap Catmull-Rom (Jimenez's bilinear form) mixed with a 6x6 Lanczos-3 (F_LANCZOS, in the
+// proportion `sharp`), YCoCg variance clipping (Salvi) of the history towards the
 // neighbourhood mean, luminance-weighted blend; plus the object-ID and depth disocclusion tests of
 // the checkerboard resolve. MODE 1 (`+taa:inside`, Pedersen 2016): 3x3 closest-depth dilation,
 // bilinear history, rounded 3x3 min-max box with YCoCg chroma shrink, clip towards the clamped
@@ -35,7 +36,7 @@ layout(set = 0, binding = BINDING_OUT_RANGE, rgba16f) uniform writeonly image2D 
 // Each object's turn this frame, by object ID (F_REACTIVE; gpu_scene.rs `object_turns`).
 layout(set = 0, binding = BINDING_TURNS) readonly buffer Turns { float turns[]; };
 
-// F_RESET, F_DILATION, F_CLIP, F_IDS, F_DEPTH, F_CATMULL, F_MEAN (blend weight 1 / (n + 1): the
+// F_RESET, F_DILATION, F_CLIP, F_IDS, F_DEPTH, F_CATMULL, F_LANCZOS (below), F_MEAN (blend weight 1 / (n + 1): the
 // running mean), F_FILTER (reconstruct the current sample at the pixel centre, Karis' filter),
 // F_COUNT (the current-frame weight is at least 1 / (m + 1), m the frames the pixel's history
 // holds), F_LUMA (Karis' luminance weights in the blend), F_CYCLE (a still pixel shows the mean
@@ -50,7 +51,8 @@ layout(set = 0, binding = BINDING_TURNS) readonly buffer Turns { float turns[]; 
 // depth tolerance, exposure scale; feedback_still: INSIDE feedback min, max, still threshold
 // (pixels), the cycle's change tolerance (perceptual luma); speed_jitter:
 // x: current-frame weight at and above speed y (pixels per frame; 0: off), zw: the jitter;
-// interior: x the speed at which a moving interior's weight reaches 1 (F_INTERIOR).
+// interior: x the speed at which a moving interior's weight reaches 1 (F_INTERIOR), y the
+// history kernel's Lanczos-3 share (F_LANCZOS; `sharp`).
 PUSH_CONSTANTS
 
 bool has(uint f) { return (pc.flags.x & f) != 0u; }
@@ -61,6 +63,7 @@ float luma(vec3 c) { return dot(c, LUMA); }
 #include "../inc/perceptual.glsl"
 #include "../inc/plane.glsl"
 #include "../inc/thin_feature.glsl"
+#include "../inc/lanczos3.glsl"
 
 // Linear HDR -> perceptual YCoCg at the frame's exposure, and back (taau's space too).
 vec3 to_p(vec3 c) { return perceptual(c, pc.params.w); }
@@ -114,6 +117,31 @@ vec3 history_catmull(vec2 q) {
     for (int k = 0; k < 5; k++) {
         acc += w[k] * textureLod(hist, at[k] * inv, 0.0).rgb;
         ws += w[k];
+    }
+    return max(acc / ws, vec3(0.0));
+}
+
+// History at continuous pixel position q: Lanczos-3 over the 6x6 texels around it (F_LANCZOS),
+// renormalised, its undershoot clamped at 0. Exact at rest (f = 0). The history is resampled at
+// every reprojection and the blur compounds over the frames it holds; Lanczos-3 keeps more of
+// the detail, but alone it kept more of a view-dependent highlight's lag too (`specular`), so it
+// is mixed with Catmull-Rom (`sharp`; docs/post-aa.md has the sweep).
+vec3 history_lanczos(vec2 q) {
+    vec2 g = q - 0.5;
+    vec2 bf = floor(g);
+    vec2 f = g - bf;
+    ivec2 b = ivec2(bf);
+    float wx[6], wy[6];
+    lanczos3_weights(f.x, wx);
+    lanczos3_weights(f.y, wy);
+    vec3 acc = vec3(0.0);
+    float ws = 0.0;
+    for (int y = 0; y < 6; y++) {
+        for (int x = 0; x < 6; x++) {
+            float w = wx[x] * wy[y];
+            acc += w * texelFetch(hist, clamp_px(b + ivec2(x - 2, y - 2)), 0).rgb;
+            ws += w;
+        }
     }
     return max(acc / ws, vec3(0.0));
 }
@@ -259,7 +287,13 @@ void main() {
     }
     vec3 h = vec3(0.0);
     if (use) {
-        h = has(F_CATMULL) ? history_catmull(q) : history_bilinear(q);
+        if (!has(F_CATMULL)) {
+            h = history_bilinear(q);
+        } else {
+            float s = has(F_LANCZOS) ? pc.interior.y : 0.0;
+            h = s < 1.0 ? history_catmull(q) : vec3(0.0);
+            if (s > 0.0) h = mix(h, history_lanczos(q), s);
+        }
         use = finite3(h);
     }
     cycling = cycling && use;
@@ -324,9 +358,15 @@ void main() {
             // F_REACTIVE (FSR 2's reactive mask from the scene's own motion, as `taau`'s): a
             // turning object's shading changes every frame (its normals turn with it), however
             // slowly its pixel moves (near its axis), and its history only lags; its current
-            // weight goes on to 1 by its turn (the demo's spinning torus; docs/post-aa.md).
+            // weight goes on to 1 by its turn (the demo's spinning torus; docs/post-aa.md). So
+            // does a history that shows a turning object, whatever this pixel shows: where the
+            // object has just uncovered the background the ID test keeps its history (the object
+            // is in the 3x3), the clip towards a box that holds its colours too keeps some of
+            // it, and the moving demo showed trails of the torus on the sky.
             if (has(F_REACTIVE)) {
+                uint hid = g.x & HIST_ID_MASK;
                 float turn = nid[4] < uint(turns.length()) ? turns[nid[4]] : 0.0;
+                turn = max(turn, hid < uint(turns.length()) ? turns[hid] : 0.0);
                 a = mix(a, 1.0, turn);
             }
             // A history of m frames (m + 1 = count) takes the current frame with weight at least

@@ -237,8 +237,11 @@ void main() {
     // supersample its texture, and an untextured surface has nothing within the pixel for them
     // to supersample but its smooth shading, to which the jitter only adds noise (`specular`'s
     // dark floor, docs/post-aa.md).
+    // A turning object is rasterised without the jitter in proportion to its turn (forward.vert):
+    // its share is of the jitter it kept.
     float share = motion_share();
     if (share > 0.0 && m.tex.x < 0 && m.tex.y < 0 && m.tex.w < 0) share = 1.0;
+    if (frame.screen_jitter.w != 0.0) share *= 1.0 - uintBitsToFloat(o.ids.z);
     vec2 uv = unjittered(v_uv, share);
     vec3 world = unjittered(v_world, share);
     vec3 normal = unjittered(v_normal, share);

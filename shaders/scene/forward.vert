@@ -37,8 +37,13 @@ void main() {
     v_prev_clip = o.prev_clip_from_local * local;
     vec4 pos = v_clip;
     // The projection's jitter (`--jitter`, TAA): j output pixels move NDC by 2j / size, before any
-    // layout's mapping, so every layout and the ID prepass see the same jittered scene.
-    pos.xy += frame.screen_jitter.xy * 2.0 * frame.output_size.zw * pos.w;
+    // layout's mapping, so every layout and the ID prepass see the same jittered scene. Under
+    // `+taa`'s `unjitter` (screen_jitter.w != 0) a turning object (ObjectData.ids.z) is
+    // rasterised without it in proportion to its turn: its history is cut by its turn (the
+    // reactive rule), and a single jittered sample is a worse estimate of its pixel than the
+    // centred one (`native`'s) at its edges as inside (the moving demo's torus; docs/post-aa.md).
+    float kept = frame.screen_jitter.w != 0.0 ? 1.0 - uintBitsToFloat(o.ids.z) : 1.0;
+    pos.xy += frame.screen_jitter.xy * kept * 2.0 * frame.output_size.zw * pos.w;
 #ifdef CLIP_TO_SCREEN
     gl_ClipDistance[0] = pos.x + pos.w;
     gl_ClipDistance[1] = pos.w - pos.x;

@@ -93,26 +93,9 @@ const uint SPEED_BITS = 6u, SPEED_MASK = 63u, ID_MASK = 0x3ffffu;
 const float SPEED_STEP = 0.25, SPEED_MAX = 15.75;
 const float BOX_CURVE = 2.3;
 
-// Lanczos-3, 3 sin(pi x) sin(pi x / 3) / (pi x)^2, at the history's 6 taps per axis, distances
-// x = j - f (j = -2..3, f in [0, 1)), from three sines: sin(pi (j - f)) = -(-1)^j sin(pi f) and
-// sin(pi (j - f) / 3) = sin(pi j / 3) cos(pi f / 3) - cos(pi j / 3) sin(pi f / 3) (the
-// reference's `lanczos3_weights`). Every reprojection resamples the history, and its blur
-// compounds over the frames it holds: Lanczos-3 keeps more detail than FSR 2's Lanczos-2 (the
-// moving demo 1.044x -> 1.021x `native`'s FLIP; `lobes=2` is FSR 2's; docs/upsampling.md).
-void lanczos3_weights(float f, out float w[6]) {
-    const float PI = 3.14159265358979;
-    const float S3 = 0.866025403784439;
-    const float SJ[6] = float[6](-S3, -S3, 0.0, S3, S3, 0.0);
-    const float CJ[6] = float[6](-0.5, 0.5, 1.0, 0.5, -0.5, -1.0);
-    // sin(pi f) = sin(pi (1 - f)): the smaller argument keeps its precision near f = 1.
-    float s = sin(PI * min(f, 1.0 - f)), s3 = sin(PI * f / 3.0), c3 = cos(PI * f / 3.0);
-    for (int k = 0; k < 6; k++) {
-        float x = float(k - 2) - f;
-        float a = PI * x;
-        float sx = (k & 1) == 0 ? -s : s;
-        w[k] = abs(x) < 1e-4 ? 1.0 : 3.0 * sx * (SJ[k] * c3 - CJ[k] * s3) / (a * a);
-    }
-}
+// The history's kernel: Lanczos-3 (inc/lanczos3.glsl) keeps more detail than FSR 2's Lanczos-2
+// (the moving demo 1.044x -> 1.021x `native`'s FLIP; `lobes=2` is FSR 2's; docs/upsampling.md).
+#include "../inc/lanczos3.glsl"
 
 vec4 hist_texel(ivec2 t) { return texelFetch(hist, clamp(t, ivec2(0), pc.sizes.xy - 1), 0); }
 

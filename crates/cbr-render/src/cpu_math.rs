@@ -44,6 +44,30 @@ pub fn catmull_rom(f: f32) -> [f32; 4] {
     ]
 }
 
+/// Lanczos-3, 3 sin(pi x) sin(pi x / 3) / (pi x)^2, at the 6 taps x = j - f (j = -2..3, f in
+/// [0, 1)), from three sines as inc/lanczos3.glsl's `lanczos3_weights`: sin(pi (j - f)) =
+/// -(-1)^j sin(pi f), sin(pi (j - f) / 3) = sin(pi j / 3) cos(pi f / 3) - cos(pi j / 3)
+/// sin(pi f / 3).
+pub fn lanczos3_weights(f: f32) -> [f32; 6] {
+    const PI: f32 = std::f32::consts::PI;
+    const S3: f32 = 0.866_025_4;
+    const SJ: [f32; 6] = [-S3, -S3, 0.0, S3, S3, 0.0];
+    const CJ: [f32; 6] = [-0.5, 0.5, 1.0, 0.5, -0.5, -1.0];
+    // sin(pi f) = sin(pi (1 - f)): the smaller argument keeps its precision near f = 1.
+    let s = (PI * f.min(1.0 - f)).sin();
+    let (s3, c3) = ((PI * f / 3.0).sin(), (PI * f / 3.0).cos());
+    std::array::from_fn(|k| {
+        let x = (k as i32 - 2) as f32 - f;
+        let a = PI * x;
+        let sx = if k % 2 == 0 { -s } else { s };
+        if x.abs() < 1e-4 {
+            1.0
+        } else {
+            3.0 * sx * (SJ[k] * c3 - CJ[k] * s3) / (a * a)
+        }
+    })
+}
+
 /// The 3x3 neighbourhood's offsets, row by row (the shaders' `OFF`).
 pub const OFF_3X3: [[i32; 2]; 9] = [
     [-1, -1],

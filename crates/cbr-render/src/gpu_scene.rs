@@ -138,6 +138,10 @@ pub struct FrameView {
     /// ([`turn`]): a temporal technique's sharper bias (`taau`'s, `+taa`'s), which its history
     /// cannot average where the object's own rotation changes its shading every frame. 0: none.
     pub lod_turn: f32,
+    /// The objects' turns reach the scene pass (ObjectData.ids.z; 0 otherwise): a technique or
+    /// post pass of the frame applies a reactive rule. With `+taa`'s `unjitter` a turning
+    /// object is then rasterised without the jitter by its turn (forward.vert).
+    pub turns: bool,
     pub frame_index: u32,
     /// The projection's sub-pixel jitter in output pixels, every layout (RenderSettings::jitter
     /// plus a jittering post pass's).
@@ -563,7 +567,10 @@ impl GpuScene {
                     ids: [
                         i as u32 + 1,
                         scene.objects[i].material,
-                        turn(&world, &prev_world).to_bits(),
+                        match view.turns {
+                            true => turn(&world, &prev_world).to_bits(),
+                            false => 0,
+                        },
                         0,
                     ],
                 }
@@ -684,6 +691,7 @@ mod tests {
             lod_bias: 0.0,
             lod_motion: [0.0; 2],
             lod_turn: 0.0,
+            turns: false,
             frame_index: 1,
             screen_jitter: [0.0; 2],
             raster: RasterUniforms::default(),

@@ -355,6 +355,16 @@ impl Renderer {
         self.technique.temporal_lod_bias() + post
     }
 
+    /// Whether the objects' turns reach the scene pass ([`FrameView::turns`]): the technique or
+    /// (but in a centred frame) a post pass applies a reactive rule; with `--lod-bias`, whether
+    /// the `lod_turn` setting is given (tests).
+    pub fn turns(&self, centred: bool) -> bool {
+        if self.settings.lod_bias.is_some() {
+            return self.settings.lod_turn.is_some();
+        }
+        self.technique.reactive() || (!centred && self.post.iter().any(|p| p.reactive()))
+    }
+
     /// Bytes of the raster targets (what a technique costs in memory).
     pub fn target_bytes(&self) -> u64 {
         self.technique.target_bytes()
@@ -421,6 +431,7 @@ impl Renderer {
             lod_bias,
             lod_motion,
             lod_turn: self.lod_turn(centred),
+            turns: self.turns(centred),
             frame_index: frame,
             screen_jitter: jitter,
             raster: RasterUniforms {

@@ -120,6 +120,11 @@ pub trait Technique {
     fn temporal_lod_bias(&self) -> f32 {
         0.0
     }
+    /// It applies a reactive rule to turning objects (`taau`'s): the scene pass gets each
+    /// object's turn ([`crate::gpu_scene::FrameView::turns`]).
+    fn reactive(&self) -> bool {
+        false
+    }
     /// Bytes of the technique's raster targets (what it costs in memory).
     fn target_bytes(&self) -> u64;
     /// It jitters its own frames (checkerboard `fused`): a jittering post pass after it would

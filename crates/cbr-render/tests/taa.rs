@@ -99,7 +99,8 @@ fn taa_input(
 
 /// The shader against the CPU reference, frame by frame: each frame's reference takes the GPU's
 /// previous output as its history, so differences do not compound. The history is fetched
-/// through the hardware bilinear filter (Catmull-Rom's five taps, INSIDE's one), whose weights
+/// through the hardware bilinear filter (Catmull-Rom's five taps, INSIDE's one; Lanczos-3's
+/// 36 texels are read as they are), whose weights
 /// lavapipe quantises to 8 bits (subTexelPrecisionBits): the bound is f16 rounding plus 2^-8
 /// of the local history range; and the depth test, done on reverse-Z on the GPU and on linear
 /// depth here, may decide a pixel at its tolerance differently: at most 0.3% of pixels.
@@ -112,6 +113,8 @@ fn the_shader_matches_its_cpu_reference_on_a_moving_camera() {
         "",
         "inside",
         "without-catmull:without-dilation",
+        "without-lanczos",
+        "sharp=1",
         "gamma=1.5:alpha=0.2:filter",
         "without-count:without-luma",
         "adaptive",
@@ -564,6 +567,69 @@ fn a_turning_object_withdraws_the_lod_bias() {
         on_torus > 50 && elsewhere > 500,
         "{on_torus} torus, {elsewhere} other pixels"
     );
+    assert_clean(&gpu);
+}
+
+/// Under `unjitter` (the default) a turning object is rasterised without the projection's
+/// jitter in proportion to its turn (forward.vert), and its shading is not moved again
+/// (forward.frag): in the jittered frame `+taa` renders, the demo's torus (18 degrees a frame,
+/// its turn 1, its LOD bias withdrawn to 0) covers the pixels it covers in `native`'s frame and
+/// shows `native`'s colours (bit for bit on most of them; below), while the rest of the frame
+/// moved with the jitter. Without `unjitter` or `reactive` the torus is jittered as everything
+/// else.
+#[test]
+fn a_turning_object_is_rasterised_without_the_jitter() {
+    let gpu = gpu();
+    let (w, h) = (128u32, 72u32);
+    let s = demo(w, h);
+    let torus = s.object_id("spinner").expect("torus");
+    let f = 5;
+    let native = render(&gpu, &s, spec(w, h, "native"), &[f]).remove(0);
+    let rgb = |o: &FrameOutput, i: usize| [0, 1, 2].map(|k| o.color[4 * i + k].to_bits());
+    // Of the pixels either frame's torus covers: how many show the same object and primitive
+    // in both, and how many the same colour bit for bit; and of the other pixels, how many
+    // changed colour.
+    let compare = |c: &TaaConfig| {
+        let j = jittered_native_for(&gpu, &s, w, h, c, f);
+        let (mut on, mut covered, mut same, mut moved) = (0, 0, 0, 0);
+        for i in 0..native.ids.len() {
+            if native.ids[i][0] == torus || j.ids[i][0] == torus {
+                on += 1;
+                covered += usize::from(native.ids[i] == j.ids[i]);
+                same += usize::from(native.ids[i] == j.ids[i] && rgb(&native, i) == rgb(&j, i));
+            } else {
+                moved += usize::from(rgb(&native, i) != rgb(&j, i));
+            }
+        }
+        (on, covered, same, moved)
+    };
+    let (on, covered, same, moved) = compare(&TaaConfig::OURS);
+    eprintln!(
+        "torus: {covered} of {on} pixels native's triangles, {same} native's colours; \
+         elsewhere {moved} pixels moved with the jitter"
+    );
+    assert!(
+        on > 100 && covered == on,
+        "{covered} of {on} torus pixels are native's triangles"
+    );
+    // Not all of them bit for bit (15 of 148 here, all on the same triangles as `native`'s):
+    // the difference goes when no object's shading inputs are moved back to the pixel centre
+    // (`unjittered` off for every object, the torus's as now), and stays when only the torus's
+    // are kept in place, so it follows the other, moving objects' centring. Not explained.
+    assert!(
+        same * 10 >= on * 8,
+        "{same} of {on} torus pixels are native's colours"
+    );
+    assert!(moved > 1000, "only {moved} pixels moved with the jitter");
+    for off in ["without-reactive", "without-unjitter"] {
+        let c = TaaConfig::parse(&[off]).expect("config");
+        let (on, covered, same, _) = compare(&c);
+        eprintln!("{off}: {covered} of {on} torus pixels native's triangles, {same} its colours");
+        assert!(
+            covered * 10 < on * 8,
+            "{off}: {covered} of {on} torus pixels are native's"
+        );
+    }
     assert_clean(&gpu);
 }
 

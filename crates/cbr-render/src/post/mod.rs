@@ -91,6 +91,11 @@ pub trait PostPass {
     fn lod_turn(&self) -> f32 {
         0.0
     }
+    /// It applies a reactive rule to turning objects (TAA's): the scene pass gets each object's
+    /// turn ([`crate::gpu_scene::FrameView::turns`]).
+    fn reactive(&self) -> bool {
+        false
+    }
     /// The part of the LOD bias a fragment moving at [`PostPass::lod_speed`] or faster sheds
     /// (TAA's `motionlod`: all of [`PostPass::lod_bias`]; `unjitter`: none).
     fn lod_shed(&self) -> f32 {

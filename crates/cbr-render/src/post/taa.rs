@@ -6,7 +6,7 @@
 //!
 //! - `+taa` (after Karis 2014): velocity of the nearest of the 3x3 neighbours (dilation; a pixel
 //!   whose 3x3 is one plane keeps its own), history
-//!   by a 5-tap Catmull-Rom, clipped towards the neighbourhood mean into the YCoCg variance box
+//!   by Karis' 5-tap Catmull-Rom mixed half and half with a 6x6 Lanczos-3 (`sharp`), clipped towards the neighbourhood mean into the YCoCg variance box
 //!   mean +- gamma sigma (Salvi 2016), blended with current-frame weight alpha, both weighted by
 //!   1 / (1 + luma) (Karis); alpha rises with the pixel's speed (0.1 still, 0.5 from 2 px per
 //!   frame: every reprojection resamples and softens the history). Beyond the published: the
@@ -21,7 +21,8 @@
 //!   locks). Moving fragments are shaded at the pixel centre by the scene pass (`unjitter`, the
 //!   default); with `motionlod` (or `interior`) moving interiors take the current frame. A
 //!   turning object (its own rotation per frame, `gpu_scene::turn`) takes the current frame by
-//!   its turn and withdraws the LOD bias as much (the reactive rule). The blend is h + (c - h) t,
+//!   its turn, as does a pixel whose history shows one, and under `unjitter` the scene pass
+//!   rasterises it unjittered and withdraws the LOD bias, both by its turn (the reactive rule). The blend is h + (c - h) t,
 //!   exactly h where c = h. `without-X` switches one part off ([`ABLATIONS`]); `adaptive`
 //!   reconstructs the current sample at the pixel centre in proportion 1 / m.
 //! - `+taa:inside` (Pedersen 2016, Playdead's INSIDE): Halton x16, 3x3 closest-depth dilation,
@@ -45,10 +46,12 @@ use crate::targets::COLOR_FORMAT;
 
 pub const REGISTRATION: PostRegistration = PostRegistration {
     name: "taa",
-    grammar: "taa[:inside][:8|16][:alpha=A][:amax=A][:speed=V][:uspeed=V][:ispeed=V][:gamma=G][:tol=T][:ctol=T][:lod=B][:mean][:filter][:adaptive][:motionlod][:interior][:without-X...]",
-    about: "temporal AA: Halton jitter, dilated velocity, Catmull-Rom history, YCoCg variance \
+    grammar: "taa[:inside][:8|16][:alpha=A][:amax=A][:speed=V][:uspeed=V][:ispeed=V][:gamma=G][:tol=T][:ctol=T][:lod=B][:sharp=S][:mean][:filter][:adaptive][:motionlod][:interior][:without-X...]",
+    about: "temporal AA: Halton jitter, dilated velocity, Catmull-Rom and Lanczos-3 history, YCoCg variance \
             clipping, ID and depth rejection, speed-dependent weight, per-pixel frame count, \
-            thin-feature locks, moving fragments shaded at the pixel centre (X: dilation, clip, ids, depth, catmull, speed, count, luma, \
+            thin-feature locks, moving fragments shaded at the pixel centre, turning objects' \
+            current frame (X: dilation, clip, ids, depth, lanczos: Catmull-Rom alone, catmull: \
+            bilinear, reactive, speed, count, luma, \
             cycle: still pixels show the mean of their last jitter cycle, centred-reset, \
             interior, locks, unjitter); `motionlod`: the sharper LOD shed with motion too, and \
             moving interiors taking the current frame (`interior`: that alone); \
@@ -64,13 +67,14 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
 };
 
 /// The parts `without-X` switches off.
-pub const ABLATIONS: [&str; 15] = [
+pub const ABLATIONS: [&str; 16] = [
     "dilation",
     "surface-velocity",
     "reactive",
     "clip",
     "ids",
     "depth",
+    "lanczos",
     "catmull",
     "speed",
     "count",
@@ -138,6 +142,9 @@ const OURS_SWITCHES: &[Switch] = &[
     ("interior", "moving interiors' current frame", |c| {
         c.interior = Some(true)
     }),
+    ("without-lanczos", "Lanczos-3 history (it is Catmull-Rom)", |c| {
+        c.sharp = 0.0
+    }),
     ("without-catmull", "Catmull-Rom history (it is bilinear)", |c| {
         c.catmull = false
     }),
@@ -187,13 +194,22 @@ pub struct TaaConfig {
     pub surface_velocity: bool,
     /// FSR 2's reactive mask from the scene's own motion, as `taau`'s: a turning object's
     /// pixel takes the current frame with weight mix(a, 1, turn), whatever its speed
-    /// (`gpu_scene::turn`), and its fragments withdraw the LOD bias as much
-    /// (`without-reactive`; off in INSIDE's mode).
+    /// (`gpu_scene::turn`), and so does a pixel whose history shows a turning object (no
+    /// trails of it where it uncovered the background); its fragments withdraw the LOD bias as
+    /// much and, under `unjitter`, are rasterised without the jitter as much (`native`'s
+    /// centred sample; `without-reactive`; off in INSIDE's mode).
     pub reactive: bool,
     pub clip: bool,
     pub ids: bool,
     pub depth: bool,
     pub catmull: bool,
+    /// With `catmull`: the history resampled by (1 - sharp) x the 5-tap Catmull-Rom + sharp x a
+    /// 6x6 Lanczos-3 (`sharp=S`, 0 to 1; `without-lanczos`: 0, Karis' kernel alone). The
+    /// resampling's blur compounds over the frames the history holds: Lanczos-3 alone took the
+    /// moving demo from 0.708x to 0.692x `native`'s FLIP, but kept more of a view-dependent
+    /// highlight's lag (`specular` 1.10x `native`); 0.5 gave 0.697x and 0.97x
+    /// (docs/post-aa.md). 0 in INSIDE's mode.
+    pub sharp: f32,
     /// `filter`: reconstruct the current sample at the pixel centre from the 3x3 (Karis'
     /// Blackman-Harris fit). Off by default: on the moving demo it blurs texture more than it
     /// removes jitter (docs/post-aa.md).
@@ -303,6 +319,7 @@ impl TaaConfig {
         ids: true,
         depth: true,
         catmull: true,
+        sharp: 0.5,
         filter: false,
         count: true,
         luma: true,
@@ -324,6 +341,7 @@ impl TaaConfig {
         ids: false,
         depth: false,
         catmull: false,
+        sharp: 0.0,
         filter: false,
         count: false,
         luma: false,
@@ -413,6 +431,10 @@ impl TaaConfig {
                         ours_only("moving fragments shaded at the pixel centre")?;
                         c.unjitter_speed = Some(num(p, v, 0.001, 1000.0)?)
                     }
+                    Some(("sharp", v)) => {
+                        ours_only("Lanczos-3 history")?;
+                        c.sharp = num(p, v, 0.0, 1.0)?
+                    }
                     Some(("ctol", v)) => {
                         ours_only("still pixels' jitter cycle")?;
                         c.cycle_tolerance = num(p, v, 0.0, 1.0)?
@@ -422,9 +444,9 @@ impl TaaConfig {
                             "taa",
                             p,
                             "inside, 8, 16, alpha=A, amax=A, speed=V, uspeed=V, gamma=G, tol=T, ctol=T, \
-                             lod=B, \
+                             lod=B, sharp=S, \
                              mean, without-dilation, without-surface-velocity, without-clip, without-ids, without-depth, \
-                             without-catmull, without-speed, without-count, without-luma, \
+                             without-lanczos, without-catmull, without-speed, without-count, without-luma, \
                              without-cycle, without-centred-reset, without-interior, without-locks, \
                              without-unjitter, ispeed=V, unjitter, interior, \
                              motionlod, \
@@ -472,6 +494,7 @@ impl TaaConfig {
             (self.ids, F_IDS),
             (self.depth, F_DEPTH),
             (self.catmull, F_CATMULL),
+            (self.catmull && self.sharp > 0.0, F_LANCZOS),
             (self.mean, F_MEAN),
             (self.filter, F_FILTER),
             (self.count, F_COUNT),
@@ -511,6 +534,7 @@ pub const F_LOCK: u32 = 16384;
 pub const F_SHED: u32 = 32768;
 pub const F_SURFACE: u32 = 65536;
 pub const F_REACTIVE: u32 = 131072;
+pub const F_LANCZOS: u32 = 262144;
 
 /// The radical inverse of `i` in `base` (the Halton sequence's element i).
 pub fn halton(mut i: u32, base: u32) -> f32 {
@@ -543,7 +567,8 @@ crate::push_constants! {
         /// frame's jitter (pixels).
         speed_jitter: [f32; 4],
         /// x: the speed (pixels per frame) at which a moving interior's current-frame weight
-        /// reaches 1 (`interior`; `ispeed`, else `speed`).
+        /// reaches 1 (`interior`; `ispeed`, else `speed`); y: the history kernel's Lanczos-3
+        /// share (`sharp`).
         interior: [f32; 4],
     }
 }
@@ -573,6 +598,7 @@ pub fn decl(inside: bool, packed: bool) -> ComputeDecl {
             ("F_SHED", F_SHED),
             ("F_SURFACE", F_SURFACE),
             ("F_REACTIVE", F_REACTIVE),
+            ("F_LANCZOS", F_LANCZOS),
             ("MOVED", MOVED),
             ("ID_MASK", !MOVED),
             ("HIST_ID_MASK", HIST_ID_MASK),
@@ -650,7 +676,7 @@ impl Taa {
                 c.cycle_tolerance,
             ],
             speed_jitter: [c.alpha_max, c.speed, 0.0, 0.0],
-            interior: [c.interior_speed(), 0.0, 0.0, 0.0],
+            interior: [c.interior_speed(), c.sharp, 0.0, 0.0],
         };
         Ok(Taa {
             config: c,
@@ -719,6 +745,10 @@ impl PostPass for Taa {
             true => self.config.lod_bias,
             false => 0.0,
         }
+    }
+
+    fn reactive(&self) -> bool {
+        self.config.reactive
     }
 
     fn lod_speed(&self) -> f32 {
@@ -809,7 +839,7 @@ fn f16_round(v: f32) -> f32 {
 const LUMA: [f32; 3] = [0.2126, 0.7152, 0.0722];
 use crate::cpu_math::OFF_3X3 as OFF;
 
-use crate::cpu_math::{V3, catmull_rom};
+use crate::cpu_math::{V3, catmull_rom, lanczos3_weights};
 
 fn dot(a: V3, b: V3) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
@@ -1007,7 +1037,25 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                 };
                 let mut hc = [0.0f32; 3];
                 if use_h {
-                    hc = if c.catmull {
+                    let lanczos = || {
+                        // Lanczos-3 over the 6x6 texels, renormalised, clamped at 0.
+                        let g = [q[0] - 0.5, q[1] - 0.5];
+                        let b = [g[0].floor(), g[1].floor()];
+                        let f = [g[0] - b[0], g[1] - b[1]];
+                        let (wx, wy) = (lanczos3_weights(f[0]), lanczos3_weights(f[1]));
+                        let (bx, by) = (b[0] as i32, b[1] as i32);
+                        let (mut acc, mut ws) = ([0.0f32; 3], 0.0f32);
+                        for (ty, &wyk) in wy.iter().enumerate() {
+                            for (tx, &wxk) in wx.iter().enumerate() {
+                                let wt = wxk * wyk;
+                                let t = fetch([bx + tx as i32 - 2, by + ty as i32 - 2]);
+                                acc = zip3(acc, t, |a, s| a + wt * s);
+                                ws += wt;
+                            }
+                        }
+                        map3(acc, |a| (a / ws).max(0.0))
+                    };
+                    let catmull = || {
                         let g = [q[0] - 0.5, q[1] - 0.5];
                         let b = [g[0].floor(), g[1].floor()];
                         let f = [g[0] - b[0], g[1] - b[1]];
@@ -1029,8 +1077,15 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                             ws += wt;
                         }
                         map3(acc, |a| (a / ws).max(0.0))
-                    } else {
-                        bilinear(q)
+                    };
+                    // (1 - sharp) Catmull-Rom + sharp Lanczos-3 (`sharp`, see the shader).
+                    hc = match (c.catmull, c.sharp) {
+                        (false, _) => bilinear(q),
+                        (true, s) if s <= 0.0 => catmull(),
+                        (true, s) => {
+                            let h0 = if s < 1.0 { catmull() } else { [0.0; 3] };
+                            zip3(h0, lanczos(), |a, b| a * (1.0 - s) + b * s)
+                        }
                     };
                     use_h = finite(hc);
                 }
@@ -1081,12 +1136,15 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                                 let s = (v[0] * v[0] + v[1] * v[1]).sqrt() / ramp;
                                 a += (amax - a) * s.min(1.0);
                             }
-                            // The reactive rule: a turning object's weight goes on to 1.
+                            // The reactive rule: the weight of a turning object's pixel, or of a
+                            // pixel whose history shows one, goes on to 1.
                             if c.reactive {
-                                let turn = i
-                                    .turns
-                                    .and_then(|t| t.get(nid[4] as usize).copied())
-                                    .unwrap_or(0.0);
+                                let turn_of = |id: u32| {
+                                    i.turns
+                                        .and_then(|t| t.get(id as usize).copied())
+                                        .unwrap_or(0.0)
+                                };
+                                let turn = turn_of(nid[4]).max(turn_of(hid & HIST_ID_MASK));
                                 a += (1.0 - a) * turn;
                             }
                             if c.count {
@@ -1437,6 +1495,98 @@ mod tests {
         }
         assert!(!TaaConfig::parse(&["inside"]).expect("inside").reactive);
         assert!(!TaaConfig::parse(&["without-reactive"]).expect("ok").reactive);
+    }
+
+    /// The reactive rule reads the history's object too: on the frame above, the pixel of object
+    /// 2 beside object 1 (its 3x3 meets both, so the ID test keeps a history of either) whose
+    /// history texel shows object 1 takes the current frame alone when object 1 turns, and
+    /// amax's blend when it does not; its neighbour of object 2 with object 2's history keeps
+    /// amax's blend while object 1 turns (where an object uncovers the background, no trail of
+    /// it is kept).
+    #[test]
+    fn a_history_of_a_turning_object_takes_the_current_frame() {
+        let (w, h) = (6usize, 5usize);
+        let (cur, vel, ids, hist, mut hg) = two_objects_moving(w, h);
+        let depth = vec![2.0f32; w * h];
+        let c = TaaConfig {
+            clip: false,
+            luma: false,
+            ..TaaConfig::OURS
+        };
+        // Pixel (3, 3) is object 2; moving 2 px down a frame, its history texel is (3, 1).
+        let (pixel, beside) = (3 * w + 3, 3 * w + 4);
+        hg[w + 3] = (hist_geom_x(1, 20, true), 2.0);
+        let run = |turns: &[f32]| {
+            let i = RefInputs {
+                turns: Some(turns),
+                ..moving_frame((w, h), (&cur, &vel, &depth, &ids), (&hist, &hg), None)
+            };
+            reference(&c, &i).0
+        };
+        let turning = run(&[0.0, 1.0, 0.0]);
+        assert_eq!(turning[pixel], [1.0; 3], "a turning object's history");
+        assert!((turning[beside][0] - 2.0).abs() < 1e-6, "{:?}", turning[beside]);
+        let still = run(&[0.0, 0.0, 0.0]);
+        assert!((still[pixel][0] - 2.0).abs() < 1e-6, "{:?}", still[pixel]);
+    }
+
+    /// The history's kernel: (1 - sharp) x Catmull-Rom + sharp x Lanczos-3. A history of a
+    /// vertical step (0 left of x = 8, 1 from it) reprojected half a pixel: each kernel gives its
+    /// own weights' sums at the step (`sharp=0` Catmull-Rom's, `sharp=1` Lanczos-3's, overshoot
+    /// included, undershoot clamped at 0), the default the mean of the two, and at rest (a
+    /// whole-pixel motion) every kernel returns the history itself.
+    #[test]
+    fn the_history_kernel_mixes_catmull_rom_and_lanczos3() {
+        let (w, h) = (16usize, 4usize);
+        let hist: Vec<V3> = (0..w * h).map(|i| [if i % w < 8 { 0.0 } else { 1.0 }; 3]).collect();
+        let cur = flat(w, h, [0.5; 3]);
+        let ids = vec![1u32; w * h];
+        let depth = vec![2.0f32; w * h];
+        let hg: Vec<(u32, f32)> = ids.iter().map(|&id| (hist_geom_x(id, 20, true), 2.0)).collect();
+        let at = |sharp: f32, v: [f32; 2]| {
+            let vel = vec![v; w * h];
+            let c = TaaConfig {
+                clip: false,
+                luma: false,
+                alpha: 0.001,
+                speed: 0.0,
+                count: false,
+                locks: false,
+                sharp,
+                ..TaaConfig::OURS
+            };
+            let i = moving_frame((w, h), (&cur, &vel, &depth, &ids), (&hist, &hg), None);
+            let out = reference(&c, &i).0;
+            // Undo the blend with the current frame: out = h + (0.5 - h) 0.001.
+            std::array::from_fn::<f32, 3, _>(|x| (out[w + 6 + x][0] - 0.0005) / 0.999)
+        };
+        // Pixels 6, 7, 8 sample the history at x + 0.5 + 0.5: between texels 6|7, 7|8, 8|9.
+        let v = [-0.5, 0.0];
+        let l = lanczos3_weights(0.5);
+        let cr = catmull_rom(0.5);
+        let want_l = |k: usize| -> f32 {
+            // Taps j = -2..3 around texel 6 + k: the ones at or past x = 8 are 1.
+            let s: f32 = (0..6).filter(|&j| 6 + k + j >= 10).map(|j| l[j]).sum();
+            (s / l.iter().sum::<f32>()).max(0.0)
+        };
+        // The motion is along x only, so Jimenez's five taps are Catmull-Rom's four along x
+        // (the dropped corners weigh 0 at f = 0 along y); its weights sum to 1.
+        let want_c = |k: usize| -> f32 { (0..4).filter(|&j| 6 + k + j >= 9).map(|j| cr[j]).sum::<f32>().max(0.0) };
+        for k in 0..3 {
+            let (c0, l1, m) = (at(0.0, v)[k], at(1.0, v)[k], at(0.5, v)[k]);
+            assert!((c0 - want_c(k)).abs() < 1e-4, "Catmull-Rom {k}: {c0} against {}", want_c(k));
+            assert!((l1 - want_l(k)).abs() < 1e-4, "Lanczos-3 {k}: {l1} against {}", want_l(k));
+            assert!((m - 0.5 * (c0 + l1)).abs() < 1e-5, "the mix {k}: {m}");
+        }
+        assert!(at(1.0, v)[2] > 1.0, "Lanczos-3 overshoots past the step");
+        for sharp in [0.0, 0.5, 1.0] {
+            assert_eq!(at(sharp, [-1.0, 0.0]).map(|x| x.round()), [0.0, 1.0, 1.0], "{sharp}");
+        }
+        assert_eq!(TaaConfig::OURS.sharp, 0.5);
+        assert_eq!(TaaConfig::parse(&["without-lanczos"]).expect("ok").sharp, 0.0);
+        assert_eq!(TaaConfig::parse(&["sharp=1"]).expect("ok").sharp, 1.0);
+        assert!(TaaConfig::parse(&["sharp=2"]).is_err());
+        assert!(TaaConfig::parse(&["inside", "sharp=1"]).is_err());
     }
 
     /// Moving interiors (`interior`: on with `motionlod`, off with `unjitter` alone unless set):

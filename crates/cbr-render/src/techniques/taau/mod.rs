@@ -562,6 +562,10 @@ impl Technique for Taau {
         }
     }
 
+    fn reactive(&self) -> bool {
+        self.config.reactive
+    }
+
     fn jitters(&self) -> bool {
         true
     }
