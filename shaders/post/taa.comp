@@ -4,9 +4,10 @@
 // The CPU reference is crates/cbr-render/src/post/taa.rs (`reference`): keep the two in step,
 // operation for operation.
 //
-// MODE 0 (`+taa`, after Karis 2014): 3x3 closest-depth velocity dilation, history by Karis'
-// 5-tap Catmull-Rom (Jimenez's bilinear form) mixed with a 6x6 Lanczos-3 (F_LANCZOS, in the
-// proportion `sharp`), YCoCg variance clipping (Salvi) of the history towards the
+// MODE 0 (`+taa`, after Karis 2014): 3x3 closest-depth velocity dilation, history by
+// Catmull-Rom mixed with Lanczos-3 over 6x6 texels (HISTORY 2, in the proportion `sharp`; 1:
+// Karis' 5-tap Catmull-Rom in Jimenez's bilinear form; 0: bilinear), YCoCg variance clipping
+// (Salvi) of the history towards the
 // neighbourhood mean, luminance-weighted blend; plus the object-ID and depth disocclusion tests of
 // the checkerboard resolve. MODE 1 (`+taa:inside`, Pedersen 2016): 3x3 closest-depth dilation,
 // bilinear history, rounded 3x3 min-max box with YCoCg chroma shrink, clip towards the clamped
@@ -36,7 +37,7 @@ layout(set = 0, binding = BINDING_OUT_RANGE, rgba16f) uniform writeonly image2D 
 // Each object's turn this frame, by object ID (F_REACTIVE; gpu_scene.rs `object_turns`).
 layout(set = 0, binding = BINDING_TURNS) readonly buffer Turns { float turns[]; };
 
-// F_RESET, F_DILATION, F_CLIP, F_IDS, F_DEPTH, F_CATMULL, F_LANCZOS (below), F_MEAN (blend weight 1 / (n + 1): the
+// F_RESET, F_DILATION, F_CLIP, F_IDS, F_DEPTH, F_MEAN (blend weight 1 / (n + 1): the
 // running mean), F_FILTER (reconstruct the current sample at the pixel centre, Karis' filter),
 // F_COUNT (the current-frame weight is at least 1 / (m + 1), m the frames the pixel's history
 // holds), F_LUMA (Karis' luminance weights in the blend), F_CYCLE (a still pixel shows the mean
@@ -52,7 +53,7 @@ layout(set = 0, binding = BINDING_TURNS) readonly buffer Turns { float turns[]; 
 // (pixels), the cycle's change tolerance (perceptual luma); speed_jitter:
 // x: current-frame weight at and above speed y (pixels per frame; 0: off), zw: the jitter;
 // interior: x the speed at which a moving interior's weight reaches 1 (F_INTERIOR), y the
-// history kernel's Lanczos-3 share (F_LANCZOS; `sharp`).
+// history kernel's Lanczos-3 share (HISTORY 2; `sharp`).
 PUSH_CONSTANTS
 
 bool has(uint f) { return (pc.flags.x & f) != 0u; }
@@ -121,29 +122,38 @@ vec3 history_catmull(vec2 q) {
     return max(acc / ws, vec3(0.0));
 }
 
-// History at continuous pixel position q: Lanczos-3 over the 6x6 texels around it (F_LANCZOS),
-// renormalised, its undershoot clamped at 0. Exact at rest (f = 0). The history is resampled at
-// every reprojection and the blur compounds over the frames it holds; Lanczos-3 keeps more of
-// the detail, but alone it kept more of a view-dependent highlight's lag too (`specular`), so it
-// is mixed with Catmull-Rom (`sharp`; docs/post-aa.md has the sweep).
-vec3 history_lanczos(vec2 q) {
+// History at continuous pixel position q, HISTORY 2: (1 - s) Catmull-Rom (its 4x4 weights, padded
+// to the 6x6) + s Lanczos-3 (renormalised) over the 6x6 texels around q, one sum, clamped at 0;
+// exact at rest (f = 0). The history is resampled at every reprojection and the blur compounds
+// over the frames it holds: Lanczos-3 keeps more of the detail, but alone it kept more of a
+// view-dependent highlight's lag too (`specular`), so it is mixed (`sharp`; docs/post-aa.md has
+// the sweep). One sum of texel reads: the 5-tap Catmull-Rom's bilinear taps beside the 36 reads
+// cost 184 ms a frame at 1280x720 on lavapipe, this 141.
+vec3 history_mixed(vec2 q, float s) {
     vec2 g = q - 0.5;
     vec2 bf = floor(g);
     vec2 f = g - bf;
     ivec2 b = ivec2(bf);
-    float wx[6], wy[6];
-    lanczos3_weights(f.x, wx);
-    lanczos3_weights(f.y, wy);
+    float lx[6], ly[6];
+    lanczos3_weights(f.x, lx);
+    lanczos3_weights(f.y, ly);
+    vec4 cx4 = catmull_rom(f.x), cy4 = catmull_rom(f.y);
+    float cx[6] = float[6](0.0, cx4.x, cx4.y, cx4.z, cx4.w, 0.0);
+    float cy[6] = float[6](0.0, cy4.x, cy4.y, cy4.z, cy4.w, 0.0);
+    float lsx = 0.0, lsy = 0.0;
+    for (int k = 0; k < 6; k++) {
+        lsx += lx[k];
+        lsy += ly[k];
+    }
+    float ls = s / (lsx * lsy);
     vec3 acc = vec3(0.0);
-    float ws = 0.0;
     for (int y = 0; y < 6; y++) {
         for (int x = 0; x < 6; x++) {
-            float w = wx[x] * wy[y];
+            float w = (1.0 - s) * cx[x] * cy[y] + ls * lx[x] * ly[y];
             acc += w * texelFetch(hist, clamp_px(b + ivec2(x - 2, y - 2)), 0).rgb;
-            ws += w;
         }
     }
-    return max(acc / ws, vec3(0.0));
+    return max(acc, vec3(0.0));
 }
 
 vec3 history_bilinear(vec2 q) { return textureLod(hist, q / vec2(pc.size.xy), 0.0).rgb; }
@@ -287,13 +297,13 @@ void main() {
     }
     vec3 h = vec3(0.0);
     if (use) {
-        if (!has(F_CATMULL)) {
-            h = history_bilinear(q);
-        } else {
-            float s = has(F_LANCZOS) ? pc.interior.y : 0.0;
-            h = s < 1.0 ? history_catmull(q) : vec3(0.0);
-            if (s > 0.0) h = mix(h, history_lanczos(q), s);
-        }
+#if HISTORY == 2
+        h = history_mixed(q, pc.interior.y);
+#elif HISTORY == 1
+        h = history_catmull(q);
+#else
+        h = history_bilinear(q);
+#endif
         use = finite3(h);
     }
     cycling = cycling && use;

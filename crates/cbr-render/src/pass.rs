@@ -1679,7 +1679,7 @@ mod tests {
         let interleaved = interleaved::parse(&["4x4", "direct"]).expect("interleaved");
         let mut decls = vec![
             crate::post::sharpen::decl(),
-            crate::post::taa::decl(false, false),
+            crate::post::taa::decl(&crate::post::taa::TaaConfig::OURS, false),
             ssaa::decl(),
             resolve::decl(&ResolveSettings::default(), &plan, false),
             resolve::copy_floor_decl("copy"),

@@ -22,9 +22,16 @@ use cbr_render::upscale::{self, UpscaleFilter};
 fn declared() -> Vec<ComputeDecl> {
     let mut d = vec![sharpen::decl(), ssaa::decl()];
     d.extend(fxaa::decls());
-    for inside in [false, true] {
+    // TAA: ours with each history kernel, and INSIDE's.
+    for params in [
+        &[][..],
+        &["without-lanczos"],
+        &["without-catmull"],
+        &["inside"],
+    ] {
+        let c = taa::TaaConfig::parse(params).expect("taa");
         for packed in [false, true] {
-            d.push(taa::decl(inside, packed));
+            d.push(taa::decl(&c, packed));
         }
     }
     // The resolve: every mode, pixel and quad, groups 8 and 16, with and without the prepass.
@@ -96,7 +103,7 @@ fn declared_passes_build_without_allocating() {
                 .unwrap_or_else(|e| panic!("{}: {e}", d.name))
         })
         .collect();
-    assert_eq!(built.len(), 72);
+    assert_eq!(built.len(), 76);
     assert_eq!(
         gpu.allocations_made(),
         before,

@@ -59,7 +59,7 @@ pub const REGISTRATION: PostRegistration = PostRegistration {
     check: |p| TaaConfig::parse(p).map(|_| ()),
     geometry: true,
     estimate: |ctx, _| crate::pass::estimate(&resources(ctx.width, ctx.height), "taa"),
-    passes: |p, packed| Ok(vec![decl(TaaConfig::parse(p)?.inside, packed)]),
+    passes: |p, packed| Ok(vec![decl(&TaaConfig::parse(p)?, packed)]),
     build: |ctx, p| {
         let c = TaaConfig::parse(p).map_err(|e| super::refused("taa", p, e))?;
         Ok(Box::new(Taa::new(ctx, c)?))
@@ -486,6 +486,15 @@ impl TaaConfig {
         self.interior_speed.unwrap_or(CENTRING_SPEED)
     }
 
+    /// The history's kernel: [`HISTORY_BILINEAR`], [`HISTORY_CATMULL`] or [`HISTORY_MIXED`].
+    pub fn history_kernel(&self) -> u32 {
+        match (self.catmull, self.sharp > 0.0) {
+            (false, _) => HISTORY_BILINEAR,
+            (true, false) => HISTORY_CATMULL,
+            (true, true) => HISTORY_MIXED,
+        }
+    }
+
     fn flags(&self) -> u32 {
         let mut f = 0;
         for (on, bit) in [
@@ -493,8 +502,6 @@ impl TaaConfig {
             (self.clip, F_CLIP),
             (self.ids, F_IDS),
             (self.depth, F_DEPTH),
-            (self.catmull, F_CATMULL),
-            (self.catmull && self.sharp > 0.0, F_LANCZOS),
             (self.mean, F_MEAN),
             (self.filter, F_FILTER),
             (self.count, F_COUNT),
@@ -521,7 +528,6 @@ pub const F_DILATION: u32 = 2;
 pub const F_CLIP: u32 = 4;
 pub const F_IDS: u32 = 8;
 pub const F_DEPTH: u32 = 16;
-pub const F_CATMULL: u32 = 32;
 pub const F_MEAN: u32 = 64;
 pub const F_FILTER: u32 = 128;
 pub const F_COUNT: u32 = 256;
@@ -534,7 +540,6 @@ pub const F_LOCK: u32 = 16384;
 pub const F_SHED: u32 = 32768;
 pub const F_SURFACE: u32 = 65536;
 pub const F_REACTIVE: u32 = 131072;
-pub const F_LANCZOS: u32 = 262144;
 
 /// The radical inverse of `i` in `base` (the Halton sequence's element i).
 pub fn halton(mut i: u32, base: u32) -> f32 {
@@ -573,19 +578,29 @@ crate::push_constants! {
     }
 }
 
-/// The pass (shaders/post/taa.comp): `inside` picks the mode; `packed` geometry is the
-/// checkerboard resolve's (object ID | moved, reverse-Z depth bits in one RG32UI image).
-pub fn decl(inside: bool, packed: bool) -> ComputeDecl {
+/// The history's resampling kernel ([`TaaConfig::history_kernel`], the shader's HISTORY): one
+/// bilinear tap (`without-catmull`, INSIDE's), Karis' 5-tap Catmull-Rom (`without-lanczos`), or
+/// (1 - sharp) Catmull-Rom + sharp Lanczos-3 over 6x6 texels. A define, not a flag: llvmpipe
+/// runs both sides of a branch even on a uniform flag (the mixed kernel's 36 reads cost every
+/// variant 75 ms a frame at 1280x720, docs/post-aa.md).
+pub const HISTORY_BILINEAR: u32 = 0;
+pub const HISTORY_CATMULL: u32 = 1;
+pub const HISTORY_MIXED: u32 = 2;
+
+/// The pass (shaders/post/taa.comp): `c.inside` picks the mode, `c`'s history kernel the
+/// HISTORY define; `packed` geometry is the checkerboard resolve's (object ID | moved,
+/// reverse-Z depth bits in one RG32UI image).
+pub fn decl(c: &TaaConfig, packed: bool) -> ComputeDecl {
     ComputeDecl::new("taa", "post/taa.comp")
-        .define("MODE", u32::from(inside))
+        .define("MODE", u32::from(c.inside))
         .define("PACKED", u32::from(packed))
+        .define("HISTORY", c.history_kernel())
         .constants(&[
             ("F_RESET", F_RESET),
             ("F_DILATION", F_DILATION),
             ("F_CLIP", F_CLIP),
             ("F_IDS", F_IDS),
             ("F_DEPTH", F_DEPTH),
-            ("F_CATMULL", F_CATMULL),
             ("F_MEAN", F_MEAN),
             ("F_FILTER", F_FILTER),
             ("F_COUNT", F_COUNT),
@@ -598,7 +613,6 @@ pub fn decl(inside: bool, packed: bool) -> ComputeDecl {
             ("F_SHED", F_SHED),
             ("F_SURFACE", F_SURFACE),
             ("F_REACTIVE", F_REACTIVE),
-            ("F_LANCZOS", F_LANCZOS),
             ("MOVED", MOVED),
             ("ID_MASK", !MOVED),
             ("HIST_ID_MASK", HIST_ID_MASK),
@@ -680,7 +694,7 @@ impl Taa {
         };
         Ok(Taa {
             config: c,
-            pass: decl(c.inside, g0.packed).build(ctx.gpu, ctx.shaders)?,
+            pass: decl(&c, g0.packed).build(ctx.gpu, ctx.shaders)?,
             res: Resources::new(ctx.gpu, "taa", &resources(ctx.width, ctx.height))?,
             push,
             accumulated: 0,
@@ -1037,23 +1051,26 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                 };
                 let mut hc = [0.0f32; 3];
                 if use_h {
-                    let lanczos = || {
-                        // Lanczos-3 over the 6x6 texels, renormalised, clamped at 0.
+                    let mixed = |sh: f32| {
+                        // (1 - sh) Catmull-Rom (its 4x4, padded to 6x6) + sh Lanczos-3 (its
+                        // weights renormalised) over the 6x6 texels, one sum, clamped at 0.
                         let g = [q[0] - 0.5, q[1] - 0.5];
                         let b = [g[0].floor(), g[1].floor()];
                         let f = [g[0] - b[0], g[1] - b[1]];
-                        let (wx, wy) = (lanczos3_weights(f[0]), lanczos3_weights(f[1]));
+                        let (lx, ly) = (lanczos3_weights(f[0]), lanczos3_weights(f[1]));
+                        let pad = |c: [f32; 4]| [0.0, c[0], c[1], c[2], c[3], 0.0];
+                        let (cx, cy) = (pad(catmull_rom(f[0])), pad(catmull_rom(f[1])));
+                        let ls = sh / (lx.iter().sum::<f32>() * ly.iter().sum::<f32>());
                         let (bx, by) = (b[0] as i32, b[1] as i32);
-                        let (mut acc, mut ws) = ([0.0f32; 3], 0.0f32);
-                        for (ty, &wyk) in wy.iter().enumerate() {
-                            for (tx, &wxk) in wx.iter().enumerate() {
-                                let wt = wxk * wyk;
+                        let mut acc = [0.0f32; 3];
+                        for ty in 0..6 {
+                            for tx in 0..6 {
+                                let wt = (1.0 - sh) * cx[tx] * cy[ty] + ls * lx[tx] * ly[ty];
                                 let t = fetch([bx + tx as i32 - 2, by + ty as i32 - 2]);
                                 acc = zip3(acc, t, |a, s| a + wt * s);
-                                ws += wt;
                             }
                         }
-                        map3(acc, |a| (a / ws).max(0.0))
+                        map3(acc, |a| a.max(0.0))
                     };
                     let catmull = || {
                         let g = [q[0] - 0.5, q[1] - 0.5];
@@ -1078,14 +1095,11 @@ pub fn reference_cycle(c: &TaaConfig, i: &RefInputs) -> RefOutput {
                         }
                         map3(acc, |a| (a / ws).max(0.0))
                     };
-                    // (1 - sharp) Catmull-Rom + sharp Lanczos-3 (`sharp`, see the shader).
-                    hc = match (c.catmull, c.sharp) {
-                        (false, _) => bilinear(q),
-                        (true, s) if s <= 0.0 => catmull(),
-                        (true, s) => {
-                            let h0 = if s < 1.0 { catmull() } else { [0.0; 3] };
-                            zip3(h0, lanczos(), |a, b| a * (1.0 - s) + b * s)
-                        }
+                    // The history's kernel (see the shader's HISTORY).
+                    hc = match c.history_kernel() {
+                        HISTORY_BILINEAR => bilinear(q),
+                        HISTORY_CATMULL => catmull(),
+                        _ => mixed(c.sharp),
                     };
                     use_h = finite(hc);
                 }
@@ -1533,7 +1547,7 @@ mod tests {
     /// The history's kernel: (1 - sharp) x Catmull-Rom + sharp x Lanczos-3. A history of a
     /// vertical step (0 left of x = 8, 1 from it) reprojected half a pixel: each kernel gives its
     /// own weights' sums at the step (`sharp=0` Catmull-Rom's, `sharp=1` Lanczos-3's, overshoot
-    /// included, undershoot clamped at 0), the default the mean of the two, and at rest (a
+    /// included), the default the mean of the two, each clamped at 0, and at rest (a
     /// whole-pixel motion) every kernel returns the history itself.
     #[test]
     fn the_history_kernel_mixes_catmull_rom_and_lanczos3() {
@@ -1564,19 +1578,20 @@ mod tests {
         let v = [-0.5, 0.0];
         let l = lanczos3_weights(0.5);
         let cr = catmull_rom(0.5);
+        // Unclamped: taps j = -2..3 around texel 6 + k, the ones at or past x = 8 are 1.
         let want_l = |k: usize| -> f32 {
-            // Taps j = -2..3 around texel 6 + k: the ones at or past x = 8 are 1.
             let s: f32 = (0..6).filter(|&j| 6 + k + j >= 10).map(|j| l[j]).sum();
-            (s / l.iter().sum::<f32>()).max(0.0)
+            s / l.iter().sum::<f32>()
         };
         // The motion is along x only, so Jimenez's five taps are Catmull-Rom's four along x
         // (the dropped corners weigh 0 at f = 0 along y); its weights sum to 1.
-        let want_c = |k: usize| -> f32 { (0..4).filter(|&j| 6 + k + j >= 9).map(|j| cr[j]).sum::<f32>().max(0.0) };
+        let want_c = |k: usize| -> f32 { (0..4).filter(|&j| 6 + k + j >= 9).map(|j| cr[j]).sum::<f32>() };
         for k in 0..3 {
             let (c0, l1, m) = (at(0.0, v)[k], at(1.0, v)[k], at(0.5, v)[k]);
-            assert!((c0 - want_c(k)).abs() < 1e-4, "Catmull-Rom {k}: {c0} against {}", want_c(k));
-            assert!((l1 - want_l(k)).abs() < 1e-4, "Lanczos-3 {k}: {l1} against {}", want_l(k));
-            assert!((m - 0.5 * (c0 + l1)).abs() < 1e-5, "the mix {k}: {m}");
+            let (c, l, mix) = (want_c(k), want_l(k), 0.5 * (want_c(k) + want_l(k)));
+            assert!((c0 - c.max(0.0)).abs() < 1e-4, "Catmull-Rom {k}: {c0} against {c}");
+            assert!((l1 - l.max(0.0)).abs() < 1e-4, "Lanczos-3 {k}: {l1} against {l}");
+            assert!((m - mix.max(0.0)).abs() < 1e-4, "the mix {k}: {m} against {mix}");
         }
         assert!(at(1.0, v)[2] > 1.0, "Lanczos-3 overshoots past the step");
         for sharp in [0.0, 0.5, 1.0] {
