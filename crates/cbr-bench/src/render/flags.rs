@@ -52,8 +52,9 @@ pub enum TaaAblationArg {
     Dilation,
     /// A surface's own velocity (the 3x3 one plane): the nearest neighbour's, as at silhouettes.
     SurfaceVelocity,
-    /// A turning object's current frame rising to weight 1 and its LOD bias withdrawn by its
-    /// turn (the reactive rule): blended and biased as everything else.
+    /// A turning object's current frame rising to weight 1 (and a history showing one), its
+    /// LOD bias withdrawn and its raster unjittered by its turn (the reactive rule): blended,
+    /// biased and jittered as everything else.
     Reactive,
     /// YCoCg variance clipping of the history.
     Clip,
@@ -61,6 +62,8 @@ pub enum TaaAblationArg {
     Ids,
     /// Rejection of history outside the 3x3's depth span.
     Depth,
+    /// Lanczos-3 in the history's kernel: Karis' 5-tap Catmull-Rom alone.
+    Lanczos,
     /// Catmull-Rom history fetch: bilinear instead.
     Catmull,
     /// The current-frame weight rising with speed: alpha everywhere.
