@@ -29,6 +29,7 @@ layout(location = 1) in vec3 v_normal[];
 layout(location = 2) in vec2 v_uv[];
 layout(location = 3) in vec4 v_clip[];
 layout(location = 4) in vec4 v_prev_clip[];
+layout(location = 5) flat in float v_turn[];  // forward.vert's; unused here
 
 #include "raster_io.glsl"
 

@@ -37,6 +37,7 @@ layout(location = 1) INTERP in vec3 v_normal;
 layout(location = 2) INTERP in vec2 v_uv;
 layout(location = 3) INTERP in vec4 v_clip;
 layout(location = 4) INTERP in vec4 v_prev_clip;
+layout(location = 5) flat in float v_turn;  // the object's turn (forward.vert)
 
 #ifdef EARLY_TESTS
 // The G-buffer pass after its depth pre-pass (DEPTH_ONLY): the depth test is EQUAL and writes
@@ -118,8 +119,7 @@ float motion_share() {
 // frame, so its history holds a frame or none, and the sharper level only aliases (the demo's
 // spinning torus; docs/upsampling.md). The larger withdrawal of the two applies.
 float lod_bias() {
-    float turn = uintBitsToFloat(objects[pc.object_index].ids.z);
-    return frame.ambient.w - min(frame.screen_jitter.z * motion_share(), frame.turning.x * turn);
+    return frame.ambient.w - min(frame.screen_jitter.z * motion_share(), frame.turning.x * v_turn);
 }
 
 // The derivatives a, b between this layout's neighbouring samples, per output pixel (as
@@ -241,7 +241,7 @@ void main() {
     // its share is of the jitter it kept.
     float share = motion_share();
     if (share > 0.0 && m.tex.x < 0 && m.tex.y < 0 && m.tex.w < 0) share = 1.0;
-    if (frame.screen_jitter.w != 0.0) share *= 1.0 - uintBitsToFloat(o.ids.z);
+    if (frame.screen_jitter.w != 0.0) share *= 1.0 - v_turn;
     vec2 uv = unjittered(v_uv, share);
     vec3 world = unjittered(v_world, share);
     vec3 normal = unjittered(v_normal, share);

@@ -17,6 +17,11 @@ layout(location = 1) out vec3 v_normal;
 layout(location = 2) out vec2 v_uv;
 layout(location = 3) out vec4 v_clip;       // unjittered screen clip position, this frame
 layout(location = 4) out vec4 v_prev_clip;  // previous frame
+// The object's turn (ObjectData.ids.z; 0 where no reactive rule applies), as a flat varying: the
+// fragment shader's helper lanes (a quad's uncovered pixels, which its derivatives read) get it
+// too, where their own load of the objects buffer reads 0 on llvmpipe, and a turning object's
+// texture derivatives came out mixed (docs/post-aa.md).
+layout(location = 5) flat out float v_turn;
 
 // Layouts whose targets extend past the screen (odd sizes, msaa2x's spare column, the tangram's
 // wrapped pieces) clip exactly to the screen rectangle.
@@ -35,6 +40,7 @@ void main() {
     v_uv = vec2(vdata[b + 6], vdata[b + 7]);
     v_clip = o.clip_from_local * local;
     v_prev_clip = o.prev_clip_from_local * local;
+    v_turn = uintBitsToFloat(o.ids.z);
     vec4 pos = v_clip;
     // The projection's jitter (`--jitter`, TAA): j output pixels move NDC by 2j / size, before any
     // layout's mapping, so every layout and the ID prepass see the same jittered scene. Under
@@ -42,7 +48,7 @@ void main() {
     // rasterised without it in proportion to its turn: its history is cut by its turn (the
     // reactive rule), and a single jittered sample is a worse estimate of its pixel than the
     // centred one (`native`'s) at its edges as inside (the moving demo's torus; docs/post-aa.md).
-    float kept = frame.screen_jitter.w != 0.0 ? 1.0 - uintBitsToFloat(o.ids.z) : 1.0;
+    float kept = frame.screen_jitter.w != 0.0 ? 1.0 - v_turn : 1.0;
     pos.xy += frame.screen_jitter.xy * kept * 2.0 * frame.output_size.zw * pos.w;
 #ifdef CLIP_TO_SCREEN
     gl_ClipDistance[0] = pos.x + pos.w;
