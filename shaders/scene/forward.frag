@@ -114,7 +114,7 @@ float motion_share() {
 // bias, withdrawn linearly up to screen_jitter.w's speed; its history averages too few jittered
 // samples for it). With screen_jitter.zw = 0 the bias is the frame's exactly.
 //
-// A turning object's fragment (ObjectData.ids.z, its own rotation this frame) withdraws the
+// A turning object's fragment (v_turn: its own rotation this frame) withdraws the
 // temporal technique's bias (frame.turning.x) in proportion to its turn: its shading changes every
 // frame, so its history holds a frame or none, and the sharper level only aliases (the demo's
 // spinning torus; docs/upsampling.md). The larger withdrawal of the two applies.

@@ -298,7 +298,7 @@ pub const STILL: f32 = 1.0 / 64.0;
 /// The rectification box's weight exp(-BOX_CURVE d^2) (FSR 2's).
 const BOX_CURVE: f32 = 2.3;
 
-pub use crate::cpu_math::lanczos3_weights;
+use crate::cpu_math::lanczos3_weights;
 
 fn history_at(p: &Params, hist: &[[f32; 4]], b: [i32; 2], f: [f32; 2], nearest: [i32; 2]) -> [f32; 4] {
     let lanczos3 = p.kernel == Kernel::Lanczos && p.history_lobes == 3;
