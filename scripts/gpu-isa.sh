@@ -46,7 +46,7 @@ for m in ours fused pq4k intel spatial temporal none; do SP="$SP,checkerboard:ro
 SP="$SP,checkerboard:msaa2x:ours:locations,checkerboard:rotated:ours:prepass+taa,ssaa:2,msaa:4:sample:hdr"
 SP="$SP,analytic:seed:aniso,deferred:vpls=64,interleaved:4x4:vpls=64:seed:direct:debug:floor"
 SP="$SP,interleaved:3x2:vpls=48:implicit,interlaced:debug,upscale:bicubic,native+taa+sharpen,native+taa:inside+fxaa"
-SP="$SP,upscale:fsr1:0.5"
+SP="$SP,upscale:fsr1:0.5,taau,taau:0.5:without-locks:debug"
 start=$(date +%s)
 $CBR gpu-stats --techniques "$SP" --width 1920 --height 1080 -o "$O/all" > "$O/all.txt"
 echo "every registered technique, 4 families, 1920x1080: $(( $(date +%s) - start )) s" | tee "$O/all.time"
