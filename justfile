@@ -105,6 +105,13 @@ interleaved-work width="1280" height="720": setup
         python3 scripts/work-count.py "$s" deferred:vpls=1024 interleaved:4x4:vpls=1024:search=1 interleaved:4x4:vpls=1024:exact-edges=2:band=depth:contrast=0.1:side=near:search=1 --width {{width}} --height {{height}} --entries 8 -o {{out}}/work/interleaved-$n-{{width}}x{{height}} || exit 1; \
     done
 
+# The floor of FSR 2's passes on lavapipe (docs/upsampling.md, "The floor of FSR 2's passes"):
+# `native,taau` at 1280x720 with the shipped accumulation and two stripped ones (through
+# CBR_SHADER_DIR; measurements only, 3 runs, about a minute).
+# The taau passes' floor against native's frame at 1280x720 on lavapipe (about a minute).
+taau-floor: setup
+    python3 scripts/taau-floor.py --runs 3 -o {{out}}/taau-floor
+
 # The `taau` passes against `native`'s frame in instructions (docs/upsampling.md, the cost goal):
 # 1280x720, 2 warm-up frames and one counted; about 10 minutes.
 taau-work: setup
